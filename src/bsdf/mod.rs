@@ -1,0 +1,143 @@
+//! BSDF evaluation and sampling for every `Material`, in world space around a `ShadingPoint`.
+//!
+//! Conventions: `wo` is the given direction (toward the previous vertex: the viewer on eye paths,
+//! the light on particle paths) and `wi` the sampled one; both point away from the surface.
+//! `eval` returns f without the cosine. `BsdfSample::weight` is f·|cos θ_i|/pdf_w (times the
+//! radiance η² factor or the adjoint shading-normal correction, depending on `Mode`).
+//!
+//! Invariants: reflection lobes return 0 unless `wo` and `wi` lie on the same side of the
+//! **geometric** normal (no light leaks through walls); Dirac samples have `is_delta` and their
+//! pdf_w is the discrete choice probability.
+
+mod dielectric;
+mod phong;
+
+pub use dielectric::fresnel_dielectric;
+
+use crate::math::{Frame, Rgb, Vec3, INV_PI};
+use crate::sampling::warp::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
+use crate::scene::Material;
+
+/// Which quantity a path carries (Veach ch. 5; pbrt's TransportMode).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// Eye paths: radiance (η² scaling at refraction).
+    Radiance,
+    /// Light paths: importance (adjoint shading-normal correction, no η² scaling).
+    Importance,
+}
+
+/// The local geometry a BSDF needs.
+#[derive(Clone, Copy, Debug)]
+pub struct ShadingPoint {
+    /// Position.
+    pub p: Vec3,
+    /// Unit geometric normal, as the shape defines it (outward for closed meshes and spheres).
+    pub ng: Vec3,
+    /// Unit shading normal on the `ng` side.
+    pub ns: Vec3,
+}
+
+/// A sampled direction.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSample {
+    /// Sampled direction (unit, away from the surface).
+    pub wi: Vec3,
+    /// f·|cos θ_i| / pdf_w, with the transport-mode factor.
+    pub weight: Rgb,
+    /// Solid-angle pdf (for Dirac lobes: the discrete lobe probability).
+    pub pdf_w: f32,
+    /// Dirac lobe.
+    pub is_delta: bool,
+}
+
+impl ShadingPoint {
+    /// Normals flipped to `wo`'s geometric side: (ng', ns').
+    #[inline]
+    fn oriented(&self, wo: Vec3) -> (Vec3, Vec3) {
+        if wo.dot(self.ng) >= 0.0 {
+            (self.ng, self.ns)
+        } else {
+            (-self.ng, -self.ns)
+        }
+    }
+}
+
+/// Adjoint shading-normal correction for importance transport (Veach eq. 5.19).
+#[inline]
+fn shading_correction(mode: Mode, sp: &ShadingPoint, wo: Vec3, wi: Vec3) -> f32 {
+    if mode == Mode::Radiance || sp.ng == sp.ns {
+        return 1.0;
+    }
+    let den = wo.dot(sp.ng).abs() * wi.dot(sp.ns).abs();
+    if den <= 0.0 {
+        return 0.0;
+    }
+    (wo.dot(sp.ns).abs() * wi.dot(sp.ng).abs()) / den
+}
+
+/// BSDF value f(wo, wi) without the cosine; zero for Dirac and black materials.
+#[inline]
+pub fn eval(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3) -> Rgb {
+    let (ng, ns) = sp.oriented(wo);
+    if wi.dot(ng) <= 0.0 || wi.dot(ns) <= 0.0 || wo.dot(ns) <= 0.0 {
+        return Rgb::ZERO;
+    }
+    match *m {
+        Material::Diffuse { albedo } => albedo * INV_PI,
+        Material::Glossy { albedo, specular, exponent } => phong::eval(albedo, specular, exponent, ns, wo, wi),
+        _ => Rgb::ZERO,
+    }
+}
+
+/// Solid-angle pdf of `sample` producing `wi` (0 for Dirac and black materials).
+#[inline]
+pub fn pdf_w(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3) -> f32 {
+    let (ng, ns) = sp.oriented(wo);
+    if wi.dot(ng) <= 0.0 {
+        return 0.0;
+    }
+    match *m {
+        Material::Diffuse { .. } => cosine_hemisphere_pdf(wi.dot(ns)),
+        Material::Glossy { albedo, specular, exponent } => phong::pdf_w(albedo, specular, exponent, ns, wo, wi),
+        _ => 0.0,
+    }
+}
+
+/// Samples `wi` given `wo` with three uniforms.
+#[inline]
+pub fn sample(m: &Material, sp: &ShadingPoint, wo: Vec3, u: [f32; 3], mode: Mode) -> Option<BsdfSample> {
+    let (ng, ns) = sp.oriented(wo);
+    let s = match *m {
+        Material::Diffuse { albedo } => {
+            let frame = Frame::from_normal(ns);
+            let wi = frame.to_world(sample_cosine_hemisphere([u[0], u[1]]));
+            let cos = wi.dot(ns);
+            if wi.dot(ng) <= 0.0 || cos <= 0.0 || wo.dot(ns) <= 0.0 {
+                return None;
+            }
+            // f·cos/pdf = albedo for the cosine warp
+            BsdfSample { wi, weight: albedo, pdf_w: cos * INV_PI, is_delta: false }
+        }
+        Material::Glossy { albedo, specular, exponent } => {
+            let (wi, pdf) = phong::sample(albedo, specular, exponent, ns, wo, u)?;
+            if wi.dot(ng) <= 0.0 || wo.dot(ns) <= 0.0 || pdf <= 0.0 {
+                return None;
+            }
+            let f = phong::eval(albedo, specular, exponent, ns, wo, wi);
+            BsdfSample { wi, weight: f * wi.dot(ns) / pdf, pdf_w: pdf, is_delta: false }
+        }
+        Material::Mirror { reflectance } => {
+            let wi = crate::math::reflect(wo, ns);
+            if wi.dot(ng) <= 0.0 {
+                return None;
+            }
+            BsdfSample { wi, weight: reflectance, pdf_w: 1.0, is_delta: true }
+        }
+        Material::Glass { ior } => dielectric::sample(ior, sp, wo, u[0], mode)?,
+        Material::Black => return None,
+    };
+    let corr = if s.is_delta && matches!(m, Material::Glass { .. }) { 1.0 } else { shading_correction(mode, sp, wo, s.wi) };
+    Some(BsdfSample { weight: s.weight * corr, ..s })
+}
+

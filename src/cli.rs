@@ -1,0 +1,149 @@
+//! Command-line interface (clap derive). The `render` contract is fixed:
+//! `forecast render SCENE [--method pt] [--spp N | --time DURATION] [--resolution WxH]
+//! [--seed S] [--threads N] [--out PREFIX] [--quiet]`.
+
+use crate::integrators::{Method, MethodOptions};
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+
+/// Unbiased global illumination with Caustic Forecasting (Budge, Anderson, Joy 2008).
+#[derive(Parser, Debug)]
+#[command(name = "forecast", version, about)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Subcommands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render a scene to PREFIX.exr, PREFIX.png and PREFIX.json.
+    Render(RenderArgs),
+    /// Compare two EXR images: RMSE, relMSE (ε = 0.01) and means.
+    Diff(DiffArgs),
+    /// Ray-casting and path-tracing throughput.
+    Bench(BenchArgs),
+    /// Regenerate the committed procedural meshes (ring, figurines) deterministically.
+    GenerateScenes {
+        /// Scenes directory.
+        #[arg(long, default_value = "scenes")]
+        dir: PathBuf,
+    },
+    /// Check every MPI collective with known data (run under mpirun).
+    MpiSelftest,
+}
+
+/// `render` options.
+#[derive(Args, Debug, Clone)]
+pub struct RenderArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    /// Rendering method (default: the scene's `render.method`).
+    #[arg(long, value_enum)]
+    pub method: Option<Method>,
+    /// Samples per pixel (one per pass).
+    #[arg(long, conflicts_with = "time")]
+    pub spp: Option<u64>,
+    /// Time budget, preprocess included (e.g. 30s, 4m); whole passes only.
+    #[arg(long, value_parser = parse_secs)]
+    pub time: Option<f64>,
+    /// Resolution override, WxH.
+    #[arg(long, value_parser = parse_resolution)]
+    pub resolution: Option<(u32, u32)>,
+    /// Random seed (default: the scene's `render.seed`).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Worker threads per process (default: all cores; with MPI, cores / local ranks).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Output prefix.
+    #[arg(long, default_value = "out/render")]
+    pub out: PathBuf,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Safety cap on path vertices (default: the scene's `render.max_depth`, 64).
+    #[arg(long)]
+    pub max_depth: Option<u32>,
+    /// Write a checkpoint (PREFIX.ckpt) and the current image this often (e.g. 30s).
+    #[arg(long, value_parser = parse_secs)]
+    pub checkpoint_every: Option<f64>,
+    /// Continue from a checkpoint, adding new passes.
+    #[arg(long)]
+    pub resume: Option<PathBuf>,
+    /// Stop after this many rounds of passes (testing kill/resume).
+    #[arg(long, hide = true)]
+    pub max_rounds: Option<u64>,
+}
+
+impl RenderArgs {
+    /// The method options these arguments select.
+    pub fn method_options(&self) -> MethodOptions {
+        MethodOptions { max_depth: self.max_depth.unwrap_or(0) }
+    }
+}
+
+/// `diff` options.
+#[derive(Args, Debug)]
+pub struct DiffArgs {
+    /// Test image.
+    pub a: PathBuf,
+    /// Reference image.
+    pub b: PathBuf,
+    /// Crop x,y,w,h.
+    #[arg(long, value_parser = parse_crop)]
+    pub crop: Option<(usize, usize, usize, usize)>,
+    /// Write a false-colour difference PNG.
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Reference half image 0 (with --half1: the noise-consistency check against B).
+    #[arg(long, requires = "half1")]
+    pub half0: Option<PathBuf>,
+    /// Reference half image 1.
+    #[arg(long, requires = "half0")]
+    pub half1: Option<PathBuf>,
+}
+
+/// `bench` options.
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// Scene (default scenes/cornell-box.toml).
+    #[arg(default_value = "scenes/cornell-box.toml")]
+    pub scene: PathBuf,
+    /// Repetitions (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    pub repeats: usize,
+    /// Resolution for the pt measurement, WxH.
+    #[arg(long, value_parser = parse_resolution, default_value = "640x640")]
+    pub resolution: (u32, u32),
+    /// Worker threads.
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+fn parse_secs(s: &str) -> Result<f64, String> {
+    crate::scene::parse_duration(s)
+}
+
+/// Parses `WxH`.
+pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let (a, b) = s.split_once(['x', 'X']).ok_or_else(|| format!("bad resolution `{s}` (expected WxH, e.g. 640x480)"))?;
+    let w: u32 = a.trim().parse().map_err(|_| format!("bad width in `{s}`"))?;
+    let h: u32 = b.trim().parse().map_err(|_| format!("bad height in `{s}`"))?;
+    if w == 0 || h == 0 || w > 65536 || h > 65536 {
+        return Err(format!("resolution `{s}` must be 1..=65536 per axis"));
+    }
+    Ok((w, h))
+}
+
+fn parse_crop(s: &str) -> Result<(usize, usize, usize, usize), String> {
+    let v: Vec<usize> = s
+        .split(',')
+        .map(|x| x.trim().parse::<usize>().map_err(|_| format!("bad crop `{s}` (expected x,y,w,h)")))
+        .collect::<Result<_, _>>()?;
+    match v.as_slice() {
+        [x, y, w, h] if *w > 0 && *h > 0 => Ok((*x, *y, *w, *h)),
+        _ => Err(format!("bad crop `{s}` (expected x,y,w,h with w,h > 0)")),
+    }
+}

@@ -1,0 +1,310 @@
+//! Cluster abstraction: the few collective operations the renderer needs to split
+//! progressive passes across processes and combine their films.
+//!
+//! * [`Cluster`] is the trait the renderer talks to; it never touches MPI directly.
+//! * [`local::Local`] is the single-process implementation (rank 0 of 1); every
+//!   collective is the identity.
+//! * `mpi::MpiCluster` (only with the cargo feature `mpi`) wraps an MPI world
+//!   communicator. It also works as a singleton (size 1) when started without `mpirun`.
+//! * [`schedule`] holds the pure pass-ownership and time-box arithmetic.
+//!
+//! Invariants every implementation keeps:
+//! * `rank() < size()` and `size() >= 1`.
+//! * Every collective (all methods except `rank`/`size`) must be called by **all** ranks,
+//!   in the same order, with the same slice lengths where the method says so; otherwise
+//!   MPI deadlocks. Length disagreements that can be detected cheaply cause a panic with a
+//!   message naming the lengths, on every rank, rather than a hang or silent corruption.
+//! * Message sizes are unlimited: payloads whose element count exceeds `i32::MAX` are split
+//!   into chunks internally.
+
+pub mod local;
+#[cfg(feature = "mpi")]
+pub mod mpi;
+pub mod schedule;
+
+use std::time::Instant;
+
+use schedule::Deadline;
+
+/// Collective operations over a group of cooperating processes ("ranks").
+///
+/// All methods except [`Cluster::rank`] and [`Cluster::size`] are collective: every rank
+/// must call them in the same order.
+pub trait Cluster {
+    /// This process's index in `0..size()`.
+    fn rank(&self) -> usize;
+    /// Number of cooperating processes (at least 1).
+    fn size(&self) -> usize;
+    /// Rank 0's bytes are copied to every rank (length first, then payload; chunk payloads > i32::MAX).
+    /// On ranks other than 0 the vector's previous contents and length are replaced.
+    fn broadcast_bytes(&self, bytes: &mut Vec<u8>);
+    /// Element-wise sum over ranks into rank 0: returns Some(sum) on rank 0, None elsewhere.
+    /// All ranks must pass slices of the same length (checked; mismatch panics on every rank).
+    fn reduce_sum(&self, local: &[f64]) -> Option<Vec<f64>>;
+    /// Element-wise sum to all ranks (for agreeing on deadlines/counters).
+    /// All ranks must pass slices of the same length (checked; mismatch panics on every rank).
+    fn all_reduce_sum(&self, local: &[f64]) -> Vec<f64>;
+    /// Max over ranks to all ranks.
+    fn all_reduce_max(&self, local: f64) -> f64;
+    /// Gather one small byte blob per rank onto rank 0 (per-rank stats JSON): Some(vec per rank) on rank 0,
+    /// indexed by rank; None elsewhere. Blobs may have different lengths, including zero.
+    fn gather_bytes(&self, local: &[u8]) -> Option<Vec<Vec<u8>>>;
+    /// Blocks until every rank has reached it.
+    fn barrier(&self);
+}
+
+/// Starts the cluster: the MPI world when built with feature `mpi` (also works as a
+/// singleton without `mpirun`), else [`local::Local`].
+///
+/// # Panics
+/// When [`try_init`] fails (MPI already initialised in this process, or a non-MPI build
+/// started by `mpirun -n N` with N > 1). Use [`try_init`] to handle that yourself.
+/// Keep the returned box alive until the end of `main`: dropping it calls `MPI_Finalize`.
+pub fn init() -> Box<dyn Cluster> {
+    match try_init() {
+        Ok(c) => c,
+        Err(e) => panic!("cluster init failed: {e}"),
+    }
+}
+
+/// Like [`init`] but returns an error instead of panicking.
+///
+/// Errors:
+/// * feature `mpi`: MPI was already initialised in this process (call `init` once).
+/// * no feature `mpi`: the process was started by a launcher (`mpirun`/`srun`) that says
+///   there are several ranks. Each rank would otherwise render the whole image alone and
+///   they would all write the same output files.
+pub fn try_init() -> Result<Box<dyn Cluster>, String> {
+    #[cfg(feature = "mpi")]
+    {
+        let c = mpi::MpiCluster::init()?;
+        Ok(Box::new(c))
+    }
+    #[cfg(not(feature = "mpi"))]
+    {
+        if let Some((var, n)) = launcher_world_size() {
+            if n > 1 {
+                return Err(format!(
+                    "this binary was built without the `mpi` feature but was started as one of {n} ranks \
+                     ({var}={n}); rebuild with `cargo build --release --features mpi` \
+                     (needs .ci/install-mpi.sh) or run it without mpirun"
+                ));
+            }
+        }
+        Ok(Box::new(local::Local::new()))
+    }
+}
+
+/// World size announced by a process launcher through the environment, if any
+/// (MPICH/Hydra `PMI_SIZE`, Open MPI `OMPI_COMM_WORLD_SIZE`, Slurm `SLURM_NTASKS`).
+#[cfg_attr(feature = "mpi", allow(dead_code))]
+fn launcher_world_size() -> Option<(&'static str, usize)> {
+    for var in ["PMI_SIZE", "OMPI_COMM_WORLD_SIZE", "PMIX_SIZE"] {
+        if let Ok(v) = std::env::var(var) {
+            if let Ok(n) = v.trim().parse::<usize>() {
+                return Some((var, n));
+            }
+        }
+    }
+    None
+}
+
+/// True on every rank iff `local_ok` is true on every rank (one tiny all-reduce).
+///
+/// Use it once per round of passes with the local [`Deadline::should_start_next`] answer so
+/// that all ranks render the same number of rounds and the finished passes stay a
+/// contiguous range (see [`schedule`]).
+pub fn all_agree(c: &dyn Cluster, local_ok: bool) -> bool {
+    let veto = if local_ok { 0.0 } else { 1.0 };
+    c.all_reduce_max(veto) == 0.0
+}
+
+/// Builds a [`Deadline`] shared by all ranks for a time box of `budget_secs` seconds
+/// counted from rank 0's `local_start` (e.g. the instant rank 0's process started).
+///
+/// Rank 0 computes the remaining time and broadcasts it; every rank sets its deadline to
+/// "now + remaining", so the ranks agree up to the broadcast latency. `None`, a NaN or an
+/// infinite budget gives [`Deadline::never`]. Collective: call on all ranks.
+pub fn shared_deadline(
+    c: &dyn Cluster,
+    local_start: Instant,
+    budget_secs: Option<f64>,
+) -> Deadline {
+    let mut bytes = Vec::new();
+    if c.rank() == 0 {
+        let remaining = match budget_secs {
+            Some(b) if b.is_finite() => (b - local_start.elapsed().as_secs_f64()).max(0.0),
+            _ => f64::INFINITY,
+        };
+        bytes = remaining.to_le_bytes().to_vec();
+    }
+    c.broadcast_bytes(&mut bytes);
+    let remaining = match <[u8; 8]>::try_from(bytes.as_slice()) {
+        Ok(b) => f64::from_le_bytes(b),
+        Err(_) => f64::INFINITY, // cannot happen: rank 0 always sends 8 bytes
+    };
+    Deadline::after_secs(Instant::now(), remaining)
+}
+
+/// Checks every collective of `c` with known data; meant for `forecast mpi-selftest`.
+///
+/// Collective: call on all ranks. Returns the same verdict on every rank; rank 0's error
+/// message lists the failures of all ranks. Exercises: a 3 MB and an empty broadcast,
+/// `reduce_sum`, `all_reduce_sum`, `all_reduce_max` (with negative values), `gather_bytes`
+/// with per-rank lengths (rank 0's blob is empty) and `barrier`.
+pub fn self_test(c: &dyn Cluster) -> Result<(), String> {
+    let (rank, size) = (c.rank(), c.size());
+    let mut errs: Vec<String> = Vec::new();
+    if size == 0 || rank >= size {
+        return Err(format!("bad topology: rank {rank}, size {size}"));
+    }
+
+    // 1. Broadcast 3 MB from rank 0; other ranks start with a short, different buffer.
+    let pattern = |i: usize| ((i.wrapping_mul(31) + 7) % 251) as u8;
+    let n = 3 * 1024 * 1024 + 17;
+    let mut buf: Vec<u8> = if rank == 0 {
+        (0..n).map(pattern).collect()
+    } else {
+        vec![0xAB; 5]
+    };
+    c.broadcast_bytes(&mut buf);
+    if buf.len() != n {
+        errs.push(format!("broadcast: length {} != {n}", buf.len()));
+    } else if let Some(i) = (0..n).find(|&i| buf[i] != pattern(i)) {
+        errs.push(format!(
+            "broadcast: byte {i} is {} != {}",
+            buf[i],
+            pattern(i)
+        ));
+    }
+    let mut empty: Vec<u8> = if rank == 0 { Vec::new() } else { vec![1, 2, 3] };
+    c.broadcast_bytes(&mut empty);
+    if !empty.is_empty() {
+        errs.push(format!(
+            "broadcast of empty buffer left {} bytes",
+            empty.len()
+        ));
+    }
+
+    // 2. reduce_sum / all_reduce_sum: integers, so the f64 sums are exact.
+    let len = 100_003;
+    let local: Vec<f64> = (0..len)
+        .map(|i| (rank + 1) as f64 * i as f64 - 0.5)
+        .collect();
+    let tri = (size * (size + 1) / 2) as f64;
+    let expect = |i: usize| tri * i as f64 - 0.5 * size as f64;
+    match (rank, c.reduce_sum(&local)) {
+        (0, Some(sum)) => {
+            if sum.len() != len {
+                errs.push(format!("reduce_sum: length {} != {len}", sum.len()));
+            } else if let Some(i) = (0..len).find(|&i| sum[i] != expect(i)) {
+                errs.push(format!(
+                    "reduce_sum: element {i} is {} != {}",
+                    sum[i],
+                    expect(i)
+                ));
+            }
+        }
+        (0, None) => errs.push("reduce_sum returned None on rank 0".into()),
+        (_, Some(_)) => errs.push("reduce_sum returned Some on a non-root rank".into()),
+        (_, None) => {}
+    }
+    let all = c.all_reduce_sum(&local[..1000]);
+    if all.len() != 1000 {
+        errs.push(format!("all_reduce_sum: length {} != 1000", all.len()));
+    } else if let Some(i) = (0..1000).find(|&i| all[i] != expect(i)) {
+        errs.push(format!(
+            "all_reduce_sum: element {i} is {} != {}",
+            all[i],
+            expect(i)
+        ));
+    }
+    if !c.all_reduce_sum(&[]).is_empty() {
+        errs.push("all_reduce_sum of an empty slice is not empty".into());
+    }
+
+    // 3. all_reduce_max with negative values: max is the last rank's value.
+    let m = c.all_reduce_max(rank as f64 * 1.5 - 1000.0);
+    let want = (size - 1) as f64 * 1.5 - 1000.0;
+    if m != want {
+        errs.push(format!("all_reduce_max: {m} != {want}"));
+    }
+
+    // 4. gather_bytes with different lengths per rank (rank 0 sends nothing).
+    let blob = |r: usize| -> Vec<u8> { (0..r * 3).map(|k| (r * 7 + k) as u8).collect() };
+    match (rank, c.gather_bytes(&blob(rank))) {
+        (0, Some(v)) => {
+            if v.len() != size {
+                errs.push(format!("gather_bytes: {} blobs for {size} ranks", v.len()));
+            } else {
+                for (r, b) in v.iter().enumerate() {
+                    if *b != blob(r) {
+                        errs.push(format!(
+                            "gather_bytes: blob of rank {r} wrong ({} bytes)",
+                            b.len()
+                        ));
+                    }
+                }
+            }
+        }
+        (0, None) => errs.push("gather_bytes returned None on rank 0".into()),
+        (_, Some(_)) => errs.push("gather_bytes returned Some on a non-root rank".into()),
+        (_, None) => {}
+    }
+
+    c.barrier();
+
+    // 5. Agree on the verdict and bring every rank's messages to rank 0.
+    let text = errs
+        .iter()
+        .map(|e| format!("rank {rank}: {e}"))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let all_text = c.gather_bytes(text.as_bytes());
+    let failures = c.all_reduce_sum(&[errs.len() as f64])[0];
+    if failures == 0.0 {
+        return Ok(());
+    }
+    let msg = match all_text {
+        Some(v) => v
+            .iter()
+            .filter(|b| !b.is_empty())
+            .map(|b| String::from_utf8_lossy(b).into_owned())
+            .collect::<Vec<_>>()
+            .join("\n"),
+        None => format!("{failures} check(s) failed (details on rank 0)"),
+    };
+    Err(msg)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn self_test_passes_on_local() {
+        let c = local::Local::new();
+        assert_eq!(self_test(&c), Ok(()));
+    }
+
+    #[test]
+    fn all_agree_local() {
+        let c = local::Local::new();
+        assert!(all_agree(&c, true));
+        assert!(!all_agree(&c, false));
+    }
+
+    #[test]
+    fn shared_deadline_local() {
+        let c = local::Local::new();
+        let start = Instant::now();
+        let d = shared_deadline(&c, start, Some(3600.0));
+        assert!(d.should_start_next(Instant::now(), 1.0));
+        let d = shared_deadline(&c, start, Some(0.0));
+        assert!(!d.should_start_next(Instant::now(), 0.0));
+        let d = shared_deadline(&c, start, None);
+        assert!(d.should_start_next(Instant::now(), 1e12));
+        let d = shared_deadline(&c, start, Some(f64::NAN));
+        assert!(d.should_start_next(Instant::now(), 1e12));
+    }
+}

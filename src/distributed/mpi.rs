@@ -1,0 +1,233 @@
+//! [`Cluster`] over an MPI world communicator (rsmpi 0.8, tested with MPICH 4.0.2).
+//!
+//! Compiled only with the cargo feature `mpi`. Started without `mpirun` it is a singleton
+//! world of size 1.
+//!
+//! Invariants and choices:
+//! * MPI is initialised with `Threading::Funneled`: only the thread that called
+//!   [`MpiCluster::init`] (the main thread) may call the collectives; rayon workers must not.
+//! * The `Universe` lives inside the struct; dropping the cluster calls `MPI_Finalize`.
+//!   Keep it alive until the end of `main` (and avoid `std::process::exit` before that).
+//! * MPI counts are `i32`: every payload is split into chunks of at most
+//!   `max_chunk_bytes` bytes (default 1 GiB), so any length works.
+//! * Reductions first agree on the slice length with one tiny all-reduce; a mismatch panics
+//!   on every rank with both lengths named, instead of deadlocking or reading out of bounds.
+
+use ::mpi::collective::SystemOperation;
+use ::mpi::datatype::PartitionMut;
+use ::mpi::environment::Universe;
+use ::mpi::topology::SimpleCommunicator;
+use ::mpi::traits::*;
+use ::mpi::Threading;
+
+use super::Cluster;
+
+/// Default largest chunk of one MPI call, in bytes (1 GiB, well below `i32::MAX`).
+pub const DEFAULT_MAX_CHUNK_BYTES: usize = 1 << 30;
+
+/// The MPI world as a [`Cluster`]. Dropping it finalises MPI.
+pub struct MpiCluster {
+    // Field order matters: `world` is dropped before `universe` (which calls MPI_Finalize).
+    world: SimpleCommunicator,
+    rank: usize,
+    size: usize,
+    provided: Threading,
+    max_chunk_bytes: usize,
+    _universe: Universe,
+}
+
+impl MpiCluster {
+    /// Initialises MPI with `Threading::Funneled` and wraps the world communicator.
+    ///
+    /// Errors when MPI is already initialised in this process. Prints a warning on stderr
+    /// when the library provides less than `Funneled` (the renderer still only calls MPI
+    /// from the main thread, which works in practice).
+    pub fn init() -> Result<Self, String> {
+        let (universe, provided) = ::mpi::initialize_with_threading(Threading::Funneled)
+            .ok_or_else(|| {
+                "MPI is already initialised in this process; call distributed::init() only once"
+                    .to_string()
+            })?;
+        if provided < Threading::Funneled {
+            eprintln!("warning: MPI provides thread level {provided:?}, asked for Funneled");
+        }
+        let world = universe.world();
+        let rank = usize::try_from(world.rank())
+            .map_err(|_| format!("negative MPI rank {}", world.rank()))?;
+        let size =
+            usize::try_from(world.size()).map_err(|_| format!("bad MPI size {}", world.size()))?;
+        if size == 0 || rank >= size {
+            return Err(format!("inconsistent MPI world: rank {rank}, size {size}"));
+        }
+        Ok(MpiCluster {
+            world,
+            rank,
+            size,
+            provided,
+            max_chunk_bytes: DEFAULT_MAX_CHUNK_BYTES,
+            _universe: universe,
+        })
+    }
+
+    /// The thread level MPI actually provides.
+    pub fn provided_threading(&self) -> Threading {
+        self.provided
+    }
+
+    /// Sets the largest payload of one MPI call (clamped to `8..=i32::MAX`). Only useful to
+    /// exercise the chunking in tests; must be set to the same value on every rank.
+    pub fn set_max_chunk_bytes(&mut self, bytes: usize) {
+        self.max_chunk_bytes = bytes.clamp(8, i32::MAX as usize);
+    }
+
+    /// Largest number of f64 elements per MPI call.
+    fn chunk_f64(&self) -> usize {
+        (self.max_chunk_bytes / std::mem::size_of::<f64>()).max(1)
+    }
+
+    /// Agrees on a slice length across ranks; panics on every rank if they differ.
+    fn check_same_len(&self, what: &str, len: usize) {
+        let len = len as u64;
+        let mine = [len, u64::MAX - len];
+        let mut agg = [0u64; 2];
+        self.world
+            .all_reduce_into(&mine[..], &mut agg[..], SystemOperation::max());
+        let (max, min) = (agg[0], u64::MAX - agg[1]);
+        if max != min {
+            panic!(
+                "{what}: ranks passed slices of different lengths (min {min}, max {max}; rank {} has {len})",
+                self.rank
+            );
+        }
+    }
+
+    /// Rank 0 receives every other rank's blob by point-to-point messages, in chunks.
+    /// Used when the blobs together exceed one chunk (so `MPI_Gatherv` counts and
+    /// displacements could overflow `i32`).
+    fn gather_point_to_point(&self, local: &[u8], lens: &[u64]) -> Option<Vec<Vec<u8>>> {
+        let chunk = self.max_chunk_bytes;
+        if self.rank != 0 {
+            let root = self.world.process_at_rank(0);
+            for piece in local.chunks(chunk) {
+                root.send(piece);
+            }
+            return None;
+        }
+        let mut out = Vec::with_capacity(self.size);
+        out.push(local.to_vec());
+        for (r, &len) in lens.iter().enumerate().skip(1) {
+            let mut blob = vec![0u8; usize::try_from(len).unwrap_or(usize::MAX)];
+            let src = self.world.process_at_rank(r as i32);
+            for piece in blob.chunks_mut(chunk) {
+                src.receive_into(piece);
+            }
+            out.push(blob);
+        }
+        Some(out)
+    }
+}
+
+impl Cluster for MpiCluster {
+    fn rank(&self) -> usize {
+        self.rank
+    }
+
+    fn size(&self) -> usize {
+        self.size
+    }
+
+    fn broadcast_bytes(&self, bytes: &mut Vec<u8>) {
+        let root = self.world.process_at_rank(0);
+        let mut len = bytes.len() as u64;
+        root.broadcast_into(&mut len);
+        if self.rank != 0 {
+            let n = usize::try_from(len).unwrap_or_else(|_| {
+                panic!("broadcast_bytes: {len} bytes do not fit in this address space")
+            });
+            bytes.clear();
+            bytes.resize(n, 0);
+        }
+        for piece in bytes.chunks_mut(self.max_chunk_bytes) {
+            root.broadcast_into(piece);
+        }
+    }
+
+    fn reduce_sum(&self, local: &[f64]) -> Option<Vec<f64>> {
+        self.check_same_len("reduce_sum", local.len());
+        let root = self.world.process_at_rank(0);
+        let ce = self.chunk_f64();
+        if self.rank == 0 {
+            let mut out = vec![0.0f64; local.len()];
+            for (send, recv) in local.chunks(ce).zip(out.chunks_mut(ce)) {
+                root.reduce_into_root(send, recv, SystemOperation::sum());
+            }
+            Some(out)
+        } else {
+            for send in local.chunks(ce) {
+                root.reduce_into(send, SystemOperation::sum());
+            }
+            None
+        }
+    }
+
+    fn all_reduce_sum(&self, local: &[f64]) -> Vec<f64> {
+        self.check_same_len("all_reduce_sum", local.len());
+        let ce = self.chunk_f64();
+        let mut out = vec![0.0f64; local.len()];
+        for (send, recv) in local.chunks(ce).zip(out.chunks_mut(ce)) {
+            self.world
+                .all_reduce_into(send, recv, SystemOperation::sum());
+        }
+        out
+    }
+
+    fn all_reduce_max(&self, local: f64) -> f64 {
+        let mut out = 0.0f64;
+        self.world
+            .all_reduce_into(&local, &mut out, SystemOperation::max());
+        out
+    }
+
+    fn gather_bytes(&self, local: &[u8]) -> Option<Vec<Vec<u8>>> {
+        // Every rank learns every length, so all take the same path below.
+        let mine = local.len() as u64;
+        let mut lens = vec![0u64; self.size];
+        self.world.all_gather_into(&mine, &mut lens[..]);
+        let total: u64 = lens.iter().sum();
+        if total > self.max_chunk_bytes as u64 {
+            return self.gather_point_to_point(local, &lens);
+        }
+        // total <= max_chunk_bytes <= i32::MAX, so counts and displacements fit in i32.
+        let root = self.world.process_at_rank(0);
+        if self.rank != 0 {
+            root.gather_varcount_into(local);
+            return None;
+        }
+        let counts: Vec<i32> = lens.iter().map(|&l| l as i32).collect();
+        let displs: Vec<i32> = counts
+            .iter()
+            .scan(0i32, |acc, &c| {
+                let d = *acc;
+                *acc += c;
+                Some(d)
+            })
+            .collect();
+        let mut all = vec![0u8; total as usize];
+        {
+            let mut part = PartitionMut::new(&mut all[..], &counts[..], &displs[..]);
+            root.gather_varcount_into_root(local, &mut part);
+        }
+        let mut out = Vec::with_capacity(self.size);
+        let mut off = 0usize;
+        for &l in &lens {
+            let l = l as usize;
+            out.push(all[off..off + l].to_vec());
+            off += l;
+        }
+        Some(out)
+    }
+
+    fn barrier(&self) {
+        self.world.barrier();
+    }
+}

@@ -1,0 +1,161 @@
+//! The CF cluster map ([BAJ08 §3.2] "Caustic points near centroids of the remaining clusters … are added
+//! to a kd-tree called the cluster map"; spec §3 "Cluster map").
+//!
+//! For each kept cluster `c` (rank ≤ R_max, the prefix `clustering.clusters[..n_kept]`) the map stores
+//! its `m` members nearest the 6-D feature centroid, labelled `c`. A query at `(x, n_x)` takes the
+//! nearest representative `q` and accepts its cluster iff `|x − q| ≤ R_c + r` and `n_x·n̄_c ≥ 0.5`.
+//!
+//! Invariants: only efficiency depends on this structure, never correctness (a `None` means cosine
+//! sampling). Returned indices are kept-cluster indices, equal to indices into `clustering.clusters`.
+//! Deterministic; serializable with bitcode; an empty map answers `None`.
+
+use super::caustic_point::CausticPoint;
+use super::cluster::Clustering;
+use crate::math::Vec3;
+use crate::spatial::KdTree;
+
+/// Default number of representatives per cluster (spec §5).
+pub const DEFAULT_REPRESENTATIVES: usize = 32;
+/// Minimum `n_x·n̄_c` for a valid cluster.
+pub const MIN_NORMAL_COS: f32 = 0.5;
+
+/// Cluster-membership lookup structure.
+#[derive(Clone, Debug, Default, PartialEq, bitcode::Encode, bitcode::Decode)]
+pub struct ClusterMap {
+    /// Representatives, item id = kept-cluster index.
+    tree: KdTree,
+    /// Per kept cluster: acceptance distance R_c + r.
+    reach: Vec<f32>,
+    /// Per kept cluster: mean normal n̄_c.
+    normals: Vec<[f32; 3]>,
+}
+
+impl ClusterMap {
+    /// Builds the map over the clusters with rank ≤ `max_rank`, `m` representatives each, search
+    /// radius `r` (added to R_c in the validity test).
+    pub fn build(points: &[CausticPoint], clustering: &Clustering, max_rank: u32, m: usize, r: f32) -> Self {
+        let kept = clustering.kept(max_rank);
+        let r = if r.is_finite() { r.max(0.0) } else { 0.0 };
+        let (mut pos, mut ids) = (Vec::new(), Vec::new());
+        let mut scratch: Vec<(f32, u32)> = Vec::new();
+        for (ci, c) in kept.iter().enumerate() {
+            // m members nearest the 6-D centroid (ties by index, so deterministic).
+            scratch.clear();
+            scratch.extend(c.members.iter().filter_map(|&i| {
+                let p = points.get(i as usize)?;
+                let f = clustering.feature(p);
+                let d: f32 = (0..6).map(|t| (f[t] - c.feature[t]).powi(2)).sum();
+                Some((d, i))
+            }));
+            if m < scratch.len() {
+                scratch.select_nth_unstable_by(m, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                scratch.truncate(m);
+            }
+            for &(_, i) in &scratch {
+                pos.push(points[i as usize].p);
+                ids.push(ci as u32);
+            }
+        }
+        ClusterMap {
+            tree: KdTree::build_with_ids(pos, ids),
+            reach: kept.iter().map(|c| c.radius + r).collect(),
+            normals: kept.iter().map(|c| c.normal).collect(),
+        }
+    }
+
+    /// Number of kept clusters in the map.
+    pub fn n_clusters(&self) -> usize {
+        self.reach.len()
+    }
+
+    /// Number of stored representatives.
+    pub fn n_representatives(&self) -> usize {
+        self.tree.len()
+    }
+
+    /// The kept cluster valid at `x` with (geometric, viewer-side) normal `n_x`, if any.
+    pub fn query(&self, x: Vec3, n_x: Vec3) -> Option<usize> {
+        let (c, d2) = self.tree.nearest(x.to_array())?;
+        let c = c as usize;
+        let reach = self.reach[c];
+        // spec §3: valid iff |x − q| ≤ R_c + r and n_x·n̄_c ≥ 0.5.
+        let ok = d2 <= reach * reach && n_x.dot(Vec3::from_array(self.normals[c])) >= MIN_NORMAL_COS;
+        ok.then_some(c)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::forecast::cluster::{cluster_points, ClusteringMethod};
+    use crate::sampling::rng::{stream, Rng};
+
+    fn scene(n: usize) -> Vec<CausticPoint> {
+        // Floor blob, wall blob, a faint far blob.
+        let mut r = Rng::keyed(1, stream::MISC, 0, 0);
+        let mut v = Vec::new();
+        for i in 0..n {
+            let (a, b) = (r.next_f32(), r.next_f32());
+            v.push(match i % 3 {
+                0 => CausticPoint::new(Vec3::new(a, 0.0, b), Vec3::Y, Vec3::Y, Vec3::splat(1.0)),
+                1 => CausticPoint::new(Vec3::new(0.0, a, b), Vec3::X, Vec3::X, Vec3::splat(1.0)),
+                _ => CausticPoint::new(Vec3::new(3.0 + a, 0.0, b), Vec3::Y, Vec3::Y, Vec3::splat(1e-3)),
+            });
+        }
+        v
+    }
+
+    /// Brute force of the same rule over the same representatives.
+    fn brute(map: &ClusterMap, x: Vec3, n_x: Vec3) -> Option<usize> {
+        let (mut best, mut bd) = (None, f32::INFINITY);
+        for (c, p) in map.tree.items() {
+            let d = (Vec3::from_array(p) - x).length_squared();
+            if d < bd {
+                bd = d;
+                best = Some(c as usize);
+            }
+        }
+        let c = best?;
+        (bd <= map.reach[c].powi(2) && n_x.dot(Vec3::from_array(map.normals[c])) >= 0.5).then_some(c)
+    }
+
+    #[test]
+    fn query_matches_brute_force_and_rules() {
+        let pts = scene(6000);
+        let cl = cluster_points(&pts, 12, ClusteringMethod::Vq, 3);
+        let max_rank = 3;
+        let map = ClusterMap::build(&pts, &cl, max_rank, 32, 0.05);
+        assert_eq!(map.n_clusters(), cl.n_kept(max_rank));
+        assert!(map.n_representatives() <= 32 * map.n_clusters());
+        let mut r = Rng::keyed(2, stream::MISC, 0, 0);
+        for _ in 0..2000 {
+            let x = Vec3::new(4.0 * r.next_f32() - 0.5, 1.2 * r.next_f32() - 0.1, 1.2 * r.next_f32() - 0.1);
+            for n in [Vec3::Y, Vec3::X, -Vec3::Y] {
+                assert_eq!(map.query(x, n), brute(&map, x, n));
+            }
+        }
+        // Floor point with the floor normal lands in a floor cluster; the wrong normal is rejected.
+        let c = map.query(Vec3::new(0.5, 0.0, 0.5), Vec3::Y).expect("floor cluster");
+        assert!(cl.clusters[c].normal[1] > 0.9);
+        assert_eq!(map.query(Vec3::new(0.5, 0.0, 0.5), -Vec3::Y), None);
+        // Far away: nothing. The faint blob is culled at rank 3 when it exists as its own cluster.
+        assert_eq!(map.query(Vec3::new(50.0, 0.0, 0.0), Vec3::Y), None);
+        for ci in 0..map.n_clusters() {
+            assert!(cl.clusters[ci].rank <= max_rank);
+        }
+    }
+
+    #[test]
+    fn empty_and_round_trip() {
+        let empty = ClusterMap::build(&[], &Clustering::default(), 6, 32, 0.1);
+        assert_eq!(empty.query(Vec3::ZERO, Vec3::Y), None);
+        let pts = scene(3000);
+        let cl = cluster_points(&pts, 8, ClusteringMethod::KMeans, 1);
+        let map = ClusterMap::build(&pts, &cl, 6, 32, 0.05);
+        let bytes = bitcode::encode(&map);
+        let back: ClusterMap = bitcode::decode(&bytes).unwrap();
+        assert_eq!(back, map);
+        let bytes = bitcode::encode(&cl);
+        assert_eq!(bitcode::decode::<Clustering>(&bytes).unwrap(), cl);
+    }
+}

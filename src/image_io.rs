@@ -1,0 +1,448 @@
+//! Image container and file I/O: OpenEXR (linear float) and PNG (8-bit sRGB).
+//!
+//! * [`Image`] is a row-major buffer of linear RGB `f32` pixels; pixel `(0, 0)` is the top-left
+//!   corner and `pixels[y * width + x]` is pixel `(x, y)`. Invariant:
+//!   `pixels.len() == width * height`.
+//! * EXR files are written as one scan-line layer, float32, ZIP compression, channels `R`, `G`,
+//!   `B` and optionally the per-pixel variance-of-the-mean channels [`VARIANCE_CHANNELS`]
+//!   (`var.R`, `var.G`, `var.B`) in the same layer. Readers take the first layer that has `R`, `G`,
+//!   `B` (alpha and other channels are ignored; a lone `Y` channel is read as grey).
+//! * Every writer is atomic: bytes go to [`atomic_path`]`(path)` (`PATH.tmp`, same directory)
+//!   and are then renamed over `path`, so a reader never sees a half-written file.
+//! * Nothing here panics on bad input; errors are `String`s that name the file.
+//!
+//! This is the only module that uses the `exr` and `png` crates.
+
+use std::io::Cursor;
+use std::path::{Path, PathBuf};
+
+/// Names of the per-pixel variance-of-the-mean channels written by [`write_exr_layers`].
+pub const VARIANCE_CHANNELS: [&str; 3] = ["var.R", "var.G", "var.B"];
+
+/// A linear-RGB float image, row-major, `(0, 0)` at the top-left.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// `width * height` pixels; pixel `(x, y)` is at index `y * width + x`.
+    pub pixels: Vec<[f32; 3]>,
+}
+
+impl Image {
+    /// A black image of the given size.
+    pub fn new(width: usize, height: usize) -> Image {
+        Image { width, height, pixels: vec![[0.0; 3]; width * height] }
+    }
+
+    /// Wraps a pixel vector, checking that its length is `width * height`.
+    pub fn from_pixels(width: usize, height: usize, pixels: Vec<[f32; 3]>) -> Result<Image, String> {
+        if width.checked_mul(height) != Some(pixels.len()) {
+            return Err(format!(
+                "image of {width}x{height} needs {} pixels, got {}",
+                width.saturating_mul(height),
+                pixels.len()
+            ));
+        }
+        Ok(Image { width, height, pixels })
+    }
+
+    /// Builds an image by evaluating `f(x, y)` for every pixel.
+    pub fn from_fn(width: usize, height: usize, mut f: impl FnMut(usize, usize) -> [f32; 3]) -> Image {
+        let mut pixels = Vec::with_capacity(width * height);
+        for y in 0..height {
+            for x in 0..width {
+                pixels.push(f(x, y));
+            }
+        }
+        Image { width, height, pixels }
+    }
+
+    /// Pixel `(x, y)`. Panics if out of bounds (like slice indexing); see [`Image::try_get`].
+    pub fn get(&self, x: usize, y: usize) -> [f32; 3] {
+        assert!(x < self.width && y < self.height, "pixel ({x},{y}) outside {}x{}", self.width, self.height);
+        self.pixels[y * self.width + x]
+    }
+
+    /// Pixel `(x, y)`, or `None` if out of bounds.
+    pub fn try_get(&self, x: usize, y: usize) -> Option<[f32; 3]> {
+        if x < self.width && y < self.height {
+            self.pixels.get(y * self.width + x).copied()
+        } else {
+            None
+        }
+    }
+
+    /// Sets pixel `(x, y)`; returns `false` (and does nothing) if out of bounds.
+    pub fn set(&mut self, x: usize, y: usize, value: [f32; 3]) -> bool {
+        if x < self.width && y < self.height {
+            self.pixels[y * self.width + x] = value;
+            true
+        } else {
+            false
+        }
+    }
+
+    /// The `w`×`h` sub-image whose top-left corner is `(x, y)`; errors if it leaves the image
+    /// or is empty.
+    pub fn crop(&self, x: usize, y: usize, w: usize, h: usize) -> Result<Image, String> {
+        let fits = w > 0
+            && h > 0
+            && x.checked_add(w).is_some_and(|r| r <= self.width)
+            && y.checked_add(h).is_some_and(|b| b <= self.height);
+        if !fits {
+            return Err(format!(
+                "crop {x},{y},{w},{h} is empty or outside the {}x{} image",
+                self.width, self.height
+            ));
+        }
+        let mut pixels = Vec::with_capacity(w * h);
+        for row in y..y + h {
+            let start = row * self.width + x;
+            pixels.extend_from_slice(&self.pixels[start..start + w]);
+        }
+        Ok(Image { width: w, height: h, pixels })
+    }
+
+    /// Per-channel mean over all pixels (accumulated in `f64`); `[0; 3]` for an empty image.
+    pub fn mean(&self) -> [f64; 3] {
+        let mut s = [0.0f64; 3];
+        for p in &self.pixels {
+            for c in 0..3 {
+                s[c] += p[c] as f64;
+            }
+        }
+        let n = self.pixels.len().max(1) as f64;
+        [s[0] / n, s[1] / n, s[2] / n]
+    }
+
+    /// `true` if the other image has the same width and height.
+    pub fn same_size(&self, other: &Image) -> bool {
+        self.width == other.width && self.height == other.height
+    }
+}
+
+/// The temporary path a writer uses before renaming onto `path`: `path` with `.tmp` appended to
+/// its file name, in the same directory (so the rename is atomic on one file system).
+pub fn atomic_path(path: &Path) -> PathBuf {
+    let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
+    name.push(".tmp");
+    path.with_file_name(name)
+}
+
+/// Writes `bytes` to [`atomic_path`]`(path)`, then renames it to `path`. Creates no directories.
+pub fn atomic_write(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    let tmp = atomic_path(path);
+    std::fs::write(&tmp, bytes).map_err(|e| format!("cannot write {}: {e}", tmp.display()))?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        format!("cannot rename {} to {}: {e}", tmp.display(), path.display())
+    })
+}
+
+fn check_len(path: &Path, img: &Image) -> Result<(), String> {
+    if img.pixels.len() != img.width * img.height || img.width == 0 || img.height == 0 {
+        return Err(format!(
+            "{}: image {}x{} has {} pixels (must be non-empty and match)",
+            path.display(),
+            img.width,
+            img.height,
+            img.pixels.len()
+        ));
+    }
+    Ok(())
+}
+
+/// Writes an RGB float32 EXR (channels `R`, `G`, `B`).
+pub fn write_exr(path: &Path, img: &Image) -> Result<(), String> {
+    write_exr_layers(path, img, None)
+}
+
+/// Writes an RGB float32 EXR; with `variance` also the channels [`VARIANCE_CHANNELS`]
+/// (`var.R`, `var.G`, `var.B`, the per-pixel variance of the mean) in the same layer.
+pub fn write_exr_layers(path: &Path, img: &Image, variance: Option<&Image>) -> Result<(), String> {
+    use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Layer};
+    use exr::image::write::WritableImage;
+    use exr::meta::header::LayerAttributes;
+    check_len(path, img)?;
+    let plane = |im: &Image, c: usize| FlatSamples::F32(im.pixels.iter().map(|p| p[c]).collect());
+    let mut list: Vec<AnyChannel<FlatSamples>> = ["R", "G", "B"]
+        .iter()
+        .enumerate()
+        .map(|(c, n)| AnyChannel::new(*n, plane(img, c)))
+        .collect();
+    if let Some(v) = variance {
+        if !v.same_size(img) {
+            return Err(format!(
+                "{}: variance image is {}x{}, colour image is {}x{}",
+                path.display(),
+                v.width,
+                v.height,
+                img.width,
+                img.height
+            ));
+        }
+        check_len(path, v)?;
+        for (c, n) in VARIANCE_CHANNELS.iter().enumerate() {
+            list.push(AnyChannel::new(*n, plane(v, c)));
+        }
+    }
+    let channels = AnyChannels::sort(list.into_iter().collect());
+    let layer = Layer::new((img.width, img.height), LayerAttributes::default(), Encoding::SMALL_LOSSLESS, channels);
+    let image = exr::image::Image::from_layer(layer);
+    let mut buf = Cursor::new(Vec::new());
+    image
+        .write()
+        .to_buffered(&mut buf)
+        .map_err(|e| format!("cannot encode EXR {}: {e}", path.display()))?;
+    atomic_write(path, buf.get_ref())
+}
+
+type FlatLayer = exr::image::Layer<exr::image::AnyChannels<exr::image::FlatSamples>>;
+
+fn read_first_layer(path: &Path) -> Result<FlatLayer, String> {
+    use exr::image::read::{image::ReadLayers, layers::ReadChannels, read};
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_buffered(Cursor::new(bytes))
+        .map_err(|e| format!("cannot decode EXR {}: {e}", path.display()))?;
+    let mut layers = image.layer_data.into_iter();
+    let first = layers.next().ok_or_else(|| format!("{}: EXR has no layers", path.display()))?;
+    if find_channels(&first, &["R", "G", "B"]).is_some() || find_channels(&first, &["Y"]).is_some() {
+        return Ok(first);
+    }
+    layers
+        .find(|l| find_channels(l, &["R", "G", "B"]).is_some())
+        .ok_or_else(|| format!("{}: no layer with R, G, B channels (first layer has {:?})", path.display(), channel_names(&first)))
+}
+
+fn channel_names(layer: &FlatLayer) -> Vec<String> {
+    layer.channel_data.list.iter().map(|c| c.name.to_string()).collect()
+}
+
+fn find_channels(layer: &FlatLayer, names: &[&str]) -> Option<Vec<usize>> {
+    names
+        .iter()
+        .map(|n| layer.channel_data.list.iter().position(|c| c.name.eq(n)))
+        .collect()
+}
+
+fn layer_to_image(path: &Path, layer: &FlatLayer, idx: &[usize]) -> Result<Image, String> {
+    let (w, h) = (layer.size.width(), layer.size.height());
+    let planes: Vec<Vec<f32>> = idx
+        .iter()
+        .map(|&i| layer.channel_data.list[i].sample_data.values_as_f32().collect())
+        .collect();
+    if planes.iter().any(|p| p.len() != w * h) {
+        return Err(format!("{}: channel sample count does not match {w}x{h} (subsampled channels?)", path.display()));
+    }
+    let pixels = (0..w * h)
+        .map(|i| {
+            let g = |c: usize| planes[c.min(planes.len() - 1)][i];
+            [g(0), g(1), g(2)]
+        })
+        .collect();
+    Ok(Image { width: w, height: h, pixels })
+}
+
+/// Reads the colour of an EXR: channels `R`, `G`, `B` of the first layer that has them (or a
+/// lone `Y` channel of the first layer, replicated to grey). Other channels are ignored.
+pub fn read_exr(path: &Path) -> Result<Image, String> {
+    let layer = read_first_layer(path)?;
+    let idx = find_channels(&layer, &["R", "G", "B"])
+        .or_else(|| find_channels(&layer, &["Y"]))
+        .ok_or_else(|| format!("{}: no R, G, B or Y channels", path.display()))?;
+    layer_to_image(path, &layer, &idx)
+}
+
+/// Reads the [`VARIANCE_CHANNELS`] of the colour layer of an EXR, or `Ok(None)` if it has none.
+pub fn read_exr_variance(path: &Path) -> Result<Option<Image>, String> {
+    let layer = read_first_layer(path)?;
+    match find_channels(&layer, &VARIANCE_CHANNELS) {
+        Some(idx) => layer_to_image(path, &layer, &idx).map(Some),
+        None => Ok(None),
+    }
+}
+
+/// sRGB opto-electronic transfer function for a linear value in `[0, 1]`.
+pub fn srgb_oetf(v: f32) -> f32 {
+    if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Tone-maps one linear value to an 8-bit sRGB code: multiply by `scale`, clamp to `[0, 1]`
+/// (NaN becomes 0), apply the sRGB OETF, round.
+pub fn to_srgb8(v: f32, scale: f32) -> u8 {
+    let x = v * scale;
+    let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
+    (srgb_oetf(x) * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
+}
+
+/// Writes an 8-bit sRGB PNG of a linear image. `exposure` is in stops: values are multiplied
+/// by `2^exposure` (0 = unchanged), clamped to `[0, 1]`, then encoded with the sRGB OETF.
+pub fn write_png_srgb(path: &Path, img: &Image, exposure: f32) -> Result<(), String> {
+    check_len(path, img)?;
+    let scale = exposure.exp2();
+    let bytes: Vec<u8> = img.pixels.iter().flat_map(|p| p.map(|v| to_srgb8(v, scale))).collect();
+    write_png_rgb8(path, img.width, img.height, &bytes)
+}
+
+/// Writes raw 8-bit RGB bytes (`3 * w * h`, row-major, top row first) as a PNG.
+pub fn write_png_rgb8(path: &Path, w: usize, h: usize, rgb: &[u8]) -> Result<(), String> {
+    let bytes = encode_png_rgb8(w, h, rgb).map_err(|e| format!("{}: {e}", path.display()))?;
+    atomic_write(path, &bytes)
+}
+
+/// Encodes raw 8-bit RGB bytes (`3 * w * h`) as PNG file bytes in memory.
+pub fn encode_png_rgb8(w: usize, h: usize, rgb: &[u8]) -> Result<Vec<u8>, String> {
+    if w == 0 || h == 0 || w.checked_mul(h).and_then(|n| n.checked_mul(3)) != Some(rgb.len()) {
+        return Err(format!("PNG of {w}x{h} needs {} RGB bytes, got {}", w.saturating_mul(h).saturating_mul(3), rgb.len()));
+    }
+    let (w32, h32) = (u32::try_from(w).map_err(|_| "PNG too wide")?, u32::try_from(h).map_err(|_| "PNG too tall")?);
+    let mut out = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut out, w32, h32);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut writer = enc.write_header().map_err(|e| format!("PNG header: {e}"))?;
+        writer.write_image_data(rgb).map_err(|e| format!("PNG data: {e}"))?;
+        writer.finish().map_err(|e| format!("PNG finish: {e}"))?;
+    }
+    Ok(out)
+}
+
+/// Reads an 8-bit RGB or RGBA PNG into `(width, height, RGB bytes)` (alpha dropped). Used by
+/// tests and tools that inspect written PNGs.
+pub fn read_png_rgb8(path: &Path) -> Result<(usize, usize, Vec<u8>), String> {
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot open {}: {e}", path.display()))?;
+    let decoder = png::Decoder::new(std::io::BufReader::new(file));
+    let mut reader = decoder.read_info().map_err(|e| format!("cannot decode PNG {}: {e}", path.display()))?;
+    let size = reader.output_buffer_size().ok_or_else(|| format!("{}: PNG too large", path.display()))?;
+    let mut buf = vec![0; size];
+    let info = reader.next_frame(&mut buf).map_err(|e| format!("cannot decode PNG {}: {e}", path.display()))?;
+    if info.bit_depth != png::BitDepth::Eight {
+        return Err(format!("{}: only 8-bit PNGs are supported", path.display()));
+    }
+    let (w, h) = (info.width as usize, info.height as usize);
+    let rgb = match info.color_type {
+        png::ColorType::Rgb => buf[..w * h * 3].to_vec(),
+        png::ColorType::Rgba => buf[..w * h * 4].chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect(),
+        other => return Err(format!("{}: unsupported PNG colour type {other:?}", path.display())),
+    };
+    Ok((w, h, rgb))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tmpdir(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("forecast-image-io-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    fn sample() -> Image {
+        Image::from_fn(5, 3, |x, y| [x as f32 * 0.5, y as f32 - 1.0, (x * 10 + y) as f32 * 1e-3 + 1e6])
+    }
+
+    #[test]
+    fn get_crop_mean() {
+        let img = sample();
+        assert_eq!(img.get(4, 2), [2.0, 1.0, 42.0 * 1e-3 + 1e6]);
+        let c = img.crop(1, 1, 3, 2).unwrap();
+        assert_eq!((c.width, c.height), (3, 2));
+        assert_eq!(c.get(0, 0), img.get(1, 1));
+        assert_eq!(c.get(2, 1), img.get(3, 2));
+        assert!(img.crop(3, 0, 3, 1).is_err());
+        assert!(img.crop(0, 0, 0, 1).is_err());
+        assert!(img.crop(usize::MAX, 0, 2, 1).is_err());
+        // mean of x*0.5 over x=0..4 is 1.0; mean of y-1 over y=0..2 is 0.
+        let m = img.mean();
+        assert!((m[0] - 1.0).abs() < 1e-12 && m[1].abs() < 1e-12);
+        assert_eq!(img.try_get(5, 0), None);
+        assert!(Image::from_pixels(2, 2, vec![[0.0; 3]; 3]).is_err());
+    }
+
+    #[test]
+    fn atomic_path_convention() {
+        assert_eq!(atomic_path(Path::new("/a/b/c.exr")), PathBuf::from("/a/b/c.exr.tmp"));
+        assert_eq!(atomic_path(Path::new("c.png")), PathBuf::from("c.png.tmp"));
+    }
+
+    #[test]
+    fn exr_round_trip_bit_exact_with_variance() {
+        let d = tmpdir("exr");
+        let img = sample();
+        let var = Image::from_fn(5, 3, |x, y| [x as f32 * 1e-4, y as f32 * 2e-4, 3e-4]);
+        let p = d.join("a.exr");
+        write_exr(&p, &img).unwrap();
+        assert!(!atomic_path(&p).exists());
+        assert_eq!(read_exr(&p).unwrap(), img);
+        assert_eq!(read_exr_variance(&p).unwrap(), None);
+        let q = d.join("b.exr");
+        write_exr_layers(&q, &img, Some(&var)).unwrap();
+        assert_eq!(read_exr(&q).unwrap(), img);
+        assert_eq!(read_exr_variance(&q).unwrap(), Some(var));
+        let bad = Image::new(2, 2);
+        assert!(write_exr_layers(&q, &img, Some(&bad)).is_err());
+        let err = read_exr(&d.join("missing.exr")).unwrap_err();
+        assert!(err.contains("missing.exr"), "{err}");
+        std::fs::write(d.join("junk.exr"), b"not an exr").unwrap();
+        assert!(read_exr(&d.join("junk.exr")).unwrap_err().contains("junk.exr"));
+        let _ = std::fs::remove_dir_all(d);
+    }
+
+    #[test]
+    fn srgb_tone_map_values() {
+        assert_eq!(to_srgb8(0.0, 1.0), 0);
+        assert_eq!(to_srgb8(1.0, 1.0), 255);
+        assert_eq!(to_srgb8(7.0, 1.0), 255);
+        assert_eq!(to_srgb8(-1.0, 1.0), 0);
+        assert_eq!(to_srgb8(f32::NAN, 1.0), 0);
+        // 0.5 linear -> 1.055*0.5^(1/2.4)-0.055 = 0.73536 -> 187.5 -> 188
+        assert_eq!(to_srgb8(0.5, 1.0), 188);
+        assert_eq!(to_srgb8(0.25, 2.0), 188);
+        // linear segment: 0.001*12.92*255 = 3.29 -> 3
+        assert_eq!(to_srgb8(0.001, 1.0), 3);
+    }
+
+    #[test]
+    fn png_round_trip() {
+        let d = tmpdir("png");
+        let img = Image::from_pixels(2, 1, vec![[0.5, 0.0, 1.0], [0.125, 2.0, 0.0]]).unwrap();
+        let p = d.join("t.png");
+        write_png_srgb(&p, &img, 1.0).unwrap(); // x2
+        let (w, h, rgb) = read_png_rgb8(&p).unwrap();
+        assert_eq!((w, h), (2, 1));
+        // 0.125*2 = 0.25 linear -> 1.055*0.25^(1/2.4)-0.055 = 0.53709 -> 136.96 -> 137
+        assert_eq!(rgb, vec![255, 0, 255, 137, 255, 0]);
+        assert!(write_png_rgb8(&p, 2, 2, &[0; 5]).is_err());
+        let raw: Vec<u8> = (0..4 * 3 * 3).map(|i| i as u8).collect();
+        write_png_rgb8(&p, 4, 3, &raw).unwrap();
+        assert_eq!(read_png_rgb8(&p).unwrap(), (4, 3, raw));
+        let _ = std::fs::remove_dir_all(d);
+    }
+
+    #[test]
+    fn reads_mitsuba_reference_if_present() {
+        let p = Path::new("/work/shared/reference/cornell-box-mitsuba-256.exr");
+        if !p.exists() {
+            return;
+        }
+        let img = read_exr(p).unwrap();
+        assert_eq!((img.width, img.height), (256, 256));
+        let m = img.mean();
+        let avg = (m[0] + m[1] + m[2]) / 3.0;
+        assert!((avg - 0.13958).abs() < 2e-4, "mean {avg}");
+    }
+}

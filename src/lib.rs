@@ -1,0 +1,31 @@
+//! `forecast`: unbiased global illumination with Caustic Forecasting
+//! (Budge, Anderson, Joy 2008, "[BAJ08]").
+//!
+//! Data flow (and module order):
+//! ```text
+//! scene (TOML, OBJ) → accel::World (CWBVH) → integrators::preprocess (rank 0; caustic maps)
+//!   → distributed broadcast → per pass: Integrator::begin_pass (IWS point lights) → render::render_pass
+//!   → render::film::Film sums → distributed reduce → image_io (EXR, PNG) + JSON report
+//! ```
+//! Methods: `pt` (reference), `iws`, `iws-pm`, `iws-cf`; see `integrators`.
+#![warn(missing_docs)]
+
+pub mod accel;
+pub mod bench;
+pub mod bsdf;
+// pub mod chart;
+pub mod checkpoint;
+pub mod cli;
+pub mod distributed;
+pub mod image_io;
+pub mod integrators;
+pub mod math;
+pub mod metrics;
+pub mod pipeline;
+pub mod progress;
+pub mod render;
+pub mod sampling;
+pub mod scene;
+pub mod scenegen;
+pub mod stats;
+pub mod transport;

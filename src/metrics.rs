@@ -1,0 +1,641 @@
+//! Image-comparison metrics, difference maps and the Mitsuba noise-consistency check.
+//!
+//! * Error metrics ([`mse`], [`rmse`], [`rel_mse`], [`mean_abs`]) average over all pixels *and*
+//!   channels, in `f64`, optionally restricted to a crop `(x, y, w, h)`. Size mismatches and bad
+//!   crops are errors, never panics.
+//! * [`false_colour_diff`] maps the signed per-pixel difference (mean over channels of `a − b`)
+//!   to a diverging colour map: white = 0, red = `a > b`, blue = `a < b`, saturated at a robust
+//!   scale (99th percentile of `|a − b|`); non-finite differences are black.
+//! * Noise statistics use variances **of the pixel mean** (not of single samples). The reference
+//!   variance per pixel is estimated from two independent half renders as `(h0 − h1)² / 4`.
+//!   [`noise_consistency`] compares `mean((I − R)²)` with `mean(σ_I² + σ_R²)`: their ratio is ≈ 1
+//!   when the test and the reference differ only by noise.
+//! * [`mitsuba_agreement`] is the pass/fail rule of `scripts/check-mitsuba.sh`: per-channel means
+//!   within [`MEAN_REL_TOLERANCE`] and the noise ratio within a tolerance derived from its own
+//!   standard error (see [`NoiseReport::ratio_tolerance`]).
+
+use crate::image_io::{write_png_rgb8, Image};
+use std::fmt;
+use std::path::Path;
+
+/// A crop rectangle `(x, y, width, height)` in pixels, `(0, 0)` at the top-left.
+pub type Rect = (usize, usize, usize, usize);
+
+/// The default `ε` of [`rel_mse`].
+pub const REL_MSE_EPS: f64 = 0.01;
+
+/// Maximum relative difference of per-channel image means accepted by [`mitsuba_agreement`].
+pub const MEAN_REL_TOLERANCE: f64 = 0.005;
+
+/// Radius of the box filter used to smooth per-pixel variances for z-scores (2 → 5×5).
+pub const Z_SMOOTH_RADIUS: usize = 2;
+
+/// Fraction of `|z| > 3` expected for pure Gaussian noise (two-sided).
+pub const GAUSSIAN_FRAC_Z3: f64 = 0.0027;
+
+fn check_same(a: &Image, b: &Image, what: &str) -> Result<(), String> {
+    if !a.same_size(b) {
+        return Err(format!("{what}: size mismatch {}x{} vs {}x{}", a.width, a.height, b.width, b.height));
+    }
+    if a.pixels.len() != a.width * a.height || b.pixels.len() != b.width * b.height || a.pixels.is_empty() {
+        return Err(format!("{what}: empty image or pixel count does not match its size"));
+    }
+    Ok(())
+}
+
+/// Applies an optional crop to an image (borrowing it unchanged when `crop` is `None`).
+pub fn apply_crop(img: &Image, crop: Option<Rect>) -> Result<std::borrow::Cow<'_, Image>, String> {
+    match crop {
+        None => Ok(std::borrow::Cow::Borrowed(img)),
+        Some((x, y, w, h)) => img.crop(x, y, w, h).map(std::borrow::Cow::Owned),
+    }
+}
+
+/// Mean over pixels and channels of `f(a, b)`, after checking sizes and cropping.
+fn mean_over(a: &Image, b: &Image, crop: Option<Rect>, what: &str, f: impl Fn(f64, f64) -> f64) -> Result<f64, String> {
+    check_same(a, b, what)?;
+    let (a, b) = (apply_crop(a, crop)?, apply_crop(b, crop)?);
+    let mut s = 0.0;
+    for (p, q) in a.pixels.iter().zip(&b.pixels) {
+        for c in 0..3 {
+            s += f(p[c] as f64, q[c] as f64);
+        }
+    }
+    Ok(s / (3 * a.pixels.len()) as f64)
+}
+
+/// Mean squared error over pixels and channels.
+pub fn mse(a: &Image, b: &Image, crop: Option<Rect>) -> Result<f64, String> {
+    mean_over(a, b, crop, "mse", |x, y| (x - y) * (x - y))
+}
+
+/// Root mean squared error, `sqrt(mse)`.
+pub fn rmse(a: &Image, b: &Image, crop: Option<Rect>) -> Result<f64, String> {
+    mse(a, b, crop).map(f64::sqrt)
+}
+
+/// Relative MSE: mean over pixels and channels of `(I − R)² / (R² + eps)`; use [`REL_MSE_EPS`].
+pub fn rel_mse(img: &Image, reference: &Image, eps: f64, crop: Option<Rect>) -> Result<f64, String> {
+    mean_over(img, reference, crop, "rel_mse", |x, r| (x - r) * (x - r) / (r * r + eps))
+}
+
+/// Mean absolute difference over pixels and channels.
+pub fn mean_abs(a: &Image, b: &Image, crop: Option<Rect>) -> Result<f64, String> {
+    mean_over(a, b, crop, "mean_abs", |x, y| (x - y).abs())
+}
+
+/// Per-channel mean of an image (or of a crop of it).
+pub fn channel_means(img: &Image, crop: Option<Rect>) -> Result<[f64; 3], String> {
+    Ok(apply_crop(img, crop)?.mean())
+}
+
+/// All scalar metrics of one comparison, as printed by `forecast diff`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DiffMetrics {
+    /// Mean squared error.
+    pub mse: f64,
+    /// Root mean squared error.
+    pub rmse: f64,
+    /// Relative MSE with `ε =` [`REL_MSE_EPS`], `b` taken as the reference.
+    pub rel_mse: f64,
+    /// Mean absolute difference.
+    pub mean_abs: f64,
+    /// Per-channel means of `a`.
+    pub mean_a: [f64; 3],
+    /// Per-channel means of `b`.
+    pub mean_b: [f64; 3],
+    /// Per-channel `(mean_a − mean_b) / mean_b` (0 when both are 0).
+    pub mean_rel_diff: [f64; 3],
+}
+
+/// Computes [`DiffMetrics`] of `a` against the reference `b`, optionally on a crop.
+pub fn compare(a: &Image, b: &Image, crop: Option<Rect>) -> Result<DiffMetrics, String> {
+    let m = mse(a, b, crop)?;
+    let (mean_a, mean_b) = (channel_means(a, crop)?, channel_means(b, crop)?);
+    Ok(DiffMetrics {
+        mse: m,
+        rmse: m.sqrt(),
+        rel_mse: rel_mse(a, b, REL_MSE_EPS, crop)?,
+        mean_abs: mean_abs(a, b, crop)?,
+        mean_a,
+        mean_b,
+        mean_rel_diff: std::array::from_fn(|c| rel_diff(mean_a[c], mean_b[c])),
+    })
+}
+
+fn rel_diff(x: f64, r: f64) -> f64 {
+    if x == r {
+        0.0
+    } else {
+        (x - r) / r.abs().max(1e-300)
+    }
+}
+
+impl fmt::Display for DiffMetrics {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "mse       {:.6e}", self.mse)?;
+        writeln!(f, "rmse      {:.6e}", self.rmse)?;
+        writeln!(f, "rel_mse   {:.6e}", self.rel_mse)?;
+        writeln!(f, "mean_abs  {:.6e}", self.mean_abs)?;
+        writeln!(f, "mean_a    {:.6} {:.6} {:.6}", self.mean_a[0], self.mean_a[1], self.mean_a[2])?;
+        writeln!(f, "mean_b    {:.6} {:.6} {:.6}", self.mean_b[0], self.mean_b[1], self.mean_b[2])?;
+        write!(
+            f,
+            "mean_diff {:+.4}% {:+.4}% {:+.4}%",
+            100.0 * self.mean_rel_diff[0],
+            100.0 * self.mean_rel_diff[1],
+            100.0 * self.mean_rel_diff[2]
+        )
+    }
+}
+
+/// A false-colour difference image (8-bit RGB, row-major) and the scale it saturates at.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DiffMap {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// `3 * width * height` bytes.
+    pub rgb: Vec<u8>,
+    /// `|a − b|` at which the colour saturates (99th percentile of `|a − b|`, or 1 if all zero).
+    pub scale: f64,
+}
+
+/// The `q`-quantile (`0..=1`) of the finite values, by nearest rank; `None` if there are none.
+fn quantile(mut v: Vec<f64>, q: f64) -> Option<f64> {
+    v.retain(|x| x.is_finite());
+    if v.is_empty() {
+        return None;
+    }
+    let k = ((q.clamp(0.0, 1.0) * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1;
+    let (_, x, _) = v.select_nth_unstable_by(k, f64::total_cmp);
+    Some(*x)
+}
+
+/// Signed difference map of `a − b` (per pixel, mean over channels): white at 0, red where
+/// `a > b`, blue where `a < b`, fully saturated at the 99th percentile of `|a − b|`.
+pub fn false_colour_diff(a: &Image, b: &Image) -> Result<DiffMap, String> {
+    check_same(a, b, "false_colour_diff")?;
+    let d: Vec<f64> = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(p, q)| (0..3).map(|c| p[c] as f64 - q[c] as f64).sum::<f64>() / 3.0)
+        .collect();
+    let abs: Vec<f64> = d.iter().map(|x| x.abs()).collect();
+    let mut scale = quantile(abs.clone(), 0.99).unwrap_or(0.0);
+    if scale <= 0.0 {
+        scale = abs.iter().copied().filter(|x| x.is_finite()).fold(0.0, f64::max);
+    }
+    if scale <= 0.0 {
+        scale = 1.0;
+    }
+    let rgb = d
+        .iter()
+        .flat_map(|&x| {
+            if !x.is_finite() {
+                return [0, 0, 0];
+            }
+            let t = (x / scale).clamp(-1.0, 1.0);
+            let fade = ((1.0 - t.abs()) * 255.0).round() as u8;
+            if t >= 0.0 {
+                [255, fade, fade]
+            } else {
+                [fade, fade, 255]
+            }
+        })
+        .collect();
+    Ok(DiffMap { width: a.width, height: a.height, rgb, scale })
+}
+
+/// Writes [`false_colour_diff`]`(a, b)` as a PNG; returns the saturation scale.
+pub fn write_diff_png(path: &Path, a: &Image, b: &Image) -> Result<f64, String> {
+    let m = false_colour_diff(a, b).map_err(|e| format!("{}: {e}", path.display()))?;
+    write_png_rgb8(path, m.width, m.height, &m.rgb)?;
+    Ok(m.scale)
+}
+
+/// Per-pixel, per-channel Welch z-scores `(μa − μb) / sqrt(σa² + σb²)`, where the `var_*`
+/// images hold variances of the means. Where the denominator is 0 the score is 0 if the means
+/// are equal, else ±∞.
+pub fn z_scores(mean_a: &Image, var_a: &Image, mean_b: &Image, var_b: &Image) -> Result<Image, String> {
+    check_same(mean_a, var_a, "z_scores (mean_a vs var_a)")?;
+    check_same(mean_a, mean_b, "z_scores (mean_a vs mean_b)")?;
+    check_same(mean_a, var_b, "z_scores (mean_a vs var_b)")?;
+    let pixels = (0..mean_a.pixels.len())
+        .map(|i| {
+            std::array::from_fn(|c| {
+                let d = mean_a.pixels[i][c] as f64 - mean_b.pixels[i][c] as f64;
+                let v = var_a.pixels[i][c] as f64 + var_b.pixels[i][c] as f64;
+                if v > 0.0 {
+                    (d / v.sqrt()) as f32
+                } else if d == 0.0 {
+                    0.0
+                } else {
+                    d.signum() as f32 * f32::INFINITY
+                }
+            })
+        })
+        .collect();
+    Image::from_pixels(mean_a.width, mean_a.height, pixels)
+}
+
+/// Variance of the mean of the full render estimated from two independent halves:
+/// `(h0 − h1)² / 4` per pixel and channel.
+pub fn half_variance(half0: &Image, half1: &Image) -> Result<Image, String> {
+    check_same(half0, half1, "half_variance")?;
+    let pixels = half0
+        .pixels
+        .iter()
+        .zip(&half1.pixels)
+        .map(|(p, q)| std::array::from_fn(|c| ((p[c] as f64 - q[c] as f64).powi(2) / 4.0) as f32))
+        .collect();
+    Image::from_pixels(half0.width, half0.height, pixels)
+}
+
+/// Box filter of radius `r` ((2r+1)² window), averaging only the in-bounds pixels (so borders
+/// are not darkened). Separable, accumulated in `f64`.
+pub fn box_filter(img: &Image, r: usize) -> Image {
+    let (w, h) = (img.width, img.height);
+    if img.pixels.len() != w * h || w == 0 || h == 0 {
+        return img.clone();
+    }
+    let pass = |src: &[[f64; 3]], horizontal: bool| -> Vec<[f64; 3]> {
+        let mut out = vec![[0.0; 3]; w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let (pos, len) = if horizontal { (x, w) } else { (y, h) };
+                let (lo, hi) = (pos.saturating_sub(r), (pos + r).min(len - 1));
+                let mut s = [0.0; 3];
+                for k in lo..=hi {
+                    let p = if horizontal { src[y * w + k] } else { src[k * w + x] };
+                    for c in 0..3 {
+                        s[c] += p[c];
+                    }
+                }
+                let n = (hi - lo + 1) as f64;
+                out[y * w + x] = s.map(|v| v / n);
+            }
+        }
+        out
+    };
+    let src: Vec<[f64; 3]> = img.pixels.iter().map(|p| p.map(|v| v as f64)).collect();
+    let out = pass(&pass(&src, true), false);
+    Image { width: w, height: h, pixels: out.into_iter().map(|p| p.map(|v| v as f32)).collect() }
+}
+
+/// Result of [`noise_consistency`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct NoiseReport {
+    /// Number of pixels compared.
+    pub pixels: usize,
+    /// Whether a test variance was supplied (without one `ratio` uses `σ_I² = 0` and is not
+    /// meaningful as a noise check).
+    pub test_var_available: bool,
+    /// Mean over pixels and channels of `(I − R)²`.
+    pub mean_sq_diff: f64,
+    /// Mean over pixels and channels of the test's variance of the mean, `σ_I²`.
+    pub mean_var_test: f64,
+    /// Mean over pixels and channels of the reference's variance of the mean, `(h0 − h1)²/4`.
+    pub mean_var_ref: f64,
+    /// `mean_sq_diff / (mean_var_test + mean_var_ref)`; ≈ 1 when the difference is pure noise.
+    pub ratio: f64,
+    /// Effective number of independent terms, `(Σ s_p)² / Σ s_p²` with `s_p` the per-pixel
+    /// (channel-summed) raw variance estimate; channels are treated as fully correlated.
+    pub n_eff: f64,
+    /// Standard error of `ratio` under pure noise: `sqrt(2 Σ s_p² + 2 Σ r_p²) / Σ s_p`, where the
+    /// first term is the χ² spread of the numerator and the second that of the half-based
+    /// reference variance estimate `r_p` (itself χ² with one degree of freedom).
+    pub ratio_sigma: f64,
+    /// Accepted `|ratio − 1|`: `max(5 · ratio_sigma, 0.03)`.
+    pub ratio_tolerance: f64,
+    /// Fraction of pixel-channels with `|z| > 3`, z using 5×5 box-smoothed variances.
+    pub frac_z_above_3: f64,
+    /// Largest finite `|z|` (smoothed variances).
+    pub max_abs_z: f64,
+}
+
+impl NoiseReport {
+    /// `true` if a test variance was given and `|ratio − 1| <= ratio_tolerance`.
+    pub fn ratio_ok(&self) -> bool {
+        self.test_var_available && (self.ratio - 1.0).abs() <= self.ratio_tolerance
+    }
+}
+
+/// Checks whether `test` differs from `reference` only by noise. `ref_half0`/`ref_half1` are
+/// the two independent halves of the reference (their average is `reference`);
+/// `test_var_of_mean` is the test's per-pixel variance of the mean, if known.
+pub fn noise_consistency(
+    test: &Image,
+    reference: &Image,
+    ref_half0: &Image,
+    ref_half1: &Image,
+    test_var_of_mean: Option<&Image>,
+) -> Result<NoiseReport, String> {
+    check_same(test, reference, "noise_consistency (test vs reference)")?;
+    let var_ref = half_variance(ref_half0, ref_half1)?;
+    check_same(test, &var_ref, "noise_consistency (test vs reference halves)")?;
+    let var_test = match test_var_of_mean {
+        Some(v) => {
+            check_same(test, v, "noise_consistency (test vs test variance)")?;
+            v.clone()
+        }
+        None => Image::new(test.width, test.height),
+    };
+    let n = test.pixels.len();
+    let (mut sd, mut svt, mut svr) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut s_sq, mut r_sq) = (0.0f64, 0.0f64);
+    for i in 0..n {
+        let (mut sp, mut rp) = (0.0, 0.0);
+        for c in 0..3 {
+            let d = test.pixels[i][c] as f64 - reference.pixels[i][c] as f64;
+            let (vt, vr) = (var_test.pixels[i][c] as f64, var_ref.pixels[i][c] as f64);
+            sd += d * d;
+            svt += vt;
+            svr += vr;
+            sp += vt + vr;
+            rp += vr;
+        }
+        s_sq += sp * sp;
+        r_sq += rp * rp;
+    }
+    let s_tot = svt + svr;
+    let ratio = if s_tot > 0.0 { sd / s_tot } else if sd == 0.0 { 1.0 } else { f64::INFINITY };
+    let n_eff = if s_sq > 0.0 { s_tot * s_tot / s_sq } else { 0.0 };
+    let ratio_sigma = if s_tot > 0.0 { (2.0 * s_sq + 2.0 * r_sq).sqrt() / s_tot } else { f64::INFINITY };
+
+    let z = z_scores(test, &box_filter(&var_test, Z_SMOOTH_RADIUS), reference, &box_filter(&var_ref, Z_SMOOTH_RADIUS))?;
+    let (mut above, mut max_abs_z) = (0usize, 0.0f64);
+    for p in &z.pixels {
+        for &v in p {
+            let a = (v as f64).abs();
+            if a > 3.0 {
+                above += 1;
+            }
+            if a.is_finite() {
+                max_abs_z = max_abs_z.max(a);
+            }
+        }
+    }
+    let m = (3 * n) as f64;
+    Ok(NoiseReport {
+        pixels: n,
+        test_var_available: test_var_of_mean.is_some(),
+        mean_sq_diff: sd / m,
+        mean_var_test: svt / m,
+        mean_var_ref: svr / m,
+        ratio,
+        n_eff,
+        ratio_sigma,
+        ratio_tolerance: (5.0 * ratio_sigma).max(0.03),
+        frac_z_above_3: above as f64 / m,
+        max_abs_z,
+    })
+}
+
+impl fmt::Display for NoiseReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "noise: pixels {}  test variance {}", self.pixels, if self.test_var_available { "yes" } else { "MISSING" })?;
+        writeln!(
+            f,
+            "noise: mean (I-R)^2 {:.4e} = ratio {:.4} x (var_I {:.4e} + var_R {:.4e})",
+            self.mean_sq_diff, self.ratio, self.mean_var_test, self.mean_var_ref
+        )?;
+        writeln!(
+            f,
+            "noise: ratio {:.4} (expect 1 +- {:.4}, tolerance {:.4}, n_eff {:.0})",
+            self.ratio, self.ratio_sigma, self.ratio_tolerance, self.n_eff
+        )?;
+        write!(
+            f,
+            "noise: |z|>3 in {:.3}% of pixel-channels (Gaussian {:.2}%), max |z| {:.2}",
+            100.0 * self.frac_z_above_3,
+            100.0 * GAUSSIAN_FRAC_Z3,
+            self.max_abs_z
+        )
+    }
+}
+
+/// Result of [`mitsuba_agreement`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct AgreementReport {
+    /// Per-channel means of the test image.
+    pub mean_test: [f64; 3],
+    /// Per-channel means of the reference.
+    pub mean_ref: [f64; 3],
+    /// Per-channel `(mean_test − mean_ref) / mean_ref`.
+    pub mean_rel_diff: [f64; 3],
+    /// The noise-consistency statistics.
+    pub noise: NoiseReport,
+    /// Copy of `noise.ratio`.
+    pub ratio: f64,
+    /// `true` if every check passed.
+    pub passed: bool,
+    /// One line per failed check (empty when `passed`).
+    pub failures: Vec<String>,
+}
+
+/// The Mitsuba agreement rule: passes iff every `|mean_rel_diff| <` [`MEAN_REL_TOLERANCE`]
+/// (0.5 %) and the test variance is present and `|ratio − 1| <= noise.ratio_tolerance`.
+/// The `|z| > 3` fraction is reported but not judged (edges and fireflies make it non-Gaussian).
+pub fn mitsuba_agreement(
+    test: &Image,
+    test_var: Option<&Image>,
+    reference: &Image,
+    half0: &Image,
+    half1: &Image,
+) -> Result<AgreementReport, String> {
+    let noise = noise_consistency(test, reference, half0, half1, test_var)?;
+    let (mean_test, mean_ref) = (test.mean(), reference.mean());
+    let mean_rel_diff: [f64; 3] = std::array::from_fn(|c| rel_diff(mean_test[c], mean_ref[c]));
+    let mut failures = Vec::new();
+    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+        let d = mean_rel_diff[c];
+        if d.is_nan() || d.abs() >= MEAN_REL_TOLERANCE {
+            failures.push(format!(
+                "mean {name}: test {:.6} vs reference {:.6} ({:+.3}%, limit {:.1}%)",
+                mean_test[c],
+                mean_ref[c],
+                100.0 * d,
+                100.0 * MEAN_REL_TOLERANCE
+            ));
+        }
+    }
+    if !noise.test_var_available {
+        failures.push("noise: test image has no variance channels (var.R, var.G, var.B); cannot check noise".into());
+    } else if !noise.ratio_ok() {
+        failures.push(format!(
+            "noise: ratio {:.4} differs from 1 by more than {:.4} (5 sigma, sigma {:.4})",
+            noise.ratio, noise.ratio_tolerance, noise.ratio_sigma
+        ));
+    }
+    Ok(AgreementReport {
+        mean_test,
+        mean_ref,
+        mean_rel_diff,
+        ratio: noise.ratio,
+        noise,
+        passed: failures.is_empty(),
+        failures,
+    })
+}
+
+impl fmt::Display for AgreementReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (c, name) in ["R", "G", "B"].iter().enumerate() {
+            writeln!(
+                f,
+                "mean {name}: test {:.6} ref {:.6} diff {:+.4}%",
+                self.mean_test[c],
+                self.mean_ref[c],
+                100.0 * self.mean_rel_diff[c]
+            )?;
+        }
+        writeln!(f, "{}", self.noise)?;
+        for line in &self.failures {
+            writeln!(f, "FAIL {line}")?;
+        }
+        write!(f, "agreement: {}", if self.passed { "PASS" } else { "FAIL" })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn img(w: usize, h: usize, v: &[[f32; 3]]) -> Image {
+        Image::from_pixels(w, h, v.to_vec()).unwrap()
+    }
+
+    #[test]
+    fn scalar_metrics_by_hand() {
+        let a = img(2, 1, &[[1.0, 2.0, 3.0], [0.0, 0.0, 0.0]]);
+        let b = img(2, 1, &[[1.0, 0.0, 3.0], [0.0, 0.0, 1.0]]);
+        // differences 0, 2, 0 | 0, 0, -1
+        assert!((mse(&a, &b, None).unwrap() - 5.0 / 6.0).abs() < 1e-12);
+        assert!((rmse(&a, &b, None).unwrap() - (5.0f64 / 6.0).sqrt()).abs() < 1e-12);
+        assert!((mean_abs(&a, &b, None).unwrap() - 0.5).abs() < 1e-12);
+        // 4/(0+0.01) + 1/(1+0.01)
+        let want = (400.0 + 1.0 / 1.01) / 6.0;
+        assert!((rel_mse(&a, &b, REL_MSE_EPS, None).unwrap() - want).abs() < 1e-9);
+        assert!((mse(&a, &b, Some((0, 0, 1, 1))).unwrap() - 4.0 / 3.0).abs() < 1e-12);
+        assert_eq!(mse(&a, &b, Some((1, 0, 1, 1))).unwrap(), 1.0 / 3.0);
+        assert!(mse(&a, &b, Some((1, 0, 2, 1))).is_err());
+        assert!(mse(&a, &Image::new(1, 2), None).unwrap_err().contains("size mismatch"));
+        assert_eq!(channel_means(&a, None).unwrap(), [0.5, 1.0, 1.5]);
+        let m = compare(&a, &b, None).unwrap();
+        assert_eq!(m.mean_b, [0.5, 0.0, 2.0]);
+        assert_eq!(m.mean_rel_diff[0], 0.0);
+        assert!((m.mean_rel_diff[2] + 0.25).abs() < 1e-12);
+        assert!(m.to_string().contains("rel_mse"));
+    }
+
+    #[test]
+    fn false_colour_by_hand() {
+        let a = img(3, 1, &[[1.0; 3], [0.0; 3], [2.0; 3]]);
+        let b = img(3, 1, &[[0.0; 3], [0.5; 3], [2.0; 3]]);
+        let m = false_colour_diff(&a, &b).unwrap();
+        assert_eq!(m.scale, 1.0); // nearest-rank 99th percentile of {1, 0.5, 0}
+        assert_eq!(m.rgb, vec![255, 0, 0, 128, 128, 255, 255, 255, 255]);
+        let same = false_colour_diff(&a, &a).unwrap();
+        assert_eq!(same.scale, 1.0);
+        assert!(same.rgb.iter().all(|&v| v == 255));
+        let nan = img(1, 1, &[[f32::NAN; 3]]);
+        assert_eq!(false_colour_diff(&nan, &img(1, 1, &[[0.0; 3]])).unwrap().rgb, vec![0, 0, 0]);
+        let p = std::env::temp_dir().join(format!("forecast-metrics-diff-{}.png", std::process::id()));
+        assert_eq!(write_diff_png(&p, &a, &b).unwrap(), 1.0);
+        assert_eq!(crate::image_io::read_png_rgb8(&p).unwrap(), (3, 1, m.rgb));
+        let _ = std::fs::remove_file(p);
+        assert!(false_colour_diff(&a, &Image::new(2, 1)).is_err());
+    }
+
+    #[test]
+    fn z_half_variance_box_by_hand() {
+        let ma = img(2, 1, &[[1.0, 2.0, 0.0], [5.0, 0.0, 1.0]]);
+        let va = img(2, 1, &[[0.09, 0.0, 0.0], [1.0, 0.0, 0.0]]);
+        let mb = img(2, 1, &[[0.0, 2.0, 0.0], [1.0, 0.0, 0.0]]);
+        let vb = img(2, 1, &[[0.16, 0.0, 0.0], [3.0, 0.0, 0.0]]);
+        let z = z_scores(&ma, &va, &mb, &vb).unwrap();
+        assert!((z.get(0, 0)[0] - 2.0).abs() < 1e-6); // 1/sqrt(0.25)
+        assert_eq!(z.get(0, 0)[1], 0.0);
+        assert!((z.get(1, 0)[0] - 2.0).abs() < 1e-6); // 4/sqrt(4)
+        assert_eq!(z.get(1, 0)[2], f32::INFINITY);
+        let hv = half_variance(&img(1, 1, &[[1.0, 0.0, 2.0]]), &img(1, 1, &[[0.6, 0.0, 1.0]])).unwrap();
+        let want = [0.04f32, 0.0, 0.25];
+        for c in 0..3 {
+            assert!((hv.pixels[0][c] - want[c]).abs() < 1e-7);
+        }
+        let row = img(3, 1, &[[0.0; 3], [3.0; 3], [6.0; 3]]);
+        assert_eq!(box_filter(&row, 1).pixels, vec![[1.5; 3], [3.0; 3], [4.5; 3]]);
+        let col = img(1, 3, &[[0.0; 3], [3.0; 3], [6.0; 3]]);
+        assert_eq!(box_filter(&col, 5).pixels, vec![[3.0; 3]; 3]);
+    }
+
+    /// xorshift64* + Box–Muller: deterministic standard normals without a rand dependency.
+    struct Gauss(u64);
+    impl Gauss {
+        fn uniform(&mut self) -> f64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            ((self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+        }
+        fn normal(&mut self) -> f64 {
+            let (u, v) = (self.uniform(), self.uniform());
+            (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+        }
+    }
+
+    /// A synthetic "render": truth with spatially varying noise; returns
+    /// (test, test_var, reference, half0, half1).
+    fn synthetic(bias: f64, noise_scale: f64) -> (Image, Image, Image, Image, Image) {
+        let (w, h) = (96, 80);
+        let mut g = Gauss(0x9E37_79B9_7F4A_7C15);
+        let truth = Image::from_fn(w, h, |x, y| [0.1 + 0.01 * x as f32, 0.5, 0.2 + 0.005 * y as f32]);
+        let vt = Image::from_fn(w, h, |x, y| [1e-4 * (1 + x % 7) as f32, 4e-4, 2e-4 * (1 + y % 3) as f32]);
+        let vr = Image::from_fn(w, h, |x, _| [2e-5 * (1 + x % 5) as f32, 1e-5, 3e-5]);
+        let mut add = |base: &Image, var: &Image, k: f64, off: f64| {
+            Image::from_fn(w, h, |x, y| {
+                let (b, v) = (base.get(x, y), var.get(x, y));
+                std::array::from_fn(|c| (b[c] as f64 * (1.0 + off) + g.normal() * (k * v[c] as f64).sqrt()) as f32)
+            })
+        };
+        let test = add(&truth, &vt, noise_scale * noise_scale, bias);
+        let h0 = add(&truth, &vr, 2.0, 0.0);
+        let h1 = add(&truth, &vr, 2.0, 0.0);
+        let reference = Image::from_fn(w, h, |x, y| {
+            let (a, b) = (h0.get(x, y), h1.get(x, y));
+            std::array::from_fn(|c| 0.5 * (a[c] + b[c]))
+        });
+        (test, vt, reference, h0, h1)
+    }
+
+    #[test]
+    fn pure_noise_passes() {
+        let (t, vt, r, h0, h1) = synthetic(0.0, 1.0);
+        let rep = mitsuba_agreement(&t, Some(&vt), &r, &h0, &h1).unwrap();
+        assert!(rep.passed, "{rep}");
+        assert!((rep.ratio - 1.0).abs() < 3.0 * rep.noise.ratio_sigma, "{rep}");
+        // sigma ~ sqrt(2/N_eff) with N_eff of order the pixel count
+        assert!(rep.noise.ratio_sigma > 0.005 && rep.noise.ratio_sigma < 0.05, "{rep}");
+        assert!(rep.noise.frac_z_above_3 < 0.01, "{rep}");
+        assert!(rep.to_string().ends_with("PASS"));
+    }
+
+    #[test]
+    fn bias_or_wrong_noise_fails() {
+        let (t, vt, r, h0, h1) = synthetic(0.01, 1.0); // 1 % brighter
+        let rep = mitsuba_agreement(&t, Some(&vt), &r, &h0, &h1).unwrap();
+        assert!(!rep.passed);
+        assert!(rep.failures.iter().any(|f| f.starts_with("mean")), "{rep}");
+        let (t, vt, r, h0, h1) = synthetic(0.0, 1.5); // noise 1.5x larger than its variance claims
+        let rep = mitsuba_agreement(&t, Some(&vt), &r, &h0, &h1).unwrap();
+        assert!(!rep.passed && rep.ratio > 1.5, "{rep}");
+        assert!(rep.failures.iter().all(|f| f.starts_with("noise")), "{rep}");
+        let (t, _, r, h0, h1) = synthetic(0.0, 1.0);
+        let rep = mitsuba_agreement(&t, None, &r, &h0, &h1).unwrap();
+        assert!(!rep.passed && !rep.noise.test_var_available);
+        assert!(mitsuba_agreement(&t, None, &r, &h0, &Image::new(3, 3)).is_err());
+    }
+}

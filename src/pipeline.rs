@@ -1,0 +1,312 @@
+//! The render pipeline, top to bottom, and the only place the stages meet:
+//! scene → BVH → caustic preprocess (rank 0, broadcast) → interleaved passes → reduce → image.
+//!
+//! Ranks: rank r renders passes r, r+N, … in rounds of N passes; all ranks agree once per round
+//! whether to start another (time boxes), so finished passes are always a contiguous range
+//! (`distributed::schedule`). The image is the mean over exactly the samples that were summed.
+//! Checkpoints are taken at round boundaries: rank 0 gathers the sums and writes them atomically
+//! with the pass bookkeeping; `--resume` continues with the next pass and repeats none.
+
+use crate::accel::World;
+use crate::checkpoint::Checkpoint;
+use crate::distributed::schedule::{Deadline, PassTimer};
+use crate::distributed::{self, Cluster};
+use crate::image_io::{self, Image};
+use crate::integrators::{self, Method, MethodOptions};
+use crate::progress::Progress;
+use crate::render::film::Film;
+use crate::render::{render_pass, PassCounters};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Everything a render needs (resolved from the CLI and the scene's defaults).
+#[derive(Clone, Debug)]
+pub struct RenderJob {
+    /// Scene file.
+    pub scene: PathBuf,
+    /// Method (`None`: the scene's default).
+    pub method: Option<Method>,
+    /// Method options.
+    pub opts: MethodOptions,
+    /// Samples per pixel (one per pass).
+    pub spp: Option<u64>,
+    /// Time budget in seconds, preprocess included.
+    pub time: Option<f64>,
+    /// Seed (`None`: the scene's default).
+    pub seed: Option<u64>,
+    /// Resolution override.
+    pub resolution: Option<(u32, u32)>,
+    /// Output prefix (`PREFIX.exr`, `.png`, `.json`).
+    pub out: PathBuf,
+    /// Show progress.
+    pub progress: bool,
+    /// Checkpoint interval in seconds.
+    pub checkpoint_every: Option<f64>,
+    /// Checkpoint to resume from.
+    pub resume: Option<PathBuf>,
+    /// Where checkpoints go (default `PREFIX.ckpt`).
+    pub checkpoint_path: Option<PathBuf>,
+    /// Stop after this many rounds (tests of kill-and-resume); `None` = no limit.
+    pub max_rounds: Option<u64>,
+    /// Worker threads (`None`: all cores divided among the ranks on this node).
+    pub threads: Option<usize>,
+}
+
+/// The outcome on rank 0.
+pub struct RenderResult {
+    /// The accumulated film (rank 0).
+    pub film: Film,
+    /// The JSON report written next to the image.
+    pub report: serde_json::Value,
+}
+
+fn secs(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64()
+}
+
+/// Runs a render on every rank of `cluster`; returns `Some` on rank 0.
+pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Result<Option<RenderResult>, String> {
+    let (rank, size) = (cluster.rank(), cluster.size());
+    let pool = thread_pool(job.threads)?;
+    let t_load = Instant::now();
+    let scene = crate::scene::load(&job.scene).map_err(|e| e.to_string())?;
+    let load_s = secs(t_load);
+    if rank == 0 {
+        for w in &scene.warnings {
+            eprintln!("warning: {w}");
+        }
+    }
+    let method = match job.method {
+        Some(m) => m,
+        None => Method::from_name(&scene.render.method)
+            .ok_or_else(|| format!("{}: method `{}` is not available", scene.path, scene.render.method))?,
+    };
+    let seed = job.seed.unwrap_or(scene.render.seed);
+    let mut opts = job.opts.clone();
+    if opts.max_depth == 0 {
+        opts.max_depth = scene.render.max_depth;
+    }
+    let time = job.time.or(if job.spp.is_some() { None } else { scene.render.time });
+    let spp = if time.is_some() { None } else { Some(job.spp.or(scene.render.spp).unwrap_or(16)) };
+    let (w, h) = job.resolution.unwrap_or((scene.camera.width, scene.camera.height));
+    let camera = scene.camera.with_resolution(w, h);
+    let world = World::build(scene);
+    let bvh_s = world.build_secs;
+    let deadline: Deadline = distributed::shared_deadline(cluster, started, time);
+
+    // Caustic preprocess on rank 0, broadcast to the others.
+    let t_pre = Instant::now();
+    let mut product = if rank == 0 { integrators::preprocess(method, &world, &opts, seed)? } else { Vec::new() };
+    let preprocess_s = secs(t_pre);
+    let t_bc = Instant::now();
+    cluster.broadcast_bytes(&mut product);
+    let broadcast_s = secs(t_bc);
+    let bytes_broadcast = product.len();
+    let mut integrator = integrators::build(method, &world, &opts, &product)?;
+    drop(product);
+
+    // Resume: rank 0 validates the checkpoint; everyone learns the first pass.
+    let ckpt_path = job.checkpoint_path.clone().unwrap_or_else(|| with_ext(&job.out, "ckpt"));
+    let mut resumed: Option<Checkpoint> = None;
+    let mut first = vec![0u8; 8];
+    if rank == 0 {
+        if let Some(p) = &job.resume {
+            let c = Checkpoint::load(p).map_err(|e| e.to_string())?;
+            c.validate(world.scene.hash, seed, method.name(), w, h)
+                .map_err(|e| format!("{}: cannot resume: {e}", p.display()))?;
+            first = c.next_pass.to_le_bytes().to_vec();
+            resumed = Some(c);
+        }
+    }
+    cluster.broadcast_bytes(&mut first);
+    let first_pass = u64::from_le_bytes(first.as_slice().try_into().map_err(|_| "bad resume broadcast")?);
+    let total_passes = spp.map(|s| s.max(first_pass));
+
+    let progress = Progress::new(job.progress && rank == 0, total_passes.map(|t| t - first_pass), time);
+    let mut film = Film::new(w as usize, h as usize);
+    let mut counters = PassCounters::default();
+    let mut timer = PassTimer::new();
+    let t_render = Instant::now();
+    let mut last_ckpt = Instant::now();
+    let mut my_passes = 0u64;
+    let mut round = 0u64;
+    let mut passes_done = first_pass;
+    loop {
+        let round_start = first_pass + round * size as u64;
+        let more = match total_passes {
+            Some(t) => round_start < t,
+            None => distributed::all_agree(cluster, deadline.should_start_next(Instant::now(), timer.mean_secs())),
+        };
+        if !more || job.max_rounds.is_some_and(|m| round >= m) {
+            break;
+        }
+        let pass = round_start + rank as u64;
+        if total_passes.is_none_or(|t| pass < t) {
+            let t_pass = Instant::now();
+            integrator.begin_pass(&world, seed, pass);
+            let integ = integrator.as_ref();
+            let c = pool.install(|| render_pass(&world, integ, &camera, seed, pass, &mut film));
+            counters.add(&c);
+            timer.record(secs(t_pass));
+            my_passes += 1;
+        }
+        round += 1;
+        passes_done = total_passes.map_or(round_start + size as u64, |t| (round_start + size as u64).min(t));
+        let rays = counters.closest_rays + counters.shadow_rays;
+        progress.update(passes_done - first_pass, passes_done, secs(t_render), secs(started), rays * size as u64);
+        if let Some(every) = job.checkpoint_every {
+            let want = if rank == 0 && last_ckpt.elapsed().as_secs_f64() >= every { 1.0 } else { 0.0 };
+            if cluster.all_reduce_max(want) > 0.0 {
+                let sums = cluster.reduce_sum(&film.data);
+                if let Some(sums) = sums {
+                    let mut total = Film::from_data(w as usize, h as usize, sums).ok_or("film size mismatch")?;
+                    if let Some(r) = &resumed {
+                        add_resumed(&mut total, r)?;
+                    }
+                    let ck = Checkpoint {
+                        scene_hash: world.scene.hash,
+                        seed,
+                        method: method.name().to_string(),
+                        width: w,
+                        height: h,
+                        passes_done,
+                        next_pass: passes_done,
+                        spp: passes_done,
+                        elapsed_secs: secs(started) + resumed.as_ref().map_or(0.0, |r| r.elapsed_secs),
+                        film: total.data.clone(),
+                    };
+                    ck.save(&ckpt_path).map_err(|e| e.to_string())?;
+                    write_images(&job.out, &total)?;
+                }
+                last_ckpt = Instant::now();
+            }
+        }
+    }
+    let render_s = secs(t_render);
+    progress.finish();
+
+    // Reduce the sums to rank 0.
+    let t_red = Instant::now();
+    let sums = cluster.reduce_sum(&film.data);
+    let totals = cluster.all_reduce_sum(&[
+        counters.closest_rays as f64,
+        counters.shadow_rays as f64,
+        counters.nonfinite as f64,
+        counters.samples as f64,
+    ]);
+    let reduce_s = secs(t_red);
+    let rank_stats = json!({
+        "rank": rank, "passes": my_passes, "preprocess_s": preprocess_s, "broadcast_s": broadcast_s,
+        "render_s": render_s, "reduce_s": reduce_s, "bytes_broadcast": bytes_broadcast,
+        "samples": counters.samples, "closest_rays": counters.closest_rays, "shadow_rays": counters.shadow_rays,
+    });
+    let gathered = cluster.gather_bytes(rank_stats.to_string().as_bytes());
+    let Some(sums) = sums else { return Ok(None) };
+    let mut total = Film::from_data(w as usize, h as usize, sums).ok_or("film size mismatch")?;
+    if let Some(r) = &resumed {
+        add_resumed(&mut total, r)?;
+    }
+    let per_rank: Vec<serde_json::Value> = gathered
+        .unwrap_or_default()
+        .iter()
+        .map(|b| serde_json::from_slice(b).unwrap_or(serde_json::Value::Null))
+        .collect();
+    let t_write = Instant::now();
+    if let Some(every) = job.checkpoint_every {
+        let _ = every;
+        let ck = Checkpoint {
+            scene_hash: world.scene.hash,
+            seed,
+            method: method.name().to_string(),
+            width: w,
+            height: h,
+            passes_done,
+            next_pass: passes_done,
+            spp: passes_done,
+            elapsed_secs: secs(started) + resumed.as_ref().map_or(0.0, |r| r.elapsed_secs),
+            film: total.data.clone(),
+        };
+        ck.save(&ckpt_path).map_err(|e| e.to_string())?;
+    }
+    write_images(&job.out, &total)?;
+    let write_s = secs(t_write);
+    let pixels = (w as f64) * (h as f64);
+    let samples_total = total.total_samples();
+    let (closest, shadow) = (totals[0] as u64, totals[1] as u64);
+    let report = json!({
+        "method": method.name(),
+        "scene": world.scene.path,
+        "resolution": [w, h],
+        "spp": (samples_total / pixels).round() as u64,
+        "passes": passes_done,
+        "first_pass": first_pass,
+        "resumed": resumed.is_some(),
+        "seed": seed,
+        "ranks": size,
+        "time_budget_s": time,
+        "timings": {
+            "load_s": load_s, "bvh_s": bvh_s, "preprocess_s": preprocess_s, "broadcast_s": broadcast_s,
+            "render_s": render_s, "reduce_s": reduce_s, "write_s": write_s, "total_s": secs(started),
+        },
+        "rays": { "closest": closest, "shadow": shadow },
+        "mrays_per_s": (closest + shadow) as f64 / render_s.max(1e-9) / 1e6,
+        "samples_per_s": totals[3] / render_s.max(1e-9),
+        "nonfinite_samples": totals[2] as u64,
+        "bytes_broadcast": bytes_broadcast,
+        "method_stats": integrator.stats(),
+        "options": opts,
+        "per_rank": per_rank,
+        "warnings": world.scene.warnings,
+        "image_mean": image_from_film(&total).mean(),
+    });
+    let json_path = with_ext(&job.out, "json");
+    let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+    image_io::atomic_write(&json_path, text.as_bytes())?;
+    let _ = &mut integrator;
+    Ok(Some(RenderResult { film: total, report }))
+}
+
+/// A rayon pool of `threads` workers (default: cores ÷ ranks on this node, from MPICH's
+/// `MPI_LOCALNRANKS` or Open MPI's `OMPI_COMM_WORLD_LOCAL_SIZE`).
+pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, String> {
+    let local = ["MPI_LOCALNRANKS", "OMPI_COMM_WORLD_LOCAL_SIZE"]
+        .iter()
+        .find_map(|v| std::env::var(v).ok()?.parse::<usize>().ok())
+        .unwrap_or(1);
+    let n = threads.unwrap_or_else(|| {
+        let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+        (cores / local.max(1)).max(1)
+    });
+    rayon::ThreadPoolBuilder::new().num_threads(n).build().map_err(|e| e.to_string())
+}
+
+fn add_resumed(total: &mut Film, r: &Checkpoint) -> Result<(), String> {
+    let prev = Film::from_data(total.width, total.height, r.film.clone()).ok_or("checkpoint film size mismatch")?;
+    total.merge(&prev);
+    Ok(())
+}
+
+/// The film's mean as an image.
+pub fn image_from_film(f: &Film) -> Image {
+    Image { width: f.width, height: f.height, pixels: f.mean() }
+}
+
+/// Writes PREFIX.exr (mean + variance-of-mean layer) and PREFIX.png, atomically.
+pub fn write_images(prefix: &Path, film: &Film) -> Result<(), String> {
+    if let Some(dir) = prefix.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    }
+    let img = image_from_film(film);
+    let var = Image { width: film.width, height: film.height, pixels: film.variance_of_mean() };
+    image_io::write_exr_layers(&with_ext(prefix, "exr"), &img, Some(&var))?;
+    image_io::write_png_srgb(&with_ext(prefix, "png"), &img, 1.0)
+}
+
+/// `prefix` + "." + `ext` (keeps dots inside the prefix).
+pub fn with_ext(prefix: &Path, ext: &str) -> PathBuf {
+    let mut s = prefix.as_os_str().to_owned();
+    s.push(".");
+    s.push(ext);
+    PathBuf::from(s)
+}

@@ -1,0 +1,96 @@
+//! One rendering pass: every pixel gets one sample, tiles run in parallel with rayon.
+//!
+//! Randomness is a pure function of (seed, pass, pixel) (`Rng::keyed` with the camera stream),
+//! and each tile's results merge into the film in tile order, so the film is bit-identical for
+//! any thread count. Non-finite samples are counted and replaced by zero (never written).
+
+pub mod film;
+
+use crate::accel::{take_ray_counts, World};
+use crate::integrators::Integrator;
+use crate::math::Rgb;
+use crate::sampling::rng::{stream, Rng};
+use crate::scene::Camera;
+use film::Film;
+use rayon::prelude::*;
+
+/// Tile edge in pixels.
+pub const TILE: usize = 16;
+
+/// What one pass cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct PassCounters {
+    /// Closest-hit rays.
+    pub closest_rays: u64,
+    /// Shadow rays.
+    pub shadow_rays: u64,
+    /// Samples whose estimate was NaN or infinite (replaced by 0).
+    pub nonfinite: u64,
+    /// Samples taken.
+    pub samples: u64,
+}
+
+impl PassCounters {
+    /// Adds another pass's counters.
+    pub fn add(&mut self, o: &PassCounters) {
+        self.closest_rays += o.closest_rays;
+        self.shadow_rays += o.shadow_rays;
+        self.nonfinite += o.nonfinite;
+        self.samples += o.samples;
+    }
+}
+
+/// Renders pass `pass` (one sample per pixel) into `film`.
+pub fn render_pass(
+    world: &World,
+    integrator: &dyn Integrator,
+    camera: &Camera,
+    seed: u64,
+    pass: u64,
+    film: &mut Film,
+) -> PassCounters {
+    let (w, h) = (film.width, film.height);
+    let tiles_x = w.div_ceil(TILE);
+    let tiles_y = h.div_ceil(TILE);
+    let results: Vec<(usize, Vec<Rgb>, PassCounters)> = (0..tiles_x * tiles_y)
+        .into_par_iter()
+        .map(|tile| {
+            let _ = take_ray_counts();
+            let (tx, ty) = (tile % tiles_x, tile / tiles_x);
+            let mut out = Vec::with_capacity(TILE * TILE);
+            let mut c = PassCounters::default();
+            for y in ty * TILE..((ty + 1) * TILE).min(h) {
+                for x in tx * TILE..((tx + 1) * TILE).min(w) {
+                    let pixel = (y * w + x) as u64;
+                    let mut rng = Rng::keyed(seed, stream::CAMERA, pass, pixel);
+                    let [jx, jy] = rng.next_2d();
+                    let dir = camera.direction(x as f32 + jx, y as f32 + jy);
+                    let mut l = integrator.radiance(world, camera.position, dir, &mut rng);
+                    if !l.is_finite() {
+                        c.nonfinite += 1;
+                        l = Rgb::ZERO;
+                    }
+                    c.samples += 1;
+                    out.push(l);
+                }
+            }
+            let (closest, shadow) = take_ray_counts();
+            c.closest_rays = closest;
+            c.shadow_rays = shadow;
+            (tile, out, c)
+        })
+        .collect();
+    let mut total = PassCounters::default();
+    for (tile, out, c) in results {
+        let (tx, ty) = (tile % tiles_x, tile / tiles_x);
+        let mut k = 0;
+        for y in ty * TILE..((ty + 1) * TILE).min(h) {
+            for x in tx * TILE..((tx + 1) * TILE).min(w) {
+                film.add(y * w + x, out[k]);
+                k += 1;
+            }
+        }
+        total.add(&c);
+    }
+    total
+}

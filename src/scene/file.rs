@@ -1,0 +1,577 @@
+//! The TOML scene file (documented in `scenes/README.md`): parsing and validation.
+//!
+//! Every error names the file, the line and the key (`SceneError`'s Display is
+//! `file:line: key `k`: message`). Unknown keys are errors. Degenerate triangles are skipped with a
+//! warning; everything else that is wrong (NaN, negative values, zero-area lights, a bad fov, a
+//! missing OBJ, an empty scene) is an error, never a panic.
+
+use super::{
+    obj, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere, Triangle,
+    NO_EMITTER,
+};
+use crate::math::{luminance, Vec3, PI};
+use crate::sampling::distribution::Distribution1D;
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+use toml::Spanned;
+
+/// A scene loading error with its location.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneError {
+    /// File name.
+    pub file: String,
+    /// 1-based line (0 when unknown).
+    pub line: usize,
+    /// The offending key (may be empty).
+    pub key: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl std::fmt::Display for SceneError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}:{}: ", self.file, self.line)?;
+        if !self.key.is_empty() {
+            write!(f, "key `{}`: ", self.key)?;
+        }
+        write!(f, "{}", self.message)
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Doc {
+    camera: Spanned<CameraDef>,
+    render: Option<Spanned<RenderDef>>,
+    #[serde(default)]
+    materials: BTreeMap<String, Spanned<MaterialDef>>,
+    #[serde(default)]
+    shape: Vec<Spanned<ShapeDef>>,
+    #[serde(default)]
+    light: Vec<Spanned<LightDef>>,
+    #[serde(default)]
+    roi: Vec<Spanned<RoiDef>>,
+    forecast: Option<Spanned<ForecastDef>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraDef {
+    position: [f32; 3],
+    look_at: [f32; 3],
+    #[serde(default = "default_up")]
+    up: [f32; 3],
+    fov: f32,
+    resolution: [u32; 2],
+}
+
+fn default_up() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RenderDef {
+    method: Option<String>,
+    spp: Option<u64>,
+    time: Option<String>,
+    seed: Option<u64>,
+    max_depth: Option<u32>,
+}
+
+#[derive(Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+enum MaterialDef {
+    Diffuse { albedo: [f32; 3] },
+    Glossy { albedo: [f32; 3], specular: [f32; 3], exponent: f32 },
+    Mirror { reflectance: [f32; 3] },
+    Glass { ior: f32 },
+}
+
+#[derive(Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+enum ShapeDef {
+    Quad {
+        corner: [f32; 3],
+        u: [f32; 3],
+        v: [f32; 3],
+        material: Option<String>,
+        emission: Option<[f32; 3]>,
+    },
+    Sphere {
+        center: [f32; 3],
+        radius: f32,
+        material: Option<String>,
+        emission: Option<[f32; 3]>,
+        #[serde(default)]
+        inward: bool,
+    },
+    Mesh {
+        file: String,
+        #[serde(default = "default_normals")]
+        normals: String,
+        material: Option<String>,
+        emission: Option<[f32; 3]>,
+        translate: Option<[f32; 3]>,
+        scale: Option<f32>,
+        rotate_y: Option<f32>,
+    },
+}
+
+fn default_normals() -> String {
+    "flat".into()
+}
+
+#[derive(Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+enum LightDef {
+    Point { position: [f32; 3], intensity: [f32; 3] },
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RoiDef {
+    name: String,
+    rect: [u32; 4],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ForecastDef {
+    target_box: Option<[[f32; 3]; 2]>,
+}
+
+/// Parses a duration such as `500ms`, `30s`, `4m`, `1h` or `1m30s` into seconds.
+pub fn parse_duration(s: &str) -> Result<f64, String> {
+    let s = s.trim();
+    let mut total = 0.0;
+    let mut num = String::new();
+    let mut chars = s.chars().peekable();
+    let mut any = false;
+    while let Some(c) = chars.next() {
+        if c.is_ascii_digit() || c == '.' {
+            num.push(c);
+            continue;
+        }
+        let mut unit = c.to_string();
+        while let Some(&n) = chars.peek() {
+            if n.is_ascii_alphabetic() {
+                unit.push(n);
+                chars.next();
+            } else {
+                break;
+            }
+        }
+        let v: f64 = num.parse().map_err(|_| format!("bad duration `{s}` (expected e.g. 30s, 4m, 1h)"))?;
+        total += v * match unit.as_str() {
+            "ms" => 1e-3,
+            "s" => 1.0,
+            "m" | "min" => 60.0,
+            "h" => 3600.0,
+            _ => return Err(format!("bad duration unit `{unit}` in `{s}` (use ms, s, m, h)")),
+        };
+        num.clear();
+        any = true;
+    }
+    if !num.is_empty() {
+        // a bare number means seconds
+        total += num.parse::<f64>().map_err(|_| format!("bad duration `{s}`"))?;
+        any = true;
+    }
+    if !any || !total.is_finite() || total <= 0.0 {
+        return Err(format!("bad duration `{s}`: must be positive (e.g. 30s, 4m, 1h)"));
+    }
+    Ok(total)
+}
+
+struct Ctx<'a> {
+    file: String,
+    src: &'a str,
+}
+
+impl Ctx<'_> {
+    fn line_of(&self, offset: usize) -> usize {
+        self.src[..offset.min(self.src.len())].bytes().filter(|&b| b == b'\n').count() + 1
+    }
+    /// Error at `key` inside the entry spanning `span` (finds the key's own line when present).
+    fn err(&self, span: std::ops::Range<usize>, key: &str, message: impl Into<String>) -> SceneError {
+        let text = &self.src[span.start.min(self.src.len())..span.end.min(self.src.len())];
+        let mut at = span.start;
+        if !key.is_empty() {
+            let leaf = key.rsplit('.').next().unwrap_or(key);
+            let mut search = 0;
+            while let Some(i) = text[search..].find(leaf) {
+                let pos = search + i;
+                let before_ok = pos == 0 || !text.as_bytes()[pos - 1].is_ascii_alphanumeric() && text.as_bytes()[pos - 1] != b'_';
+                let rest = text[pos + leaf.len()..].trim_start();
+                if before_ok && rest.starts_with('=') {
+                    at = span.start + pos;
+                    break;
+                }
+                search = pos + leaf.len();
+            }
+        }
+        SceneError { file: self.file.clone(), line: self.line_of(at), key: key.to_string(), message: message.into() }
+    }
+}
+
+fn finite3(v: [f32; 3]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+fn v3(a: [f32; 3]) -> Vec3 {
+    Vec3::from_array(a)
+}
+
+/// Loads a scene file (and the OBJ files it names).
+pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    let file = path.display().to_string();
+    let src = std::fs::read_to_string(path).map_err(|e| SceneError {
+        file: file.clone(),
+        line: 0,
+        key: String::new(),
+        message: format!("cannot read scene file: {e}"),
+    })?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    load_str(&src, &file, dir)
+}
+
+/// Parses scene text; `dir` resolves relative mesh paths; `file` is used in messages.
+pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> {
+    let cx = Ctx { file: file.to_string(), src };
+    let doc: Doc = toml::from_str(src).map_err(|e| {
+        let line = e.span().map(|s| cx.line_of(s.start)).unwrap_or(0);
+        let msg = e.message().trim().to_string();
+        let key = msg
+            .split('`')
+            .nth(1)
+            .filter(|_| msg.contains("unknown field") || msg.contains("missing field"))
+            .unwrap_or("")
+            .to_string();
+        SceneError { file: cx.file.clone(), line, key, message: msg }
+    })?;
+    let mut hash = fnv1a(0xcbf2_9ce4_8422_2325, src.as_bytes());
+    let mut warnings = Vec::new();
+
+    // camera
+    let cs = doc.camera.span();
+    let c = doc.camera.get_ref();
+    if !finite3(c.position) || !finite3(c.look_at) || !finite3(c.up) {
+        return Err(cx.err(cs, "camera.position", "camera vectors must be finite"));
+    }
+    if !(c.fov.is_finite() && c.fov > 0.0 && c.fov < 180.0) {
+        return Err(cx.err(cs, "camera.fov", format!("fov must be in (0, 180) degrees, got {}", c.fov)));
+    }
+    if c.resolution[0] == 0 || c.resolution[1] == 0 || c.resolution[0] > 65536 || c.resolution[1] > 65536 {
+        return Err(cx.err(cs, "camera.resolution", "resolution must be in 1..=65536 per axis"));
+    }
+    let fwd = v3(c.look_at) - v3(c.position);
+    if fwd.length() < 1e-9 {
+        return Err(cx.err(cs, "camera.look_at", "look_at equals position"));
+    }
+    if fwd.normalize().cross(v3(c.up)).length() < 1e-6 {
+        return Err(cx.err(cs, "camera.up", "up is parallel to the view direction"));
+    }
+    let camera = Camera::new(v3(c.position), v3(c.look_at), v3(c.up), c.fov, c.resolution[0], c.resolution[1]);
+
+    // render defaults
+    let mut render = RenderDefaults { method: "pt".into(), spp: None, time: None, seed: 0, max_depth: 64 };
+    if let Some(r) = &doc.render {
+        let rs = r.span();
+        let r = r.get_ref();
+        if let Some(m) = &r.method {
+            if !["pt", "iws", "iws-pm", "iws-cf"].contains(&m.as_str()) {
+                return Err(cx.err(rs, "render.method", format!("unknown method `{m}` (pt, iws, iws-pm, iws-cf)")));
+            }
+            render.method = m.clone();
+        }
+        if let Some(s) = r.spp {
+            if s == 0 {
+                return Err(cx.err(rs, "render.spp", "spp must be positive"));
+            }
+            render.spp = Some(s);
+        }
+        if let Some(t) = &r.time {
+            render.time = Some(parse_duration(t).map_err(|m| cx.err(rs.clone(), "render.time", m))?);
+        }
+        render.seed = r.seed.unwrap_or(0);
+        if let Some(d) = r.max_depth {
+            if d < 2 {
+                return Err(cx.err(rs, "render.max_depth", "max_depth must be at least 2"));
+            }
+            render.max_depth = d;
+        }
+    }
+
+    // materials
+    let mut materials = vec![Material::Black];
+    let mut names: BTreeMap<&str, u32> = BTreeMap::new();
+    for (name, m) in &doc.materials {
+        let ms = m.span();
+        let bad = |k: &str, msg: &str| cx.err(ms.clone(), &format!("materials.{name}.{k}"), msg);
+        let refl = |k: &str, a: [f32; 3]| -> Result<Vec3, SceneError> {
+            if !finite3(a) || a.iter().any(|&x| !(0.0..=1.0).contains(&x)) {
+                return Err(bad(k, "must be three finite values in [0, 1]"));
+            }
+            Ok(v3(a))
+        };
+        let mat = match m.get_ref() {
+            MaterialDef::Diffuse { albedo } => Material::Diffuse { albedo: refl("albedo", *albedo)? },
+            MaterialDef::Glossy { albedo, specular, exponent } => {
+                let (a, s) = (refl("albedo", *albedo)?, refl("specular", *specular)?);
+                if (a + s).max_element() > 1.0 + 1e-6 {
+                    return Err(bad("specular", "albedo + specular must be <= 1 per channel (energy conservation)"));
+                }
+                if !(exponent.is_finite() && *exponent >= 0.0 && *exponent <= 1e6) {
+                    return Err(bad("exponent", "exponent must be finite and in [0, 1e6]"));
+                }
+                Material::Glossy { albedo: a, specular: s, exponent: *exponent }
+            }
+            MaterialDef::Mirror { reflectance } => Material::Mirror { reflectance: refl("reflectance", *reflectance)? },
+            MaterialDef::Glass { ior } => {
+                if !(ior.is_finite() && *ior >= 1.0 && *ior <= 10.0) {
+                    return Err(bad("ior", "ior must be finite and in [1, 10]"));
+                }
+                Material::Glass { ior: *ior }
+            }
+        };
+        names.insert(name.as_str(), materials.len() as u32);
+        materials.push(mat);
+    }
+
+    // shapes
+    let mut triangles: Vec<Triangle> = Vec::new();
+    let mut spheres: Vec<Sphere> = Vec::new();
+    let mut tri_emission: Vec<Option<Vec3>> = Vec::new();
+    let mut sph_emission: Vec<Option<Vec3>> = Vec::new();
+    for (idx, s) in doc.shape.iter().enumerate() {
+        let ss = s.span();
+        let key = |k: &str| format!("shape[{idx}].{k}");
+        let resolve = |mat: &Option<String>, emission: &Option<[f32; 3]>| -> Result<(u32, Option<Vec3>), SceneError> {
+            let e = match emission {
+                Some(e) => {
+                    if !finite3(*e) || e.iter().any(|&x| x < 0.0) {
+                        return Err(cx.err(ss.clone(), &key("emission"), "emission must be finite and non-negative"));
+                    }
+                    Some(v3(*e)).filter(|e| e.max_element() > 0.0)
+                }
+                None => None,
+            };
+            if e.is_some() {
+                return Ok((0, e)); // emitters reflect nothing
+            }
+            match mat {
+                Some(m) => names
+                    .get(m.as_str())
+                    .map(|&i| (i, None))
+                    .ok_or_else(|| cx.err(ss.clone(), &key("material"), format!("unknown material `{m}`"))),
+                None => Err(cx.err(ss.clone(), &key("material"), "a shape needs `material` (or `emission`)")),
+            }
+        };
+        match s.get_ref() {
+            ShapeDef::Quad { corner, u, v, material, emission } => {
+                if !finite3(*corner) || !finite3(*u) || !finite3(*v) {
+                    return Err(cx.err(ss, &key("corner"), "quad vectors must be finite"));
+                }
+                let (mat, e) = resolve(material, emission)?;
+                let (c, u, v) = (v3(*corner), v3(*u), v3(*v));
+                if u.cross(v).length() < 1e-12 {
+                    return Err(cx.err(ss, &key("u"), "zero-area quad (u × v = 0)"));
+                }
+                for p in [[c, c + u, c + u + v], [c, c + u + v, c + v]] {
+                    if let Some(t) = make_triangle(p, None, mat) {
+                        triangles.push(t);
+                        tri_emission.push(e);
+                    }
+                }
+            }
+            ShapeDef::Sphere { center, radius, material, emission, inward } => {
+                if !finite3(*center) {
+                    return Err(cx.err(ss, &key("center"), "center must be finite"));
+                }
+                if !(radius.is_finite() && *radius > 0.0) {
+                    return Err(cx.err(ss, &key("radius"), format!("radius must be positive and finite, got {radius}")));
+                }
+                let (mat, e) = resolve(material, emission)?;
+                spheres.push(Sphere { center: v3(*center), radius: *radius, inward: *inward, material: mat, emitter: NO_EMITTER });
+                sph_emission.push(e);
+            }
+            ShapeDef::Mesh { file: f, normals, material, emission, translate, scale, rotate_y } => {
+                let smooth = match normals.as_str() {
+                    "flat" => false,
+                    "smooth" => true,
+                    other => return Err(cx.err(ss, &key("normals"), format!("normals must be `flat` or `smooth`, got `{other}`"))),
+                };
+                let (mat, e) = resolve(material, emission)?;
+                let t = translate.unwrap_or([0.0; 3]);
+                let sc = scale.unwrap_or(1.0);
+                let ry = rotate_y.unwrap_or(0.0);
+                if !finite3(t) || !(sc.is_finite() && sc > 0.0) || !ry.is_finite() {
+                    return Err(cx.err(ss, &key("scale"), "transform values must be finite and scale positive"));
+                }
+                let path = dir.join(f);
+                let mesh = obj::load_mesh(&path, smooth).map_err(|m| cx.err(ss.clone(), &key("file"), m))?;
+                hash = fnv1a(hash, &mesh.bytes_hash.to_le_bytes());
+                let (sin, cos) = ry.to_radians().sin_cos();
+                let xf = |p: Vec3| {
+                    let p = p * sc;
+                    Vec3::new(cos * p.x + sin * p.z, p.y, -sin * p.x + cos * p.z) + v3(t)
+                };
+                let xn = |n: Vec3| Vec3::new(cos * n.x + sin * n.z, n.y, -sin * n.x + cos * n.z);
+                let mut skipped = 0usize;
+                for (k, tri) in mesh.triangles.iter().enumerate() {
+                    let p = [xf(tri[0]), xf(tri[1]), xf(tri[2])];
+                    let n = mesh.normals.as_ref().map(|ns| [xn(ns[k][0]), xn(ns[k][1]), xn(ns[k][2])]);
+                    match make_triangle(p, n, mat) {
+                        Some(t) => {
+                            triangles.push(t);
+                            tri_emission.push(e);
+                        }
+                        None => skipped += 1,
+                    }
+                }
+                if skipped > 0 {
+                    warnings.push(format!(
+                        "{}:{}: key `{}`: skipped {skipped} degenerate triangle(s) in {}",
+                        cx.file,
+                        cx.err(ss.clone(), &key("file"), "").line,
+                        key("file"),
+                        path.display()
+                    ));
+                }
+            }
+        }
+    }
+    if triangles.is_empty() && spheres.is_empty() {
+        return Err(SceneError { file: cx.file.clone(), line: 1, key: "shape".into(), message: "empty scene: no shapes".into() });
+    }
+
+    // emitters
+    let mut emitters = Vec::new();
+    for (i, e) in tri_emission.iter().enumerate() {
+        if let Some(le) = e {
+            triangles[i].emitter = emitters.len() as u32;
+            emitters.push(Emitter { prim: i as u32, radiance: *le, area: triangles[i].area });
+        }
+    }
+    let ntri = triangles.len() as u32;
+    for (i, e) in sph_emission.iter().enumerate() {
+        if let Some(le) = e {
+            spheres[i].emitter = emitters.len() as u32;
+            let r = spheres[i].radius;
+            emitters.push(Emitter { prim: ntri + i as u32, radiance: *le, area: 4.0 * PI * r * r });
+        }
+    }
+    let mut point_lights = Vec::new();
+    for (idx, l) in doc.light.iter().enumerate() {
+        let ls = l.span();
+        let LightDef::Point { position, intensity } = l.get_ref();
+        if !finite3(*position) {
+            return Err(cx.err(ls, &format!("light[{idx}].position"), "position must be finite"));
+        }
+        if !finite3(*intensity) || intensity.iter().any(|&x| x < 0.0) {
+            return Err(cx.err(ls, &format!("light[{idx}].intensity"), "intensity must be finite and non-negative"));
+        }
+        point_lights.push(PointLight { position: v3(*position), intensity: v3(*intensity) });
+    }
+    let mut lights: Vec<LightRef> = (0..emitters.len() as u32).map(LightRef::Area).collect();
+    lights.extend((0..point_lights.len() as u32).map(LightRef::Point));
+    let powers: Vec<f32> = lights
+        .iter()
+        .map(|l| match *l {
+            LightRef::Area(i) => luminance(emitters[i as usize].radiance) * emitters[i as usize].area * PI,
+            LightRef::Point(i) => 4.0 * PI * luminance(point_lights[i as usize].intensity),
+        })
+        .collect();
+    let light_pick = Distribution1D::new(&powers).ok_or_else(|| SceneError {
+        file: cx.file.clone(),
+        line: 1,
+        key: "shape.emission".into(),
+        message: "the scene has no light with positive power (add `emission` to a shape or a [[light]])".into(),
+    })?;
+    let emitter_light_index = (0..emitters.len() as u32).collect();
+
+    // regions of interest and forecast options
+    let mut rois = Vec::new();
+    for (i, r) in doc.roi.iter().enumerate() {
+        let rd = r.get_ref();
+        let [x, y, w, h] = rd.rect;
+        if w == 0 || h == 0 || x + w > camera.width || y + h > camera.height {
+            return Err(cx.err(r.span(), &format!("roi[{i}].rect"), format!(
+                "rect {:?} must be non-empty and inside the {}x{} image", rd.rect, camera.width, camera.height
+            )));
+        }
+        rois.push(Roi { name: rd.name.clone(), rect: rd.rect });
+    }
+    let mut forecast_target = None;
+    if let Some(f) = &doc.forecast {
+        if let Some([lo, hi]) = f.get_ref().target_box {
+            if !finite3(lo) || !finite3(hi) || (0..3).any(|k| lo[k] > hi[k]) {
+                return Err(cx.err(f.span(), "forecast.target_box", "target_box must be [[min], [max]] with min <= max"));
+            }
+            forecast_target = Some((v3(lo), v3(hi)));
+        }
+    }
+
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for t in &triangles {
+        for p in t.p {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+    }
+    for s in &spheres {
+        lo = lo.min(s.center - Vec3::splat(s.radius));
+        hi = hi.max(s.center + Vec3::splat(s.radius));
+    }
+    Ok(Scene {
+        path: cx.file.clone(),
+        hash,
+        camera,
+        render,
+        materials,
+        triangles,
+        spheres,
+        emitters,
+        point_lights,
+        lights,
+        light_pick,
+        emitter_light_index,
+        rois,
+        forecast_target,
+        bounds: (lo, hi),
+        warnings,
+    })
+}
+
+/// Builds a triangle, or `None` when degenerate (zero area or non-finite).
+fn make_triangle(p: [Vec3; 3], n: Option<[Vec3; 3]>, material: u32) -> Option<Triangle> {
+    let c = (p[1] - p[0]).cross(p[2] - p[0]);
+    let len = c.length();
+    if !(len.is_finite() && len > 1e-12) {
+        return None;
+    }
+    let ng = c / len;
+    // shading normals must be finite and on the geometric side; else fall back to flat
+    let n = n.and_then(|ns| {
+        let ok = ns.iter().all(|v| v.is_finite() && v.length() > 1e-6);
+        ok.then(|| ns.map(|v| {
+            let v = v.normalize();
+            if v.dot(ng) < 0.0 { -v } else { v }
+        }))
+    });
+    Some(Triangle { p, n, ng, area: 0.5 * len, material, emitter: NO_EMITTER })
+}
+
+/// FNV-1a over bytes, continuing from `h`.
+pub(crate) fn fnv1a(mut h: u64, bytes: &[u8]) -> u64 {
+    for &b in bytes {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    h
+}

@@ -1,0 +1,48 @@
+//! Material parameters (no sampling code; see `bsdf`). The D/S partition of the spec §1 is
+//! `Material::is_dirac`: mirrors and glass are Dirac (S), everything else non-specular (D).
+
+use crate::math::Rgb;
+
+/// A surface material, by the scene file's `type`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Material {
+    /// Lambertian reflector: f = albedo/π.
+    Diffuse {
+        /// Diffuse reflectance.
+        albedo: Rgb,
+    },
+    /// Energy-conserving modified Phong: albedo/π + specular·(e+2)/(2π)·cosᵉα.
+    Glossy {
+        /// Diffuse reflectance.
+        albedo: Rgb,
+        /// Specular reflectance.
+        specular: Rgb,
+        /// Phong exponent e.
+        exponent: f32,
+    },
+    /// Perfect specular reflector with constant reflectance (Dirac).
+    Mirror {
+        /// Reflectance.
+        reflectance: Rgb,
+    },
+    /// Smooth dielectric with Fresnel reflection and refraction (Dirac).
+    Glass {
+        /// Index of refraction inside (outside is 1).
+        ior: f32,
+    },
+    /// The black BSDF of an area light: it reflects nothing.
+    Black,
+}
+
+impl Material {
+    /// True for Dirac (delta) BSDFs: the S side of the L_d / L_c split.
+    #[inline]
+    pub fn is_dirac(&self) -> bool {
+        matches!(self, Material::Mirror { .. } | Material::Glass { .. })
+    }
+    /// True when the BSDF is identically zero.
+    #[inline]
+    pub fn is_black(&self) -> bool {
+        matches!(self, Material::Black)
+    }
+}

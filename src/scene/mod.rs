@@ -1,0 +1,242 @@
+//! `Scene`: immutable geometry, materials, lights and camera, as loaded from a TOML scene file.
+//!
+//! Primitives are triangles (quads and OBJ meshes) and analytic spheres. Primitive ids are
+//! `[0, ntri)` for triangles and `[ntri, ntri+nsph)` for spheres. Every emissive primitive is one
+//! `Emitter`; lights (emitters and point lights) are picked in proportion to their power.
+//!
+//! Invariants: geometric normals are unit and define the emitting side of area lights; shading
+//! normals lie on the geometric normal's side; emitters have the black material.
+
+mod camera;
+mod file;
+mod material;
+mod obj;
+
+pub use camera::Camera;
+pub use file::{load, load_str, parse_duration, SceneError};
+pub use material::Material;
+
+use crate::math::{luminance, Rgb, Vec3, PI};
+use crate::sampling::distribution::Distribution1D;
+
+/// Sentinel for "no emitter".
+pub const NO_EMITTER: u32 = u32::MAX;
+
+/// A triangle with optional per-vertex shading normals.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Triangle {
+    /// Vertices.
+    pub p: [Vec3; 3],
+    /// Per-vertex shading normals (smooth meshes).
+    pub n: Option<[Vec3; 3]>,
+    /// Unit geometric normal, normalize((p1−p0)×(p2−p0)).
+    pub ng: Vec3,
+    /// Area.
+    pub area: f32,
+    /// Material index.
+    pub material: u32,
+    /// Emitter index or `NO_EMITTER`.
+    pub emitter: u32,
+}
+
+/// An analytic sphere.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sphere {
+    /// Centre.
+    pub center: Vec3,
+    /// Radius (> 0).
+    pub radius: f32,
+    /// Normals point inwards (closed rooms).
+    pub inward: bool,
+    /// Material index.
+    pub material: u32,
+    /// Emitter index or `NO_EMITTER`.
+    pub emitter: u32,
+}
+
+/// An emissive primitive: a one-sided Lambertian emitter with constant radiance.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Emitter {
+    /// Primitive id (triangle or sphere).
+    pub prim: u32,
+    /// Emitted radiance on the normal's side.
+    pub radiance: Rgb,
+    /// Area.
+    pub area: f32,
+}
+
+/// An isotropic point light.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointLight {
+    /// Position.
+    pub position: Vec3,
+    /// Radiant intensity (W/sr).
+    pub intensity: Rgb,
+}
+
+/// A region of interest in pixels at the camera's resolution.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Roi {
+    /// Name.
+    pub name: String,
+    /// x, y, w, h (top-left origin).
+    pub rect: [u32; 4],
+}
+
+/// Defaults from the scene's `[render]` table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderDefaults {
+    /// Method name.
+    pub method: String,
+    /// Samples per pixel (when no time budget).
+    pub spp: Option<u64>,
+    /// Time budget in seconds.
+    pub time: Option<f64>,
+    /// Seed.
+    pub seed: u64,
+    /// Safety cap on path vertices.
+    pub max_depth: u32,
+}
+
+/// A light that next-event estimation can pick.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightRef {
+    /// Index into `Scene::emitters`.
+    Area(u32),
+    /// Index into `Scene::point_lights`.
+    Point(u32),
+}
+
+/// The loaded scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Source file (for messages and hashing).
+    pub path: String,
+    /// FNV-1a hash of the scene file text and its meshes (checkpoint validation).
+    pub hash: u64,
+    /// Camera.
+    pub camera: Camera,
+    /// Render defaults.
+    pub render: RenderDefaults,
+    /// Materials (index = material id).
+    pub materials: Vec<Material>,
+    /// Triangles.
+    pub triangles: Vec<Triangle>,
+    /// Spheres.
+    pub spheres: Vec<Sphere>,
+    /// Area emitters.
+    pub emitters: Vec<Emitter>,
+    /// Point lights.
+    pub point_lights: Vec<PointLight>,
+    /// All lights, in `light_pick` order.
+    pub lights: Vec<LightRef>,
+    /// Light selection ∝ power.
+    pub light_pick: Distribution1D,
+    /// Emitter index → position in `lights`.
+    pub emitter_light_index: Vec<u32>,
+    /// Regions of interest.
+    pub rois: Vec<Roi>,
+    /// Optional Caustic Forecasting target box override (min, max).
+    pub forecast_target: Option<(Vec3, Vec3)>,
+    /// Scene bounds (min, max).
+    pub bounds: (Vec3, Vec3),
+    /// Warnings collected while loading (degenerate triangles, ...).
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    /// Number of triangles (the first sphere's primitive id).
+    #[inline]
+    pub fn ntri(&self) -> u32 {
+        self.triangles.len() as u32
+    }
+
+    /// Material of a primitive.
+    #[inline]
+    pub fn material_of(&self, prim: u32) -> &Material {
+        let m = if prim < self.ntri() {
+            self.triangles[prim as usize].material
+        } else {
+            self.spheres[(prim - self.ntri()) as usize].material
+        };
+        &self.materials[m as usize]
+    }
+
+    /// Emitter of a primitive, or `NO_EMITTER`.
+    #[inline]
+    pub fn emitter_of(&self, prim: u32) -> u32 {
+        if prim < self.ntri() {
+            self.triangles[prim as usize].emitter
+        } else {
+            self.spheres[(prim - self.ntri()) as usize].emitter
+        }
+    }
+
+    /// Power (luminance, W) of a light, used for light selection.
+    pub fn light_power(&self, l: LightRef) -> f32 {
+        match l {
+            LightRef::Area(i) => {
+                let e = &self.emitters[i as usize];
+                luminance(e.radiance) * e.area * PI
+            }
+            LightRef::Point(i) => 4.0 * PI * luminance(self.point_lights[i as usize].intensity),
+        }
+    }
+
+    /// Samples a point uniformly on an emitter: (position, unit geometric normal, pdf_a = 1/area).
+    pub fn sample_emitter_point(&self, emitter: u32, u: [f32; 2]) -> (Vec3, Vec3, f32) {
+        let e = &self.emitters[emitter as usize];
+        if e.prim < self.ntri() {
+            let t = &self.triangles[e.prim as usize];
+            let (b0, b1) = crate::sampling::warp::sample_triangle(u);
+            let p = b0 * t.p[0] + b1 * t.p[1] + (1.0 - b0 - b1) * t.p[2];
+            (p, t.ng, 1.0 / t.area)
+        } else {
+            let s = &self.spheres[(e.prim - self.ntri()) as usize];
+            let d = crate::sampling::warp::sample_uniform_sphere(u);
+            let n = if s.inward { -d } else { d };
+            (s.center + s.radius * d, n, 1.0 / e.area)
+        }
+    }
+
+    /// Total area of non-Dirac, non-emitting surfaces (IWS's A_D).
+    pub fn non_specular_area(&self) -> f32 {
+        let tri: f32 = self
+            .triangles
+            .iter()
+            .filter(|t| !self.materials[t.material as usize].is_dirac() && t.emitter == NO_EMITTER)
+            .map(|t| t.area)
+            .sum();
+        let sph: f32 = self
+            .spheres
+            .iter()
+            .filter(|s| !self.materials[s.material as usize].is_dirac() && s.emitter == NO_EMITTER)
+            .map(|s| 4.0 * PI * s.radius * s.radius)
+            .sum();
+        tri + sph
+    }
+
+    /// Bounding box of all Dirac primitives, if any.
+    pub fn dirac_bounds(&self) -> Option<(Vec3, Vec3)> {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        let mut any = false;
+        for t in &self.triangles {
+            if self.materials[t.material as usize].is_dirac() {
+                any = true;
+                for p in t.p {
+                    lo = lo.min(p);
+                    hi = hi.max(p);
+                }
+            }
+        }
+        for s in &self.spheres {
+            if self.materials[s.material as usize].is_dirac() {
+                any = true;
+                lo = lo.min(s.center - Vec3::splat(s.radius));
+                hi = hi.max(s.center + Vec3::splat(s.radius));
+            }
+        }
+        any.then_some((lo, hi))
+    }
+}

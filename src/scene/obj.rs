@@ -1,0 +1,67 @@
+//! OBJ meshes via tobj (the only module that touches tobj): triangulated positions and, for
+//! smooth shading, per-vertex normals (the file's `vn`, else area-weighted vertex normals).
+//!
+//! Invariants: degenerate faces are returned as-is; the caller skips them with a warning.
+
+use crate::math::Vec3;
+use std::path::Path;
+
+/// A loaded triangle mesh.
+pub struct Mesh {
+    /// Triangle vertex positions.
+    pub triangles: Vec<[Vec3; 3]>,
+    /// Per-triangle vertex normals (smooth meshes only).
+    pub normals: Option<Vec<[Vec3; 3]>>,
+    /// Hash of the file bytes (scene hashing).
+    pub bytes_hash: u64,
+}
+
+/// Loads an OBJ file; errors are messages that name the file.
+pub fn load_mesh(path: &Path, smooth: bool) -> Result<Mesh, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read OBJ `{}`: {e}", path.display()))?;
+    let bytes_hash = super::file::fnv1a(0xcbf2_9ce4_8422_2325, &bytes);
+    let opts = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
+    let mut reader = std::io::BufReader::new(&bytes[..]);
+    let (models, _) = tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed))
+        .map_err(|e| format!("cannot parse OBJ `{}`: {e}", path.display()))?;
+    let mut triangles = Vec::new();
+    let mut normals = Vec::new();
+    for m in &models {
+        let mesh = &m.mesh;
+        let pos = |i: u32| -> Option<Vec3> {
+            let i = i as usize * 3;
+            mesh.positions.get(i..i + 3).map(|s| Vec3::new(s[0], s[1], s[2]))
+        };
+        let has_vn = mesh.normals.len() == mesh.positions.len() && !mesh.normals.is_empty();
+        let mut vnorm: Vec<Vec3> = Vec::new();
+        if smooth {
+            if has_vn {
+                vnorm = mesh.normals.chunks_exact(3).map(|s| Vec3::new(s[0], s[1], s[2])).collect();
+            } else {
+                vnorm = vec![Vec3::ZERO; mesh.positions.len() / 3];
+                for f in mesh.indices.chunks_exact(3) {
+                    if let (Some(a), Some(b), Some(c)) = (pos(f[0]), pos(f[1]), pos(f[2])) {
+                        let n = (b - a).cross(c - a); // area-weighted
+                        for &i in f {
+                            vnorm[i as usize] += n;
+                        }
+                    }
+                }
+            }
+        }
+        for f in mesh.indices.chunks_exact(3) {
+            let (Some(a), Some(b), Some(c)) = (pos(f[0]), pos(f[1]), pos(f[2])) else {
+                return Err(format!("OBJ `{}`: face index out of range", path.display()));
+            };
+            triangles.push([a, b, c]);
+            if smooth {
+                let n = |i: u32| vnorm.get(i as usize).copied().unwrap_or(Vec3::ZERO);
+                normals.push([n(f[0]), n(f[1]), n(f[2])]);
+            }
+        }
+    }
+    if triangles.is_empty() {
+        return Err(format!("OBJ `{}` has no faces", path.display()));
+    }
+    Ok(Mesh { triangles, normals: smooth.then_some(normals), bytes_hash })
+}

@@ -1,0 +1,306 @@
+//! A static 3-D kd-tree over points, used by the CF cluster map and forecast maps ([BAJ08 §3.2]
+//! "cluster map" / "forecast maps", spec §3) and by photon-map gathers.
+//!
+//! Layout: a flat node array (children of node `i` are `i + 1` and `right`), built by a median split on
+//! the widest axis of each node's bounding box until a node holds at most [`LEAF_SIZE`] points. Points
+//! are stored permuted into leaf order next to their item id (a `u32` chosen by the caller, by default
+//! the index into the input slice), so the tree is self-contained and serializable with bitcode.
+//!
+//! Invariants: for an inner node with axis `d` and value `s`, every point of the left subtree has
+//! `p[d] ≤ s` and every point of the right subtree has `p[d] ≥ s`. Queries allocate nothing (the
+//! traversal stack is a fixed array; depth ≤ 64 for any `u32` count); "within r²" means `dist² ≤ r²`.
+//! Points with non-finite coordinates are stored but never returned by a finite query; empty trees and
+//! NaN queries return nothing.
+
+/// Maximum number of points in a leaf.
+pub const LEAF_SIZE: usize = 8;
+const STACK: usize = 64;
+use std::cell::Cell;
+const LEAF: u8 = 3;
+
+/// One node of the flat tree.
+#[derive(Clone, Copy, Debug, PartialEq, bitcode::Encode, bitcode::Decode)]
+struct Node {
+    /// Split coordinate (inner nodes).
+    split: f32,
+    /// Inner: index of the right child. Leaf: first slot of its points.
+    a: u32,
+    /// Leaf: one past the last slot. Inner: unused.
+    b: u32,
+    /// Split axis 0..3, or `LEAF`.
+    axis: u8,
+}
+
+/// Static kd-tree over 3-D points labelled by `u32` ids.
+#[derive(Clone, Debug, Default, PartialEq, bitcode::Encode, bitcode::Decode)]
+pub struct KdTree {
+    nodes: Vec<Node>,
+    points: Vec<[f32; 3]>,
+    ids: Vec<u32>,
+}
+
+#[inline]
+fn dist2(a: &[f32; 3], b: &[f32; 3]) -> f32 {
+    let (x, y, z) = (a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+    x * x + y * y + z * z
+}
+
+impl KdTree {
+    /// Builds a tree over `points`; item ids are indices into `points`.
+    pub fn build(points: &[[f32; 3]]) -> Self {
+        let ids = (0..points.len() as u32).collect();
+        Self::build_with_ids(points.to_vec(), ids)
+    }
+
+    /// Builds a tree over `points[i]` labelled `ids[i]` (extra entries of the longer vector are dropped).
+    pub fn build_with_ids(points: Vec<[f32; 3]>, ids: Vec<u32>) -> Self {
+        let n = points.len().min(ids.len());
+        let mut items: Vec<([f32; 3], u32)> = points.into_iter().zip(ids).take(n).collect();
+        let mut nodes = Vec::with_capacity(2 * n / LEAF_SIZE + 1);
+        if n > 0 {
+            build_rec(&mut items, 0, &mut nodes);
+        }
+        KdTree { nodes, points: items.iter().map(|x| x.0).collect(), ids: items.iter().map(|x| x.1).collect() }
+    }
+
+    /// Number of stored points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// True when the tree holds no point.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Iterates over all stored `(id, position)` pairs (in leaf order).
+    pub fn items(&self) -> impl Iterator<Item = (u32, [f32; 3])> + '_ {
+        self.ids.iter().copied().zip(self.points.iter().copied())
+    }
+
+    /// Nearest stored point to `p`: `(id, dist²)`. `None` for an empty tree or a non-finite query.
+    pub fn nearest(&self, p: [f32; 3]) -> Option<(u32, f32)> {
+        let mut best: Option<(u32, f32)> = None;
+        let bound = Cell::new(f32::INFINITY);
+        self.traverse(&p, &bound, |id, d2| {
+            if d2 < bound.get() {
+                bound.set(d2);
+                best = Some((id, d2));
+            }
+        });
+        best
+    }
+
+    /// The `k` nearest points with `dist² ≤ r2`, written to `out` as `(dist², id)` sorted by distance
+    /// (ties in arbitrary but deterministic order). `out` is cleared first; nothing else is allocated.
+    pub fn k_nearest_within(&self, p: [f32; 3], k: usize, r2: f32, out: &mut Vec<(f32, u32)>) {
+        out.clear();
+        if k == 0 || !(r2 >= 0.0) {
+            return;
+        }
+        out.reserve(k.min(self.len()));
+        // `out` is kept sorted; the bound is the current k-th distance once full, else r2.
+        let bound = Cell::new(r2);
+        self.traverse(&p, &bound, |id, d2| {
+            if !(d2 <= bound.get()) || (out.len() == k && d2 >= bound.get()) {
+                return;
+            }
+            if out.len() == k {
+                out.pop();
+            }
+            let pos = out.partition_point(|e| e.0 <= d2);
+            out.insert(pos, (d2, id));
+            if out.len() == k {
+                bound.set(out[k - 1].0);
+            }
+        });
+    }
+
+    /// Calls `f(id, dist²)` for every stored point with `dist² ≤ r2` (in no particular order).
+    pub fn for_each_within(&self, p: [f32; 3], r2: f32, mut f: impl FnMut(u32, f32)) {
+        if !(r2 >= 0.0) {
+            return;
+        }
+        self.traverse(&p, &Cell::new(r2), |id, d2| {
+            if d2 <= r2 {
+                f(id, d2)
+            }
+        });
+    }
+
+    /// Depth-first traversal, near child first; a far child is visited when its plane distance² is ≤
+    /// the current `bound` (which `visit` may shrink). `visit` sees every candidate point.
+    #[inline]
+    fn traverse(&self, p: &[f32; 3], bound: &Cell<f32>, mut visit: impl FnMut(u32, f32)) {
+        if self.nodes.is_empty() || !p.iter().all(|c| c.is_finite()) {
+            return;
+        }
+        // Stack of (node, plane distance² lower bound).
+        let mut stack = [(0u32, 0.0f32); STACK];
+        let mut sp = 1usize;
+        while sp > 0 {
+            sp -= 1;
+            let (mut ni, lb) = stack[sp];
+            if lb > bound.get() {
+                continue;
+            }
+            loop {
+                let node = self.nodes[ni as usize];
+                if node.axis == LEAF {
+                    for s in node.a as usize..node.b as usize {
+                        let d2 = dist2(&self.points[s], p);
+                        visit(self.ids[s], d2);
+                    }
+                    break;
+                }
+                let diff = p[node.axis as usize] - node.split;
+                let (near, far) = if diff < 0.0 { (ni + 1, node.a) } else { (node.a, ni + 1) };
+                let d2 = diff * diff;
+                // `!(d2 > bound)` also descends when the split is NaN (fail open, never skip).
+                if !(d2 > bound.get()) && sp < STACK {
+                    stack[sp] = (far, d2);
+                    sp += 1;
+                }
+                ni = near;
+            }
+        }
+    }
+}
+
+/// Recursively builds the subtree over `items` (whose first slot is `offset`) and returns its node index.
+fn build_rec(items: &mut [([f32; 3], u32)], offset: usize, nodes: &mut Vec<Node>) -> u32 {
+    let idx = nodes.len() as u32;
+    let n = items.len();
+    if n <= LEAF_SIZE {
+        nodes.push(Node { split: 0.0, a: offset as u32, b: (offset + n) as u32, axis: LEAF });
+        return idx;
+    }
+    // Widest axis of the finite bounding box (NaN coordinates are ignored by min/max).
+    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for (p, _) in items.iter() {
+        for d in 0..3 {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    let ext = |d: usize| if hi[d] >= lo[d] { hi[d] - lo[d] } else { 0.0 };
+    let axis = (0..3).fold(0, |best, d| if ext(d) > ext(best) { d } else { best });
+    let mid = n / 2;
+    items.select_nth_unstable_by(mid, |a, b| a.0[axis].total_cmp(&b.0[axis]));
+    let split = items[mid].0[axis];
+    // Always splitting at the median index keeps the depth at log2(n / LEAF_SIZE), even for
+    // coincident points; the ≤ / ≥ invariant holds because select_nth orders around `mid`.
+    // NaN compares greater than everything under total_cmp, so the left half has no NaN above `split`
+    // unless split itself is NaN; then pruning never happens on that axis (comparisons fail open).
+    nodes.push(Node { split, a: 0, b: 0, axis: axis as u8 });
+    let (left, right) = items.split_at_mut(mid);
+    build_rec(left, offset, nodes);
+    let r = build_rec(right, offset + mid, nodes);
+    nodes[idx as usize].a = r;
+    idx
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::rng::{stream, Rng};
+
+    fn random_points(n: usize, seed: u64) -> Vec<[f32; 3]> {
+        let mut r = Rng::keyed(seed, stream::MISC, 0, 0);
+        (0..n).map(|_| [r.next_f32(), r.next_f32(), r.next_f32()]).collect()
+    }
+
+    fn brute_knn(pts: &[[f32; 3]], p: [f32; 3], k: usize, r2: f32) -> Vec<f32> {
+        let mut d: Vec<f32> = pts.iter().map(|q| dist2(q, &p)).filter(|&d| d <= r2).collect();
+        d.sort_by(f32::total_cmp);
+        d.truncate(k);
+        d
+    }
+
+    fn check_against_brute(pts: &[[f32; 3]], seed: u64) {
+        let tree = KdTree::build(pts);
+        assert_eq!(tree.len(), pts.len());
+        let queries = random_points(200, seed + 1000);
+        let mut out = Vec::new();
+        for (qi, q) in queries.iter().enumerate() {
+            let q = [q[0] * 1.2 - 0.1, q[1] * 1.2 - 0.1, q[2] * 1.2 - 0.1];
+            let bn = pts.iter().map(|x| dist2(x, &q)).fold(f32::INFINITY, f32::min);
+            match tree.nearest(q) {
+                Some((id, d2)) => {
+                    assert_eq!(d2, bn);
+                    assert_eq!(dist2(&pts[id as usize], &q), d2);
+                }
+                None => assert!(pts.is_empty()),
+            }
+            let k = [1, 5, 8, 32, 1000][qi % 5];
+            let r2 = [0.001, 0.01, 0.1, f32::INFINITY][qi % 4];
+            tree.k_nearest_within(q, k, r2, &mut out);
+            let got: Vec<f32> = out.iter().map(|e| e.0).collect();
+            assert_eq!(got, brute_knn(pts, q, k, r2));
+            for &(d2, id) in &out {
+                assert_eq!(dist2(&pts[id as usize], &q), d2);
+            }
+            let mut ids = Vec::new();
+            tree.for_each_within(q, r2.min(0.05), |id, d2| {
+                assert!(d2 <= r2.min(0.05));
+                ids.push(id)
+            });
+            ids.sort();
+            let brute: Vec<u32> =
+                (0..pts.len() as u32).filter(|&i| dist2(&pts[i as usize], &q) <= r2.min(0.05)).collect();
+            assert_eq!(ids, brute);
+        }
+    }
+
+    #[test]
+    fn matches_brute_force_on_random_points() {
+        check_against_brute(&random_points(5000, 1), 1);
+        check_against_brute(&random_points(9, 2), 2);
+        check_against_brute(&random_points(1, 3), 3);
+    }
+
+    #[test]
+    fn matches_brute_force_on_degenerate_input() {
+        check_against_brute(&[], 4);
+        check_against_brute(&vec![[0.5, 0.5, 0.5]; 1000], 5);
+        let plane: Vec<[f32; 3]> = random_points(2000, 6).into_iter().map(|p| [p[0], 0.25, p[2]]).collect();
+        check_against_brute(&plane, 6);
+        let line: Vec<[f32; 3]> = random_points(2000, 7).into_iter().map(|p| [p[0], 0.5, 0.5]).collect();
+        check_against_brute(&line, 7);
+        // Duplicated points: k > n and exact ties.
+        let mut dup = random_points(50, 8);
+        dup.extend_from_within(..);
+        check_against_brute(&dup, 8);
+    }
+
+    #[test]
+    fn custom_ids_nan_and_empty_queries() {
+        let pts = random_points(100, 9);
+        let ids: Vec<u32> = (0..100).map(|i| 1000 + i).collect();
+        let tree = KdTree::build_with_ids(pts.clone(), ids);
+        let (id, _) = tree.nearest(pts[17]).unwrap();
+        assert_eq!(id, 1017);
+        assert!(tree.nearest([f32::NAN, 0.0, 0.0]).is_none());
+        let mut out = vec![(1.0, 1)];
+        tree.k_nearest_within([0.5; 3], 0, 1.0, &mut out);
+        assert!(out.is_empty());
+        tree.k_nearest_within([0.5; 3], 4, f32::NAN, &mut out);
+        assert!(out.is_empty());
+        let empty = KdTree::build(&[]);
+        assert!(empty.nearest([0.0; 3]).is_none());
+        // Points with NaN coordinates never match and do not break other queries.
+        let mut bad = pts.clone();
+        bad[3] = [f32::NAN, 0.1, 0.1];
+        let t = KdTree::build(&bad);
+        let (id, _) = t.nearest(pts[40]).unwrap();
+        assert_eq!(id, 40);
+    }
+
+    #[test]
+    fn serialization_round_trip() {
+        let tree = KdTree::build(&random_points(1000, 10));
+        let bytes = bitcode::encode(&tree);
+        let back: KdTree = bitcode::decode(&bytes).unwrap();
+        assert_eq!(back, tree);
+    }
+}

@@ -1,0 +1,77 @@
+//! Next-event estimation: one light sample (picked ∝ power) with a shadow ray, MIS-weighted
+//! against BSDF sampling by the power heuristic for area lights; point lights by NEE only.
+//!
+//! `emitter_pdf_w` gives the light-sampling pdf of a BSDF-sampled hit on an emitter, so the
+//! path tracer can weight that hit with the same heuristic (Veach 1997 §9.2).
+
+use crate::accel::{offset_origin, World};
+use crate::bsdf::{self, ShadingPoint};
+use crate::math::{Rgb, Vec3};
+use crate::sampling::power_heuristic;
+use crate::sampling::rng::Rng;
+use crate::scene::{LightRef, Material};
+
+/// Solid-angle pdf that `sample_light` picks the point `y` (normal `ny`) of emitter `e` from a
+/// point at distance² `dist2` with light-side cosine `cos_l`.
+#[inline]
+pub fn emitter_pdf_w(world: &World, emitter: u32, dist2: f32, cos_l: f32) -> f32 {
+    let s = &world.scene;
+    if cos_l <= 0.0 {
+        return 0.0;
+    }
+    let li = s.emitter_light_index[emitter as usize] as usize;
+    s.light_pick.pmf(li) / s.emitters[emitter as usize].area * dist2 / cos_l
+}
+
+/// One NEE sample at a non-Dirac point: Le·f·cos/pdf with MIS (area lights) or exact (point lights).
+pub fn sample_light(world: &World, sp: &ShadingPoint, m: &Material, wo: Vec3, rng: &mut Rng) -> Rgb {
+    let s = &world.scene;
+    let (li, pmf, _) = s.light_pick.sample(rng.next_f32());
+    let u = rng.next_2d();
+    match s.lights[li] {
+        LightRef::Area(e) => {
+            let (y, ny, pdf_a) = s.sample_emitter_point(e, u);
+            let d = y - sp.p;
+            let dist2 = d.length_squared();
+            if dist2 <= 0.0 {
+                return Rgb::ZERO;
+            }
+            let wi = d / dist2.sqrt();
+            let cos_l = ny.dot(-wi);
+            if cos_l <= 0.0 {
+                return Rgb::ZERO;
+            }
+            let f = bsdf::eval(m, sp, wo, wi);
+            if f == Rgb::ZERO {
+                return Rgb::ZERO;
+            }
+            let pdf_light = pmf * pdf_a * dist2 / cos_l;
+            let pdf_bsdf = bsdf::pdf_w(m, sp, wo, wi);
+            if !world.visible(sp.p, sp.ng, y, ny) {
+                return Rgb::ZERO;
+            }
+            let le = s.emitters[e as usize].radiance;
+            le * f * (wi.dot(sp.ns).abs() / pdf_light) * power_heuristic(pdf_light, pdf_bsdf)
+        }
+        LightRef::Point(i) => {
+            let pl = &s.point_lights[i as usize];
+            let d = pl.position - sp.p;
+            let dist2 = d.length_squared();
+            if dist2 <= 0.0 {
+                return Rgb::ZERO;
+            }
+            let dist = dist2.sqrt();
+            let wi = d / dist;
+            let f = bsdf::eval(m, sp, wo, wi);
+            if f == Rgb::ZERO {
+                return Rgb::ZERO;
+            }
+            let o = offset_origin(sp.p, sp.ng, wi);
+            let len = (pl.position - o).length();
+            if world.occluded(o, (pl.position - o) / len, len) {
+                return Rgb::ZERO;
+            }
+            pl.intensity * f * (wi.dot(sp.ns).abs() / (dist2 * pmf))
+        }
+    }
+}
