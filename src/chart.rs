@@ -292,7 +292,7 @@ fn guide_segment(
     } else if !(y0.ln()..=y1.ln()).contains(&lya) {
         return None;
     }
-    if !(lo < hi) {
+    if lo.is_nan() || hi.is_nan() || lo >= hi {
         return None;
     }
     Some(vec![(lo.exp(), y_at(lo).exp()), (hi.exp(), y_at(hi).exp())])

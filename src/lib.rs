@@ -13,7 +13,7 @@
 pub mod accel;
 pub mod bench;
 pub mod bsdf;
-// pub mod chart;
+pub mod chart;
 pub mod checkpoint;
 pub mod cli;
 pub mod distributed;

@@ -563,8 +563,8 @@ mod tests {
         assert_eq!(z.get(1, 0)[2], f32::INFINITY);
         let hv = half_variance(&img(1, 1, &[[1.0, 0.0, 2.0]]), &img(1, 1, &[[0.6, 0.0, 1.0]])).unwrap();
         let want = [0.04f32, 0.0, 0.25];
-        for c in 0..3 {
-            assert!((hv.pixels[0][c] - want[c]).abs() < 1e-7);
+        for (got, want) in hv.pixels[0].iter().zip(want) {
+            assert!((got - want).abs() < 1e-7);
         }
         let row = img(3, 1, &[[0.0; 3], [3.0; 3], [6.0; 3]]);
         assert_eq!(box_filter(&row, 1).pixels, vec![[1.5; 3], [3.0; 3], [4.5; 3]]);

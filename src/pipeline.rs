@@ -103,6 +103,7 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
     cluster.broadcast_bytes(&mut product);
     let broadcast_s = secs(t_bc);
     let bytes_broadcast = product.len();
+    let product_hash = crate::checkpoint::checksum(&product);
     let mut integrator = integrators::build(method, &world, &opts, &product)?;
     drop(product);
 
@@ -198,7 +199,7 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
     let reduce_s = secs(t_red);
     let rank_stats = json!({
         "rank": rank, "passes": my_passes, "preprocess_s": preprocess_s, "broadcast_s": broadcast_s,
-        "render_s": render_s, "reduce_s": reduce_s, "bytes_broadcast": bytes_broadcast,
+        "render_s": render_s, "reduce_s": reduce_s, "bytes_broadcast": bytes_broadcast, "product_hash": product_hash,
         "samples": counters.samples, "closest_rays": counters.closest_rays, "shadow_rays": counters.shadow_rays,
     });
     let gathered = cluster.gather_bytes(rank_stats.to_string().as_bytes());

@@ -8,14 +8,19 @@
 //!
 //! Invariants: for an inner node with axis `d` and value `s`, every point of the left subtree has
 //! `p[d] ≤ s` and every point of the right subtree has `p[d] ≥ s`. Queries allocate nothing (the
-//! traversal stack is a fixed array; depth ≤ 64 for any `u32` count); "within r²" means `dist² ≤ r²`.
+//! traversal stack is a fixed array; depth ≤ 64 for any `u32` count); "within r²" means `dist² ≤ r²`;
+//! k-nearest results are the k smallest `(dist², id)` pairs, so ties resolve deterministically.
 //! Points with non-finite coordinates are stored but never returned by a finite query; empty trees and
 //! NaN queries return nothing.
+
+// `!(x > 0.0)`-style tests are deliberate: they are true for NaN (degenerate input is rejected).
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use std::cell::Cell;
 
 /// Maximum number of points in a leaf.
 pub const LEAF_SIZE: usize = 8;
 const STACK: usize = 64;
-use std::cell::Cell;
 const LEAF: u8 = 3;
 
 /// One node of the flat tree.
@@ -92,28 +97,93 @@ impl KdTree {
     }
 
     /// The `k` nearest points with `dist² ≤ r2`, written to `out` as `(dist², id)` sorted by distance
-    /// (ties in arbitrary but deterministic order). `out` is cleared first; nothing else is allocated.
+    /// (ties by id). `out` is cleared first and used as a max-heap during the search; nothing else is
+    /// allocated.
     pub fn k_nearest_within(&self, p: [f32; 3], k: usize, r2: f32, out: &mut Vec<(f32, u32)>) {
         out.clear();
         if k == 0 || !(r2 >= 0.0) {
             return;
         }
         out.reserve(k.min(self.len()));
-        // `out` is kept sorted; the bound is the current k-th distance once full, else r2.
+        // Max-heap keyed by (dist², id); the bound is the heap top once full, else r2.
         let bound = Cell::new(r2);
+        let key = |e: &(f32, u32)| (e.0, e.1);
         self.traverse(&p, &bound, |id, d2| {
-            if !(d2 <= bound.get()) || (out.len() == k && d2 >= bound.get()) {
+            if !(d2 <= bound.get()) {
                 return;
             }
-            if out.len() == k {
-                out.pop();
+            if out.len() < k {
+                out.push((d2, id));
+                let mut c = out.len() - 1;
+                while c > 0 {
+                    let parent = (c - 1) / 2;
+                    if key(&out[parent]) < key(&out[c]) {
+                        out.swap(parent, c);
+                        c = parent;
+                    } else {
+                        break;
+                    }
+                }
+            } else {
+                if (d2, id) >= key(&out[0]) {
+                    return;
+                }
+                out[0] = (d2, id);
+                let (mut c, n) = (0usize, out.len());
+                loop {
+                    let (l, r) = (2 * c + 1, 2 * c + 2);
+                    let mut m = c;
+                    if l < n && key(&out[l]) > key(&out[m]) {
+                        m = l;
+                    }
+                    if r < n && key(&out[r]) > key(&out[m]) {
+                        m = r;
+                    }
+                    if m == c {
+                        break;
+                    }
+                    out.swap(c, m);
+                    c = m;
+                }
             }
-            let pos = out.partition_point(|e| e.0 <= d2);
-            out.insert(pos, (d2, id));
             if out.len() == k {
-                bound.set(out[k - 1].0);
+                bound.set(out[0].0);
             }
         });
+        out.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    }
+
+    /// Calls `f(id, position)` for every stored point inside the closed box `[lo, hi]`.
+    pub fn for_each_in_box(&self, lo: [f32; 3], hi: [f32; 3], mut f: impl FnMut(u32, [f32; 3])) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack = [0u32; STACK];
+        let mut sp = 1usize;
+        while sp > 0 {
+            sp -= 1;
+            let node = self.nodes[stack[sp] as usize];
+            let ni = stack[sp];
+            if node.axis == LEAF {
+                for s in node.a as usize..node.b as usize {
+                    let q = self.points[s];
+                    if (0..3).all(|d| q[d] >= lo[d] && q[d] <= hi[d]) {
+                        f(self.ids[s], q);
+                    }
+                }
+                continue;
+            }
+            let d = node.axis as usize;
+            // Left holds p[d] ≤ split, right p[d] ≥ split; `!(a > b)` descends on NaN.
+            if !(lo[d] > node.split) && sp < STACK {
+                stack[sp] = ni + 1;
+                sp += 1;
+            }
+            if !(hi[d] < node.split) && sp < STACK {
+                stack[sp] = node.a;
+                sp += 1;
+            }
+        }
     }
 
     /// Calls `f(id, dist²)` for every stored point with `dist² ≤ r2` (in no particular order).
@@ -294,6 +364,28 @@ mod tests {
         let t = KdTree::build(&bad);
         let (id, _) = t.nearest(pts[40]).unwrap();
         assert_eq!(id, 40);
+    }
+
+    #[test]
+    fn box_query_matches_brute_force() {
+        for pts in [random_points(3000, 11), vec![[0.5; 3]; 100], Vec::new()] {
+            let tree = KdTree::build(&pts);
+            let boxes = random_points(100, 12);
+            for b in boxes.chunks(2) {
+                let lo = [b[0][0].min(b[1][0]), b[0][1].min(b[1][1]), b[0][2].min(b[1][2])];
+                let hi = [b[0][0].max(b[1][0]), b[0][1].max(b[1][1]), b[0][2].max(b[1][2])];
+                let mut got = Vec::new();
+                tree.for_each_in_box(lo, hi, |id, _| got.push(id));
+                got.sort();
+                let want: Vec<u32> = (0..pts.len() as u32)
+                    .filter(|&i| (0..3).all(|d| pts[i as usize][d] >= lo[d] && pts[i as usize][d] <= hi[d]))
+                    .collect();
+                assert_eq!(got, want);
+            }
+            let mut all = 0;
+            tree.for_each_in_box([0.0; 3], [1.0; 3], |_, _| all += 1);
+            assert_eq!(all, pts.len());
+        }
     }
 
     #[test]

@@ -17,6 +17,9 @@
 //! clusters are dropped, so `clusters.len() ≤ min(k, #valid points)`; ranks are non-decreasing along
 //! `clusters`; non-finite points get the label [`NO_CLUSTER`]. Nothing panics on empty input.
 
+// `!(x > 0.0)`-style tests are deliberate: they are true for NaN (degenerate input is rejected).
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::caustic_point::CausticPoint;
 use crate::math::Vec3;
 use crate::sampling::rng::{stream, Rng};

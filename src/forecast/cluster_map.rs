@@ -9,6 +9,9 @@
 //! sampling). Returned indices are kept-cluster indices, equal to indices into `clustering.clusters`.
 //! Deterministic; serializable with bitcode; an empty map answers `None`.
 
+// `!(x > 0.0)`-style tests are deliberate: they are true for NaN (degenerate input is rejected).
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::caustic_point::CausticPoint;
 use super::cluster::Clustering;
 use crate::math::Vec3;

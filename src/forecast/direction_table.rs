@@ -17,6 +17,9 @@
 //! equal to `pdf_w` of the same direction; the number of samples never depends on the samples.
 //! Construction never panics: NaN/negative weights count as 0, a table with no weight is `None`.
 
+// `!(x > 0.0)`-style tests are deliberate: they are true for NaN (degenerate input is rejected).
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use crate::math::{Vec3, PI};
 use crate::sampling::rng::Rng;
 use std::ops::{Add, Mul};
@@ -29,6 +32,8 @@ pub const N_MU: usize = 16;
 pub const N_BINS: usize = N_PHI * N_MU;
 /// Solid angle of every bin, ΔΩ = 2π/(N_φ N_μ).
 pub const BIN_SOLID_ANGLE: f32 = 2.0 * PI / N_BINS as f32;
+/// Smallest probability of a bin with positive weight (see `DirectionTable::from_weights`).
+pub const MIN_BIN_PMF: f64 = 1.0 / 65536.0;
 /// Relative floor of the T2 / defensive fill values (spec §4 ⚠ sharp lobes).
 pub const FILL_FLOOR_REL: f32 = 1e-3;
 
@@ -93,22 +98,28 @@ pub struct DirectionTable {
 }
 
 impl DirectionTable {
-    /// Table ∝ `weights` (non-finite or negative entries count as 0); `None` if nothing is positive.
+    /// Table ∝ `weights` (non-finite or negative entries count as 0; positive bins floored at
+    /// [`MIN_BIN_PMF`] before renormalising); `None` if nothing is positive.
     pub fn from_weights(weights: &[f32; N_BINS]) -> Option<Self> {
         let w = |x: f32| if x.is_finite() && x > 0.0 { x as f64 } else { 0.0 };
         let total: f64 = weights.iter().map(|&x| w(x)).sum();
         if !(total > 0.0) || !total.is_finite() {
             return None;
         }
+        // Positive bins get probability ≥ MIN_BIN_PMF (then renormalised), so each is reachable with a
+        // frequency matching its pmf to < 0.4% at the 2^-24 resolution of f32 uniforms.
+        let floored = |x: f32| {
+            let p = w(x) / total;
+            if p > 0.0 { p.max(MIN_BIN_PMF) } else { 0.0 }
+        };
+        let norm: f64 = weights.iter().map(|&x| floored(x)).sum();
         let mut pmf = [0.0f32; N_BINS];
         let mut cdf = [0.0f32; N_BINS + 1];
         let (mut acc, mut last) = (0.0f64, 0usize);
         for i in 0..N_BINS {
-            let p = w(weights[i]) / total;
+            let p = floored(weights[i]) / norm;
             pmf[i] = p as f32;
             if p > 0.0 {
-                // Tiny-but-positive weights keep a positive pmf (and hence pdf > 0).
-                pmf[i] = pmf[i].max(f32::MIN_POSITIVE);
                 last = i;
             }
             acc += p;
@@ -374,6 +385,14 @@ mod tests {
         let t = ForecastTables::build(std::iter::empty(), |_| 0.0, TableMode::Dual);
         let t2 = t.t2.unwrap();
         assert!((0..N_BINS).all(|i| (t2.bin_pmf(i) - 1.0 / N_BINS as f32).abs() < 1e-7));
+        // A vanishingly small but positive bin is still reachable (pmf floor).
+        let mut w = [0.0f32; N_BINS];
+        w[5] = 1e-30;
+        w[6] = 1.0;
+        let t = DirectionTable::from_weights(&w).unwrap();
+        assert!(t.bin_pmf(5) as f64 >= 0.99 * MIN_BIN_PMF);
+        let (d, pdf) = t.sample([0.5 * t.cdf[6], 0.5, 0.5]);
+        assert_eq!((bin_of(d), pdf), (Some(5), t.pdf_w(d)));
         // Photons in every bin: no T2.
         let all: Vec<(Vec3, f32)> = (0..N_BINS).map(|i| (bin_center(i), 1.0)).collect();
         let t = ForecastTables::build(all, lambert, TableMode::Dual);

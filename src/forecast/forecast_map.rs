@@ -11,6 +11,9 @@
 //! `r`; nothing allocates beyond the caller's buffer; an unknown cluster index gathers nothing.
 //! Building is parallel over clusters but deterministic. Serializable with bitcode.
 
+// `!(x > 0.0)`-style tests are deliberate: they are true for NaN (degenerate input is rejected).
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::caustic_point::CausticPoint;
 use super::cluster::Clustering;
 use crate::math::Vec3;
@@ -52,32 +55,35 @@ impl ForecastMaps {
         let r2 = r * r;
         let maps = kept
             .par_iter()
-            .map(|c| {
+            .enumerate()
+            .map(|(ci, c)| {
                 let nbar = c.normal_v();
-                let mut inside = vec![false; points.len()];
-                let mut ids: Vec<u32> = Vec::with_capacity(c.count() * 2);
-                for &m in &c.members {
-                    if let Some(f) = inside.get_mut(m as usize) {
-                        if !*f {
-                            *f = true;
-                            ids.push(m);
+                let mut ids: Vec<u32> = c.members.iter().copied().filter(|&m| (m as usize) < points.len()).collect();
+                if r2 > 0.0 && !ids.is_empty() {
+                    // Epsilon margin: non-members within r of a member, with n_i·n̄_c > 0.5. Candidates
+                    // come from the members' bbox grown by r; each is tested against the member tree,
+                    // so the work scales with the cluster's neighbourhood, not with members × n.
+                    let members = KdTree::build_with_ids(ids.iter().map(|&i| points[i as usize].p).collect(), ids.clone());
+                    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+                    for &m in &ids {
+                        for d in 0..3 {
+                            lo[d] = lo[d].min(points[m as usize].p[d] - r);
+                            hi[d] = hi[d].max(points[m as usize].p[d] + r);
                         }
                     }
-                }
-                // Epsilon margin: photons within r of a member, with n_i·n̄_c > 0.5.
-                if r2 > 0.0 {
-                    for &m in &c.members {
-                        let Some(pm) = points.get(m as usize) else { continue };
-                        global.for_each_within(pm.p, r2, |i, _| {
-                            let f = &mut inside[i as usize];
-                            if !*f && points[i as usize].normal().normalize_or_zero().dot(nbar) > MARGIN_NORMAL_COS {
-                                *f = true;
-                                ids.push(i);
-                            }
-                        });
-                    }
+                    global.for_each_in_box(lo, hi, |i, p| {
+                        if clustering.labels.get(i as usize).copied() == Some(ci as u32) {
+                            return; // a member (labels index kept clusters in the same order)
+                        }
+                        if points[i as usize].normal().normalize_or_zero().dot(nbar) > MARGIN_NORMAL_COS
+                            && members.nearest(p).is_some_and(|(_, d2)| d2 <= r2)
+                        {
+                            ids.push(i);
+                        }
+                    });
                 }
                 ids.sort_unstable();
+                ids.dedup();
                 let pos = ids.iter().map(|&i| points[i as usize].p).collect();
                 KdTree::build_with_ids(pos, ids)
             })

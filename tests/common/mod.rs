@@ -1,0 +1,117 @@
+//! Shared helpers for the integration tests: temporary directories, render jobs, and a
+//! brute-force ray caster that does not use the BVH (the reference for `tests/bvh.rs`).
+#![allow(dead_code)]
+
+use forecast::distributed::local::Local;
+use forecast::integrators::{Method, MethodOptions};
+use forecast::math::Vec3;
+use forecast::pipeline::{render, RenderJob};
+use forecast::render::film::Film;
+use forecast::scene::Scene;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// A fresh, empty directory under the system temp dir, unique per process and `name`.
+pub fn tmp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("forecast-tests-{}-{}", std::process::id(), name));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The crate root (for `scenes/` and `tests/scenes/`).
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A render job with everything explicit (no progress, no checkpoints).
+pub fn job(scene: &Path, method: Method, spp: u64, seed: u64, res: (u32, u32), threads: usize, out: &Path) -> RenderJob {
+    RenderJob {
+        scene: scene.to_path_buf(),
+        method: Some(method),
+        opts: MethodOptions::default(),
+        spp: Some(spp),
+        time: None,
+        seed: Some(seed),
+        resolution: Some(res),
+        out: out.to_path_buf(),
+        progress: false,
+        checkpoint_every: None,
+        resume: None,
+        checkpoint_path: None,
+        max_rounds: None,
+        threads: Some(threads),
+    }
+}
+
+/// Renders `job` on the single-process cluster and returns the film.
+pub fn render_film(job: &RenderJob) -> Film {
+    let r = render(job, &Local::new(), Instant::now()).expect("render failed").expect("rank 0 returns a result");
+    r.film
+}
+
+/// Möller–Trumbore in f64; returns t in (tmin, tmax) or None. No back-face culling.
+pub fn tri_t(p: [Vec3; 3], o: Vec3, d: Vec3, tmin: f64, tmax: f64) -> Option<f64> {
+    let f = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
+    let (p0, p1, p2, o, d) = (f(p[0]), f(p[1]), f(p[2]), f(o), f(d));
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let cross = |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let (e1, e2) = (sub(p1, p0), sub(p2, p0));
+    let pv = cross(d, e2);
+    let det = dot(e1, pv);
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let tv = sub(o, p0);
+    let u = dot(tv, pv) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let qv = cross(tv, e1);
+    let v = dot(d, qv) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    let t = dot(e2, qv) * inv;
+    (t > tmin && t < tmax).then_some(t)
+}
+
+/// Ray–sphere in f64: the nearest root in (tmin, tmax).
+pub fn sphere_t(c: Vec3, r: f32, o: Vec3, d: Vec3, tmin: f64, tmax: f64) -> Option<f64> {
+    let f = [o.x as f64 - c.x as f64, o.y as f64 - c.y as f64, o.z as f64 - c.z as f64];
+    let d = [d.x as f64, d.y as f64, d.z as f64];
+    let a = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    let b = f[0] * d[0] + f[1] * d[1] + f[2] * d[2];
+    let c2 = f[0] * f[0] + f[1] * f[1] + f[2] * f[2] - (r as f64) * (r as f64);
+    let disc = b * b - a * c2;
+    if disc < 0.0 {
+        return None;
+    }
+    let s = disc.sqrt();
+    let q = -b - b.signum() * s;
+    let (mut t0, mut t1) = if q == 0.0 { (-b / a, -b / a) } else { (q / a, c2 / q) };
+    if t0 > t1 {
+        std::mem::swap(&mut t0, &mut t1);
+    }
+    [t0, t1].into_iter().find(|&t| t > tmin && t < tmax)
+}
+
+/// All primitive hits along the ray, sorted by t: (t, prim id as in `Scene`).
+pub fn brute_hits(s: &Scene, o: Vec3, d: Vec3, tmax: f64) -> Vec<(f64, u32)> {
+    let mut v = Vec::new();
+    for (i, t) in s.triangles.iter().enumerate() {
+        if let Some(t) = tri_t(t.p, o, d, 0.0, tmax) {
+            v.push((t, i as u32));
+        }
+    }
+    let ntri = s.triangles.len() as u32;
+    for (i, sp) in s.spheres.iter().enumerate() {
+        if let Some(t) = sphere_t(sp.center, sp.radius, o, d, 0.0, tmax) {
+            v.push((t, ntri + i as u32));
+        }
+    }
+    v.sort_by(|a, b| a.0.total_cmp(&b.0));
+    v
+}

@@ -1,0 +1,128 @@
+//! Cluster rendering with 2 MPI ranks on one node (needs `--features mpi` and MPICH's mpirun):
+//! equivalence with the single-process render for every method, the broadcast round trip,
+//! the time box, and checkpoint/resume across ranks.
+#![cfg(feature = "mpi")]
+
+use forecast::image_io::read_exr;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+const METHODS: &[&str] = &["pt"];
+
+fn bin() -> &'static str {
+    env!("CARGO_BIN_EXE_forecast")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("forecast-mpi-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn scene() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml").display().to_string()
+}
+
+fn mpirun(n: usize, args: &[&str]) -> std::process::Output {
+    let o = Command::new("mpirun")
+        .arg("-n")
+        .arg(n.to_string())
+        .env("RAYON_NUM_THREADS", "1")
+        .arg(bin())
+        .args(args)
+        .output()
+        .expect("mpirun not found: install MPICH (.ci/install-mpi.sh)");
+    assert!(o.status.success(), "mpirun failed: {}", String::from_utf8_lossy(&o.stderr));
+    o
+}
+
+fn json(prefix: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(format!("{}.json", prefix.display())).unwrap()).unwrap()
+}
+
+/// Relative difference bound for float summation order (the only allowed difference).
+fn assert_same_image(a: &Path, b: &Path) {
+    let (a, b) = (read_exr(a).unwrap(), read_exr(b).unwrap());
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    for (i, (p, q)) in a.pixels.iter().zip(&b.pixels).enumerate() {
+        for c in 0..3 {
+            let tol = 1e-6 * p[c].abs().max(q[c].abs()) + 1e-12;
+            assert!((p[c] - q[c]).abs() <= tol, "pixel {i} channel {c}: {} vs {}", p[c], q[c]);
+        }
+    }
+}
+
+#[test]
+fn selftest_of_every_collective() {
+    let o = mpirun(2, &["mpi-selftest"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("passed on 2 rank"));
+}
+
+#[test]
+fn two_ranks_equal_one_process_for_every_method() {
+    let d = tmp("equiv");
+    for m in METHODS {
+        let one = d.join(format!("{m}-1"));
+        let two = d.join(format!("{m}-2"));
+        let common = ["--spp", "8", "--resolution", "64x64", "--seed", "7", "--quiet", "--method", m];
+        let st = Command::new(bin())
+            .args(["render", &scene()])
+            .args(common)
+            .arg("--out")
+            .arg(&one)
+            .status()
+            .unwrap();
+        assert!(st.success());
+        mpirun(2, &[&["render", &scene()][..], &common[..], &["--out", two.to_str().unwrap()][..]].concat());
+        assert_same_image(&one.with_extension("exr"), &two.with_extension("exr"));
+        let j = json(&two);
+        assert_eq!(j["ranks"], 2);
+        assert_eq!(j["spp"], 8);
+        // broadcast round trip: every rank holds rank 0's preprocess product, byte for byte
+        let ranks = j["per_rank"].as_array().unwrap();
+        assert_eq!(ranks.len(), 2);
+        assert_eq!(ranks[0]["product_hash"], ranks[1]["product_hash"]);
+        assert_eq!(ranks[0]["bytes_broadcast"], ranks[1]["bytes_broadcast"]);
+        assert_eq!(ranks[0]["passes"], 4);
+        assert_eq!(ranks[1]["passes"], 4);
+    }
+}
+
+#[test]
+fn time_box_ends_within_budget_plus_one_pass() {
+    let d = tmp("time");
+    let out = d.join("t");
+    let t = Instant::now();
+    mpirun(2, &["render", &scene(), "--time", "5s", "--resolution", "64x64", "--seed", "1", "--quiet", "--out", out.to_str().unwrap()]);
+    let wall = t.elapsed().as_secs_f64();
+    let j = json(&out);
+    let ranks = j["per_rank"].as_array().unwrap();
+    let passes: u64 = ranks.iter().map(|r| r["passes"].as_u64().unwrap()).sum();
+    let max_pass = ranks
+        .iter()
+        .map(|r| r["render_s"].as_f64().unwrap() / r["passes"].as_f64().unwrap().max(1.0))
+        .fold(0.0, f64::max);
+    assert_eq!(j["spp"].as_u64().unwrap(), passes, "spp must equal the passes summed over ranks");
+    assert_eq!(j["passes"].as_u64().unwrap(), passes);
+    // budget + one pass + process start/finalize (mpirun start-up is ~0.2 s on this machine)
+    assert!(wall <= 5.0 + max_pass + 1.0, "wall {wall:.2}s exceeds the 5 s budget plus one pass ({max_pass:.3}s)");
+    assert!(passes >= 2);
+}
+
+#[test]
+fn checkpoint_and_resume_across_ranks() {
+    let d = tmp("ckpt");
+    let full = d.join("full");
+    let part = d.join("part");
+    mpirun(2, &["render", &scene(), "--spp", "12", "--resolution", "32x32", "--seed", "5", "--quiet", "--out", full.to_str().unwrap()]);
+    // stop after 2 rounds (4 passes) with a checkpoint, then resume to 12 passes
+    mpirun(2, &["render", &scene(), "--spp", "12", "--resolution", "32x32", "--seed", "5", "--quiet", "--checkpoint-every", "1ms", "--max-rounds", "2", "--out", part.to_str().unwrap()]);
+    let ck = forecast::checkpoint::Checkpoint::load(&PathBuf::from(format!("{}.ckpt", part.display()))).unwrap();
+    assert_eq!(ck.passes_done, 4);
+    let res = d.join("res");
+    mpirun(2, &["render", &scene(), "--spp", "12", "--resolution", "32x32", "--seed", "5", "--quiet", "--resume", &format!("{}.ckpt", part.display()), "--out", res.to_str().unwrap()]);
+    assert_eq!(json(&res)["spp"], 12);
+    assert_same_image(&res.with_extension("exr"), &full.with_extension("exr"));
+}
