@@ -1,0 +1,254 @@
+//! `CausticForecast`: the built CF product (caustic points, clustering, cluster map, forecast
+//! maps, search radius) and the CF estimator Ĺ_c at a non-specular point [BAJ08 §3.2; spec §4].
+//!
+//! At x: query the cluster map. Outside a kept cluster: S_cos = 1 BSDF sample. Inside: gather
+//! up to n forecasters within r, build the 32×16 table (weights lum(Φ)·f·μ, or lum(Φ)·f with
+//! `PhotonWeight::Flux`) and its dual on the empty bins, sample each S(rank, d) times and SUM
+//! the two estimates. The caller's `g(ωi)` returns the integrand f·cos·1[first hit Dirac]·L̂;
+//! any table is a valid pdf, so the estimate is unbiased whatever the photons are.
+//!
+//! Invariants: S depends only on the cluster rank and the diffuse depth, never on samples;
+//! the product is identical after a bitcode round trip (it is what rank 0 broadcasts).
+
+use super::caustic_point::CausticPoint;
+use super::cluster::{cluster_points, Clustering, ClusteringMethod};
+use super::cluster_map::{ClusterMap, DEFAULT_REPRESENTATIVES};
+use super::direction_table::{ForecastTables, TableMode};
+use super::forecast_map::{search_radius, ForecastMaps};
+use crate::bsdf::{self, Mode, ShadingPoint};
+use crate::math::{luminance, Frame, Rgb, Vec3};
+use crate::sampling::rng::Rng;
+use crate::scene::Material;
+use std::cell::RefCell;
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+use std::time::Instant;
+
+/// Photon weight in the T1 table.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize, bitcode::Encode, bitcode::Decode)]
+pub enum PhotonWeight {
+    /// BAJ08: lum(Φ)·f·cosθ ("modulated with the BRDF and the cosine").
+    #[default]
+    Paper,
+    /// lum(Φ)·f: proportional to the integrand, since Φ already holds the projected area.
+    Flux,
+}
+
+/// Table layout (`--table`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize, bitcode::Encode, bitcode::Decode)]
+pub enum TableKind {
+    /// CF dual table (T1 + T2 on the empty bins, summed).
+    #[default]
+    Dual,
+    /// One defensive table (α = 0.1), for the ablation.
+    Single,
+}
+
+/// CF parameters (defaults: spec §5).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
+pub struct ForecastOptions {
+    /// Codebook size k.
+    pub clusters: usize,
+    /// Clustering algorithm.
+    #[serde(skip)]
+    pub clustering: ClusteringMethod,
+    /// Clusters with rank > max_rank are culled.
+    pub max_rank: u32,
+    /// Forecasters gathered per table (n).
+    pub gather: usize,
+    /// Table layout.
+    pub table: TableKind,
+    /// Photon weight.
+    pub photon_weight: PhotonWeight,
+    /// Splitting at diffuse depth 0 for rank 0 (S = max(1, S0 >> rank)).
+    pub s0: u32,
+}
+
+impl Default for ForecastOptions {
+    fn default() -> Self {
+        ForecastOptions {
+            clusters: 64,
+            clustering: ClusteringMethod::Vq,
+            max_rank: 6,
+            gather: 128,
+            table: TableKind::Dual,
+            photon_weight: PhotonWeight::Paper,
+            s0: 4,
+        }
+    }
+}
+
+/// Preprocess figures in the paper's Table 1 layout.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
+pub struct PreprocessStats {
+    /// Light paths launched.
+    pub paths: u64,
+    /// Forecast photons (caustic points) stored.
+    pub stored: u64,
+    /// Seconds tracing photons.
+    pub tracing_s: f64,
+    /// Seconds clustering.
+    pub clustering_s: f64,
+    /// Seconds building the cluster map and forecast maps.
+    pub kdtree_s: f64,
+    /// Clusters found.
+    pub clusters: u64,
+    /// Clusters kept (rank ≤ max_rank).
+    pub clusters_kept: u64,
+    /// Fraction of caustic energy in kept clusters.
+    pub energy_kept: f64,
+    /// Forecast-map search radius r.
+    pub radius: f32,
+    /// Fraction of light paths launched by targeted shooting that left a caustic point.
+    pub yield_per_path: f64,
+}
+
+/// The CF product broadcast from rank 0.
+#[derive(Clone, Debug, PartialEq, bitcode::Encode, bitcode::Decode)]
+pub struct CausticForecast {
+    /// Options used.
+    pub opts: ForecastOptions,
+    /// Caustic points (forecasters).
+    pub points: Vec<CausticPoint>,
+    /// Clusters, ranked.
+    pub clustering: Clustering,
+    /// Membership structure.
+    pub cluster_map: ClusterMap,
+    /// Per-cluster kd-trees.
+    pub maps: ForecastMaps,
+    /// Search radius r (0 when no cluster is kept).
+    pub radius: f32,
+    /// Preprocess figures.
+    pub stats: PreprocessStats,
+}
+
+/// Render-time counters (summed over threads).
+#[derive(Debug, Default)]
+pub struct ForecastCounters {
+    /// Ĺ_c evaluations.
+    pub queries: AtomicU64,
+    /// Evaluations inside a kept cluster.
+    pub inside: AtomicU64,
+    /// Direction samples taken (splitting factor numerator).
+    pub samples: AtomicU64,
+    /// Nanoseconds spent gathering and building tables ("creating CDFs").
+    pub cdf_ns: AtomicU64,
+}
+
+thread_local! {
+    static GATHER: RefCell<Vec<(f32, u32)>> = const { RefCell::new(Vec::new()) };
+}
+
+impl CausticForecast {
+    /// Clusters the caustic points and builds the maps.
+    pub fn build(points: Vec<CausticPoint>, opts: ForecastOptions, seed: u64, mut stats: PreprocessStats) -> Self {
+        let t = Instant::now();
+        let clustering = cluster_points(&points, opts.clusters, opts.clustering, seed);
+        stats.clustering_s = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let radius = search_radius(&clustering, opts.max_rank, opts.gather).unwrap_or(0.0);
+        let cluster_map = ClusterMap::build(&points, &clustering, opts.max_rank, DEFAULT_REPRESENTATIVES, radius);
+        let maps = ForecastMaps::build(&points, &clustering, opts.max_rank, radius);
+        stats.kdtree_s = t.elapsed().as_secs_f64();
+        let kept = clustering.kept(opts.max_rank);
+        stats.stored = points.len() as u64;
+        stats.clusters = clustering.clusters.len() as u64;
+        stats.clusters_kept = kept.len() as u64;
+        let kept_power: f64 = kept.iter().map(|c| c.power as f64).sum();
+        stats.energy_kept = if clustering.total_power > 0.0 { kept_power / clustering.total_power } else { 0.0 };
+        stats.radius = radius;
+        CausticForecast { opts, points, clustering, cluster_map, maps, radius, stats }
+    }
+
+    /// Splitting factor S(rank, d) (spec §4): max(1, S0 >> rank) at d = 0, else 1.
+    #[inline]
+    pub fn split_count(&self, rank: u32, depth: u32) -> usize {
+        if depth == 0 {
+            (self.opts.s0 >> rank.min(31)).max(1) as usize
+        } else {
+            1
+        }
+    }
+
+    /// Ĺ_c(x, ωo, d). `g(ωi, rng)` returns the integrand f·|cos|·1[first hit Dirac]·L̂ (world ωi).
+    #[allow(clippy::too_many_arguments)]
+    pub fn estimate(
+        &self,
+        sp: &ShadingPoint,
+        m: &Material,
+        wo: Vec3,
+        depth: u32,
+        rng: &mut Rng,
+        counters: &ForecastCounters,
+        mut g: impl FnMut(Vec3, &mut Rng) -> Rgb,
+    ) -> Rgb {
+        counters.queries.fetch_add(1, Relaxed);
+        let (ng, ns) = if wo.dot(sp.ng) >= 0.0 { (sp.ng, sp.ns) } else { (-sp.ng, -sp.ns) };
+        let cluster = if self.radius > 0.0 { self.cluster_map.query(sp.p, ng) } else { None };
+        let Some(c) = cluster else {
+            // outside valid clusters: one BSDF (cosine for Lambert) sample
+            counters.samples.fetch_add(1, Relaxed);
+            let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+            let Some(bs) = bsdf::sample(m, sp, wo, u, Mode::Radiance) else { return Rgb::ZERO };
+            if bs.pdf_w <= 0.0 {
+                return Rgb::ZERO;
+            }
+            return g(bs.wi, rng) / bs.pdf_w;
+        };
+        counters.inside.fetch_add(1, Relaxed);
+        let t0 = Instant::now();
+        let frame = Frame::from_normal(ns);
+        let tables = GATHER.with(|buf| {
+            let mut buf = buf.borrow_mut();
+            self.maps.gather(c, sp.p, self.opts.gather, self.radius, &mut buf);
+            let photons = buf.iter().filter_map(|&(_, id)| {
+                let cp = self.points.get(id as usize)?;
+                let wi = cp.wi();
+                let local = frame.to_local(wi);
+                if local.z <= 0.0 {
+                    return None; // [spec §4] skip photons from below: also stops thin-wall leaks
+                }
+                let f = luminance(bsdf::eval(m, sp, wo, wi));
+                let w = match self.opts.photon_weight {
+                    PhotonWeight::Paper => cp.energy() * f * local.z,
+                    PhotonWeight::Flux => cp.energy() * f,
+                };
+                Some((local, w))
+            });
+            let mode = match self.opts.table {
+                TableKind::Dual => TableMode::Dual,
+                TableKind::Single => TableMode::Single { alpha: 0.1 },
+            };
+            ForecastTables::build(photons, |l| luminance(bsdf::eval(m, sp, wo, frame.to_world(l))) * l.z, mode)
+        });
+        counters.cdf_ns.fetch_add(t0.elapsed().as_nanos() as u64, Relaxed);
+        let s = self.split_count(self.clustering.clusters[c].rank, depth);
+        let mut samples = Vec::with_capacity(2 * s);
+        tables.for_each_sample(s, rng, |ts| samples.push(ts));
+        counters.samples.fetch_add(samples.len() as u64, Relaxed);
+        // [BAJ08 §3.2] each table is sampled S times and the two estimates are added
+        samples.iter().map(|ts| g(frame.to_world(ts.dir), rng) * ts.weight).fold(Rgb::ZERO, |a, b| a + b)
+    }
+
+    /// Encodes for the broadcast.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        bitcode::encode(self)
+    }
+
+    /// Decodes a broadcast product.
+    pub fn from_bytes(b: &[u8]) -> Result<Self, String> {
+        bitcode::decode(b).map_err(|e| format!("corrupt caustic-forecast product ({} bytes): {e}", b.len()))
+    }
+}
+
+impl ForecastCounters {
+    /// JSON figures: fraction inside clusters, mean splitting factor, CDF seconds.
+    pub fn json(&self) -> serde_json::Value {
+        let q = self.queries.load(Relaxed).max(1) as f64;
+        serde_json::json!({
+            "lc_queries": self.queries.load(Relaxed),
+            "fraction_inside_clusters": self.inside.load(Relaxed) as f64 / q,
+            "mean_splitting_factor": self.samples.load(Relaxed) as f64 / q,
+            "creating_cdfs_s": self.cdf_ns.load(Relaxed) as f64 * 1e-9,
+        })
+    }
+}

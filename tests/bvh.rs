@@ -1,0 +1,366 @@
+//! `World::intersect` / `occluded` against brute force (every triangle by f64 Möller–Trumbore and
+//! every sphere by the f64 quadratic, in `common`) on random rays.
+//!
+//! Comparison per ray (tolerances derived from f32 precision):
+//! - hit / no hit must agree; t must agree to a relative 1e-4 (f32 has 6e-8 relative precision; the
+//!   BVH's f32 triangle and sphere tests lose a few digits to cancellation at grazing angles and
+//!   large coordinates, 1e-4 leaves 3 orders of margin yet catches any wrong-primitive hit in these
+//!   scenes, whose surfaces are ≫ 1e-4 apart along a ray except at ties);
+//! - a different primitive is accepted only as a tie: the brute-force t of the BVH's primitive must
+//!   be within relative 1e-5 of the nearest t (coincident faces, shared edges);
+//! - a hit/no-hit disagreement is accepted only for a genuine edge case: the brute-force hit lies
+//!   within 1e-5 (barycentric) of a triangle edge, or within relative 1e-5 of the ray's tmax, or the
+//!   ray is tangent to a sphere (discriminant within 1e-5 of zero). Such cases are measure-zero for
+//!   random rays, so at most 1e-3 of the rays may use any of these exemptions (counted, asserted).
+//! `occluded(o, d, tmax)` must equal "brute force has a hit in (0, tmax)" under the same rules.
+
+mod common;
+
+use common::{brute_hits, tmp_dir};
+use forecast::accel::World;
+use forecast::math::Vec3;
+use forecast::sampling::rng::{stream, Rng};
+use forecast::sampling::warp::sample_uniform_sphere;
+use forecast::scene::{load_str, Scene};
+use std::fmt::Write;
+use std::path::Path;
+
+const HEADER: &str = r#"
+[camera]
+position = [0.0, 0.0, 10.0]
+look_at = [0.0, 0.0, 0.0]
+fov = 40.0
+resolution = [8, 8]
+
+[materials.m]
+type = "diffuse"
+albedo = [0.5, 0.5, 0.5]
+
+[[light]]
+type = "point"
+position = [0.0, 50.0, 0.0]
+intensity = [1.0, 1.0, 1.0]
+"#;
+
+fn rand_vec(rng: &mut Rng, lo: f32, hi: f32) -> Vec3 {
+    Vec3::new(lo + (hi - lo) * rng.next_f32(), lo + (hi - lo) * rng.next_f32(), lo + (hi - lo) * rng.next_f32())
+}
+
+/// Writes an OBJ of the given triangles.
+fn write_obj(path: &Path, tris: &[[Vec3; 3]]) {
+    let mut s = String::new();
+    for t in tris {
+        for v in t {
+            writeln!(s, "v {:e} {:e} {:e}", v.x, v.y, v.z).unwrap();
+        }
+    }
+    for i in 0..tris.len() {
+        writeln!(s, "f {} {} {}", 3 * i + 1, 3 * i + 2, 3 * i + 3).unwrap();
+    }
+    std::fs::write(path, s).unwrap();
+}
+
+fn soup(rng: &mut Rng, n: usize, extent: f32, size: f32) -> Vec<[Vec3; 3]> {
+    (0..n)
+        .map(|_| {
+            let c = rand_vec(rng, -extent, extent);
+            let s = size * (0.05 + rng.next_f32());
+            [c + rand_vec(rng, -s, s), c + rand_vec(rng, -s, s), c + rand_vec(rng, -s, s)]
+        })
+        .collect()
+}
+
+/// Barycentric distance to the nearest edge of triangle `p` of the point where the ray meets its
+/// plane (negative outside); None if the ray is parallel to the plane.
+fn edge_distance(p: [Vec3; 3], o: Vec3, d: Vec3) -> Option<f64> {
+    let f = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
+    let (p0, p1, p2, o, d) = (f(p[0]), f(p[1]), f(p[2]), f(o), f(d));
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let cross = |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let (e1, e2) = (sub(p1, p0), sub(p2, p0));
+    let pv = cross(d, e2);
+    let det = dot(e1, pv);
+    if det == 0.0 {
+        return None;
+    }
+    let tv = sub(o, p0);
+    let u = dot(tv, pv) / det;
+    let v = dot(d, cross(tv, e1)) / det;
+    Some(u.min(v).min(1.0 - u - v))
+}
+
+fn sphere_tangent(c: Vec3, r: f32, o: Vec3, d: Vec3) -> bool {
+    let f = o - c;
+    let b = f.dot(d) as f64;
+    let disc = b * b - (f.dot(f) as f64 - (r as f64).powi(2));
+    disc.abs() < 1e-5 * (r as f64).powi(2)
+}
+
+/// Is this ray an edge case for primitive `prim` (see the module docs)?
+fn edge_case(s: &Scene, prim: u32, o: Vec3, d: Vec3) -> bool {
+    if prim < s.ntri() {
+        edge_distance(s.triangles[prim as usize].p, o, d).is_none_or(|e| e.abs() < 1e-5)
+    } else {
+        let sp = &s.spheres[(prim - s.ntri()) as usize];
+        sphere_tangent(sp.center, sp.radius, o, d)
+    }
+}
+
+#[derive(Default, Debug)]
+struct Tally {
+    rays: usize,
+    hits: usize,
+    ties: usize,
+    exempt: usize,
+}
+
+/// Compares one ray; panics on an unexplained disagreement.
+fn compare(w: &World, o: Vec3, d: Vec3, tmax: f32, tally: &mut Tally) {
+    let s = &w.scene;
+    tally.rays += 1;
+    let brute = brute_hits(s, o, d, tmax as f64);
+    let near_tmax = |t: f64| tmax.is_finite() && (t - tmax as f64).abs() <= 1e-5 * (tmax as f64).max(1.0);
+    let hit = w.intersect(o, d, tmax);
+    match (hit, brute.first()) {
+        (None, None) => {}
+        (Some(h), Some(&(tb, pb))) => {
+            tally.hits += 1;
+            let t = h.t as f64;
+            assert!(h.t > 0.0 && h.t < tmax, "t {} outside (0, {tmax})", h.t);
+            assert!((h.ng.length() - 1.0).abs() < 1e-4 && (h.ns.length() - 1.0).abs() < 1e-4, "normals not unit");
+            assert!(h.ns.dot(h.ng) > 0.0, "shading normal on the wrong side");
+            let p_ref = o + h.t * d;
+            assert!((h.p - p_ref).length() <= 1e-4 * (p_ref.abs().max_element() + h.t).max(1.0), "p {} vs o + t·d {}", h.p, p_ref);
+            if h.prim != pb {
+                // a tie: the BVH's primitive must have a brute-force hit at (nearly) the same t
+                let tp = brute.iter().find(|x| x.1 == h.prim).map(|x| x.0);
+                let tie = tp.is_some_and(|tp| (tp - tb).abs() <= 1e-5 * tb.max(1.0));
+                if tie || edge_case(s, pb, o, d) || edge_case(s, h.prim, o, d) {
+                    tally.ties += 1;
+                } else {
+                    panic!("ray o={o} d={d} tmax={tmax}: BVH hit prim {} at t={t}, brute force prim {pb} at t={tb} (BVH prim's brute t: {tp:?})", h.prim);
+                }
+            }
+            assert!((t - tb).abs() <= 1e-4 * tb.max(1.0) || tally_exempt(s, &brute, h.prim, o, d, tally), "ray o={o} d={d}: t {t} vs brute force {tb} (prim {pb})");
+        }
+        (None, Some(&(tb, pb))) => {
+            if edge_case(s, pb, o, d) || near_tmax(tb) {
+                tally.exempt += 1;
+            } else {
+                panic!("ray o={o} d={d} tmax={tmax}: BVH missed prim {pb} at t={tb}");
+            }
+        }
+        (Some(h), None) => {
+            if edge_case(s, h.prim, o, d) || near_tmax(h.t as f64) {
+                tally.exempt += 1;
+            } else {
+                panic!("ray o={o} d={d} tmax={tmax}: BVH hit prim {} at t={} but brute force sees nothing", h.prim, h.t);
+            }
+        }
+    }
+    let occ = w.occluded(o, d, tmax);
+    if occ != !brute.is_empty() {
+        let explained = brute.first().is_some_and(|&(t, p)| near_tmax(t) || edge_case(s, p, o, d))
+            || hit.is_some_and(|h| edge_case(s, h.prim, o, d) || near_tmax(h.t as f64));
+        assert!(explained, "ray o={o} d={d} tmax={tmax}: occluded = {occ}, brute force hits: {:?}", &brute[..brute.len().min(3)]);
+        tally.exempt += 1;
+    }
+}
+
+/// A t disagreement at a tie between the two nearest hits is fine (either t is right).
+fn tally_exempt(_s: &Scene, brute: &[(f64, u32)], prim: u32, _o: Vec3, _d: Vec3, tally: &mut Tally) -> bool {
+    let ok = brute.len() > 1 && (brute[1].0 - brute[0].0).abs() <= 1e-5 * brute[0].0.max(1.0) && brute.iter().any(|x| x.1 == prim);
+    if ok {
+        tally.ties += 1;
+    }
+    ok
+}
+
+/// Random rays: half from random points in the (expanded) bounds in uniform directions, half aimed
+/// from outside at a random point of a random primitive (so most of them hit). tmax is ∞ for half of
+/// them and a random distance otherwise.
+fn random_rays(w: &World, n: usize, seed: u64) -> Tally {
+    let s = &w.scene;
+    let (lo, hi) = s.bounds;
+    let (c, ext) = ((lo + hi) * 0.5, (hi - lo).max_element().max(1e-6));
+    let mut rng = Rng::keyed(seed, stream::MISC, 0, 0);
+    let mut tally = Tally::default();
+    let nprim = s.triangles.len() + s.spheres.len();
+    for k in 0..n {
+        let (o, d) = if k % 2 == 0 {
+            let o = c + (rand_vec(&mut rng, -0.75, 0.75) * ext);
+            (o, sample_uniform_sphere(rng.next_2d()))
+        } else {
+            let p = (rng.next_f32() * nprim as f32) as usize % nprim;
+            let target = if p < s.triangles.len() {
+                let t = &s.triangles[p];
+                let (b0, b1) = forecast::sampling::warp::sample_triangle(rng.next_2d());
+                b0 * t.p[0] + b1 * t.p[1] + (1.0 - b0 - b1) * t.p[2]
+            } else {
+                let sp = &s.spheres[p - s.triangles.len()];
+                sp.center + sp.radius * 0.999 * sample_uniform_sphere(rng.next_2d())
+            };
+            let o = c + sample_uniform_sphere(rng.next_2d()) * ext * 1.5;
+            (o, (target - o).normalize())
+        };
+        let tmax = if rng.next_f32() < 0.5 { f32::INFINITY } else { rng.next_f32() * 2.0 * ext };
+        compare(w, o, d, tmax, &mut tally);
+    }
+    assert!(tally.exempt + tally.ties <= n / 1000, "too many exemptions (edge cases/ties) for random rays: {tally:?}");
+    assert!(tally.hits > n / 4, "test has too few hits to mean anything: {tally:?}");
+    tally
+}
+
+fn mesh_scene(dir: &Path, tris: &[[Vec3; 3]], extra: &str, transform: &str) -> Scene {
+    write_obj(&dir.join("soup.obj"), tris);
+    let src = format!("{HEADER}\n[[shape]]\ntype = \"mesh\"\nfile = \"soup.obj\"\nmaterial = \"m\"\n{transform}\n{extra}");
+    load_str(&src, "bvh.toml", dir).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn random_triangle_soup() {
+    let dir = tmp_dir("bvh-soup");
+    let mut rng = Rng::keyed(1, stream::MISC, 0, 0);
+    let tris = soup(&mut rng, 2000, 1.0, 0.2);
+    let w = World::build(mesh_scene(&dir, &tris, "", ""));
+    assert_eq!(w.scene.triangles.len(), 2000);
+    let t = random_rays(&w, 20_000, 11);
+    eprintln!("soup: {t:?}");
+}
+
+#[test]
+fn triangles_and_spheres_mixed() {
+    let dir = tmp_dir("bvh-mixed");
+    let mut rng = Rng::keyed(2, stream::MISC, 0, 0);
+    let tris = soup(&mut rng, 500, 1.0, 0.3);
+    let mut extra = String::new();
+    for _ in 0..40 {
+        let c = rand_vec(&mut rng, -1.2, 1.2);
+        let r = 0.02 + 0.3 * rng.next_f32();
+        let inward = rng.next_f32() < 0.2;
+        writeln!(extra, "[[shape]]\ntype = \"sphere\"\ncenter = [{}, {}, {}]\nradius = {r}\nmaterial = \"m\"\ninward = {inward}\n", c.x, c.y, c.z).unwrap();
+    }
+    // a few quads, one axis-aligned
+    extra.push_str("[[shape]]\ntype = \"quad\"\ncorner = [-1.5, -1.0, -1.5]\nu = [3.0, 0.0, 0.0]\nv = [0.0, 0.0, 3.0]\nmaterial = \"m\"\n");
+    extra.push_str("[[shape]]\ntype = \"quad\"\ncorner = [-1.0, -1.0, 1.3]\nu = [2.0, 0.5, 0.0]\nv = [0.0, 2.0, 0.3]\nmaterial = \"m\"\n");
+    let w = World::build(mesh_scene(&dir, &tris, &extra, ""));
+    assert_eq!(w.scene.spheres.len(), 40);
+    let t = random_rays(&w, 20_000, 12);
+    eprintln!("mixed: {t:?}");
+}
+
+#[test]
+fn spheres_only() {
+    // Overlapping and nested spheres of very different radii, some inward; rays from inside too.
+    let mut rng = Rng::keyed(3, stream::MISC, 0, 0);
+    let mut src = HEADER.to_string();
+    for k in 0..60 {
+        let c = rand_vec(&mut rng, -2.0, 2.0);
+        let r = if k % 10 == 0 { 2.5 } else { 0.01 + 0.5 * rng.next_f32() };
+        writeln!(src, "[[shape]]\ntype = \"sphere\"\ncenter = [{}, {}, {}]\nradius = {r}\nmaterial = \"m\"\ninward = {}\n", c.x, c.y, c.z, k % 3 == 0).unwrap();
+    }
+    let w = World::build(load_str(&src, "spheres.toml", Path::new(".")).unwrap());
+    assert_eq!(w.scene.ntri(), 0);
+    let t = random_rays(&w, 20_000, 13);
+    eprintln!("spheres: {t:?}");
+    // sphere normals: outward unless inward, exactly radial
+    let mut rng = Rng::keyed(30, stream::MISC, 0, 0);
+    for _ in 0..2000 {
+        let o = rand_vec(&mut rng, -3.0, 3.0);
+        let d = sample_uniform_sphere(rng.next_2d());
+        if let Some(h) = w.intersect(o, d, f32::INFINITY) {
+            let s = &w.scene.spheres[h.prim as usize];
+            let radial = (h.p - s.center).normalize();
+            let n = if s.inward { -radial } else { radial };
+            assert!((h.ng - n).length() < 1e-4, "sphere normal {} vs {}", h.ng, n);
+            assert!(((h.p - s.center).length() / s.radius - 1.0).abs() < 1e-5, "hit point off the sphere");
+        }
+    }
+}
+
+#[test]
+fn degenerate_and_coincident_triangles() {
+    let dir = tmp_dir("bvh-degenerate");
+    let mut rng = Rng::keyed(4, stream::MISC, 0, 0);
+    let mut tris = soup(&mut rng, 300, 1.0, 0.3);
+    let n_good = tris.len();
+    // zero-area triangles: collinear, a repeated vertex, all three equal
+    let a = Vec3::new(0.1, 0.2, 0.3);
+    let b = Vec3::new(0.5, -0.2, 0.1);
+    tris.push([a, b, a + 2.0 * (b - a)]);
+    tris.push([a, a, b]);
+    tris.push([b, b, b]);
+    // coincident: 50 duplicated triangles, 50 with reversed winding
+    for k in 0..50 {
+        tris.push(tris[k]);
+        tris.push([tris[50 + k][0], tris[50 + k][2], tris[50 + k][1]]);
+    }
+    let w = World::build(mesh_scene(&dir, &tris, "", ""));
+    assert_eq!(w.scene.triangles.len(), n_good + 100, "the 3 zero-area triangles must be skipped");
+    assert!(
+        w.scene.warnings.iter().any(|m| m.contains("skipped 3 degenerate") && m.contains("bvh.toml")),
+        "expected a warning naming the file and the count: {:?}",
+        w.scene.warnings
+    );
+    let t = random_rays(&w, 20_000, 14);
+    eprintln!("degenerate: {t:?}");
+}
+
+#[test]
+fn rays_parallel_to_faces() {
+    // An axis-aligned box of quads; rays exactly parallel to a face (d.y = 0) just above and below it
+    // must miss that face and agree with brute force about everything else.
+    let mut src = HEADER.to_string();
+    for (c, u, v) in [
+        ([-1.0, 0.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]),
+        ([-1.0, 1.0, -1.0], [0.0, 0.0, 2.0], [2.0, 0.0, 0.0]),
+        ([-1.0, 0.0, -1.0], [0.0, 1.0, 0.0], [2.0, 0.0, 0.0]),
+        ([-1.0, 0.0, 1.0], [2.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+    ] {
+        writeln!(src, "[[shape]]\ntype = \"quad\"\ncorner = {c:?}\nu = {u:?}\nv = {v:?}\nmaterial = \"m\"\n").unwrap();
+    }
+    let w = World::build(load_str(&src, "parallel.toml", Path::new(".")).unwrap());
+    let mut rng = Rng::keyed(5, stream::MISC, 0, 0);
+    let mut tally = Tally::default();
+    for k in 0..5000 {
+        let phi = 2.0 * std::f32::consts::PI * rng.next_f32();
+        let d = Vec3::new(phi.cos(), 0.0, phi.sin());
+        let y = [1e-3, -1e-3, 0.5, 1.0 + 1e-3, 0.999][k % 5];
+        let o = Vec3::new(-3.0 + 6.0 * rng.next_f32(), y, -3.0 + 6.0 * rng.next_f32());
+        compare(&w, o, d, f32::INFINITY, &mut tally);
+        if let Some(h) = w.intersect(o, d, f32::INFINITY) {
+            assert!(h.ng.y.abs() < 1e-6, "a ray parallel to the floor/ceiling hit them: {o} {d} -> prim {}", h.prim);
+        }
+    }
+    assert!(tally.hits > 1000 && tally.exempt + tally.ties <= 5, "{tally:?}");
+}
+
+#[test]
+fn very_large_and_very_small_scales() {
+    for (name, scale, offset, seed) in [("large", 1e4f32, 1e5f32, 21u64), ("small", 1e-3, 0.0, 22), ("tiny-offset", 1e-3, 10.0, 23)] {
+        let dir = tmp_dir(&format!("bvh-{name}"));
+        let mut rng = Rng::keyed(seed, stream::MISC, 0, 0);
+        let tris = soup(&mut rng, 500, 1.0, 0.3);
+        let transform = format!("scale = {scale:e}\ntranslate = [{offset:e}, 0.0, {:e}]", -offset);
+        let w = World::build(mesh_scene(&dir, &tris, "", &transform));
+        assert_eq!(w.scene.triangles.len(), 500, "{name}: no triangle may be dropped as degenerate");
+        let t = random_rays(&w, 10_000, seed + 100);
+        eprintln!("{name}: {t:?}");
+    }
+}
+
+/// Negative control: a scene whose BVH lacks primitives the brute force knows (we build the World
+/// from a scene and then compare against a different, larger scene) must be detected.
+#[test]
+fn comparison_detects_a_wrong_bvh() {
+    let dir = tmp_dir("bvh-negative");
+    let mut rng = Rng::keyed(6, stream::MISC, 0, 0);
+    let tris = soup(&mut rng, 200, 1.0, 0.3);
+    let full = mesh_scene(&dir, &tris, "", "");
+    let half = mesh_scene(&dir, &tris[..100], "", "");
+    let mut w = World::build(half);
+    w.scene = full; // the brute force now sees 200 triangles, the BVH only 100
+    let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| random_rays(&w, 2000, 16)));
+    assert!(r.is_err(), "missing primitives went undetected");
+}
