@@ -15,16 +15,23 @@ if [ "${FORECAST_NO_MPI:-0}" != "1" ]; then
     fi
 fi
 
+log="$(mktemp)"
+trap 'rm -f "$log"' EXIT
+
 echo "== cargo test --release"
-cargo test --release
+cargo test --release 2>&1 | tee -a "$log"
 
 if [ "${FORECAST_NO_MPI:-0}" != "1" ] && command -v mpirun >/dev/null 2>&1; then
     echo "== cargo test --release --features mpi --test mpi (2 ranks)"
     # a separate target dir keeps the MPI binary from replacing the default one
-    CARGO_TARGET_DIR=target/mpi cargo test --release --features mpi --test mpi
+    CARGO_TARGET_DIR=target/mpi cargo test --release --features mpi --test mpi -- --test-threads=1 2>&1 | tee -a "$log"
 else
     echo "warning: MPI tests skipped (mpirun not found)" >&2
 fi
 
 echo "== Mitsuba agreement check"
 SPP="${SPP:-1024}" bash scripts/check-mitsuba.sh
+
+# one closing line over every cargo test binary run above
+awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p += $i; if ($(i+1) ~ /^failed/) f += $i } }
+     END { printf "all suites: %d passed, %d failed\n", p, f }' "$log"

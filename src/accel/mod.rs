@@ -119,7 +119,7 @@ impl World {
         let p = self.slot_prim[slot];
         let ntri = self.scene.ntri();
         if p < ntri {
-            self.slot_tri[slot].intersect(r)
+            tri_t(&self.slot_tri[slot], r)
         } else {
             let s = &self.scene.spheres[(p - ntri) as usize];
             sphere_t(s.center, s.radius, r)
@@ -132,7 +132,8 @@ impl World {
         if self.slot_prim.is_empty() {
             return None;
         }
-        let ray = Ray::new(origin.into(), dir.into(), 0.0, tmax);
+        // + 0.0 turns −0.0 components into +0.0 (obvhs' node test misreads −0.0)
+        let ray = Ray::new(origin.into(), (dir + Vec3::ZERO).into(), 0.0, tmax);
         let mut hit = RayHit::none();
         if !self.bvh.ray_traverse(ray, &mut hit, |r, slot| self.prim_t(r, slot)) {
             return None;
@@ -172,7 +173,7 @@ impl World {
         if self.slot_prim.is_empty() || tmax <= 0.0 {
             return false;
         }
-        let ray = Ray::new(origin.into(), dir.into(), 0.0, tmax);
+        let ray = Ray::new(origin.into(), (dir + Vec3::ZERO).into(), 0.0, tmax);
         !self.bvh.ray_traverse_miss(ray, |r, slot| self.prim_t(r, slot))
     }
 
@@ -190,6 +191,29 @@ impl World {
         let len = seg.length();
         !self.occluded(o, seg / len.max(1e-30), len)
     }
+}
+
+/// Möller–Trumbore on obvhs' precomputed triangle with inclusive edge tests: unlike
+/// `RtTriangle::intersect` (which rejects −0.0 barycentrics by sign bit), a ray through an edge
+/// shared by two triangles hits one of them (no pinhole leaks at quad diagonals).
+#[inline]
+fn tri_t(t: &RtTriangle, ray: &Ray) -> f32 {
+    let c = t.v0 - ray.origin;
+    let r = ray.direction.cross(c);
+    let det = t.ng.dot(ray.direction);
+    if det == 0.0 {
+        return f32::INFINITY;
+    }
+    let inv_det = 1.0 / det;
+    let u = r.dot(t.e2) * inv_det;
+    let v = r.dot(t.e1) * inv_det;
+    if u >= 0.0 && v >= 0.0 && u + v <= 1.0 {
+        let tt = t.ng.dot(c) * inv_det;
+        if tt >= ray.tmin && tt <= ray.tmax {
+            return tt;
+        }
+    }
+    f32::INFINITY
 }
 
 /// Barycentric (b1, b2) of `p` in triangle `t` (b0 = 1 − b1 − b2).

@@ -121,7 +121,7 @@ pub fn sample(m: &Material, sp: &ShadingPoint, wo: Vec3, u: [f32; 3], mode: Mode
         }
         Material::Glossy { albedo, specular, exponent } => {
             let (wi, pdf) = phong::sample(albedo, specular, exponent, ns, wo, u)?;
-            if wi.dot(ng) <= 0.0 || wo.dot(ns) <= 0.0 || pdf <= 0.0 {
+            if wi.dot(ng) <= 0.0 || wi.dot(ns) <= 0.0 || wo.dot(ns) <= 0.0 || pdf <= 0.0 {
                 return None;
             }
             let f = phong::eval(albedo, specular, exponent, ns, wo, wi);

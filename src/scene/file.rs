@@ -198,17 +198,31 @@ impl Ctx<'_> {
     }
     /// Error at `key` inside the entry spanning `span` (finds the key's own line when present).
     fn err(&self, span: std::ops::Range<usize>, key: &str, message: impl Into<String>) -> SceneError {
-        let text = &self.src[span.start.min(self.src.len())..span.end.min(self.src.len())];
-        let mut at = span.start;
+        // toml spans of a table cover only its header: search from the header to the next one
+        let start = span.start.min(self.src.len());
+        let body_start = self.src[start..].find('\n').map_or(self.src.len(), |i| start + i + 1);
+        let mut end = self.src.len();
+        let mut off = body_start;
+        for line in self.src[body_start..].split_inclusive('\n') {
+            if line.trim_start().starts_with('[') {
+                end = off;
+                break;
+            }
+            off += line.len();
+        }
+        let end = end.max(span.end.min(self.src.len()));
+        let text = &self.src[start..end];
+        let mut at = start;
         if !key.is_empty() {
             let leaf = key.rsplit('.').next().unwrap_or(key);
             let mut search = 0;
             while let Some(i) = text[search..].find(leaf) {
                 let pos = search + i;
-                let before_ok = pos == 0 || !text.as_bytes()[pos - 1].is_ascii_alphanumeric() && text.as_bytes()[pos - 1] != b'_';
+                let b = text.as_bytes();
+                let before_ok = pos == 0 || !(b[pos - 1].is_ascii_alphanumeric() || b[pos - 1] == b'_');
                 let rest = text[pos + leaf.len()..].trim_start();
                 if before_ok && rest.starts_with('=') {
-                    at = span.start + pos;
+                    at = start + pos;
                     break;
                 }
                 search = pos + leaf.len();
@@ -243,7 +257,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
 pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> {
     let cx = Ctx { file: file.to_string(), src };
     let doc: Doc = toml::from_str(src).map_err(|e| {
-        let line = e.span().map(|s| cx.line_of(s.start)).unwrap_or(0);
+        let mut line = e.span().map(|s| cx.line_of(s.start)).unwrap_or(0);
         let msg = e.message().trim().to_string();
         let key = msg
             .split('`')
@@ -251,6 +265,13 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
             .filter(|_| msg.contains("unknown field") || msg.contains("missing field"))
             .unwrap_or("")
             .to_string();
+        if msg.contains("unknown field") && !key.is_empty() {
+            // the span may cover a whole table (or array of tables): find the key's own line
+            let from = e.span().map_or(0, |s| s.start);
+            if let Some(l) = key_line_after(src, from, &key) {
+                line = l;
+            }
+        }
         SceneError { file: cx.file.clone(), line, key, message: msg }
     })?;
     let mut hash = fnv1a(0xcbf2_9ce4_8422_2325, src.as_bytes());
@@ -379,7 +400,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
                 let (mat, e) = resolve(material, emission)?;
                 let (c, u, v) = (v3(*corner), v3(*u), v3(*v));
                 if u.cross(v).length() < 1e-12 {
-                    return Err(cx.err(ss, &key("u"), "zero-area quad (u × v = 0)"));
+                    return Err(cx.err(ss, &key("v"), "zero-area quad (u × v = 0)"));
                 }
                 for p in [[c, c + u, c + u + v], [c, c + u + v, c + v]] {
                     if let Some(t) = make_triangle(p, None, mat) {
@@ -546,6 +567,19 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
         bounds: (lo, hi),
         warnings,
     })
+}
+
+/// 1-based line of the first `key = …` at or after byte `from`.
+fn key_line_after(src: &str, from: usize, key: &str) -> Option<usize> {
+    let mut off = 0usize;
+    for (i, line) in src.split_inclusive('\n').enumerate() {
+        let t = line.trim_start();
+        if off + line.len() > from && t.starts_with(key) && t[key.len()..].trim_start().starts_with('=') {
+            return Some(i + 1);
+        }
+        off += line.len();
+    }
+    None
 }
 
 /// Builds a triangle, or `None` when degenerate (zero area or non-finite).

@@ -1,0 +1,261 @@
+//! Malformed scenes are rejected with an error that names the file, the line and the key (never a
+//! panic), and degenerate mesh input loads with a warning (scenes/README.md, src/scene/file.rs).
+//!
+//! Each case is a valid base scene with one fault; the offending line carries the marker `#<`, and
+//! the error's `line` must be that line and its `key` the given key.
+
+mod common;
+
+use common::tmp_dir;
+use forecast::scene::{load, load_str, SceneError};
+use std::path::Path;
+
+const BASE: &str = r#"[camera]
+position   = [0.0, 1.0, 3.0]
+look_at    = [0.0, 1.0, 0.0]
+fov        = 40.0
+resolution = [32, 32]
+
+[render]
+method = "pt"
+spp    = 4
+
+[materials.white]
+type   = "diffuse"
+albedo = [0.5, 0.5, 0.5]
+
+[materials.plastic]
+type     = "glossy"
+albedo   = [0.3, 0.3, 0.3]
+specular = [0.2, 0.2, 0.2]
+exponent = 20.0
+
+[[shape]]
+type     = "quad"
+corner   = [-1.0, 0.0, -1.0]
+u        = [2.0, 0.0, 0.0]
+v        = [0.0, 0.0, 2.0]
+material = "white"
+
+[[shape]]
+type     = "sphere"
+center   = [0.0, 0.5, 0.0]
+radius   = 0.5
+material = "plastic"
+
+[[shape]]
+type     = "quad"
+corner   = [-0.2, 1.9, -0.2]
+u        = [0.4, 0.0, 0.0]
+v        = [0.0, 0.0, 0.4]
+emission = [5.0, 5.0, 5.0]
+"#;
+
+/// `BASE` with the first line starting with `from` replaced by `to` (which carries the `#<` marker).
+fn with(from: &str, to: &str) -> String {
+    let mut done = false;
+    let out: Vec<String> = BASE
+        .lines()
+        .map(|l| {
+            if !done && l.starts_with(from) {
+                done = true;
+                to.to_string()
+            } else {
+                l.to_string()
+            }
+        })
+        .collect();
+    assert!(done, "test bug: no line starts with {from:?}");
+    out.join("\n") + "\n"
+}
+
+/// `BASE` with `extra` inserted after the first line starting with `after`.
+fn insert_after(after: &str, extra: &str) -> String {
+    let mut out = String::new();
+    let mut done = false;
+    for l in BASE.lines() {
+        out.push_str(l);
+        out.push('\n');
+        if !done && l.starts_with(after) {
+            out.push_str(extra);
+            out.push('\n');
+            done = true;
+        }
+    }
+    assert!(done, "test bug: no line starts with {after:?}");
+    out
+}
+
+fn marked_line(src: &str) -> usize {
+    src.lines().position(|l| l.contains("#<")).expect("test bug: no #< marker") + 1
+}
+
+/// Loads `src` and checks the error's file, line, key and Display; returns the error, or a
+/// description of what was wrong.
+fn try_err(name: &str, src: &str, dir: &Path, line: usize, key: &str) -> Result<SceneError, String> {
+    let e = match load_str(src, "bad.toml", dir) {
+        Ok(_) => return Err(format!("{name}: scene was accepted")),
+        Err(e) => e,
+    };
+    let shown = e.to_string();
+    if e.file != "bad.toml" || e.line != line || e.key != key {
+        return Err(format!("{name}: want bad.toml:{line} key `{key}`, got: {shown}"));
+    }
+    if e.message.is_empty() || !shown.starts_with(&format!("bad.toml:{line}: ")) || !shown.contains(key) {
+        return Err(format!("{name}: Display must show file:line and key: {shown}"));
+    }
+    Ok(e)
+}
+
+fn expect_err(name: &str, src: &str, dir: &Path, line: usize, key: &str) -> SceneError {
+    try_err(name, src, dir, line, key).unwrap_or_else(|m| panic!("{m}"))
+}
+
+/// Runs one case; the failures of a group are collected so that one run shows them all.
+fn case(fails: &mut Vec<String>, name: &str, src: &str, key: &str) {
+    if let Err(m) = try_err(name, src, Path::new("."), marked_line(src), key) {
+        fails.push(m);
+    }
+}
+
+fn finish(fails: Vec<String>) {
+    assert!(fails.is_empty(), "{} case(s) failed:\n{}", fails.len(), fails.join("\n"));
+}
+
+/// `BASE` plus a mesh shape (shape[3]) reading `file`; the `file =` line is marked.
+fn with_mesh(file: &str, extra: &str) -> String {
+    format!("{BASE}\n[[shape]]\ntype = \"mesh\"\nfile = \"{file}\" #<\nmaterial = \"white\"\n{extra}")
+}
+
+#[test]
+fn base_scene_is_valid() {
+    let s = load_str(BASE, "base.toml", Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    assert!(s.warnings.is_empty());
+    assert_eq!((s.triangles.len(), s.spheres.len(), s.emitters.len()), (4, 1, 2));
+}
+
+#[test]
+fn unknown_keys() {
+    let mut f = Vec::new();
+    case(&mut f, "top-level", &insert_after("[render]", "").replacen("[camera]", "colour = 3 #<\n[camera]", 1), "colour");
+    case(&mut f, "camera", &with("fov", "fov = 40.0\nfocus = 2.0 #<"), "focus");
+    case(&mut f, "render", &with("spp", "spp = 4\nsamples = 16 #<"), "samples");
+    case(&mut f, "material", &with("albedo   = [0.3", "albedo   = [0.3, 0.3, 0.3]\nroughness = 0.1 #<"), "roughness");
+    case(&mut f, "shape", &with("radius", "radius = 0.5\nradious = 0.5 #<"), "radious");
+    finish(f);
+}
+
+#[test]
+fn bad_values() {
+    let mut f = Vec::new();
+    case(&mut f, "nan albedo", &with("albedo = [0.5", "albedo = [nan, 0.5, 0.5] #<"), "materials.white.albedo");
+    case(&mut f, "negative albedo", &with("albedo = [0.5", "albedo = [0.5, -0.1, 0.5] #<"), "materials.white.albedo");
+    case(&mut f, "albedo > 1", &with("albedo = [0.5", "albedo = [0.5, 1.2, 0.5] #<"), "materials.white.albedo");
+    case(&mut f, "glossy albedo + specular > 1", &with("specular", "specular = [0.8, 0.2, 0.2] #<"), "materials.plastic.specular");
+    case(&mut f, "negative emission", &with("emission", "emission = [5.0, -1.0, 5.0] #<"), "shape[2].emission");
+    case(&mut f, "inf emission", &with("emission", "emission = [5.0, inf, 5.0] #<"), "shape[2].emission");
+    case(&mut f, "zero-area emissive quad", &with("v        = [0.0, 0.0, 0.4]", "v        = [0.8, 0.0, 0.0] #<"), "shape[2].v");
+    case(&mut f, "negative radius", &with("radius", "radius = -0.5 #<"), "shape[1].radius");
+    case(&mut f, "zero radius", &with("radius", "radius = 0.0 #<"), "shape[1].radius");
+    case(&mut f, "unknown material", &with("material = \"plastic\"", "material = \"plastik\" #<"), "shape[1].material");
+    case(&mut f, "fov 0", &with("fov", "fov = 0.0 #<"), "camera.fov");
+    case(&mut f, "fov 180", &with("fov", "fov = 180.0 #<"), "camera.fov");
+    case(&mut f, "fov nan", &with("fov", "fov = nan #<"), "camera.fov");
+    case(&mut f, "zero resolution", &with("resolution", "resolution = [0, 32] #<"), "camera.resolution");
+    case(&mut f, "bad duration", &with("spp", "time = \"10 parsecs\" #<"), "render.time");
+    case(&mut f, "zero duration", &with("spp", "time = \"0s\" #<"), "render.time");
+    case(&mut f, "unknown method", &with("method", "method = \"bdpt\" #<"), "render.method");
+    case(&mut f, "zero spp", &with("spp", "spp = 0 #<"), "render.spp");
+    case(&mut f, "glass ior < 1", &insert_after("exponent", "\n[materials.glass]\ntype = \"glass\"\nior = 0.5 #<"), "materials.glass.ior");
+    finish(f);
+}
+
+#[test]
+fn missing_obj_file() {
+    let dir = tmp_dir("bad-obj");
+    let src = with_mesh("nothere.obj", "");
+    let e = expect_err("missing obj", &src, &dir, marked_line(&src), "shape[3].file");
+    assert!(e.message.contains("nothere.obj"), "message should name the OBJ: {e}");
+}
+
+#[test]
+fn empty_scene_and_no_lights() {
+    // No shapes at all: nothing to point at but the document (line 1), key `shape`.
+    let src = "[camera]\nposition = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 40.0\nresolution = [8, 8]\n";
+    expect_err("empty scene", src, Path::new("."), 1, "shape");
+    // Shapes but no light with positive power.
+    let src = BASE.replace("emission = [5.0, 5.0, 5.0]", "material = \"white\"");
+    let e = expect_err("no light", &src, Path::new("."), 1, "shape.emission");
+    assert!(e.message.contains("light"));
+}
+
+#[test]
+fn toml_syntax_error_has_a_line() {
+    let src = with("fov", "fov = [40.0 #<");
+    let e = load_str(&src, "bad.toml", Path::new(".")).err().expect("rejected");
+    // the parser reports the position where it gave up: the marked line or the next one
+    assert!(e.line == marked_line(&src) || e.line == marked_line(&src) + 1, "{e}");
+    assert!(e.to_string().starts_with("bad.toml:"), "{e}");
+}
+
+#[test]
+fn load_reports_the_path_and_unreadable_files() {
+    let dir = tmp_dir("bad-load");
+    let p = dir.join("scene.toml");
+    std::fs::write(&p, with("fov", "fov = 0.0 #<")).unwrap();
+    let e = load(&p).err().expect("rejected");
+    assert_eq!((e.line, e.key.as_str()), (4, "camera.fov"));
+    assert!(e.to_string().contains(&p.display().to_string()), "{e}");
+    let e = load(&dir.join("missing.toml")).err().expect("a missing file is an error");
+    assert!(e.to_string().contains("missing.toml"), "{e}");
+}
+
+#[test]
+fn degenerate_obj_triangles_are_skipped_with_a_warning() {
+    let dir = tmp_dir("bad-degenerate");
+    // 4 faces: two good, one zero-area (collinear), one good whose vertex normal is NaN.
+    let obj = "\
+v 0 0 0
+v 1 0 0
+v 0 1 0
+v 1 1 0
+v 2 2 0
+v 0 0 1
+v 1 0 1
+v 0 1 1
+vn 0 0 1
+vn nan 0 1
+f 1//1 2//1 3//1
+f 2//1 4//1 3//1
+f 1//1 4//1 5//1
+f 6//1 7//2 8//1
+";
+    std::fs::write(dir.join("m.obj"), obj).unwrap();
+    let src = with_mesh("m.obj", "normals = \"smooth\"\n");
+    let line = marked_line(&src);
+    let s = load_str(&src, "deg.toml", &dir).unwrap_or_else(|e| panic!("{e}"));
+    // two quads: 4 triangles; mesh: 3 of 4
+    assert_eq!(s.triangles.len(), 4 + 3, "the zero-area face must be skipped, the others kept");
+    let w = s.warnings.iter().find(|w| w.contains("degenerate")).unwrap_or_else(|| panic!("no warning: {:?}", s.warnings));
+    assert!(w.contains("skipped 1 degenerate"), "{w}");
+    assert!(w.starts_with("deg.toml:") && w.contains("shape[3].file") && w.contains("m.obj"), "warning must name file, key and OBJ: {w}");
+    let w = w.clone();
+    // no NaN may survive into the scene: every kept shading normal is finite and unit
+    for t in &s.triangles {
+        assert!(t.ng.is_finite() && t.area > 0.0);
+        if let Some(n) = t.n {
+            assert!(n.iter().all(|v| v.is_finite() && (v.length() - 1.0).abs() < 1e-4), "NaN shading normal kept: {n:?}");
+        }
+    }
+    // and the world built from it returns finite shading normals on the NaN-normal face
+    let (o, d) = (forecast::math::Vec3::new(0.2, 0.2, 5.0), forecast::math::Vec3::new(1e-3, 1e-3, -1.0).normalize());
+    let brute = common::brute_hits(&s, o, d, f64::INFINITY);
+    assert!(brute.first().is_some_and(|b| (b.0 - 4.0).abs() < 1e-4), "brute force: {brute:?}");
+    let world = forecast::accel::World::build(s);
+    let h = world
+        .intersect(o, d, f32::INFINITY)
+        .unwrap_or_else(|| panic!("BVH: no hit; brute force: {brute:?}; triangles: {:?}", world.scene.triangles.iter().map(|t| t.p).collect::<Vec<_>>()));
+    assert!((h.t - 4.0).abs() < 1e-4 && h.ns.is_finite() && h.ng.is_finite(), "{h:?}");
+    // last, the line: the warning must point at the `file =` line
+    assert!(w.starts_with(&format!("deg.toml:{line}:")), "warning must point at line {line}: {w}");
+}
