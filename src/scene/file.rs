@@ -443,11 +443,13 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
                 };
                 let xn = |n: Vec3| Vec3::new(cos * n.x + sin * n.z, n.y, -sin * n.x + cos * n.z);
                 let mut skipped = 0usize;
+                let mut flat_fallback = 0usize;
                 for (k, tri) in mesh.triangles.iter().enumerate() {
                     let p = [xf(tri[0]), xf(tri[1]), xf(tri[2])];
                     let n = mesh.normals.as_ref().map(|ns| [xn(ns[k][0]), xn(ns[k][1]), xn(ns[k][2])]);
                     match make_triangle(p, n, mat) {
                         Some(t) => {
+                            flat_fallback += (n.is_some() && t.n.is_none()) as usize;
                             triangles.push(t);
                             tri_emission.push(e);
                         }
@@ -460,6 +462,15 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
                         cx.file,
                         cx.err(ss.clone(), &key("file"), "").line,
                         key("file"),
+                        path.display()
+                    ));
+                }
+                if flat_fallback > 0 {
+                    warnings.push(format!(
+                        "{}:{}: key `{}`: {flat_fallback} triangle(s) in {} have NaN or zero vertex normals; shaded flat",
+                        cx.file,
+                        cx.err(ss.clone(), &key("normals"), "").line,
+                        key("normals"),
                         path.display()
                     ));
                 }
