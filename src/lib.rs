@@ -25,6 +25,7 @@ pub mod pipeline;
 pub mod progress;
 pub mod render;
 pub mod sampling;
+pub mod spatial;
 pub mod scene;
 pub mod scenegen;
 pub mod stats;
