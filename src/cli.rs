@@ -150,7 +150,11 @@ pub struct BenchArgs {
 
 fn parse_bound(s: &str) -> Result<f32, String> {
     let t = s.trim();
-    let b = if t.eq_ignore_ascii_case("inf") { f32::INFINITY } else { t.parse::<f32>().map_err(|_| format!("bad bound `{s}`"))? };
+    let b = if t.eq_ignore_ascii_case("inf") {
+        f32::INFINITY
+    } else {
+        t.parse::<f32>().map_err(|_| format!("bad bound `{s}`"))?
+    };
     if b.is_nan() || b < 0.0 {
         return Err(format!("bound `{s}` must be >= 0 (or `inf`)"));
     }
@@ -170,7 +174,8 @@ fn parse_secs(s: &str) -> Result<f64, String> {
 
 /// Parses `WxH`.
 pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
-    let (a, b) = s.split_once(['x', 'X']).ok_or_else(|| format!("bad resolution `{s}` (expected WxH, e.g. 640x480)"))?;
+    let (a, b) =
+        s.split_once(['x', 'X']).ok_or_else(|| format!("bad resolution `{s}` (expected WxH, e.g. 640x480)"))?;
     let w: u32 = a.trim().parse().map_err(|_| format!("bad width in `{s}`"))?;
     let h: u32 = b.trim().parse().map_err(|_| format!("bad height in `{s}`"))?;
     if w == 0 || h == 0 || w > 65536 || h > 65536 {

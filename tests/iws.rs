@@ -125,7 +125,8 @@ fn furnace_area_light_b_sweep() {
 }
 
 fn pt(world: &World, w: u32, h: u32, spp: u64) -> Film {
-    let mut p = integrators::build(Method::Pt, world, &MethodOptions { max_depth: 64, ..Default::default() }, &[]).unwrap();
+    let mut p =
+        integrators::build(Method::Pt, world, &MethodOptions { max_depth: 64, ..Default::default() }, &[]).unwrap();
     render(world, p.as_mut(), w, h, spp, 11)
 }
 
@@ -206,4 +207,3 @@ fn photon_map_roundtrips_through_bitcode() {
     assert!(integrators::build(Method::IwsPm, &w, &opts, &bytes[..bytes.len() / 2]).is_err());
     assert!(integrators::build(Method::IwsPm, &w, &opts, &[]).is_err());
 }
-

@@ -72,7 +72,16 @@ impl CausticEstimator for NoCaustics {
     fn name(&self) -> &'static str {
         "none"
     }
-    fn estimate(&self, _: &World, _: &ShadingPoint, _: &Material, _: Vec3, _: u32, _: &mut Rng, _: &dyn Recurse) -> Rgb {
+    fn estimate(
+        &self,
+        _: &World,
+        _: &ShadingPoint,
+        _: &Material,
+        _: Vec3,
+        _: u32,
+        _: &mut Rng,
+        _: &dyn Recurse,
+    ) -> Rgb {
         Rgb::ZERO
     }
     fn stats(&self) -> serde_json::Value {
@@ -89,19 +98,32 @@ impl CausticEstimator for BsdfCaustics {
     fn name(&self) -> &'static str {
         "bsdf"
     }
-    fn estimate(&self, world: &World, x: &ShadingPoint, m: &Material, wo: Vec3, depth: u32, rng: &mut Rng, full: &dyn Recurse) -> Rgb {
+    fn estimate(
+        &self,
+        world: &World,
+        x: &ShadingPoint,
+        m: &Material,
+        wo: Vec3,
+        depth: u32,
+        rng: &mut Rng,
+        full: &dyn Recurse,
+    ) -> Rgb {
         if depth + 1 >= MAX_VERTICES {
             return Rgb::ZERO;
         }
         let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
-        let Some(bs) = bsdf::sample(m, x, wo, u, Mode::Radiance) else { return Rgb::ZERO };
+        let Some(bs) = bsdf::sample(m, x, wo, u, Mode::Radiance) else {
+            return Rgb::ZERO;
+        };
         let Some(hit) = world.intersect(offset_origin(x.p, x.ng, bs.wi), bs.wi, f32::INFINITY) else {
             return Rgb::ZERO;
         };
         if world.scene.emitter_of(hit.prim) != NO_EMITTER || !world.scene.material_of(hit.prim).is_dirac() {
             return Rgb::ZERO; // spec §1: L_d owns diffuse and emitter first hits
         }
-        let Some(w) = rr_weight(bs.weight, depth + 1, rng) else { return Rgb::ZERO };
+        let Some(w) = rr_weight(bs.weight, depth + 1, rng) else {
+            return Rgb::ZERO;
+        };
         match follow_dirac_chain(world, hit, bs.wi, w, MAX_VERTICES, rng) {
             Some((z, d, beta)) => beta * full.l_hat(world, &z, -d, depth + 1, rng),
             None => Rgb::ZERO,
@@ -303,7 +325,7 @@ impl Iws {
             return Rgb::ZERO;
         }
         let shade_x = w.dot(x.ns).abs() / cos_x; // eye-side shading-normal factor
-        // spec §2: G = |n_x·ŵ||n_y·ŵ|/r² on geometric normals; min(G, b) except point lights
+                                                 // spec §2: G = |n_x·ŵ||n_y·ŵ|/r² on geometric normals; min(G, b) except point lights
         let (e, g) = match v.kind {
             VplKind::Point => (Rgb::ONE, cos_x / r2),
             VplKind::Area => {
@@ -362,10 +384,12 @@ impl Iws {
     /// Bias compensation `C(x, ω_o, d)` (spec §2): one BSDF ray, weight `(G−b)/G` if `G > b`.
     fn compensate(&self, world: &World, x: &ShadingPoint, m: &Material, wo: Vec3, depth: u32, rng: &mut Rng) -> Rgb {
         let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
-        if !(self.b < f32::INFINITY) || depth + 1 >= MAX_VERTICES {
+        if self.b.is_infinite() || depth + 1 >= MAX_VERTICES {
             return Rgb::ZERO;
         }
-        let Some(bs) = bsdf::sample(m, x, wo, u, Mode::Radiance) else { return Rgb::ZERO };
+        let Some(bs) = bsdf::sample(m, x, wo, u, Mode::Radiance) else {
+            return Rgb::ZERO;
+        };
         let cos_x = x.ng.dot(bs.wi).abs();
         if cos_x <= 0.0 {
             return Rgb::ZERO;
@@ -373,7 +397,9 @@ impl Iws {
         // G > b implies r² < cosθ_x/b (pbrt-v2 maxDist); slack for the origin offset
         let t_max = if self.b > 0.0 { (cos_x / self.b).sqrt() + 2.0 * ray_epsilon(x.p) } else { f32::INFINITY };
         bump(1, 0, 0);
-        let Some(hit) = world.intersect(offset_origin(x.p, x.ng, bs.wi), bs.wi, t_max) else { return Rgb::ZERO };
+        let Some(hit) = world.intersect(offset_origin(x.p, x.ng, bs.wi), bs.wi, t_max) else {
+            return Rgb::ZERO;
+        };
         let s = &world.scene;
         let is_emitter = s.emitter_of(hit.prim) != NO_EMITTER;
         if !is_emitter && s.material_of(hit.prim).is_dirac() {
@@ -384,11 +410,13 @@ impl Iws {
             return Rgb::ZERO;
         }
         let g = cos_x * hit.ng.dot(bs.wi).abs() / r2; // the same G as in vpl_term
-        if !(g > self.b) {
+        if g.is_nan() || g <= self.b {
             return Rgb::ZERO;
         }
         let w = bs.weight * ((g - self.b) / g);
-        let Some(w) = rr_weight(w, depth + 1, rng) else { return Rgb::ZERO };
+        let Some(w) = rr_weight(w, depth + 1, rng) else {
+            return Rgb::ZERO;
+        };
         w * self.l_hat(world, &hit, -bs.wi, depth + 1, rng)
     }
 

@@ -94,7 +94,12 @@ impl Default for MethodOptions {
 impl MethodOptions {
     /// The IWS parameters these options select.
     pub fn iws_params(&self) -> IwsParams {
-        IwsParams { vpl_paths: self.vpl_paths, bound: self.bound, vpl_subset: self.vpl_subset, max_depth: self.max_depth }
+        IwsParams {
+            vpl_paths: self.vpl_paths,
+            bound: self.bound,
+            vpl_subset: self.vpl_subset,
+            max_depth: self.max_depth,
+        }
     }
 }
 
@@ -111,13 +116,19 @@ pub fn preprocess(method: Method, world: &World, opts: &MethodOptions, seed: u64
 }
 
 /// Builds the integrator for `method` from the (broadcast) preprocess product.
-pub fn build(method: Method, world: &World, opts: &MethodOptions, product: &[u8]) -> Result<Box<dyn Integrator>, String> {
+pub fn build(
+    method: Method,
+    world: &World,
+    opts: &MethodOptions,
+    product: &[u8],
+) -> Result<Box<dyn Integrator>, String> {
     Ok(match method {
         Method::Pt => Box::new(PathTracer { max_depth: opts.max_depth }),
         Method::Iws => Box::new(Iws::new("iws", world, opts.iws_params(), Box::new(NoCaustics))),
         Method::IwsPm => {
-            let pm: PhotonMap = bitcode::decode(product)
-                .map_err(|e| format!("iws-pm: cannot decode the broadcast photon map ({} bytes): {e}", product.len()))?;
+            let pm: PhotonMap = bitcode::decode(product).map_err(|e| {
+                format!("iws-pm: cannot decode the broadcast photon map ({} bytes): {e}", product.len())
+            })?;
             pm.validate()?;
             Box::new(Iws::new("iws-pm", world, opts.iws_params(), Box::new(pm)))
         }

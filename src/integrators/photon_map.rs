@@ -202,7 +202,16 @@ impl CausticEstimator for PhotonMap {
     fn name(&self) -> &'static str {
         "photon-map"
     }
-    fn estimate(&self, _: &World, x: &ShadingPoint, m: &Material, wo: Vec3, _: u32, _: &mut Rng, _: &dyn Recurse) -> Rgb {
+    fn estimate(
+        &self,
+        _: &World,
+        x: &ShadingPoint,
+        m: &Material,
+        wo: Vec3,
+        _: u32,
+        _: &mut Rng,
+        _: &dyn Recurse,
+    ) -> Rgb {
         self.radiance(x, m, wo)
     }
     fn stats(&self) -> serde_json::Value {

@@ -21,7 +21,9 @@ use crate::accel::{offset_origin, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::math::{luminance, Frame, Rgb, Vec3};
 use crate::sampling::rng::Rng;
-use crate::sampling::warp::{cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_sphere, uniform_sphere_pdf};
+use crate::sampling::warp::{
+    cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_sphere, uniform_sphere_pdf,
+};
 use crate::scene::{LightRef, Material, NO_EMITTER};
 
 /// Safety cap on vertices per light path (documented truncation; RR does the real work).
@@ -157,7 +159,9 @@ pub fn trace_path(
             let le = s.emitters[e as usize].radiance;
             visitor.emitter(&EmitterVertex { p: y, n, weight: inv_n / (pmf * pdf_a), emission: le, point: false });
             counts.emitter_vertices += 1;
-            let Some((w, pdf_w)) = emission.sample_dir(n, false, u_dir) else { return };
+            let Some((w, pdf_w)) = emission.sample_dir(n, false, u_dir) else {
+                return;
+            };
             let cos0 = n.dot(w);
             if cos0 <= 0.0 {
                 return;
@@ -174,14 +178,18 @@ pub fn trace_path(
                 point: true,
             });
             counts.emitter_vertices += 1;
-            let Some((w, pdf_w)) = emission.sample_dir(Vec3::Z, true, u_dir) else { return };
+            let Some((w, pdf_w)) = emission.sample_dir(Vec3::Z, true, u_dir) else {
+                return;
+            };
             (pl.position, w, pl.intensity / (pmf * pdf_w))
         }
     };
     let (mut o, mut d) = (y0, n0);
     let mut prev_dirac = false;
     for depth in 1..MAX_VERTICES {
-        let Some(hit) = world.intersect(o, d, f32::INFINITY) else { return };
+        let Some(hit) = world.intersect(o, d, f32::INFINITY) else {
+            return;
+        };
         if s.emitter_of(hit.prim) != NO_EMITTER {
             return; // emitters absorb (black material)
         }
@@ -206,7 +214,9 @@ pub fn trace_path(
         }
         let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
         let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
-        let Some(bs) = bsdf::sample(m, &sp, w_in, u, Mode::Importance) else { return };
+        let Some(bs) = bsdf::sample(m, &sp, w_in, u, Mode::Importance) else {
+            return;
+        };
         // spec §2: RR survival q = min(1, lum(f·|cos|/p)), β ← β·(f·|cos|/p)/q
         let q = luminance(bs.weight).min(1.0);
         if q <= 0.0 || (q < 1.0 && rng.next_f32() >= q) {
