@@ -84,7 +84,7 @@ pub fn run(world: &World, resolution: (u32, u32), repeats: usize) -> Result<Benc
     let mut pt = Vec::new();
     let (w, h) = resolution;
     let camera = world.scene.camera.with_resolution(w, h);
-    let opts = MethodOptions { max_depth: world.scene.render.max_depth };
+    let opts = MethodOptions { max_depth: world.scene.render.max_depth, ..Default::default() };
     let integ = integrators::build(Method::Pt, world, &opts, &[])?;
     let mut rays_per_sample = (0.0, 0.0);
     for r in 0..repeats.max(1) {

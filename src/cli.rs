@@ -75,12 +75,38 @@ pub struct RenderArgs {
     /// Stop after this many rounds of passes (testing kill/resume).
     #[arg(long, hide = true)]
     pub max_rounds: Option<u64>,
+    /// IWS clamp bound b (default 0.25·π·N/A_D, spec §2; 0 = pure compensation, inf = no clamping).
+    #[arg(long, value_parser = parse_bound)]
+    pub bound: Option<f32>,
+    /// IWS light paths per pass N.
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..))]
+    pub vpl_paths: u32,
+    /// IWS VPLs evaluated at diffuse depth >= 1 (unbiased uniform subset; 0 = all).
+    #[arg(long, default_value_t = 16)]
+    pub vpl_subset: u32,
+    /// iws-pm: caustic photons to store.
+    #[arg(long, default_value_t = 200_000)]
+    pub photons: u64,
+    /// iws-pm: photons per radiance estimate (k).
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
+    pub gather: u32,
+    /// iws-pm: maximum gather radius in scene units (default 2% of the scene diagonal).
+    #[arg(long, value_parser = parse_positive)]
+    pub max_radius: Option<f32>,
 }
 
 impl RenderArgs {
     /// The method options these arguments select.
     pub fn method_options(&self) -> MethodOptions {
-        MethodOptions { max_depth: self.max_depth.unwrap_or(0) }
+        MethodOptions {
+            max_depth: self.max_depth.unwrap_or(0),
+            bound: self.bound,
+            vpl_paths: self.vpl_paths,
+            vpl_subset: self.vpl_subset,
+            photons: self.photons,
+            gather: self.gather,
+            max_radius: self.max_radius,
+        }
     }
 }
 
@@ -122,13 +148,34 @@ pub struct BenchArgs {
     pub threads: Option<usize>,
 }
 
+fn parse_bound(s: &str) -> Result<f32, String> {
+    let t = s.trim();
+    let b = if t.eq_ignore_ascii_case("inf") {
+        f32::INFINITY
+    } else {
+        t.parse::<f32>().map_err(|_| format!("bad bound `{s}`"))?
+    };
+    if b.is_nan() || b < 0.0 {
+        return Err(format!("bound `{s}` must be >= 0 (or `inf`)"));
+    }
+    Ok(b)
+}
+
+fn parse_positive(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("`{s}` must be a positive number")),
+    }
+}
+
 fn parse_secs(s: &str) -> Result<f64, String> {
     crate::scene::parse_duration(s)
 }
 
 /// Parses `WxH`.
 pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
-    let (a, b) = s.split_once(['x', 'X']).ok_or_else(|| format!("bad resolution `{s}` (expected WxH, e.g. 640x480)"))?;
+    let (a, b) =
+        s.split_once(['x', 'X']).ok_or_else(|| format!("bad resolution `{s}` (expected WxH, e.g. 640x480)"))?;
     let w: u32 = a.trim().parse().map_err(|_| format!("bad width in `{s}`"))?;
     let h: u32 = b.trim().parse().map_err(|_| format!("bad height in `{s}`"))?;
     if w == 0 || h == 0 || w > 65536 || h > 65536 {

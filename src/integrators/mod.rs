@@ -5,9 +5,13 @@
 //! streams keyed by (seed, pass); the one-off caustic preprocess arrives already built (see
 //! `preprocess`), so that rank 0 can build it and broadcast it.
 
+pub mod iws;
 mod path;
+pub mod photon_map;
 
+pub use iws::{BsdfCaustics, CausticEstimator, Iws, IwsParams, NoCaustics};
 pub use path::{PathTracer, RR_DEPTH};
+pub use photon_map::PhotonMap;
 
 use crate::accel::World;
 use crate::math::{Rgb, Vec3};
@@ -33,6 +37,10 @@ pub trait Integrator: Send + Sync {
 pub enum Method {
     /// Path tracing with NEE and MIS: the unbiased reference.
     Pt,
+    /// Instant radiosity with bias compensation (Le + L_d); L_c left out by design.
+    Iws,
+    /// IWS with a caustic photon map for L_c (biased baseline).
+    IwsPm,
 }
 
 impl Method {
@@ -44,6 +52,8 @@ impl Method {
     pub fn name(&self) -> &'static str {
         match self {
             Method::Pt => "pt",
+            Method::Iws => "iws",
+            Method::IwsPm => "iws-pm",
         }
     }
 }
@@ -53,25 +63,74 @@ impl Method {
 pub struct MethodOptions {
     /// Safety cap on path vertices (0: the scene's `render.max_depth`).
     pub max_depth: u32,
+    /// IWS clamp bound `b` (None: spec §2 default `0.25·π·N/A_D`).
+    pub bound: Option<f32>,
+    /// IWS light paths per pass `N` (default 512, spec §5).
+    pub vpl_paths: u32,
+    /// VPLs evaluated (uniform subset, unbiased) at diffuse depth ≥ 1; 0 = all (default 16, spec §2).
+    pub vpl_subset: u32,
+    /// Caustic photons to store for `iws-pm` (default 200k, the paper's Cornell count).
+    pub photons: u64,
+    /// Photons per photon-map estimate `k` (default 100).
+    pub gather: u32,
+    /// Photon-map gather radius cap (None: 2% of the scene diagonal).
+    pub max_radius: Option<f32>,
 }
 
 impl Default for MethodOptions {
     fn default() -> Self {
-        MethodOptions { max_depth: 0 }
+        MethodOptions {
+            max_depth: 0,
+            bound: None,
+            vpl_paths: 512,
+            vpl_subset: 16,
+            photons: 200_000,
+            gather: 100,
+            max_radius: None,
+        }
+    }
+}
+
+impl MethodOptions {
+    /// The IWS parameters these options select.
+    pub fn iws_params(&self) -> IwsParams {
+        IwsParams {
+            vpl_paths: self.vpl_paths,
+            bound: self.bound,
+            vpl_subset: self.vpl_subset,
+            max_depth: self.max_depth,
+        }
     }
 }
 
 /// The one-off caustic preprocess, run on rank 0 only; its product is serialized so that
 /// it can be broadcast (empty for methods without one).
-pub fn preprocess(method: Method, _world: &World, _opts: &MethodOptions, _seed: u64) -> Result<Vec<u8>, String> {
+pub fn preprocess(method: Method, world: &World, opts: &MethodOptions, seed: u64) -> Result<Vec<u8>, String> {
     match method {
-        Method::Pt => Ok(Vec::new()),
+        Method::Pt | Method::Iws => Ok(Vec::new()),
+        Method::IwsPm => {
+            let pm = PhotonMap::build(world, opts.photons, opts.gather, opts.max_radius, seed);
+            Ok(bitcode::encode(&pm))
+        }
     }
 }
 
 /// Builds the integrator for `method` from the (broadcast) preprocess product.
-pub fn build(method: Method, _world: &World, opts: &MethodOptions, _product: &[u8]) -> Result<Box<dyn Integrator>, String> {
+pub fn build(
+    method: Method,
+    world: &World,
+    opts: &MethodOptions,
+    product: &[u8],
+) -> Result<Box<dyn Integrator>, String> {
     Ok(match method {
         Method::Pt => Box::new(PathTracer { max_depth: opts.max_depth }),
+        Method::Iws => Box::new(Iws::new("iws", world, opts.iws_params(), Box::new(NoCaustics))),
+        Method::IwsPm => {
+            let pm: PhotonMap = bitcode::decode(product).map_err(|e| {
+                format!("iws-pm: cannot decode the broadcast photon map ({} bytes): {e}", product.len())
+            })?;
+            pm.validate()?;
+            Box::new(Iws::new("iws-pm", world, opts.iws_params(), Box::new(pm)))
+        }
     })
 }

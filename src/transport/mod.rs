@@ -3,3 +3,4 @@
 //! (`particle`).
 
 pub mod direct;
+pub mod particle;

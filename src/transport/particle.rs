@@ -1,0 +1,248 @@
+//! The one particle (light-path) tracer behind every light-path consumer: IWS point lights
+//! (VPLs), the caustic photon map, and (later) caustic forecasters.
+//!
+//! A path is launched from a light picked with probability `P_ℓ ∝ power`, at a point `y0` with
+//! area pdf `p_A` (`Scene::sample_emitter_point`), in a direction drawn by an [`Emission`]
+//! sampler (cosine for area lights, uniform sphere for point lights). It then bounces by BSDF
+//! sampling in `Mode::Importance` (no η² scaling, adjoint shading-normal correction) and reports
+//! events to a [`ParticleVisitor`] (spec §2 "VPL generation", §6 "Caustic map"):
+//! - [`EmitterVertex`]: the direct point light at `y0`, weight `W0 = 1/(N·P_ℓ·p_A)` (spec §2;
+//!   `p_A = 1` for point lights);
+//! - [`SurfaceVertex`]: every non-specular hit, also after Dirac bounces, with `β/N`. A vertex
+//!   with `prev_dirac` is a **caustic point** (spec §1/§6: "previous vertex Dirac").
+//!
+//! Invariants: every weight is normalised by the number of paths **launched** (`n_paths`), not
+//! by the number of events; nothing is reported at Dirac vertices; randomness is a pure function
+//! of (seed, stream, pass, path index). Russian roulette uses `q = min(1, lum(f·|cos|/p))` (spec
+//! §2, pbrt-v2 `igi.cpp`); the only cut is the documented 64-vertex safety cap ([`MAX_VERTICES`]),
+//! whose truncated energy is below `Π q ≤ 0.95^64`-scale for any physical scene.
+
+use crate::accel::{offset_origin, World};
+use crate::bsdf::{self, Mode, ShadingPoint};
+use crate::math::{luminance, Frame, Rgb, Vec3};
+use crate::sampling::rng::Rng;
+use crate::sampling::warp::{
+    cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_sphere, uniform_sphere_pdf,
+};
+use crate::scene::{LightRef, Material, NO_EMITTER};
+
+/// Safety cap on vertices per light path (documented truncation; RR does the real work).
+pub const MAX_VERTICES: u32 = 64;
+
+/// How the first direction of a light path is drawn. A seam for targeted shooting (CF
+/// forecasters aim at the Dirac bounding box with their true pdf); only the unbiased
+/// whole-hemisphere samplers exist now.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[non_exhaustive]
+pub enum Emission {
+    /// Cosine-weighted hemisphere around the emitter normal (area lights), uniform sphere
+    /// (point lights).
+    #[default]
+    Cosine,
+}
+
+impl Emission {
+    /// Samples a launch direction from `y` with normal `n` (ignored for point lights);
+    /// returns `(ω, pdf_w)`, or `None` when the sampler produced no usable direction.
+    #[inline]
+    pub fn sample_dir(&self, n: Vec3, point_light: bool, u: [f32; 2]) -> Option<(Vec3, f32)> {
+        match self {
+            Emission::Cosine => {
+                if point_light {
+                    Some((sample_uniform_sphere(u), uniform_sphere_pdf()))
+                } else {
+                    let l = sample_cosine_hemisphere(u);
+                    let pdf_w = cosine_hemisphere_pdf(l.z);
+                    (pdf_w > 0.0).then(|| (Frame::from_normal(n).to_world(l), pdf_w))
+                }
+            }
+        }
+    }
+}
+
+/// The light-source vertex of a path: a "direct point light" (spec §2).
+#[derive(Clone, Copy, Debug)]
+pub struct EmitterVertex {
+    /// Position `y0`.
+    pub p: Vec3,
+    /// Emitting-side geometric normal (unused for point lights).
+    pub n: Vec3,
+    /// `W0 = 1/(N·P_ℓ·p_A)` (`p_A` = 1 for point lights).
+    pub weight: f32,
+    /// Emitted radiance `Le` (area lights) or intensity `I` (point lights).
+    pub emission: Rgb,
+    /// True for a point light (never clamped by IWS).
+    pub point: bool,
+}
+
+/// A non-specular hit of a light path (an indirect VPL; a caustic point if `prev_dirac`).
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceVertex<'a> {
+    /// Position.
+    pub p: Vec3,
+    /// Geometric normal as the shape defines it.
+    pub ng: Vec3,
+    /// Shading normal (on the `ng` side).
+    pub ns: Vec3,
+    /// Material at the hit (never Dirac).
+    pub material: &'a Material,
+    /// Direction toward the previous vertex (unit, away from the surface).
+    pub w_in: Vec3,
+    /// Path throughput `β/N` (flux carried, normalised by the paths launched).
+    pub beta: Rgb,
+    /// The previous vertex was Dirac (a caustic point, spec §1).
+    pub prev_dirac: bool,
+    /// Index of this vertex on the path (1 = first hit after the light).
+    pub depth: u32,
+}
+
+/// Receives the events of traced light paths.
+pub trait ParticleVisitor {
+    /// The light vertex of each launched path.
+    fn emitter(&mut self, _v: &EmitterVertex) {}
+    /// Each non-specular hit. Return `false` to stop this path early (for consumers that only
+    /// want the first events; stopping never changes the weights already reported).
+    fn surface(&mut self, _v: &SurfaceVertex) -> bool {
+        true
+    }
+}
+
+/// Counters of a batch of traced paths.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct TraceCounts {
+    /// Paths launched (the normaliser N).
+    pub paths: u64,
+    /// Emitter vertices reported.
+    pub emitter_vertices: u64,
+    /// Non-specular surface vertices reported.
+    pub surface_vertices: u64,
+    /// Of those, vertices after a Dirac vertex (caustic points).
+    pub caustic_vertices: u64,
+    /// Paths cut by the vertex cap.
+    pub capped: u64,
+}
+
+/// Traces light path `index` of `n_paths` (the normaliser) with the random stream
+/// `(seed, stream_id, pass, index)` and reports its events to `visitor`.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_path(
+    world: &World,
+    emission: Emission,
+    n_paths: u64,
+    seed: u64,
+    stream_id: u64,
+    pass: u64,
+    index: u64,
+    visitor: &mut dyn ParticleVisitor,
+    counts: &mut TraceCounts,
+) {
+    let s = &world.scene;
+    counts.paths += 1;
+    if s.lights.is_empty() || n_paths == 0 {
+        return;
+    }
+    let mut rng = Rng::keyed(seed, stream_id, pass, index);
+    let inv_n = 1.0 / n_paths as f32;
+    let (li, pmf, _) = s.light_pick.sample(rng.next_f32());
+    if pmf <= 0.0 {
+        return;
+    }
+    let u_pos = rng.next_2d();
+    let u_dir = rng.next_2d();
+    // spec §2: W0 = 1/(N·P_ℓ·p_A); β1 = Le·cosθ0/(P_ℓ·p_A·p_σ) (area), I/(P_ℓ·p_σ) (point)
+    let (y0, n0, mut beta) = match s.lights[li] {
+        LightRef::Area(e) => {
+            let (y, n, pdf_a) = s.sample_emitter_point(e, u_pos);
+            if pdf_a <= 0.0 {
+                return;
+            }
+            let le = s.emitters[e as usize].radiance;
+            visitor.emitter(&EmitterVertex { p: y, n, weight: inv_n / (pmf * pdf_a), emission: le, point: false });
+            counts.emitter_vertices += 1;
+            let Some((w, pdf_w)) = emission.sample_dir(n, false, u_dir) else {
+                return;
+            };
+            let cos0 = n.dot(w);
+            if cos0 <= 0.0 {
+                return;
+            }
+            (offset_origin(y, n, w), w, le * (cos0 / (pmf * pdf_a * pdf_w)))
+        }
+        LightRef::Point(i) => {
+            let pl = &s.point_lights[i as usize];
+            visitor.emitter(&EmitterVertex {
+                p: pl.position,
+                n: Vec3::ZERO,
+                weight: inv_n / pmf,
+                emission: pl.intensity,
+                point: true,
+            });
+            counts.emitter_vertices += 1;
+            let Some((w, pdf_w)) = emission.sample_dir(Vec3::Z, true, u_dir) else {
+                return;
+            };
+            (pl.position, w, pl.intensity / (pmf * pdf_w))
+        }
+    };
+    let (mut o, mut d) = (y0, n0);
+    let mut prev_dirac = false;
+    for depth in 1..MAX_VERTICES {
+        let Some(hit) = world.intersect(o, d, f32::INFINITY) else {
+            return;
+        };
+        if s.emitter_of(hit.prim) != NO_EMITTER {
+            return; // emitters absorb (black material)
+        }
+        let m = s.material_of(hit.prim);
+        let w_in = -d;
+        if !m.is_dirac() {
+            let keep_going = visitor.surface(&SurfaceVertex {
+                p: hit.p,
+                ng: hit.ng,
+                ns: hit.ns,
+                material: m,
+                w_in,
+                beta: beta * inv_n,
+                prev_dirac,
+                depth,
+            });
+            counts.surface_vertices += 1;
+            counts.caustic_vertices += prev_dirac as u64;
+            if !keep_going {
+                return;
+            }
+        }
+        let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
+        let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+        let Some(bs) = bsdf::sample(m, &sp, w_in, u, Mode::Importance) else {
+            return;
+        };
+        // spec §2: RR survival q = min(1, lum(f·|cos|/p)), β ← β·(f·|cos|/p)/q
+        let q = luminance(bs.weight).min(1.0);
+        if q <= 0.0 || (q < 1.0 && rng.next_f32() >= q) {
+            return;
+        }
+        beta *= bs.weight / q;
+        prev_dirac = bs.is_delta;
+        o = offset_origin(hit.p, hit.ng, bs.wi);
+        d = bs.wi;
+    }
+    counts.capped += 1;
+}
+
+/// Traces paths `0..n_paths` of `(seed, stream_id, pass)` sequentially into one visitor.
+pub fn trace_paths(
+    world: &World,
+    emission: Emission,
+    n_paths: u64,
+    seed: u64,
+    stream_id: u64,
+    pass: u64,
+    visitor: &mut dyn ParticleVisitor,
+) -> TraceCounts {
+    let mut counts = TraceCounts::default();
+    for i in 0..n_paths {
+        trace_path(world, emission, n_paths, seed, stream_id, pass, i, visitor, &mut counts);
+    }
+    counts
+}
