@@ -89,10 +89,14 @@ pub fn run(world: &World, resolution: (u32, u32), repeats: usize) -> Result<Benc
     let mut rays_per_sample = (0.0, 0.0);
     for r in 0..repeats.max(1) {
         let t = Instant::now();
-        let hits: usize = rays.par_chunks(1024).map(|c| c.iter().filter(|(o, d)| world.intersect(*o, *d, f32::INFINITY).is_some()).count()).sum();
+        let hits: usize = rays
+            .par_chunks(1024)
+            .map(|c| c.iter().filter(|(o, d)| world.intersect(*o, *d, f32::INFINITY).is_some()).count())
+            .sum();
         closest.push(n_rays as f64 / t.elapsed().as_secs_f64() / 1e6);
         let t = Instant::now();
-        let occl: usize = segs.par_chunks(1024).map(|c| c.iter().filter(|(o, d, l)| world.occluded(*o, *d, *l)).count()).sum();
+        let occl: usize =
+            segs.par_chunks(1024).map(|c| c.iter().filter(|(o, d, l)| world.occluded(*o, *d, *l)).count()).sum();
         shadow.push(n_rays as f64 / t.elapsed().as_secs_f64() / 1e6);
         std::hint::black_box((hits, occl));
         let mut film = Film::new(w as usize, h as usize);

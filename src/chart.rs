@@ -192,7 +192,13 @@ fn render<DB: DrawingBackend>(
     root.present().map_err(err_str)
 }
 
-fn plot<DB, X, Y>(root: &DrawingArea<DB, Shift>, spec: &ChartSpec, series: &[Series], xr: X, yr: Y) -> Result<(), String>
+fn plot<DB, X, Y>(
+    root: &DrawingArea<DB, Shift>,
+    spec: &ChartSpec,
+    series: &[Series],
+    xr: X,
+    yr: Y,
+) -> Result<(), String>
 where
     DB: DrawingBackend,
     X: AsRangedCoord<Value = f64>,
@@ -227,9 +233,7 @@ where
             if b.len() >= 2 {
                 let mut poly: Vec<(f64, f64)> = b.iter().map(|&(x, lo, _)| (x, lo)).collect();
                 poly.extend(b.iter().rev().map(|&(x, _, hi)| (x, hi)));
-                chart
-                    .draw_series(std::iter::once(Polygon::new(poly, colour.mix(0.18).filled())))
-                    .map_err(err_str)?;
+                chart.draw_series(std::iter::once(Polygon::new(poly, colour.mix(0.18).filled()))).map_err(err_str)?;
             }
         }
         let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(|&(x, y)| usable(x, lx) && usable(y, ly)).collect();
@@ -238,9 +242,7 @@ where
             .map_err(err_str)?
             .label(s.label.as_str())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
-        chart
-            .draw_series(pts.iter().map(|&p| Circle::new(p, 3, colour.filled())))
-            .map_err(err_str)?;
+        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, colour.filled()))).map_err(err_str)?;
     }
 
     if let (Some(slope), true, true) = (spec.slope_guide, lx, ly) {

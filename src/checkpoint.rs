@@ -120,52 +120,20 @@ impl fmt::Display for CheckpointError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         use CheckpointError::*;
         match self {
-            Io {
-                path,
-                action,
-                source,
-            } => write!(
-                f,
-                "checkpoint {}: {action} failed: {source}",
-                path.display()
-            ),
-            BadMagic { path } => write!(
-                f,
-                "checkpoint {}: not a forecast checkpoint (bad magic)",
-                path.display()
-            ),
-            Version {
-                path,
-                found,
-                expected,
-            } => write!(
+            Io { path, action, source } => write!(f, "checkpoint {}: {action} failed: {source}", path.display()),
+            BadMagic { path } => write!(f, "checkpoint {}: not a forecast checkpoint (bad magic)", path.display()),
+            Version { path, found, expected } => write!(
                 f,
                 "checkpoint {}: format version {found}, this program reads version {expected}",
                 path.display()
             ),
-            Truncated {
-                path,
-                expected,
-                found,
-            } => write!(
-                f,
-                "checkpoint {}: truncated ({found} bytes, expected {expected})",
-                path.display()
-            ),
-            TrailingBytes {
-                path,
-                expected,
-                found,
-            } => write!(
-                f,
-                "checkpoint {}: {found} bytes, expected {expected} (trailing data)",
-                path.display()
-            ),
-            Checksum { path } => write!(
-                f,
-                "checkpoint {}: checksum mismatch (file corrupted)",
-                path.display()
-            ),
+            Truncated { path, expected, found } => {
+                write!(f, "checkpoint {}: truncated ({found} bytes, expected {expected})", path.display())
+            }
+            TrailingBytes { path, expected, found } => {
+                write!(f, "checkpoint {}: {found} bytes, expected {expected} (trailing data)", path.display())
+            }
+            Checksum { path } => write!(f, "checkpoint {}: checksum mismatch (file corrupted)", path.display()),
             Decode { path, message } => {
                 write!(f, "checkpoint {}: cannot decode: {message}", path.display())
             }
@@ -213,15 +181,8 @@ pub fn tmp_path(path: &Path) -> PathBuf {
     PathBuf::from(s)
 }
 
-fn io_err<'a>(
-    path: &'a Path,
-    action: &'static str,
-) -> impl FnOnce(io::Error) -> CheckpointError + 'a {
-    move |source| CheckpointError::Io {
-        path: path.to_path_buf(),
-        action,
-        source,
-    }
+fn io_err<'a>(path: &'a Path, action: &'static str) -> impl FnOnce(io::Error) -> CheckpointError + 'a {
+    move |source| CheckpointError::Io { path: path.to_path_buf(), action, source }
 }
 
 impl Checkpoint {
@@ -245,30 +206,17 @@ impl Checkpoint {
         if bytes.len() < MAGIC.len() || bytes[..MAGIC.len()] != MAGIC {
             // A short file that is a prefix of the magic is a truncated checkpoint.
             if bytes.len() < MAGIC.len() && !bytes.is_empty() && MAGIC.starts_with(bytes) {
-                return Err(CheckpointError::Truncated {
-                    path: p(),
-                    expected: HEADER_LEN as u64,
-                    found,
-                });
+                return Err(CheckpointError::Truncated { path: p(), expected: HEADER_LEN as u64, found });
             }
             if bytes.is_empty() {
-                return Err(CheckpointError::Truncated {
-                    path: p(),
-                    expected: HEADER_LEN as u64,
-                    found,
-                });
+                return Err(CheckpointError::Truncated { path: p(), expected: HEADER_LEN as u64, found });
             }
             return Err(CheckpointError::BadMagic { path: p() });
         }
         if bytes.len() < HEADER_LEN {
-            return Err(CheckpointError::Truncated {
-                path: p(),
-                expected: HEADER_LEN as u64,
-                found,
-            });
+            return Err(CheckpointError::Truncated { path: p(), expected: HEADER_LEN as u64, found });
         }
-        let u32_at =
-            |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
+        let u32_at = |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
         let u64_at = |o: usize| {
             let mut a = [0u8; 8];
             a.copy_from_slice(&bytes[o..o + 8]);
@@ -276,48 +224,30 @@ impl Checkpoint {
         };
         let version = u32_at(8);
         if version != FORMAT_VERSION {
-            return Err(CheckpointError::Version {
-                path: p(),
-                found: version,
-                expected: FORMAT_VERSION,
-            });
+            return Err(CheckpointError::Version { path: p(), found: version, expected: FORMAT_VERSION });
         }
         let payload_len = u64_at(16);
         let expected = (HEADER_LEN as u64).saturating_add(payload_len);
         if found < expected {
-            return Err(CheckpointError::Truncated {
-                path: p(),
-                expected,
-                found,
-            });
+            return Err(CheckpointError::Truncated { path: p(), expected, found });
         }
         if found > expected {
-            return Err(CheckpointError::TrailingBytes {
-                path: p(),
-                expected,
-                found,
-            });
+            return Err(CheckpointError::TrailingBytes { path: p(), expected, found });
         }
         let payload = &bytes[HEADER_LEN..];
         if checksum(payload) != u64_at(24) {
             return Err(CheckpointError::Checksum { path: p() });
         }
-        let ck: Checkpoint = bitcode::decode(payload).map_err(|e| CheckpointError::Decode {
-            path: p(),
-            message: e.to_string(),
-        })?;
-        ck.check_consistency()
-            .map_err(|message| CheckpointError::Decode { path: p(), message })?;
+        let ck: Checkpoint =
+            bitcode::decode(payload).map_err(|e| CheckpointError::Decode { path: p(), message: e.to_string() })?;
+        ck.check_consistency().map_err(|message| CheckpointError::Decode { path: p(), message })?;
         Ok(ck)
     }
 
     /// Internal consistency that holds for every checkpoint this program writes.
     fn check_consistency(&self) -> Result<(), String> {
         if self.next_pass < self.passes_done {
-            return Err(format!(
-                "next_pass {} < passes_done {}",
-                self.next_pass, self.passes_done
-            ));
+            return Err(format!("next_pass {} < passes_done {}", self.next_pass, self.passes_done));
         }
         if !(self.elapsed_secs.is_finite() && self.elapsed_secs >= 0.0) {
             return Err(format!("elapsed_secs is {}", self.elapsed_secs));
@@ -371,14 +301,7 @@ impl Checkpoint {
 
     /// Checks that this checkpoint belongs to the render described by the arguments;
     /// the error lists every mismatch in words.
-    pub fn validate(
-        &self,
-        scene_hash: u64,
-        seed: u64,
-        method: &str,
-        width: u32,
-        height: u32,
-    ) -> Result<(), String> {
+    pub fn validate(&self, scene_hash: u64, seed: u64, method: &str, width: u32, height: u32) -> Result<(), String> {
         let mut why = Vec::new();
         if self.scene_hash != scene_hash {
             why.push(format!(
@@ -387,16 +310,10 @@ impl Checkpoint {
             ));
         }
         if self.seed != seed {
-            why.push(format!(
-                "seed differs (checkpoint {}, requested {seed})",
-                self.seed
-            ));
+            why.push(format!("seed differs (checkpoint {}, requested {seed})", self.seed));
         }
         if self.method != method {
-            why.push(format!(
-                "method differs (checkpoint {:?}, requested {method:?})",
-                self.method
-            ));
+            why.push(format!("method differs (checkpoint {:?}, requested {method:?})", self.method));
         }
         if (self.width, self.height) != (width, height) {
             why.push(format!(
@@ -410,10 +327,7 @@ impl Checkpoint {
         if why.is_empty() {
             Ok(())
         } else {
-            Err(format!(
-                "cannot resume from this checkpoint: {}",
-                why.join("; ")
-            ))
+            Err(format!("cannot resume from this checkpoint: {}", why.join("; ")))
         }
     }
 }
@@ -445,8 +359,7 @@ mod tests {
     }
 
     fn scratch_dir(name: &str) -> PathBuf {
-        let d =
-            std::env::temp_dir().join(format!("forecast-ckpt-test-{}-{name}", std::process::id()));
+        let d = std::env::temp_dir().join(format!("forecast-ckpt-test-{}-{name}", std::process::id()));
         let _ = fs::remove_dir_all(&d);
         fs::create_dir_all(&d).expect("create test dir");
         d
@@ -457,10 +370,7 @@ mod tests {
         let c = sample();
         let bytes = c.to_bytes();
         assert_eq!(&bytes[..8], b"FCSTCKPT");
-        assert_eq!(
-            Checkpoint::from_bytes(&bytes, Path::new("mem")).expect("decode"),
-            c
-        );
+        assert_eq!(Checkpoint::from_bytes(&bytes, Path::new("mem")).expect("decode"), c);
 
         let dir = scratch_dir("rt");
         let path = dir.join("render.ckpt");
@@ -479,11 +389,7 @@ mod tests {
         c2.save(&path).expect("save again");
         assert_eq!(Checkpoint::load(&path).expect("load again"), c2);
         assert!(!tmp_path(&path).exists());
-        let names: Vec<_> = fs::read_dir(&dir)
-            .expect("ls")
-            .filter_map(|e| e.ok())
-            .map(|e| e.file_name())
-            .collect();
+        let names: Vec<_> = fs::read_dir(&dir).expect("ls").filter_map(|e| e.ok()).map(|e| e.file_name()).collect();
         assert_eq!(names, vec![std::ffi::OsString::from("render.ckpt")]);
         let _ = fs::remove_dir_all(&dir);
     }
@@ -493,10 +399,7 @@ mod tests {
         let path = std::env::temp_dir().join("forecast-no-such-dir-xyz/sub/render.ckpt");
         let e = sample().save(&path).expect_err("must fail");
         let msg = e.to_string();
-        assert!(
-            msg.contains("render.ckpt.tmp") && msg.contains("create"),
-            "{msg}"
-        );
+        assert!(msg.contains("render.ckpt.tmp") && msg.contains("create"), "{msg}");
     }
 
     #[test]
@@ -515,27 +418,14 @@ mod tests {
         let mut b = good.clone();
         b[0] = b'X';
         assert!(matches!(err(&b), CheckpointError::BadMagic { .. }));
-        assert!(matches!(
-            err(b"hello world, this is not a checkpoint at all"),
-            CheckpointError::BadMagic { .. }
-        ));
+        assert!(matches!(err(b"hello world, this is not a checkpoint at all"), CheckpointError::BadMagic { .. }));
 
         let mut b = good.clone();
         b[8..12].copy_from_slice(&99u32.to_le_bytes());
-        assert!(matches!(
-            err(&b),
-            CheckpointError::Version {
-                found: 99,
-                expected: FORMAT_VERSION,
-                ..
-            }
-        ));
+        assert!(matches!(err(&b), CheckpointError::Version { found: 99, expected: FORMAT_VERSION, .. }));
 
         for cut in [0, 3, 8, 20, HEADER_LEN, good.len() / 2, good.len() - 1] {
-            assert!(
-                matches!(err(&good[..cut]), CheckpointError::Truncated { .. }),
-                "cut at {cut}"
-            );
+            assert!(matches!(err(&good[..cut]), CheckpointError::Truncated { .. }), "cut at {cut}");
         }
 
         let mut b = good.clone();
@@ -582,10 +472,7 @@ mod tests {
         assert!(matches!(e, CheckpointError::Checksum { .. }));
         assert!(e.to_string().contains("c.ckpt"));
         fs::write(&path, &b[..n / 2]).expect("write");
-        assert!(matches!(
-            Checkpoint::load(&path),
-            Err(CheckpointError::Truncated { .. })
-        ));
+        assert!(matches!(Checkpoint::load(&path), Err(CheckpointError::Truncated { .. })));
         let _ = fs::remove_dir_all(&dir);
     }
 
@@ -594,21 +481,12 @@ mod tests {
         let c = sample();
         assert_eq!(c.validate(c.scene_hash, 42, "iws+cf", 4, 3), Ok(()));
         let e = c.validate(1, 43, "pt", 8, 3).expect_err("must fail");
-        for part in [
-            "scene changed",
-            "seed differs",
-            "method differs",
-            "resolution differs",
-            "4x3",
-            "8x3",
-        ] {
+        for part in ["scene changed", "seed differs", "method differs", "resolution differs", "4x3", "8x3"] {
             assert!(e.contains(part), "{e}");
         }
         let mut bad = c.clone();
         bad.next_pass = 3;
-        let e = bad
-            .validate(c.scene_hash, 42, "iws+cf", 4, 3)
-            .expect_err("must fail");
+        let e = bad.validate(c.scene_hash, 42, "iws+cf", 4, 3).expect_err("must fail");
         assert!(e.contains("next_pass"), "{e}");
         let mut bad = c.clone();
         bad.film.pop();

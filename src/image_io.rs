@@ -92,10 +92,7 @@ impl Image {
             && x.checked_add(w).is_some_and(|r| r <= self.width)
             && y.checked_add(h).is_some_and(|b| b <= self.height);
         if !fits {
-            return Err(format!(
-                "crop {x},{y},{w},{h} is empty or outside the {}x{} image",
-                self.width, self.height
-            ));
+            return Err(format!("crop {x},{y},{w},{h} is empty or outside the {}x{} image", self.width, self.height));
         }
         let mut pixels = Vec::with_capacity(w * h);
         for row in y..y + h {
@@ -162,16 +159,13 @@ pub fn write_exr(path: &Path, img: &Image) -> Result<(), String> {
 /// Writes an RGB float32 EXR; with `variance` also the channels [`VARIANCE_CHANNELS`]
 /// (`var.R`, `var.G`, `var.B`, the per-pixel variance of the mean) in the same layer.
 pub fn write_exr_layers(path: &Path, img: &Image, variance: Option<&Image>) -> Result<(), String> {
-    use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Layer};
     use exr::image::write::WritableImage;
+    use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Layer};
     use exr::meta::header::LayerAttributes;
     check_len(path, img)?;
     let plane = |im: &Image, c: usize| FlatSamples::F32(im.pixels.iter().map(|p| p[c]).collect());
-    let mut list: Vec<AnyChannel<FlatSamples>> = ["R", "G", "B"]
-        .iter()
-        .enumerate()
-        .map(|(c, n)| AnyChannel::new(*n, plane(img, c)))
-        .collect();
+    let mut list: Vec<AnyChannel<FlatSamples>> =
+        ["R", "G", "B"].iter().enumerate().map(|(c, n)| AnyChannel::new(*n, plane(img, c))).collect();
     if let Some(v) = variance {
         if !v.same_size(img) {
             return Err(format!(
@@ -192,10 +186,7 @@ pub fn write_exr_layers(path: &Path, img: &Image, variance: Option<&Image>) -> R
     let layer = Layer::new((img.width, img.height), LayerAttributes::default(), Encoding::SMALL_LOSSLESS, channels);
     let image = exr::image::Image::from_layer(layer);
     let mut buf = Cursor::new(Vec::new());
-    image
-        .write()
-        .to_buffered(&mut buf)
-        .map_err(|e| format!("cannot encode EXR {}: {e}", path.display()))?;
+    image.write().to_buffered(&mut buf).map_err(|e| format!("cannot encode EXR {}: {e}", path.display()))?;
     atomic_write(path, buf.get_ref())
 }
 
@@ -217,9 +208,9 @@ fn read_first_layer(path: &Path) -> Result<FlatLayer, String> {
     if find_channels(&first, &["R", "G", "B"]).is_some() || find_channels(&first, &["Y"]).is_some() {
         return Ok(first);
     }
-    layers
-        .find(|l| find_channels(l, &["R", "G", "B"]).is_some())
-        .ok_or_else(|| format!("{}: no layer with R, G, B channels (first layer has {:?})", path.display(), channel_names(&first)))
+    layers.find(|l| find_channels(l, &["R", "G", "B"]).is_some()).ok_or_else(|| {
+        format!("{}: no layer with R, G, B channels (first layer has {:?})", path.display(), channel_names(&first))
+    })
 }
 
 fn channel_names(layer: &FlatLayer) -> Vec<String> {
@@ -227,18 +218,13 @@ fn channel_names(layer: &FlatLayer) -> Vec<String> {
 }
 
 fn find_channels(layer: &FlatLayer, names: &[&str]) -> Option<Vec<usize>> {
-    names
-        .iter()
-        .map(|n| layer.channel_data.list.iter().position(|c| c.name.eq(n)))
-        .collect()
+    names.iter().map(|n| layer.channel_data.list.iter().position(|c| c.name.eq(n))).collect()
 }
 
 fn layer_to_image(path: &Path, layer: &FlatLayer, idx: &[usize]) -> Result<Image, String> {
     let (w, h) = (layer.size.width(), layer.size.height());
-    let planes: Vec<Vec<f32>> = idx
-        .iter()
-        .map(|&i| layer.channel_data.list[i].sample_data.values_as_f32().collect())
-        .collect();
+    let planes: Vec<Vec<f32>> =
+        idx.iter().map(|&i| layer.channel_data.list[i].sample_data.values_as_f32().collect()).collect();
     if planes.iter().any(|p| p.len() != w * h) {
         return Err(format!("{}: channel sample count does not match {w}x{h} (subsampled channels?)", path.display()));
     }
@@ -305,7 +291,11 @@ pub fn write_png_rgb8(path: &Path, w: usize, h: usize, rgb: &[u8]) -> Result<(),
 /// Encodes raw 8-bit RGB bytes (`3 * w * h`) as PNG file bytes in memory.
 pub fn encode_png_rgb8(w: usize, h: usize, rgb: &[u8]) -> Result<Vec<u8>, String> {
     if w == 0 || h == 0 || w.checked_mul(h).and_then(|n| n.checked_mul(3)) != Some(rgb.len()) {
-        return Err(format!("PNG of {w}x{h} needs {} RGB bytes, got {}", w.saturating_mul(h).saturating_mul(3), rgb.len()));
+        return Err(format!(
+            "PNG of {w}x{h} needs {} RGB bytes, got {}",
+            w.saturating_mul(h).saturating_mul(3),
+            rgb.len()
+        ));
     }
     let (w32, h32) = (u32::try_from(w).map_err(|_| "PNG too wide")?, u32::try_from(h).map_err(|_| "PNG too tall")?);
     let mut out = Vec::new();

@@ -6,7 +6,6 @@ use forecast::{accel, bench, distributed, image_io, metrics, pipeline, scenegen}
 use std::process::ExitCode;
 use std::time::Instant;
 
-
 fn run() -> Result<(), String> {
     let started = Instant::now();
     let cli = Cli::parse();
@@ -83,13 +82,22 @@ fn run() -> Result<(), String> {
             let t = Instant::now();
             let ntri = scene.triangles.len();
             let world = accel::World::build(scene);
-            println!("scene {}: {} triangles, {} spheres, BVH {:.3} s", a.scene.display(), ntri, world.scene.spheres.len(), t.elapsed().as_secs_f64());
+            println!(
+                "scene {}: {} triangles, {} spheres, BVH {:.3} s",
+                a.scene.display(),
+                ntri,
+                world.scene.spheres.len(),
+                t.elapsed().as_secs_f64()
+            );
             let pool = pipeline::thread_pool(a.threads)?;
             let r = pool.install(|| bench::run(&world, a.resolution, a.repeats))?;
             println!("threads               {}", r.threads);
             println!("closest-hit Mrays/s   {:.2}  (median of {})", r.closest_mrays, a.repeats);
             println!("shadow Mrays/s        {:.2}", r.shadow_mrays);
-            println!("pt samples/s          {:.0}  ({}x{}, {:.2} closest + {:.2} shadow rays/sample)", r.pt_samples_per_s, a.resolution.0, a.resolution.1, r.rays_per_sample.0, r.rays_per_sample.1);
+            println!(
+                "pt samples/s          {:.0}  ({}x{}, {:.2} closest + {:.2} shadow rays/sample)",
+                r.pt_samples_per_s, a.resolution.0, a.resolution.1, r.rays_per_sample.0, r.rays_per_sample.1
+            );
             Ok(())
         }
         Command::GenerateScenes { dir } => {

@@ -361,7 +361,13 @@ pub fn noise_consistency(
         r_sq += rp * rp;
     }
     let s_tot = svt + svr;
-    let ratio = if s_tot > 0.0 { sd / s_tot } else if sd == 0.0 { 1.0 } else { f64::INFINITY };
+    let ratio = if s_tot > 0.0 {
+        sd / s_tot
+    } else if sd == 0.0 {
+        1.0
+    } else {
+        f64::INFINITY
+    };
     let n_eff = if s_sq > 0.0 { s_tot * s_tot / s_sq } else { 0.0 };
     let ratio_sigma = if s_tot > 0.0 { (2.0 * s_sq + 2.0 * r_sq).sqrt() / s_tot } else { f64::INFINITY };
 
@@ -396,7 +402,12 @@ pub fn noise_consistency(
 
 impl fmt::Display for NoiseReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(f, "noise: pixels {}  test variance {}", self.pixels, if self.test_var_available { "yes" } else { "MISSING" })?;
+        writeln!(
+            f,
+            "noise: pixels {}  test variance {}",
+            self.pixels,
+            if self.test_var_available { "yes" } else { "MISSING" }
+        )?;
         writeln!(
             f,
             "noise: mean (I-R)^2 {:.4e} = ratio {:.4} x (var_I {:.4e} + var_R {:.4e})",

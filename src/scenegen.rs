@@ -82,22 +82,11 @@ impl Mesh {
     /// OBJ text: header comment, `v`, optional `vn`, then 1-based faces.
     fn to_obj(&self, name: &str, prec: usize) -> String {
         let mut s = String::with_capacity(self.pos.len() * 64 + self.tri.len() * 48);
-        let _ = writeln!(
-            s,
-            "# forecast scenegen: {name}, {} vertices, {} triangles",
-            self.pos.len(),
-            self.tri.len()
-        );
+        let _ = writeln!(s, "# forecast scenegen: {name}, {} vertices, {} triangles", self.pos.len(), self.tri.len());
         let _ = writeln!(s, "o {name}");
         for (tag, list) in [("v", &self.pos), ("vn", &self.nrm)] {
             for p in list.iter() {
-                let _ = writeln!(
-                    s,
-                    "{tag} {} {} {}",
-                    fmt(p[0], prec),
-                    fmt(p[1], prec),
-                    fmt(p[2], prec)
-                );
+                let _ = writeln!(s, "{tag} {} {} {}", fmt(p[0], prec), fmt(p[1], prec), fmt(p[2], prec));
             }
         }
         let smooth = !self.nrm.is_empty();
@@ -137,12 +126,7 @@ fn ring_mesh() -> Mesh {
     for i in 0..n {
         let th = 2.0 * std::f64::consts::PI * i as f64 / n as f64;
         let (s, c) = th.sin_cos();
-        for (r, y) in [
-            (RING_R0, 0.0),
-            (RING_R0, RING_H),
-            (RING_R1, 0.0),
-            (RING_R1, RING_H),
-        ] {
+        for (r, y) in [(RING_R0, 0.0), (RING_R0, RING_H), (RING_R1, 0.0), (RING_R1, RING_H)] {
             m.vert([r * c, y, r * s]);
         }
     }
@@ -173,10 +157,7 @@ const KNOT_AROUND: usize = 64;
 /// Centre line of the (2,3) torus knot in the vertical x-y plane (unit parameter t ∈ [0, 2π)).
 fn knot_curve(t: f64) -> V3 {
     let r = 2.0 + (3.0 * t).cos();
-    mul(
-        [r * (2.0 * t).cos(), r * (2.0 * t).sin(), -(3.0 * t).sin()],
-        KNOT_SCALE,
-    )
+    mul([r * (2.0 * t).cos(), r * (2.0 * t).sin(), -(3.0 * t).sin()], KNOT_SCALE)
 }
 fn knot_tangent(t: f64) -> V3 {
     let r = 2.0 + (3.0 * t).cos();
@@ -190,9 +171,7 @@ fn knot_tangent(t: f64) -> V3 {
 
 fn knot_mesh() -> Mesh {
     let (n, k) = (KNOT_ALONG, KNOT_AROUND);
-    let ts: Vec<f64> = (0..n)
-        .map(|i| 2.0 * std::f64::consts::PI * i as f64 / n as f64)
-        .collect();
+    let ts: Vec<f64> = (0..n).map(|i| 2.0 * std::f64::consts::PI * i as f64 / n as f64).collect();
     let tan: Vec<V3> = ts.iter().map(|&t| knot_tangent(t)).collect();
     // Parallel-transport frames, then spread the closing twist evenly so the tube closes.
     let project = |v: V3, t: V3| normalize(sub(v, mul(t, dot(v, t))));
@@ -231,14 +210,8 @@ fn knot_mesh() -> Mesh {
 }
 
 /// Cube faces: (axis, sign, u axis, v axis) with e_u × e_v = sign · e_axis.
-const CUBE_FACES: [(usize, f64, usize, usize); 6] = [
-    (0, 1.0, 1, 2),
-    (0, -1.0, 2, 1),
-    (1, 1.0, 2, 0),
-    (1, -1.0, 0, 2),
-    (2, 1.0, 0, 1),
-    (2, -1.0, 1, 0),
-];
+const CUBE_FACES: [(usize, f64, usize, usize); 6] =
+    [(0, 1.0, 1, 2), (0, -1.0, 2, 1), (1, 1.0, 2, 0), (1, -1.0, 0, 2), (2, 1.0, 0, 1), (2, -1.0, 1, 0)];
 
 /// Blob: radius, cube-sphere grid cells per face edge (6·2·N² triangles).
 const BLOB_RADIUS: f64 = 0.15;
@@ -267,9 +240,7 @@ fn blob_mesh() -> Mesh {
                 key[va] = j;
                 let id = *index.entry(key).or_insert_with(|| {
                     // Equal-angle warp of the cube lattice for evenly sized triangles.
-                    let c = key.map(|q| {
-                        (std::f64::consts::FRAC_PI_4 * (2.0 * q as f64 / n as f64 - 1.0)).tan()
-                    });
+                    let c = key.map(|q| (std::f64::consts::FRAC_PI_4 * (2.0 * q as f64 / n as f64 - 1.0)).tan());
                     let d = normalize(c);
                     m.pos.push(mul(d, blob_radius(d)));
                     (m.pos.len() - 1) as u32
@@ -302,13 +273,8 @@ fn add_box(m: &mut Mesh, lo: V3, hi: V3, inward: bool, skip: &[(usize, f64)]) {
             p[va] = if sv { hi[va] } else { lo[va] };
             p
         };
-        let ids = [
-            corner(false, false),
-            corner(true, false),
-            corner(true, true),
-            corner(false, true),
-        ]
-        .map(|p| m.vert(p));
+        let ids =
+            [corner(false, false), corner(true, false), corner(true, true), corner(false, true)].map(|p| m.vert(p));
         if inward {
             m.quad(ids[0], ids[3], ids[2], ids[1]);
         } else {
@@ -328,34 +294,16 @@ const TABLE_TOP: f64 = 0.8;
 
 fn table_mesh() -> Mesh {
     let mut m = Mesh::default();
-    add_box(
-        &mut m,
-        [-1.0, TABLE_TOP - 0.04, -0.5],
-        [1.0, TABLE_TOP, 0.5],
-        false,
-        &[],
-    );
+    add_box(&mut m, [-1.0, TABLE_TOP - 0.04, -0.5], [1.0, TABLE_TOP, 0.5], false, &[]);
     for (x, z) in [(-0.9, -0.4), (0.9, -0.4), (-0.9, 0.4), (0.9, 0.4)] {
-        add_box(
-            &mut m,
-            [x - 0.03, 0.0, z - 0.03],
-            [x + 0.03, TABLE_TOP - 0.04, z + 0.03],
-            false,
-            &[],
-        );
+        add_box(&mut m, [x - 0.03, 0.0, z - 0.03], [x + 0.03, TABLE_TOP - 0.04, z + 0.03], false, &[]);
     }
     m
 }
 
 fn hall_mesh() -> Mesh {
     let mut m = Mesh::default();
-    add_box(
-        &mut m,
-        [-20.0, 0.0, -20.0],
-        [20.0, 8.0, 20.0],
-        true,
-        &[(1, -1.0)],
-    );
+    add_box(&mut m, [-20.0, 0.0, -20.0], [20.0, 8.0, 20.0], true, &[(1, -1.0)]);
     m
 }
 
@@ -411,9 +359,7 @@ mod tests {
                 Some("v") => m.pos.push([num(w.next()), num(w.next()), num(w.next())]),
                 Some("vn") => m.nrm.push([num(w.next()), num(w.next()), num(w.next())]),
                 Some("f") => {
-                    let ids: Vec<u32> = w
-                        .map(|s| s.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
-                        .collect();
+                    let ids: Vec<u32> = w.map(|s| s.split('/').next().unwrap().parse::<u32>().unwrap() - 1).collect();
                     assert_eq!(ids.len(), 3);
                     m.tri.push([ids[0], ids[1], ids[2]]);
                 }
@@ -440,10 +386,7 @@ mod tests {
             assert!(area > min_area, "degenerate triangle {t:?}: area {area}");
             if !m.nrm.is_empty() {
                 let avg = t.iter().fold([0.0; 3], |a, &i| add(a, m.nrm[i as usize]));
-                assert!(
-                    dot(normalize(f), normalize(avg)) > 0.5,
-                    "winding disagrees with vn at {t:?}"
-                );
+                assert!(dot(normalize(f), normalize(avg)) > 0.5, "winding disagrees with vn at {t:?}");
             }
         }
     }
@@ -463,9 +406,7 @@ mod tests {
         let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
         for t in &m.tri {
             for k in 0..3 {
-                *edges
-                    .entry((id[t[k] as usize], id[t[(k + 1) % 3] as usize]))
-                    .or_default() += 1;
+                *edges.entry((id[t[k] as usize], id[t[(k + 1) % 3] as usize])).or_default() += 1;
             }
         }
         for (&(a, b), &c) in &edges {
@@ -477,10 +418,7 @@ mod tests {
     /// Signed volume (positive for outward-oriented closed meshes).
     fn volume(m: &Mesh) -> f64 {
         let p = |i: u32| m.pos[i as usize];
-        m.tri
-            .iter()
-            .map(|t| dot(p(t[0]), cross(p(t[1]), p(t[2]))) / 6.0)
-            .sum()
+        m.tri.iter().map(|t| dot(p(t[0]), cross(p(t[1]), p(t[2]))) / 6.0).sum()
     }
 
     #[test]
@@ -495,10 +433,7 @@ mod tests {
         let (mut inner, mut outer, mut top) = (0, 0, 0);
         for &t in &m.tri {
             let n = normalize(m.face_normal(t));
-            let c = mul(
-                t.iter().fold([0.0; 3], |a, &i| add(a, m.pos[i as usize])),
-                1.0 / 3.0,
-            );
+            let c = mul(t.iter().fold([0.0; 3], |a, &i| add(a, m.pos[i as usize])), 1.0 / 3.0);
             let r = (c[0] * c[0] + c[2] * c[2]).sqrt();
             let radial = dot(n, normalize([c[0], 0.0, c[2]]));
             if (c[1] - RING_H).abs() < 1e-9 {
@@ -524,10 +459,7 @@ mod tests {
         let b = figurines_objs();
         assert_eq!(a, b, "not deterministic");
         let names: Vec<&str> = a.iter().map(|(n, _)| n.as_str()).collect();
-        assert_eq!(
-            names,
-            ["knot.obj", "blob.obj", "tin.obj", "table.obj", "hall.obj"]
-        );
+        assert_eq!(names, ["knot.obj", "blob.obj", "tin.obj", "table.obj", "hall.obj"]);
         let meshes: Vec<Mesh> = a.iter().map(|(_, t)| parse(t)).collect();
         let counts: Vec<usize> = meshes.iter().map(|m| m.tri.len()).collect();
         assert_eq!(counts, [131_072, 120_000, 12, 60, 10]);
@@ -545,10 +477,7 @@ mod tests {
         for m in &meshes[..3] {
             let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
             for p in &m.pos {
-                (lo, hi) = (
-                    [0, 1, 2].map(|k| lo[k].min(p[k])),
-                    [0, 1, 2].map(|k| hi[k].max(p[k])),
-                );
+                (lo, hi) = ([0, 1, 2].map(|k| lo[k].min(p[k])), [0, 1, 2].map(|k| hi[k].max(p[k])));
             }
             assert!(lo[1].abs() < 1e-5);
             assert!((0..3).all(|k| hi[k] - lo[k] < 0.45 && hi[k] - lo[k] > 0.05));
@@ -578,9 +507,7 @@ mod tests {
         // Centre-line points more than π·tube apart along the curve must stay > 2.2·tube apart
         // in space, and the curvature radius must exceed the tube radius.
         let n = 1440;
-        let pts: Vec<V3> = (0..n)
-            .map(|i| knot_curve(2.0 * std::f64::consts::PI * i as f64 / n as f64))
-            .collect();
+        let pts: Vec<V3> = (0..n).map(|i| knot_curve(2.0 * std::f64::consts::PI * i as f64 / n as f64)).collect();
         let mut arc = vec![0.0];
         for i in 1..=n {
             let d = sub(pts[i % n], pts[i - 1]);
@@ -602,10 +529,7 @@ mod tests {
             let radius = (dot(ab, ab) * dot(bc, bc) * dot(ac, ac)).sqrt() / (2.0 * twice_area);
             assert!(radius > 2.0 * KNOT_TUBE, "curvature radius {radius}");
         }
-        assert!(
-            min_d > 2.2 * KNOT_TUBE,
-            "strands {min_d} apart, tube radius {KNOT_TUBE}"
-        );
+        assert!(min_d > 2.2 * KNOT_TUBE, "strands {min_d} apart, tube radius {KNOT_TUBE}");
         // The twist-corrected frames close the tube: no stretched edges at the seam.
         let m = knot_mesh();
         assert_closed(&m);

@@ -278,7 +278,15 @@ pub fn chi2_test(observed: &[f64], expected: &[f64], min_expected: f64) -> Chi2R
     }
     let dof = used.saturating_sub(1);
     let p_value = if impossible > 0.0 { 0.0 } else { chi2_sf(chi2, dof) };
-    Chi2Result { chi2, dof, p_value, pooled_cells, impossible_samples: impossible, n_observed: n_obs, n_expected: n_exp }
+    Chi2Result {
+        chi2,
+        dof,
+        p_value,
+        pooled_cells,
+        impossible_samples: impossible,
+        n_observed: n_obs,
+        n_expected: n_exp,
+    }
 }
 
 /// Sub-cell resolution (per dimension) of the midpoint rule integrating `pdf_w` over a grid cell.

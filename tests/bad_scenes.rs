@@ -137,7 +137,12 @@ fn base_scene_is_valid() {
 #[test]
 fn unknown_keys() {
     let mut f = Vec::new();
-    case(&mut f, "top-level", &insert_after("[render]", "").replacen("[camera]", "colour = 3 #<\n[camera]", 1), "colour");
+    case(
+        &mut f,
+        "top-level",
+        &insert_after("[render]", "").replacen("[camera]", "colour = 3 #<\n[camera]", 1),
+        "colour",
+    );
     case(&mut f, "camera", &with("fov", "fov = 40.0\nfocus = 2.0 #<"), "focus");
     case(&mut f, "render", &with("spp", "spp = 4\nsamples = 16 #<"), "samples");
     case(&mut f, "material", &with("albedo   = [0.3", "albedo   = [0.3, 0.3, 0.3]\nroughness = 0.1 #<"), "roughness");
@@ -151,10 +156,20 @@ fn bad_values() {
     case(&mut f, "nan albedo", &with("albedo = [0.5", "albedo = [nan, 0.5, 0.5] #<"), "materials.white.albedo");
     case(&mut f, "negative albedo", &with("albedo = [0.5", "albedo = [0.5, -0.1, 0.5] #<"), "materials.white.albedo");
     case(&mut f, "albedo > 1", &with("albedo = [0.5", "albedo = [0.5, 1.2, 0.5] #<"), "materials.white.albedo");
-    case(&mut f, "glossy albedo + specular > 1", &with("specular", "specular = [0.8, 0.2, 0.2] #<"), "materials.plastic.specular");
+    case(
+        &mut f,
+        "glossy albedo + specular > 1",
+        &with("specular", "specular = [0.8, 0.2, 0.2] #<"),
+        "materials.plastic.specular",
+    );
     case(&mut f, "negative emission", &with("emission", "emission = [5.0, -1.0, 5.0] #<"), "shape[2].emission");
     case(&mut f, "inf emission", &with("emission", "emission = [5.0, inf, 5.0] #<"), "shape[2].emission");
-    case(&mut f, "zero-area emissive quad", &with("v        = [0.0, 0.0, 0.4]", "v        = [0.8, 0.0, 0.0] #<"), "shape[2].v");
+    case(
+        &mut f,
+        "zero-area emissive quad",
+        &with("v        = [0.0, 0.0, 0.4]", "v        = [0.8, 0.0, 0.0] #<"),
+        "shape[2].v",
+    );
     case(&mut f, "negative radius", &with("radius", "radius = -0.5 #<"), "shape[1].radius");
     case(&mut f, "zero radius", &with("radius", "radius = 0.0 #<"), "shape[1].radius");
     case(&mut f, "unknown material", &with("material = \"plastic\"", "material = \"plastik\" #<"), "shape[1].material");
@@ -166,7 +181,12 @@ fn bad_values() {
     case(&mut f, "zero duration", &with("spp", "time = \"0s\" #<"), "render.time");
     case(&mut f, "unknown method", &with("method", "method = \"bdpt\" #<"), "render.method");
     case(&mut f, "zero spp", &with("spp", "spp = 0 #<"), "render.spp");
-    case(&mut f, "glass ior < 1", &insert_after("exponent", "\n[materials.glass]\ntype = \"glass\"\nior = 0.5 #<"), "materials.glass.ior");
+    case(
+        &mut f,
+        "glass ior < 1",
+        &insert_after("exponent", "\n[materials.glass]\ntype = \"glass\"\nior = 0.5 #<"),
+        "materials.glass.ior",
+    );
     finish(f);
 }
 
@@ -236,15 +256,22 @@ f 6//1 7//2 8//1
     let s = load_str(&src, "deg.toml", &dir).unwrap_or_else(|e| panic!("{e}"));
     // two quads: 4 triangles; mesh: 3 of 4
     assert_eq!(s.triangles.len(), 4 + 3, "the zero-area face must be skipped, the others kept");
-    let w = s.warnings.iter().find(|w| w.contains("degenerate")).unwrap_or_else(|| panic!("no warning: {:?}", s.warnings));
+    let w =
+        s.warnings.iter().find(|w| w.contains("degenerate")).unwrap_or_else(|| panic!("no warning: {:?}", s.warnings));
     assert!(w.contains("skipped 1 degenerate"), "{w}");
-    assert!(w.starts_with("deg.toml:") && w.contains("shape[3].file") && w.contains("m.obj"), "warning must name file, key and OBJ: {w}");
+    assert!(
+        w.starts_with("deg.toml:") && w.contains("shape[3].file") && w.contains("m.obj"),
+        "warning must name file, key and OBJ: {w}"
+    );
     let w = w.clone();
     // no NaN may survive into the scene: every kept shading normal is finite and unit
     for t in &s.triangles {
         assert!(t.ng.is_finite() && t.area > 0.0);
         if let Some(n) = t.n {
-            assert!(n.iter().all(|v| v.is_finite() && (v.length() - 1.0).abs() < 1e-4), "NaN shading normal kept: {n:?}");
+            assert!(
+                n.iter().all(|v| v.is_finite() && (v.length() - 1.0).abs() < 1e-4),
+                "NaN shading normal kept: {n:?}"
+            );
         }
     }
     // and the world built from it returns finite shading normals on the NaN-normal face
@@ -252,9 +279,12 @@ f 6//1 7//2 8//1
     let brute = common::brute_hits(&s, o, d, f64::INFINITY);
     assert!(brute.first().is_some_and(|b| (b.0 - 4.0).abs() < 1e-4), "brute force: {brute:?}");
     let world = forecast::accel::World::build(s);
-    let h = world
-        .intersect(o, d, f32::INFINITY)
-        .unwrap_or_else(|| panic!("BVH: no hit; brute force: {brute:?}; triangles: {:?}", world.scene.triangles.iter().map(|t| t.p).collect::<Vec<_>>()));
+    let h = world.intersect(o, d, f32::INFINITY).unwrap_or_else(|| {
+        panic!(
+            "BVH: no hit; brute force: {brute:?}; triangles: {:?}",
+            world.scene.triangles.iter().map(|t| t.p).collect::<Vec<_>>()
+        )
+    });
     assert!((h.t - 4.0).abs() < 1e-4 && h.ns.is_finite() && h.ng.is_finite(), "{h:?}");
     // last, the line: the warning must point at the `file =` line
     assert!(w.starts_with(&format!("deg.toml:{line}:")), "warning must point at line {line}: {w}");

@@ -76,7 +76,8 @@ fn edge_distance(p: [Vec3; 3], o: Vec3, d: Vec3) -> Option<f64> {
     let f = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
     let (p0, p1, p2, o, d) = (f(p[0]), f(p[1]), f(p[2]), f(o), f(d));
     let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let cross = |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    let cross =
+        |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
     let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     let (e1, e2) = (sub(p1, p0), sub(p2, p0));
     let pv = cross(d, e2);
@@ -92,7 +93,11 @@ fn edge_distance(p: [Vec3; 3], o: Vec3, d: Vec3) -> Option<f64> {
 
 /// |cos| between the ray and the triangle's normal (1 for spheres).
 fn cos_to(s: &Scene, prim: u32, d: Vec3) -> f32 {
-    if prim < s.ntri() { s.triangles[prim as usize].ng.dot(d).abs() } else { 1.0 }
+    if prim < s.ntri() {
+        s.triangles[prim as usize].ng.dot(d).abs()
+    } else {
+        1.0
+    }
 }
 
 /// Absolute f32 error bound of t for an ill-conditioned (grazing) hit: t = (ng·c)/(ng·d) loses
@@ -164,7 +169,12 @@ fn compare(w: &World, o: Vec3, d: Vec3, tmax: f32, tally: &mut Tally) {
             assert!((h.ng.length() - 1.0).abs() < 1e-4 && (h.ns.length() - 1.0).abs() < 1e-4, "normals not unit");
             assert!(h.ns.dot(h.ng) > 0.0, "shading normal on the wrong side");
             let p_ref = o + h.t * d;
-            assert!((h.p - p_ref).length() <= 1e-4 * (p_ref.abs().max_element() + h.t).max(1.0), "p {} vs o + t·d {}", h.p, p_ref);
+            assert!(
+                (h.p - p_ref).length() <= 1e-4 * (p_ref.abs().max_element() + h.t).max(1.0),
+                "p {} vs o + t·d {}",
+                h.p,
+                p_ref
+            );
             if h.prim != pb && tally.allow_near_misses && tb < OBVHS_NODE_EPSILON as f64 {
                 tally.near_misses += 1;
                 return;
@@ -202,7 +212,10 @@ fn compare(w: &World, o: Vec3, d: Vec3, tmax: f32, tally: &mut Tally) {
             if edge_case(s, h.prim, o, d) || near_tmax(h.t as f64) {
                 tally.exempt += 1;
             } else {
-                panic!("ray o={o} d={d} tmax={tmax}: BVH hit prim {} at t={} but brute force sees nothing", h.prim, h.t);
+                panic!(
+                    "ray o={o} d={d} tmax={tmax}: BVH hit prim {} at t={} but brute force sees nothing",
+                    h.prim, h.t
+                );
             }
         }
     }
@@ -210,16 +223,21 @@ fn compare(w: &World, o: Vec3, d: Vec3, tmax: f32, tally: &mut Tally) {
     if occ != !brute.is_empty() {
         let explained = brute.first().is_some_and(|&(t, p)| {
             near_tmax(t) || edge_case(s, p, o, d) || (tally.allow_near_misses && t < OBVHS_NODE_EPSILON as f64)
-        })
-            || hit.is_some_and(|h| edge_case(s, h.prim, o, d) || near_tmax(h.t as f64));
-        assert!(explained, "ray o={o} d={d} tmax={tmax}: occluded = {occ}, brute force hits: {:?}", &brute[..brute.len().min(3)]);
+        }) || hit.is_some_and(|h| edge_case(s, h.prim, o, d) || near_tmax(h.t as f64));
+        assert!(
+            explained,
+            "ray o={o} d={d} tmax={tmax}: occluded = {occ}, brute force hits: {:?}",
+            &brute[..brute.len().min(3)]
+        );
         tally.exempt += 1;
     }
 }
 
 /// A t disagreement at a tie between the two nearest hits is fine (either t is right).
 fn tally_exempt(_s: &Scene, brute: &[(f64, u32)], prim: u32, _o: Vec3, _d: Vec3, tally: &mut Tally) -> bool {
-    let ok = brute.len() > 1 && (brute[1].0 - brute[0].0).abs() <= 1e-5 * brute[0].0.max(1.0) && brute.iter().any(|x| x.1 == prim);
+    let ok = brute.len() > 1
+        && (brute[1].0 - brute[0].0).abs() <= 1e-5 * brute[0].0.max(1.0)
+        && brute.iter().any(|x| x.1 == prim);
     if ok {
         tally.ties += 1;
     }
@@ -261,14 +279,18 @@ fn random_rays_ext(w: &World, n: usize, seed: u64, allow_near_misses: bool, max_
         let tmax = if rng.next_f32() < 0.5 { f32::INFINITY } else { rng.next_f32() * 2.0 * ext };
         compare(w, o, d, tmax, &mut tally);
     }
-    assert!(tally.exempt + tally.ties <= max_exempt, "too many exemptions (edge cases/ties) for random rays: {tally:?}");
+    assert!(
+        tally.exempt + tally.ties <= max_exempt,
+        "too many exemptions (edge cases/ties) for random rays: {tally:?}"
+    );
     assert!(tally.hits > n / 4, "test has too few hits to mean anything: {tally:?}");
     tally
 }
 
 fn mesh_scene(dir: &Path, tris: &[[Vec3; 3]], extra: &str, transform: &str) -> Scene {
     write_obj(&dir.join("soup.obj"), tris);
-    let src = format!("{HEADER}\n[[shape]]\ntype = \"mesh\"\nfile = \"soup.obj\"\nmaterial = \"m\"\n{transform}\n{extra}");
+    let src =
+        format!("{HEADER}\n[[shape]]\ntype = \"mesh\"\nfile = \"soup.obj\"\nmaterial = \"m\"\n{transform}\n{extra}");
     load_str(&src, "bvh.toml", dir).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -293,7 +315,12 @@ fn triangles_and_spheres_mixed() {
         let c = rand_vec(&mut rng, -1.2, 1.2);
         let r = 0.02 + 0.3 * rng.next_f32();
         let inward = rng.next_f32() < 0.2;
-        writeln!(extra, "[[shape]]\ntype = \"sphere\"\ncenter = [{}, {}, {}]\nradius = {r}\nmaterial = \"m\"\ninward = {inward}\n", c.x, c.y, c.z).unwrap();
+        writeln!(
+            extra,
+            "[[shape]]\ntype = \"sphere\"\ncenter = [{}, {}, {}]\nradius = {r}\nmaterial = \"m\"\ninward = {inward}\n",
+            c.x, c.y, c.z
+        )
+        .unwrap();
     }
     // a few quads, one axis-aligned
     extra.push_str("[[shape]]\ntype = \"quad\"\ncorner = [-1.5, -1.0, -1.5]\nu = [3.0, 0.0, 0.0]\nv = [0.0, 0.0, 3.0]\nmaterial = \"m\"\n");
@@ -312,7 +339,15 @@ fn spheres_only() {
     for k in 0..60 {
         let c = rand_vec(&mut rng, -2.0, 2.0);
         let r = if k % 10 == 0 { 2.5 } else { 0.01 + 0.5 * rng.next_f32() };
-        writeln!(src, "[[shape]]\ntype = \"sphere\"\ncenter = [{}, {}, {}]\nradius = {r}\nmaterial = \"m\"\ninward = {}\n", c.x, c.y, c.z, k % 3 == 0).unwrap();
+        writeln!(
+            src,
+            "[[shape]]\ntype = \"sphere\"\ncenter = [{}, {}, {}]\nradius = {r}\nmaterial = \"m\"\ninward = {}\n",
+            c.x,
+            c.y,
+            c.z,
+            k % 3 == 0
+        )
+        .unwrap();
     }
     let w = World::build(load_str(&src, "spheres.toml", Path::new(".")).unwrap());
     assert_eq!(w.scene.ntri(), 0);
@@ -396,7 +431,9 @@ fn rays_parallel_to_faces() {
 
 #[test]
 fn very_large_and_very_small_scales() {
-    for (name, scale, offset, seed) in [("large", 1e4f32, 1e5f32, 21u64), ("small", 1e-3, 0.0, 22), ("tiny-offset", 1e-3, 10.0, 23)] {
+    for (name, scale, offset, seed) in
+        [("large", 1e4f32, 1e5f32, 21u64), ("small", 1e-3, 0.0, 22), ("tiny-offset", 1e-3, 10.0, 23)]
+    {
         let dir = tmp_dir(&format!("bvh-{name}"));
         let mut rng = Rng::keyed(seed, stream::MISC, 0, 0);
         let tris = soup(&mut rng, 500, 1.0, 0.3);
@@ -444,7 +481,12 @@ fn hits_closer_than_1e4_are_found() {
     // the control: moved back by 1, the same ray finds the small quad at t = 1 + 5e-5
     let h1 = w.intersect(o - d, d, f32::INFINITY).expect("hit");
     assert!((h1.t - (1.0 + 5e-5)).abs() < 1e-6, "control ray: t = {}", h1.t);
-    assert!((h.t - 5e-5).abs() < 1e-9, "intersect returned t = {} (prim {}); the quad at t = 5e-5 was skipped", h.t, h.prim);
+    assert!(
+        (h.t - 5e-5).abs() < 1e-9,
+        "intersect returned t = {} (prim {}); the quad at t = 5e-5 was skipped",
+        h.t,
+        h.prim
+    );
     assert!(w.occluded(o, d, 1e-3), "occluded(tmax = 1e-3) misses the quad at t = 5e-5");
 }
 
@@ -456,9 +498,16 @@ fn hits_closer_than_1e4_are_found() {
 fn ray_through_shared_edge_hits() {
     let src = format!("{HEADER}\n[[shape]]\ntype = \"quad\"\ncorner = [-1.0, -1.0, 1.0]\nu = [2.0, 0.0, 0.0]\nv = [0.0, 2.0, 0.0]\nmaterial = \"m\"\n");
     let w = World::build(load_str(&src, "edge.toml", Path::new(".")).unwrap());
-    assert_eq!(brute_hits(&w.scene, Vec3::ZERO, Vec3::Z, f64::INFINITY).len(), 2, "brute force hits both triangles at the edge");
+    assert_eq!(
+        brute_hits(&w.scene, Vec3::ZERO, Vec3::Z, f64::INFINITY).len(),
+        2,
+        "brute force hits both triangles at the edge"
+    );
     assert!(w.intersect(Vec3::new(0.3, 0.1, 0.0), Vec3::Z, f32::INFINITY).is_some(), "control: off the diagonal");
-    assert!(w.intersect(Vec3::ZERO, Vec3::Z, f32::INFINITY).is_some(), "the ray through the quad's diagonal went through it");
+    assert!(
+        w.intersect(Vec3::ZERO, Vec3::Z, f32::INFINITY).is_some(),
+        "the ray through the quad's diagonal went through it"
+    );
 }
 
 /// Directions with a −0.0 component (e.g. `-Vec3::Z`, or `reflect` of an axis-aligned ray) must
@@ -468,7 +517,8 @@ fn ray_through_shared_edge_hits() {
 /// node is rejected and the ray hits nothing.
 #[test]
 fn negative_zero_direction_components_hit() {
-    let src = format!("{HEADER}\n[[shape]]\ntype = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\nmaterial = \"m\"\n");
+    let src =
+        format!("{HEADER}\n[[shape]]\ntype = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\nmaterial = \"m\"\n");
     let w = World::build(load_str(&src, "negzero.toml", Path::new(".")).unwrap());
     let o = Vec3::new(0.2, 0.2, 5.0);
     let plus = w.intersect(o, Vec3::new(0.0, 0.0, -1.0), f32::INFINITY).map(|h| h.t);

@@ -10,7 +10,15 @@ use forecast::render::film::Film;
 
 fn cornell(seed: u64, threads: usize, tag: &str) -> Film {
     let dir = tmp_dir(&format!("det-{tag}-{seed}-{threads}"));
-    let f = render_film(&job(&root().join("scenes/cornell-box.toml"), Method::Pt, 4, seed, (32, 32), threads, &dir.join("out")));
+    let f = render_film(&job(
+        &root().join("scenes/cornell-box.toml"),
+        Method::Pt,
+        4,
+        seed,
+        (32, 32),
+        threads,
+        &dir.join("out"),
+    ));
     let _ = std::fs::remove_dir_all(dir);
     f
 }

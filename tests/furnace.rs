@@ -40,7 +40,15 @@ fn pooled(f: &Film, x0: usize, y0: usize, w: usize, h: usize, ch: usize) -> (f64
 
 fn render(scene: &str, spp: u64, seed: u64) -> Film {
     let dir = tmp_dir(&format!("furnace-{scene}-{seed}"));
-    let f = render_film(&job(&root().join("tests/scenes").join(scene), Method::Pt, spp, seed, (32, 32), 2, &dir.join("out")));
+    let f = render_film(&job(
+        &root().join("tests/scenes").join(scene),
+        Method::Pt,
+        spp,
+        seed,
+        (32, 32),
+        2,
+        &dir.join("out"),
+    ));
     assert_eq!(f.total_samples(), (32 * 32 * spp) as f64);
     let _ = std::fs::remove_dir_all(dir);
     f
@@ -54,7 +62,11 @@ fn assert_uniform(name: &str, f: &Film, l: f64) {
             eprintln!("{name}: mean {m:.6} σ {se:.2e}");
         }
         assert!(m.is_finite() && se.is_finite(), "{name}: non-finite mean {m} / σ {se}");
-        assert!((m - l).abs() < 5.0 * se + BIAS_ALLOWANCE, "{name}: channel {ch}: mean {m:.6} vs {l} (σ = {se:.2e}, z = {:.2})", (m - l) / se);
+        assert!(
+            (m - l).abs() < 5.0 * se + BIAS_ALLOWANCE,
+            "{name}: channel {ch}: mean {m:.6} vs {l} (σ = {se:.2e}, z = {:.2})",
+            (m - l) / se
+        );
     }
     let b = 8;
     let (bx, by) = (f.width / b, f.height / b);
@@ -63,7 +75,10 @@ fn assert_uniform(name: &str, f: &Film, l: f64) {
         for i in 0..bx {
             for ch in 0..3 {
                 let (m, se) = pooled(f, i * b, j * b, b, b, ch);
-                assert!((m - l).abs() < zc * se + BIAS_ALLOWANCE, "{name}: block ({i},{j}) channel {ch}: mean {m:.6} vs {l} (σ = {se:.2e}, limit {zc:.2}σ)");
+                assert!(
+                    (m - l).abs() < zc * se + BIAS_ALLOWANCE,
+                    "{name}: block ({i},{j}) channel {ch}: mean {m:.6} vs {l} (σ = {se:.2e}, limit {zc:.2}σ)"
+                );
             }
         }
     }
@@ -92,7 +107,8 @@ fn mirror_ball_in_emissive_enclosure_is_exactly_one() {
     let w = forecast::accel::World::build(s);
     let hits_ball = (0..32 * 32).filter(|k| {
         let d = cam.direction((k % 32) as f32 + 0.5, (k / 32) as f32 + 0.5);
-        w.intersect(cam.position, d, f32::INFINITY).is_some_and(|h| w.scene.emitter_of(h.prim) == forecast::scene::NO_EMITTER)
+        w.intersect(cam.position, d, f32::INFINITY)
+            .is_some_and(|h| w.scene.emitter_of(h.prim) == forecast::scene::NO_EMITTER)
     });
     assert!(hits_ball.count() > 100, "the mirror ball must cover a good part of the frame");
 }

@@ -67,13 +67,7 @@ fn two_ranks_equal_one_process_for_every_method() {
         let one = d.join(format!("{m}-1"));
         let two = d.join(format!("{m}-2"));
         let common = ["--spp", "8", "--resolution", "64x64", "--seed", "7", "--quiet", "--method", m];
-        let st = Command::new(bin())
-            .args(["render", &scene()])
-            .args(common)
-            .arg("--out")
-            .arg(&one)
-            .status()
-            .unwrap();
+        let st = Command::new(bin()).args(["render", &scene()]).args(common).arg("--out").arg(&one).status().unwrap();
         assert!(st.success());
         mpirun(2, &[&["render", &scene()][..], &common[..], &["--out", two.to_str().unwrap()][..]].concat());
         assert_same_image(&one.with_extension("exr"), &two.with_extension("exr"));
@@ -95,7 +89,22 @@ fn time_box_ends_within_budget_plus_one_pass() {
     let d = tmp("time");
     let out = d.join("t");
     let t = Instant::now();
-    mpirun(2, &["render", &scene(), "--time", "5s", "--resolution", "64x64", "--seed", "1", "--quiet", "--out", out.to_str().unwrap()]);
+    mpirun(
+        2,
+        &[
+            "render",
+            &scene(),
+            "--time",
+            "5s",
+            "--resolution",
+            "64x64",
+            "--seed",
+            "1",
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    );
     let wall = t.elapsed().as_secs_f64();
     let j = json(&out);
     let ranks = j["per_rank"].as_array().unwrap();
@@ -116,13 +125,64 @@ fn checkpoint_and_resume_across_ranks() {
     let d = tmp("ckpt");
     let full = d.join("full");
     let part = d.join("part");
-    mpirun(2, &["render", &scene(), "--spp", "12", "--resolution", "32x32", "--seed", "5", "--quiet", "--out", full.to_str().unwrap()]);
+    mpirun(
+        2,
+        &[
+            "render",
+            &scene(),
+            "--spp",
+            "12",
+            "--resolution",
+            "32x32",
+            "--seed",
+            "5",
+            "--quiet",
+            "--out",
+            full.to_str().unwrap(),
+        ],
+    );
     // stop after 2 rounds (4 passes) with a checkpoint, then resume to 12 passes
-    mpirun(2, &["render", &scene(), "--spp", "12", "--resolution", "32x32", "--seed", "5", "--quiet", "--checkpoint-every", "1ms", "--max-rounds", "2", "--out", part.to_str().unwrap()]);
+    mpirun(
+        2,
+        &[
+            "render",
+            &scene(),
+            "--spp",
+            "12",
+            "--resolution",
+            "32x32",
+            "--seed",
+            "5",
+            "--quiet",
+            "--checkpoint-every",
+            "1ms",
+            "--max-rounds",
+            "2",
+            "--out",
+            part.to_str().unwrap(),
+        ],
+    );
     let ck = forecast::checkpoint::Checkpoint::load(&PathBuf::from(format!("{}.ckpt", part.display()))).unwrap();
     assert_eq!(ck.passes_done, 4);
     let res = d.join("res");
-    mpirun(2, &["render", &scene(), "--spp", "12", "--resolution", "32x32", "--seed", "5", "--quiet", "--resume", &format!("{}.ckpt", part.display()), "--out", res.to_str().unwrap()]);
+    mpirun(
+        2,
+        &[
+            "render",
+            &scene(),
+            "--spp",
+            "12",
+            "--resolution",
+            "32x32",
+            "--seed",
+            "5",
+            "--quiet",
+            "--resume",
+            &format!("{}.ckpt", part.display()),
+            "--out",
+            res.to_str().unwrap(),
+        ],
+    );
     assert_eq!(json(&res)["spp"], 12);
     assert_same_image(&res.with_extension("exr"), &full.with_extension("exr"));
 }

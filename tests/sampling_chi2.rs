@@ -219,13 +219,25 @@ fn weight_check(sps: &[ShadingPoint], seed: u64) {
                         let f = bsdf::eval(m, sp, wo, s.wi);
                         let expect = f * s.wi.dot(sp.ns).abs() / s.pdf_w;
                         let tol = 1e-4 * expect.max_element().max(1e-3);
-                        assert!((s.weight - expect).abs().max_element() <= tol, "{m:?} wo={wo} wi={}: weight {} vs f·cos/pdf {}", s.wi, s.weight, expect);
+                        assert!(
+                            (s.weight - expect).abs().max_element() <= tol,
+                            "{m:?} wo={wo} wi={}: weight {} vs f·cos/pdf {}",
+                            s.wi,
+                            s.weight,
+                            expect
+                        );
                         // importance mode: same direction and pdf, weight × adjoint correction
                         let si = bsdf::sample(m, sp, wo, u, Mode::Importance).expect("same u gives a sample");
                         assert_eq!(si.wi, s.wi);
-                        let corr = (wo.dot(sp.ns).abs() * s.wi.dot(sp.ng).abs()) / (wo.dot(sp.ng).abs() * s.wi.dot(sp.ns).abs());
+                        let corr = (wo.dot(sp.ns).abs() * s.wi.dot(sp.ng).abs())
+                            / (wo.dot(sp.ng).abs() * s.wi.dot(sp.ns).abs());
                         let ei = expect * corr;
-                        assert!((si.weight - ei).abs().max_element() <= 1e-3 * ei.max_element().max(1e-3), "importance weight {} vs {}", si.weight, ei);
+                        assert!(
+                            (si.weight - ei).abs().max_element() <= 1e-3 * ei.max_element().max(1e-3),
+                            "importance weight {} vs {}",
+                            si.weight,
+                            ei
+                        );
                         checked += 1;
                     }
                 }
@@ -287,7 +299,16 @@ fn glass_fresnel_choice_frequency_and_directions() {
     let n = 200_000usize;
     // (θ in degrees, from outside?) — entering and leaving; 50° from inside is beyond the critical
     // angle (41.8°) and must always reflect.
-    let cases = [(0.0f32, true), (30.0, true), (60.0, true), (85.0, true), (0.0, false), (30.0, false), (41.0, false), (50.0, false)];
+    let cases = [
+        (0.0f32, true),
+        (30.0, true),
+        (60.0, true),
+        (85.0, true),
+        (0.0, false),
+        (30.0, false),
+        (41.0, false),
+        (50.0, false),
+    ];
     for (k, &(th, outside)) in cases.iter().enumerate() {
         // from inside: wo is below the geometric (outward) normal
         let wo = if outside { dir_at(th) } else { dir_at(th) * Vec3::new(1.0, 1.0, -1.0) };
@@ -314,7 +335,11 @@ fn glass_fresnel_choice_frequency_and_directions() {
                 let sin_i = (1.0 - cos_i * cos_i).max(0.0).sqrt();
                 let sin_t = (s.wi.x * s.wi.x + s.wi.y * s.wi.y).sqrt();
                 assert!((sin_i - eta * sin_t).abs() < 1e-5, "Snell: sin_i {sin_i} vs η·sin_t {}", eta * sin_t);
-                assert!(s.wi.y.abs() < 1e-6 && (th == 0.0 || s.wi.x * wo.x < 0.0), "refracted ray leaves the plane or side: {}", s.wi);
+                assert!(
+                    s.wi.y.abs() < 1e-6 && (th == 0.0 || s.wi.x * wo.x < 0.0),
+                    "refracted ray leaves the plane or side: {}",
+                    s.wi
+                );
                 assert!((s.pdf_w as f64 - (1.0 - f)).abs() < 1e-6);
                 assert!((s.weight - Rgb::splat(1.0 / (eta * eta))).abs().max_element() < 1e-6);
             }
@@ -324,7 +349,10 @@ fn glass_fresnel_choice_frequency_and_directions() {
             assert_eq!(n_refl as f64, f * n as f64, "θ={th} outside={outside}: F={f}");
         } else {
             let z = (n_refl as f64 - n as f64 * f) / (n as f64 * f * (1.0 - f)).sqrt();
-            assert!(z.abs() < zcrit, "θ={th} outside={outside}: reflected {n_refl}/{n}, F={f}, z={z:.2} (limit {zcrit:.2})");
+            assert!(
+                z.abs() < zcrit,
+                "θ={th} outside={outside}: reflected {n_refl}/{n}, F={f}, z={z:.2} (limit {zcrit:.2})"
+            );
         }
     }
     // importance mode: refraction carries no η² factor
@@ -489,7 +517,13 @@ fn wrong_pdfs_are_rejected() {
     let exp: Vec<f64> = (0..n * n)
         .map(|c| {
             let (i, j) = (c % n, c / n);
-            1e5 * if i + j < n - 1 { 2.0 } else if i + j == n - 1 { 1.0 } else { 0.0 } / (n * n) as f64
+            1e5 * if i + j < n - 1 {
+                2.0
+            } else if i + j == n - 1 {
+                1.0
+            } else {
+                0.0
+            } / (n * n) as f64
         })
         .collect();
     assert!(!chi2_test(&obs, &exp, 5.0).passes(a));

@@ -150,7 +150,11 @@ impl World {
                     let (b1, b2) = barycentrics(tri.p, p);
                     let v = (1.0 - b1 - b2) * n[0] + b1 * n[1] + b2 * n[2];
                     let v = v.normalize_or_zero();
-                    if v.dot(tri.ng) > 1e-4 { v } else { tri.ng }
+                    if v.dot(tri.ng) > 1e-4 {
+                        v
+                    } else {
+                        tri.ng
+                    }
                 }
                 None => tri.ng,
             };

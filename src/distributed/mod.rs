@@ -125,11 +125,7 @@ pub fn all_agree(c: &dyn Cluster, local_ok: bool) -> bool {
 /// Rank 0 computes the remaining time and broadcasts it; every rank sets its deadline to
 /// "now + remaining", so the ranks agree up to the broadcast latency. `None`, a NaN or an
 /// infinite budget gives [`Deadline::never`]. Collective: call on all ranks.
-pub fn shared_deadline(
-    c: &dyn Cluster,
-    local_start: Instant,
-    budget_secs: Option<f64>,
-) -> Deadline {
+pub fn shared_deadline(c: &dyn Cluster, local_start: Instant, budget_secs: Option<f64>) -> Deadline {
     let mut bytes = Vec::new();
     if c.rank() == 0 {
         let remaining = match budget_secs {
@@ -162,35 +158,22 @@ pub fn self_test(c: &dyn Cluster) -> Result<(), String> {
     // 1. Broadcast 3 MB from rank 0; other ranks start with a short, different buffer.
     let pattern = |i: usize| ((i.wrapping_mul(31) + 7) % 251) as u8;
     let n = 3 * 1024 * 1024 + 17;
-    let mut buf: Vec<u8> = if rank == 0 {
-        (0..n).map(pattern).collect()
-    } else {
-        vec![0xAB; 5]
-    };
+    let mut buf: Vec<u8> = if rank == 0 { (0..n).map(pattern).collect() } else { vec![0xAB; 5] };
     c.broadcast_bytes(&mut buf);
     if buf.len() != n {
         errs.push(format!("broadcast: length {} != {n}", buf.len()));
     } else if let Some(i) = (0..n).find(|&i| buf[i] != pattern(i)) {
-        errs.push(format!(
-            "broadcast: byte {i} is {} != {}",
-            buf[i],
-            pattern(i)
-        ));
+        errs.push(format!("broadcast: byte {i} is {} != {}", buf[i], pattern(i)));
     }
     let mut empty: Vec<u8> = if rank == 0 { Vec::new() } else { vec![1, 2, 3] };
     c.broadcast_bytes(&mut empty);
     if !empty.is_empty() {
-        errs.push(format!(
-            "broadcast of empty buffer left {} bytes",
-            empty.len()
-        ));
+        errs.push(format!("broadcast of empty buffer left {} bytes", empty.len()));
     }
 
     // 2. reduce_sum / all_reduce_sum: integers, so the f64 sums are exact.
     let len = 100_003;
-    let local: Vec<f64> = (0..len)
-        .map(|i| (rank + 1) as f64 * i as f64 - 0.5)
-        .collect();
+    let local: Vec<f64> = (0..len).map(|i| (rank + 1) as f64 * i as f64 - 0.5).collect();
     let tri = (size * (size + 1) / 2) as f64;
     let expect = |i: usize| tri * i as f64 - 0.5 * size as f64;
     match (rank, c.reduce_sum(&local)) {
@@ -198,11 +181,7 @@ pub fn self_test(c: &dyn Cluster) -> Result<(), String> {
             if sum.len() != len {
                 errs.push(format!("reduce_sum: length {} != {len}", sum.len()));
             } else if let Some(i) = (0..len).find(|&i| sum[i] != expect(i)) {
-                errs.push(format!(
-                    "reduce_sum: element {i} is {} != {}",
-                    sum[i],
-                    expect(i)
-                ));
+                errs.push(format!("reduce_sum: element {i} is {} != {}", sum[i], expect(i)));
             }
         }
         (0, None) => errs.push("reduce_sum returned None on rank 0".into()),
@@ -213,11 +192,7 @@ pub fn self_test(c: &dyn Cluster) -> Result<(), String> {
     if all.len() != 1000 {
         errs.push(format!("all_reduce_sum: length {} != 1000", all.len()));
     } else if let Some(i) = (0..1000).find(|&i| all[i] != expect(i)) {
-        errs.push(format!(
-            "all_reduce_sum: element {i} is {} != {}",
-            all[i],
-            expect(i)
-        ));
+        errs.push(format!("all_reduce_sum: element {i} is {} != {}", all[i], expect(i)));
     }
     if !c.all_reduce_sum(&[]).is_empty() {
         errs.push("all_reduce_sum of an empty slice is not empty".into());
@@ -239,10 +214,7 @@ pub fn self_test(c: &dyn Cluster) -> Result<(), String> {
             } else {
                 for (r, b) in v.iter().enumerate() {
                     if *b != blob(r) {
-                        errs.push(format!(
-                            "gather_bytes: blob of rank {r} wrong ({} bytes)",
-                            b.len()
-                        ));
+                        errs.push(format!("gather_bytes: blob of rank {r} wrong ({} bytes)", b.len()));
                     }
                 }
             }
@@ -255,11 +227,7 @@ pub fn self_test(c: &dyn Cluster) -> Result<(), String> {
     c.barrier();
 
     // 5. Agree on the verdict and bring every rank's messages to rank 0.
-    let text = errs
-        .iter()
-        .map(|e| format!("rank {rank}: {e}"))
-        .collect::<Vec<_>>()
-        .join("\n");
+    let text = errs.iter().map(|e| format!("rank {rank}: {e}")).collect::<Vec<_>>().join("\n");
     let all_text = c.gather_bytes(text.as_bytes());
     let failures = c.all_reduce_sum(&[errs.len() as f64])[0];
     if failures == 0.0 {

@@ -43,30 +43,19 @@ impl MpiCluster {
     /// when the library provides less than `Funneled` (the renderer still only calls MPI
     /// from the main thread, which works in practice).
     pub fn init() -> Result<Self, String> {
-        let (universe, provided) = ::mpi::initialize_with_threading(Threading::Funneled)
-            .ok_or_else(|| {
-                "MPI is already initialised in this process; call distributed::init() only once"
-                    .to_string()
-            })?;
+        let (universe, provided) = ::mpi::initialize_with_threading(Threading::Funneled).ok_or_else(|| {
+            "MPI is already initialised in this process; call distributed::init() only once".to_string()
+        })?;
         if provided < Threading::Funneled {
             eprintln!("warning: MPI provides thread level {provided:?}, asked for Funneled");
         }
         let world = universe.world();
-        let rank = usize::try_from(world.rank())
-            .map_err(|_| format!("negative MPI rank {}", world.rank()))?;
-        let size =
-            usize::try_from(world.size()).map_err(|_| format!("bad MPI size {}", world.size()))?;
+        let rank = usize::try_from(world.rank()).map_err(|_| format!("negative MPI rank {}", world.rank()))?;
+        let size = usize::try_from(world.size()).map_err(|_| format!("bad MPI size {}", world.size()))?;
         if size == 0 || rank >= size {
             return Err(format!("inconsistent MPI world: rank {rank}, size {size}"));
         }
-        Ok(MpiCluster {
-            world,
-            rank,
-            size,
-            provided,
-            max_chunk_bytes: DEFAULT_MAX_CHUNK_BYTES,
-            _universe: universe,
-        })
+        Ok(MpiCluster { world, rank, size, provided, max_chunk_bytes: DEFAULT_MAX_CHUNK_BYTES, _universe: universe })
     }
 
     /// The thread level MPI actually provides.
@@ -90,8 +79,7 @@ impl MpiCluster {
         let len = len as u64;
         let mine = [len, u64::MAX - len];
         let mut agg = [0u64; 2];
-        self.world
-            .all_reduce_into(&mine[..], &mut agg[..], SystemOperation::max());
+        self.world.all_reduce_into(&mine[..], &mut agg[..], SystemOperation::max());
         let (max, min) = (agg[0], u64::MAX - agg[1]);
         if max != min {
             panic!(
@@ -141,9 +129,8 @@ impl Cluster for MpiCluster {
         let mut len = bytes.len() as u64;
         root.broadcast_into(&mut len);
         if self.rank != 0 {
-            let n = usize::try_from(len).unwrap_or_else(|_| {
-                panic!("broadcast_bytes: {len} bytes do not fit in this address space")
-            });
+            let n = usize::try_from(len)
+                .unwrap_or_else(|_| panic!("broadcast_bytes: {len} bytes do not fit in this address space"));
             bytes.clear();
             bytes.resize(n, 0);
         }
@@ -175,16 +162,14 @@ impl Cluster for MpiCluster {
         let ce = self.chunk_f64();
         let mut out = vec![0.0f64; local.len()];
         for (send, recv) in local.chunks(ce).zip(out.chunks_mut(ce)) {
-            self.world
-                .all_reduce_into(send, recv, SystemOperation::sum());
+            self.world.all_reduce_into(send, recv, SystemOperation::sum());
         }
         out
     }
 
     fn all_reduce_max(&self, local: f64) -> f64 {
         let mut out = 0.0f64;
-        self.world
-            .all_reduce_into(&local, &mut out, SystemOperation::max());
+        self.world.all_reduce_into(&local, &mut out, SystemOperation::max());
         out
     }
 

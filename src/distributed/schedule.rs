@@ -26,12 +26,7 @@ pub fn pass_owner(pass: u64, size: usize) -> usize {
 /// The passes in `first_pass..total_passes` (end exclusive) that rank `rank` renders, in
 /// increasing order: those `p` with `p % size == rank`. Empty when `rank >= size`.
 /// A `size` of 0 is treated as 1.
-pub fn passes_for_rank(
-    rank: usize,
-    size: usize,
-    first_pass: u64,
-    total_passes: u64,
-) -> impl Iterator<Item = u64> {
+pub fn passes_for_rank(rank: usize, size: usize, first_pass: u64, total_passes: u64) -> impl Iterator<Item = u64> {
     let size = size.max(1) as u64;
     let rank = rank as u64;
     // Smallest p >= first_pass with p % size == rank.
@@ -52,17 +47,9 @@ pub fn round_of(pass: u64, size: usize, first_pass: u64) -> Option<u64> {
 
 /// End (exclusive) of the contiguous range of finished passes after every rank completed
 /// `rounds` rounds starting at `first_pass`, capped at `total_passes`.
-pub fn passes_done_after_rounds(
-    first_pass: u64,
-    total_passes: u64,
-    size: usize,
-    rounds: u64,
-) -> u64 {
+pub fn passes_done_after_rounds(first_pass: u64, total_passes: u64, size: usize, rounds: u64) -> u64 {
     let span = rounds.saturating_mul(size.max(1) as u64);
-    first_pass
-        .saturating_add(span)
-        .min(total_passes)
-        .max(first_pass.min(total_passes))
+    first_pass.saturating_add(span).min(total_passes).max(first_pass.min(total_passes))
 }
 
 /// A time box end shared by all ranks, with a safety margin for the pass in flight.
@@ -85,20 +72,12 @@ impl Deadline {
 
     /// A deadline at the instant `at`.
     pub fn at(at: Instant) -> Self {
-        Deadline {
-            at: Some(at),
-            margin_frac: Self::DEFAULT_MARGIN_FRAC,
-            margin_secs: Self::DEFAULT_MARGIN_SECS,
-        }
+        Deadline { at: Some(at), margin_frac: Self::DEFAULT_MARGIN_FRAC, margin_secs: Self::DEFAULT_MARGIN_SECS }
     }
 
     /// No time box: every pass may start.
     pub fn never() -> Self {
-        Deadline {
-            at: None,
-            margin_frac: Self::DEFAULT_MARGIN_FRAC,
-            margin_secs: Self::DEFAULT_MARGIN_SECS,
-        }
+        Deadline { at: None, margin_frac: Self::DEFAULT_MARGIN_FRAC, margin_secs: Self::DEFAULT_MARGIN_SECS }
     }
 
     /// A deadline `secs` seconds after `now`. Negative or NaN `secs` mean "already
@@ -107,15 +86,8 @@ impl Deadline {
         if secs == f64::INFINITY {
             return Self::never();
         }
-        let secs = if secs.is_nan() || secs < 0.0 {
-            0.0
-        } else {
-            secs
-        };
-        match Duration::try_from_secs_f64(secs)
-            .ok()
-            .and_then(|d| now.checked_add(d))
-        {
+        let secs = if secs.is_nan() || secs < 0.0 { 0.0 } else { secs };
+        match Duration::try_from_secs_f64(secs).ok().and_then(|d| now.checked_add(d)) {
             Some(at) => Self::at(at),
             None => Self::never(),
         }
@@ -146,11 +118,7 @@ impl Deadline {
     /// NaN or negative means count as 0.
     pub fn should_start_next(&self, now: Instant, mean_pass_secs: f64) -> bool {
         let Some(at) = self.at else { return true };
-        let mean = if mean_pass_secs > 0.0 {
-            mean_pass_secs
-        } else {
-            0.0
-        };
+        let mean = if mean_pass_secs > 0.0 { mean_pass_secs } else { 0.0 };
         let need = mean * (1.0 + self.margin_frac) + self.margin_secs;
         let left = at.saturating_duration_since(now).as_secs_f64();
         // Strictly before the deadline: nothing starts once it has passed.
@@ -225,20 +193,11 @@ mod tests {
 
     #[test]
     fn passes_examples_and_edges() {
-        assert_eq!(
-            passes_for_rank(1, 2, 0, 7).collect::<Vec<_>>(),
-            vec![1, 3, 5]
-        );
-        assert_eq!(
-            passes_for_rank(0, 2, 3, 9).collect::<Vec<_>>(),
-            vec![4, 6, 8]
-        );
+        assert_eq!(passes_for_rank(1, 2, 0, 7).collect::<Vec<_>>(), vec![1, 3, 5]);
+        assert_eq!(passes_for_rank(0, 2, 3, 9).collect::<Vec<_>>(), vec![4, 6, 8]);
         assert_eq!(passes_for_rank(2, 2, 0, 9).count(), 0); // rank out of range
         assert_eq!(passes_for_rank(0, 1, 5, 3).count(), 0); // first beyond total
-        assert_eq!(
-            passes_for_rank(0, 0, 0, 3).collect::<Vec<_>>(),
-            vec![0, 1, 2]
-        );
+        assert_eq!(passes_for_rank(0, 0, 0, 3).collect::<Vec<_>>(), vec![0, 1, 2]);
         let near_max: Vec<u64> = passes_for_rank(1, 4, u64::MAX - 10, u64::MAX).collect();
         assert!(near_max.iter().all(|&p| p % 4 == 1 && p >= u64::MAX - 10));
     }
@@ -249,15 +208,12 @@ mod tests {
             for first in 0..7u64 {
                 let total = first + 23;
                 for rounds in 0..10u64 {
-                    let mut done: Vec<u64> = (0..size)
-                        .flat_map(|r| passes_for_rank(r, size, first, total).take(rounds as usize))
-                        .collect();
+                    let mut done: Vec<u64> =
+                        (0..size).flat_map(|r| passes_for_rank(r, size, first, total).take(rounds as usize)).collect();
                     done.sort_unstable();
                     let end = passes_done_after_rounds(first, total, size, rounds);
                     assert_eq!(done, (first..end).collect::<Vec<_>>());
-                    assert!(done
-                        .iter()
-                        .all(|&p| round_of(p, size, first).is_some_and(|k| k < rounds)));
+                    assert!(done.iter().all(|&p| round_of(p, size, first).is_some_and(|k| k < rounds)));
                 }
             }
         }

@@ -166,7 +166,11 @@ pub fn ranks_from_powers(powers: &[f64]) -> Vec<u32> {
             prefix += if e.is_finite() && e > 0.0 { e } else { 0.0 };
             // [BAJ08 §3.2] ranks: clusters of rank ≤ n hold ≥ 1 − 0.5^{n+1} of the energy.
             let r = -(rest.max(0.0)).log2();
-            if r.is_finite() { (r + 1e-12).floor().max(0.0).min(u32::MAX as f64) as u32 } else { u32::MAX }
+            if r.is_finite() {
+                (r + 1e-12).floor().max(0.0).min(u32::MAX as f64) as u32
+            } else {
+                u32::MAX
+            }
         })
         .collect()
 }
@@ -181,7 +185,12 @@ pub fn cluster_points(points: &[CausticPoint], k: usize, method: ClusteringMetho
         .collect();
     let k = k.min(valid.len());
     if k == 0 {
-        return Clustering { labels: vec![NO_CLUSTER; points.len()], diag: 1.0, normal_weight: 1.0, ..Default::default() };
+        return Clustering {
+            labels: vec![NO_CLUSTER; points.len()],
+            diag: 1.0,
+            normal_weight: 1.0,
+            ..Default::default()
+        };
     }
     // spec §3: D = bbox diagonal, w_n = 1/sqrt(k).
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
@@ -193,7 +202,8 @@ pub fn cluster_points(points: &[CausticPoint], k: usize, method: ClusteringMetho
     let diag = if d.is_finite() && d > 0.0 { d } else { 1.0 };
     let wn = 1.0 / (k as f32).sqrt();
     let origin = lo.to_array();
-    let feats: Vec<[f32; 6]> = valid.par_iter().map(|&i| feature(&points[i as usize], origin, 1.0 / diag, wn)).collect();
+    let feats: Vec<[f32; 6]> =
+        valid.par_iter().map(|&i| feature(&points[i as usize], origin, 1.0 / diag, wn)).collect();
     let codes = match method {
         ClusteringMethod::Vq => fscl(&feats, k, seed),
         ClusteringMethod::KMeans => kmeans(&feats, k, seed),
@@ -354,7 +364,13 @@ fn build_clustering(
     Clustering { clusters, labels, origin, diag, normal_weight: wn, total_power }
 }
 
-fn cluster_stats(points: &[CausticPoint], valid: &[u32], feats: &[[f32; 6]], slots: &[u32], area_floor: f32) -> Cluster {
+fn cluster_stats(
+    points: &[CausticPoint],
+    valid: &[u32],
+    feats: &[[f32; 6]],
+    slots: &[u32],
+    area_floor: f32,
+) -> Cluster {
     let m = slots.len() as f64;
     let (mut e, mut ps, mut ns, mut fs) = (0.0f64, [0.0f64; 3], [0.0f64; 3], [0.0f64; 6]);
     for &s in slots {
@@ -436,7 +452,7 @@ mod tests {
             assert!((500..1000).all(|i| c.labels[i] == 1), "{method:?}");
             assert_eq!(c.clusters[0].rank, 0);
             assert_eq!(c.clusters[1].rank, 1); // F = 0.5 → rank 1
-            // Uniform square of side s: E|Π(p−μ)|² = s²/6 → A = 2π s²/6.
+                                               // Uniform square of side s: E|Π(p−μ)|² = s²/6 → A = 2π s²/6.
             let a = 2.0 * std::f32::consts::PI * 0.04 / 6.0;
             assert!((c.clusters[0].area / a - 1.0).abs() < 0.15, "{} vs {a}", c.clusters[0].area);
             assert_eq!(c.clusters[0].count(), 500);

@@ -85,7 +85,11 @@ pub fn sample_cosine(u: [f32; 2]) -> Vec3 {
 /// Solid-angle pdf of [`sample_cosine`].
 #[inline]
 pub fn cosine_pdf_w(local: Vec3) -> f32 {
-    if local.z > 0.0 { local.z / PI } else { 0.0 }
+    if local.z > 0.0 {
+        local.z / PI
+    } else {
+        0.0
+    }
 }
 
 /// A piecewise-constant pdf over the 512 hemisphere bins.
@@ -110,7 +114,11 @@ impl DirectionTable {
         // frequency matching its pmf to < 0.4% at the 2^-24 resolution of f32 uniforms.
         let floored = |x: f32| {
             let p = w(x) / total;
-            if p > 0.0 { p.max(MIN_BIN_PMF) } else { 0.0 }
+            if p > 0.0 {
+                p.max(MIN_BIN_PMF)
+            } else {
+                0.0
+            }
         };
         let norm: f64 = weights.iter().map(|&x| floored(x)).sum();
         let mut pmf = [0.0f32; N_BINS];
@@ -219,7 +227,11 @@ fn fill_values(bins: impl Iterator<Item = usize> + Clone, brdf_cos: &impl Fn(Vec
 impl ForecastTables {
     /// Builds the tables from gathered forecasters `(ω_in local, weight)` (weight = lum(Φ)·f·μ or the
     /// cosine-free variant; photons with μ ≤ 0 or weight ≤ 0 are skipped) and `brdf_cos(ω)` = f·cosθ.
-    pub fn build(photons: impl IntoIterator<Item = (Vec3, f32)>, brdf_cos: impl Fn(Vec3) -> f32, mode: TableMode) -> Self {
+    pub fn build(
+        photons: impl IntoIterator<Item = (Vec3, f32)>,
+        brdf_cos: impl Fn(Vec3) -> f32,
+        mode: TableMode,
+    ) -> Self {
         let mut w = [0.0f32; N_BINS];
         for (dir, weight) in photons {
             if let Some(i) = bin_of(dir) {

@@ -24,7 +24,9 @@ use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 use std::time::Instant;
 
 /// Photon weight in the T1 table.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize, bitcode::Encode, bitcode::Decode)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize, bitcode::Encode, bitcode::Decode,
+)]
 pub enum PhotonWeight {
     /// BAJ08: lum(Φ)·f·cosθ ("modulated with the BRDF and the cosine").
     #[default]
@@ -34,7 +36,9 @@ pub enum PhotonWeight {
 }
 
 /// Table layout (`--table`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize, bitcode::Encode, bitcode::Decode)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize, bitcode::Encode, bitcode::Decode,
+)]
 pub enum TableKind {
     /// CF dual table (T1 + T2 on the empty bins, summed).
     #[default]

@@ -63,7 +63,8 @@ impl ForecastMaps {
                     // Epsilon margin: non-members within r of a member, with n_i·n̄_c > 0.5. Candidates
                     // come from the members' bbox grown by r; each is tested against the member tree,
                     // so the work scales with the cluster's neighbourhood, not with members × n.
-                    let members = KdTree::build_with_ids(ids.iter().map(|&i| points[i as usize].p).collect(), ids.clone());
+                    let members =
+                        KdTree::build_with_ids(ids.iter().map(|&i| points[i as usize].p).collect(), ids.clone());
                     let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
                     for &m in &ids {
                         for d in 0..3 {
@@ -159,7 +160,9 @@ mod tests {
                 .filter(|&i| {
                     c.members.binary_search(&i).is_ok()
                         || (pts[i as usize].normal().dot(n) > 0.5
-                            && c.members.iter().any(|&m| (pts[m as usize].pos() - pts[i as usize].pos()).length_squared() <= r * r))
+                            && c.members
+                                .iter()
+                                .any(|&m| (pts[m as usize].pos() - pts[i as usize].pos()).length_squared() <= r * r))
                 })
                 .collect();
             want.sort();
@@ -170,7 +173,8 @@ mod tests {
             let mut out = Vec::new();
             let x = c.centroid_v() + Vec3::new(0.01, 0.0, -0.02);
             maps.gather(ci, x, 32, r, &mut out);
-            let mut d: Vec<f32> = want.iter().map(|&i| (pts[i as usize].pos() - x).length_squared()).filter(|&d| d <= r * r).collect();
+            let mut d: Vec<f32> =
+                want.iter().map(|&i| (pts[i as usize].pos() - x).length_squared()).filter(|&d| d <= r * r).collect();
             d.sort_by(f32::total_cmp);
             d.truncate(32);
             assert_eq!(out.iter().map(|e| e.0).collect::<Vec<_>>(), d);

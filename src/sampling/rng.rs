@@ -104,9 +104,24 @@ mod tests {
 
     #[test]
     fn keyed_streams_are_reproducible_and_distinct() {
-        let a: Vec<u32> = (0..8).map({ let mut r = Rng::keyed(1, 2, 3, 4); move |_| r.next_u32() }).collect();
-        let b: Vec<u32> = (0..8).map({ let mut r = Rng::keyed(1, 2, 3, 4); move |_| r.next_u32() }).collect();
-        let c: Vec<u32> = (0..8).map({ let mut r = Rng::keyed(1, 2, 3, 5); move |_| r.next_u32() }).collect();
+        let a: Vec<u32> = (0..8)
+            .map({
+                let mut r = Rng::keyed(1, 2, 3, 4);
+                move |_| r.next_u32()
+            })
+            .collect();
+        let b: Vec<u32> = (0..8)
+            .map({
+                let mut r = Rng::keyed(1, 2, 3, 4);
+                move |_| r.next_u32()
+            })
+            .collect();
+        let c: Vec<u32> = (0..8)
+            .map({
+                let mut r = Rng::keyed(1, 2, 3, 5);
+                move |_| r.next_u32()
+            })
+            .collect();
         assert_eq!(a, b);
         assert_ne!(a, c);
     }

@@ -14,11 +14,8 @@ pub fn sample_concentric_disk(u: [f32; 2]) -> Vec2 {
     if ox == 0.0 && oy == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, theta) = if ox.abs() > oy.abs() {
-        (ox, (PI / 4.0) * (oy / ox))
-    } else {
-        (oy, PI / 2.0 - (PI / 4.0) * (ox / oy))
-    };
+    let (r, theta) =
+        if ox.abs() > oy.abs() { (ox, (PI / 4.0) * (oy / ox)) } else { (oy, PI / 2.0 - (PI / 4.0) * (ox / oy)) };
     Vec2::new(r * theta.cos(), r * theta.sin())
 }
 

@@ -6,8 +6,7 @@
 //! missing OBJ, an empty scene) is an error, never a panic.
 
 use super::{
-    obj, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere, Triangle,
-    NO_EMITTER,
+    obj, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere, Triangle, NO_EMITTER,
 };
 use crate::math::{luminance, Vec3, PI};
 use crate::sampling::distribution::Distribution1D;
@@ -414,17 +413,33 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
                     return Err(cx.err(ss, &key("center"), "center must be finite"));
                 }
                 if !(radius.is_finite() && *radius > 0.0) {
-                    return Err(cx.err(ss, &key("radius"), format!("radius must be positive and finite, got {radius}")));
+                    return Err(cx.err(
+                        ss,
+                        &key("radius"),
+                        format!("radius must be positive and finite, got {radius}"),
+                    ));
                 }
                 let (mat, e) = resolve(material, emission)?;
-                spheres.push(Sphere { center: v3(*center), radius: *radius, inward: *inward, material: mat, emitter: NO_EMITTER });
+                spheres.push(Sphere {
+                    center: v3(*center),
+                    radius: *radius,
+                    inward: *inward,
+                    material: mat,
+                    emitter: NO_EMITTER,
+                });
                 sph_emission.push(e);
             }
             ShapeDef::Mesh { file: f, normals, material, emission, translate, scale, rotate_y } => {
                 let smooth = match normals.as_str() {
                     "flat" => false,
                     "smooth" => true,
-                    other => return Err(cx.err(ss, &key("normals"), format!("normals must be `flat` or `smooth`, got `{other}`"))),
+                    other => {
+                        return Err(cx.err(
+                            ss,
+                            &key("normals"),
+                            format!("normals must be `flat` or `smooth`, got `{other}`"),
+                        ))
+                    }
                 };
                 let (mat, e) = resolve(material, emission)?;
                 let t = translate.unwrap_or([0.0; 3]);
@@ -478,7 +493,12 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
         }
     }
     if triangles.is_empty() && spheres.is_empty() {
-        return Err(SceneError { file: cx.file.clone(), line: 1, key: "shape".into(), message: "empty scene: no shapes".into() });
+        return Err(SceneError {
+            file: cx.file.clone(),
+            line: 1,
+            key: "shape".into(),
+            message: "empty scene: no shapes".into(),
+        });
     }
 
     // emitters
@@ -532,9 +552,11 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
         let rd = r.get_ref();
         let [x, y, w, h] = rd.rect;
         if w == 0 || h == 0 || x + w > camera.width || y + h > camera.height {
-            return Err(cx.err(r.span(), &format!("roi[{i}].rect"), format!(
-                "rect {:?} must be non-empty and inside the {}x{} image", rd.rect, camera.width, camera.height
-            )));
+            return Err(cx.err(
+                r.span(),
+                &format!("roi[{i}].rect"),
+                format!("rect {:?} must be non-empty and inside the {}x{} image", rd.rect, camera.width, camera.height),
+            ));
         }
         rois.push(Roi { name: rd.name.clone(), rect: rd.rect });
     }
@@ -542,7 +564,11 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
     if let Some(f) = &doc.forecast {
         if let Some([lo, hi]) = f.get_ref().target_box {
             if !finite3(lo) || !finite3(hi) || (0..3).any(|k| lo[k] > hi[k]) {
-                return Err(cx.err(f.span(), "forecast.target_box", "target_box must be [[min], [max]] with min <= max"));
+                return Err(cx.err(
+                    f.span(),
+                    "forecast.target_box",
+                    "target_box must be [[min], [max]] with min <= max",
+                ));
             }
             forecast_target = Some((v3(lo), v3(hi)));
         }
@@ -604,10 +630,16 @@ fn make_triangle(p: [Vec3; 3], n: Option<[Vec3; 3]>, material: u32) -> Option<Tr
     // shading normals must be finite and on the geometric side; else fall back to flat
     let n = n.and_then(|ns| {
         let ok = ns.iter().all(|v| v.is_finite() && v.length() > 1e-6);
-        ok.then(|| ns.map(|v| {
-            let v = v.normalize();
-            if v.dot(ng) < 0.0 { -v } else { v }
-        }))
+        ok.then(|| {
+            ns.map(|v| {
+                let v = v.normalize();
+                if v.dot(ng) < 0.0 {
+                    -v
+                } else {
+                    v
+                }
+            })
+        })
     });
     Some(Triangle { p, n, ng, area: 0.5 * len, material, emitter: NO_EMITTER })
 }

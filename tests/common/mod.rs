@@ -25,7 +25,15 @@ pub fn root() -> PathBuf {
 }
 
 /// A render job with everything explicit (no progress, no checkpoints).
-pub fn job(scene: &Path, method: Method, spp: u64, seed: u64, res: (u32, u32), threads: usize, out: &Path) -> RenderJob {
+pub fn job(
+    scene: &Path,
+    method: Method,
+    spp: u64,
+    seed: u64,
+    res: (u32, u32),
+    threads: usize,
+    out: &Path,
+) -> RenderJob {
     RenderJob {
         scene: scene.to_path_buf(),
         method: Some(method),
@@ -55,7 +63,8 @@ pub fn tri_t(p: [Vec3; 3], o: Vec3, d: Vec3, tmin: f64, tmax: f64) -> Option<f64
     let f = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
     let (p0, p1, p2, o, d) = (f(p[0]), f(p[1]), f(p[2]), f(o), f(d));
     let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let cross = |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    let cross =
+        |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
     let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     let (e1, e2) = (sub(p1, p0), sub(p2, p0));
     let pv = cross(d, e2);
