@@ -2,6 +2,8 @@
 //! `forecast render SCENE [--method pt] [--spp N | --time DURATION] [--resolution WxH]
 //! [--seed S] [--threads N] [--out PREFIX] [--quiet]`.
 
+use crate::forecast::cluster::ClusteringMethod;
+use crate::forecast::estimator::{ForecastOptions, PhotonWeight, TableKind};
 use crate::integrators::{Method, MethodOptions};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
@@ -93,6 +95,30 @@ pub struct RenderArgs {
     /// iws-pm: maximum gather radius in scene units (default 2% of the scene diagonal).
     #[arg(long, value_parser = parse_positive)]
     pub max_radius: Option<f32>,
+    /// iws-cf: forecast photons to store (default: the scene's `[forecast] photons`, else 200k).
+    #[arg(long)]
+    pub forecast_photons: Option<u64>,
+    /// iws-cf: clustering algorithm.
+    #[arg(long, value_enum, default_value = "vq")]
+    pub clustering: ClusteringMethod,
+    /// iws-cf: codebook size k (clusters).
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
+    pub clusters: u32,
+    /// iws-cf: clusters with rank above this are culled (cosine sampling only).
+    #[arg(long, default_value_t = 6)]
+    pub max_rank: u32,
+    /// iws-cf: forecasters gathered per table (n).
+    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(1..))]
+    pub forecasters: u32,
+    /// iws-cf: dual table (BAJ08) or one defensive table (ablation).
+    #[arg(long, value_enum, default_value = "dual")]
+    pub table: TableKind,
+    /// iws-cf: photon weight in the table: lum(Φ)·f·cos (paper) or lum(Φ)·f (flux).
+    #[arg(long, value_enum, default_value = "paper")]
+    pub photon_weight: PhotonWeight,
+    /// iws-cf: splitting factor S0 at diffuse depth 0 for rank 0 (S = max(1, S0 >> rank); 1 at depth >= 1).
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
+    pub split: u32,
 }
 
 impl RenderArgs {
@@ -106,6 +132,16 @@ impl RenderArgs {
             photons: self.photons,
             gather: self.gather,
             max_radius: self.max_radius,
+            forecast_photons: self.forecast_photons,
+            forecast: ForecastOptions {
+                clusters: self.clusters as usize,
+                clustering: self.clustering,
+                max_rank: self.max_rank,
+                gather: self.forecasters as usize,
+                table: self.table,
+                photon_weight: self.photon_weight,
+                s0: self.split,
+            },
         }
     }
 }

@@ -53,7 +53,6 @@ pub struct ForecastOptions {
     /// Codebook size k.
     pub clusters: usize,
     /// Clustering algorithm.
-    #[serde(skip)]
     pub clustering: ClusteringMethod,
     /// Clusters with rank > max_rank are culled.
     pub max_rank: u32,

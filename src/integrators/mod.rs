@@ -6,12 +6,16 @@
 //! `preprocess`), so that rank 0 can build it and broadcast it.
 
 pub mod iws;
+pub mod iws_forecast;
 mod path;
 pub mod photon_map;
 
 pub use iws::{BsdfCaustics, CausticEstimator, Iws, IwsParams, NoCaustics};
 pub use path::{PathTracer, RR_DEPTH};
+pub use iws_forecast::{build_forecast, ForecastCaustics, DEFAULT_FORECAST_PHOTONS};
 pub use photon_map::PhotonMap;
+
+use crate::forecast::estimator::{CausticForecast, ForecastOptions};
 
 use crate::accel::World;
 use crate::math::{Rgb, Vec3};
@@ -41,6 +45,8 @@ pub enum Method {
     Iws,
     /// IWS with a caustic photon map for L_c (biased baseline).
     IwsPm,
+    /// IWS with Caustic Forecasting for L_c (BAJ08): unbiased.
+    IwsCf,
 }
 
 impl Method {
@@ -54,6 +60,7 @@ impl Method {
             Method::Pt => "pt",
             Method::Iws => "iws",
             Method::IwsPm => "iws-pm",
+            Method::IwsCf => "iws-cf",
         }
     }
 }
@@ -75,6 +82,10 @@ pub struct MethodOptions {
     pub gather: u32,
     /// Photon-map gather radius cap (None: 2% of the scene diagonal).
     pub max_radius: Option<f32>,
+    /// Forecast photons to store (None: the scene's `[forecast] photons`, else 200k).
+    pub forecast_photons: Option<u64>,
+    /// Caustic Forecasting parameters.
+    pub forecast: ForecastOptions,
 }
 
 impl Default for MethodOptions {
@@ -87,6 +98,8 @@ impl Default for MethodOptions {
             photons: 200_000,
             gather: 100,
             max_radius: None,
+            forecast_photons: None,
+            forecast: ForecastOptions::default(),
         }
     }
 }
@@ -108,6 +121,10 @@ impl MethodOptions {
 pub fn preprocess(method: Method, world: &World, opts: &MethodOptions, seed: u64) -> Result<Vec<u8>, String> {
     match method {
         Method::Pt | Method::Iws => Ok(Vec::new()),
+        Method::IwsCf => {
+            let target = opts.forecast_photons.or(world.scene.forecast_photons).unwrap_or(DEFAULT_FORECAST_PHOTONS);
+            Ok(build_forecast(world, target, opts.forecast.clone(), seed).to_bytes())
+        }
         Method::IwsPm => {
             let pm = PhotonMap::build(world, opts.photons, opts.gather, opts.max_radius, seed);
             Ok(bitcode::encode(&pm))
@@ -131,6 +148,10 @@ pub fn build(
             })?;
             pm.validate()?;
             Box::new(Iws::new("iws-pm", world, opts.iws_params(), Box::new(pm)))
+        }
+        Method::IwsCf => {
+            let cf = CausticForecast::from_bytes(product)?;
+            Box::new(Iws::new("iws-cf", world, opts.iws_params(), Box::new(ForecastCaustics::new(cf))))
         }
     })
 }

@@ -26,15 +26,12 @@ use crate::math::{Rgb, Vec3, PI};
 use crate::sampling::rng::{stream, Rng};
 use crate::scene::Material;
 use crate::spatial::KdTree;
-use crate::transport::particle::{self, Emission, ParticleVisitor, SurfaceVertex, TraceCounts};
-use rayon::prelude::*;
+use crate::transport::particle::{self, Emission, BLOCK};
 use std::cell::RefCell;
 use std::time::Instant;
 
 /// Jensen's cone-filter constant `k_c`.
 pub const CONE_K: f32 = 1.1;
-/// Paths traced per parallel block while building.
-const BLOCK: u64 = 16_384;
 /// Give up after this many paths per targeted photon.
 const PATH_FACTOR: u64 = 100;
 /// Minimum cosine between a photon's normal and `x`'s normal.
@@ -68,20 +65,6 @@ pub struct PhotonMap {
     pub build_s: f64,
 }
 
-#[derive(Default)]
-struct Collect(Vec<([f32; 3], Photon)>);
-
-impl ParticleVisitor for Collect {
-    fn surface(&mut self, v: &SurfaceVertex) -> bool {
-        if v.prev_dirac && !v.material.is_black() {
-            let n = if v.ng.dot(v.w_in) >= 0.0 { v.ng } else { -v.ng };
-            let ph = Photon { n: n.to_array(), w_in: v.w_in.to_array(), flux: v.beta.to_array() };
-            self.0.push((v.p.to_array(), ph));
-        }
-        true
-    }
-}
-
 /// Default `r_max`: 2% of the scene-bounds diagonal.
 pub fn default_max_radius(world: &World) -> f32 {
     let (lo, hi) = world.scene.bounds;
@@ -97,35 +80,16 @@ impl PhotonMap {
     /// Traces light paths until `target` caustic photons are stored (see the module doc).
     pub fn build(world: &World, target: u64, k: u32, max_radius: Option<f32>, seed: u64) -> PhotonMap {
         let t0 = Instant::now();
-        let mut items: Vec<([f32; 3], Photon)> = Vec::new();
-        let mut paths = 0u64;
         let limit = target.saturating_mul(PATH_FACTOR).max(BLOCK);
-        let has_dirac = world.scene.dirac_bounds().is_some();
-        while has_dirac && target > 0 && (items.len() as u64) < target && paths < limit {
-            let start = paths;
-            // per-path photon lists, in path order (deterministic for any thread count)
-            let block: Vec<Vec<([f32; 3], Photon)>> = (start..start + BLOCK)
-                .into_par_iter()
-                .map(|i| {
-                    let mut c = Collect::default();
-                    let mut counts = TraceCounts::default();
-                    // n_paths = 1: raw β, normalised below by the paths kept
-                    particle::trace_path(world, Emission::Cosine, 1, seed, stream::PHOTON, 0, i, &mut c, &mut counts);
-                    c.0
-                })
-                .collect();
-            for list in block {
-                paths += 1;
-                items.extend(list);
-                if items.len() as u64 >= target {
-                    break;
-                }
-            }
-        }
+        let (verts, paths) = particle::collect_caustic_vertices(world, Emission::Cosine, target, limit, seed, stream::PHOTON);
         let inv = if paths > 0 { 1.0 / paths as f32 } else { 0.0 };
-        for (_, ph) in &mut items {
-            ph.flux = (Vec3::from(ph.flux) * inv).to_array();
-        }
+        let items: Vec<([f32; 3], Photon)> = verts
+            .iter()
+            .map(|v| {
+                let ph = Photon { n: v.n.to_array(), w_in: v.w_in.to_array(), flux: (v.beta * inv).to_array() };
+                (v.p.to_array(), ph)
+            })
+            .collect();
         let trace_s = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
         let (points, photons): (Vec<[f32; 3]>, Vec<Photon>) = items.into_iter().unzip();

@@ -141,6 +141,7 @@ struct RoiDef {
 #[serde(deny_unknown_fields)]
 struct ForecastDef {
     target_box: Option<[[f32; 3]; 2]>,
+    photons: Option<u64>,
 }
 
 /// Parses a duration such as `500ms`, `30s`, `4m`, `1h` or `1m30s` into seconds.
@@ -561,7 +562,14 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
         rois.push(Roi { name: rd.name.clone(), rect: rd.rect });
     }
     let mut forecast_target = None;
+    let mut forecast_photons = None;
     if let Some(f) = &doc.forecast {
+        if let Some(n) = f.get_ref().photons {
+            if n == 0 {
+                return Err(cx.err(f.span(), "forecast.photons", "photons must be positive"));
+            }
+            forecast_photons = Some(n);
+        }
         if let Some([lo, hi]) = f.get_ref().target_box {
             if !finite3(lo) || !finite3(hi) || (0..3).any(|k| lo[k] > hi[k]) {
                 return Err(cx.err(
@@ -601,6 +609,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
         emitter_light_index,
         rois,
         forecast_target,
+        forecast_photons,
         bounds: (lo, hi),
         warnings,
     })

@@ -138,6 +138,8 @@ pub struct Scene {
     pub rois: Vec<Roi>,
     /// Optional Caustic Forecasting target box override (min, max).
     pub forecast_target: Option<(Vec3, Vec3)>,
+    /// Forecast photons to store (`[forecast] photons`).
+    pub forecast_photons: Option<u64>,
     /// Scene bounds (min, max).
     pub bounds: (Vec3, Vec3),
     /// Warnings collected while loading (degenerate triangles, ...).

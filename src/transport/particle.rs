@@ -29,33 +29,51 @@ use crate::scene::{LightRef, Material, NO_EMITTER};
 /// Safety cap on vertices per light path (documented truncation; RR does the real work).
 pub const MAX_VERTICES: u32 = 64;
 
-/// How the first direction of a light path is drawn. A seam for targeted shooting (CF
-/// forecasters aim at the Dirac bounding box with their true pdf); only the unbiased
-/// whole-hemisphere samplers exist now.
+/// How the first direction of a light path is drawn.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[non_exhaustive]
 pub enum Emission {
     /// Cosine-weighted hemisphere around the emitter normal (area lights), uniform sphere
     /// (point lights).
     #[default]
     Cosine,
+    /// Uniform over the cone subtended by a sphere (the bounding sphere of the Dirac objects):
+    /// targeted shooting for caustic forecasters only, never for VPLs [BAJ08 §3.2]. Falls back
+    /// to `Cosine` when the light point is inside the sphere. The pdf is the true one, so
+    /// forecaster powers stay physically weighted (spec §3).
+    Targeted {
+        /// Sphere centre.
+        center: Vec3,
+        /// Sphere radius.
+        radius: f32,
+    },
 }
 
 impl Emission {
     /// Samples a launch direction from `y` with normal `n` (ignored for point lights);
     /// returns `(ω, pdf_w)`, or `None` when the sampler produced no usable direction.
     #[inline]
-    pub fn sample_dir(&self, n: Vec3, point_light: bool, u: [f32; 2]) -> Option<(Vec3, f32)> {
-        match self {
-            Emission::Cosine => {
-                if point_light {
-                    Some((sample_uniform_sphere(u), uniform_sphere_pdf()))
-                } else {
-                    let l = sample_cosine_hemisphere(u);
-                    let pdf_w = cosine_hemisphere_pdf(l.z);
-                    (pdf_w > 0.0).then(|| (Frame::from_normal(n).to_world(l), pdf_w))
-                }
+    pub fn sample_dir(&self, y: Vec3, n: Vec3, point_light: bool, u: [f32; 2]) -> Option<(Vec3, f32)> {
+        if let Emission::Targeted { center, radius } = *self {
+            let to_c = center - y;
+            let dist2 = to_c.length_squared();
+            if dist2 > radius * radius * 1.0001 {
+                // uniform cone: cos θ uniform in [cos θ_max, 1], pdf_w = 1/(2π(1 − cos θ_max))
+                let cos_max = (1.0 - radius * radius / dist2).max(0.0).sqrt();
+                let cos_t = 1.0 - u[0] * (1.0 - cos_max);
+                let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+                let phi = 2.0 * std::f32::consts::PI * u[1];
+                let local = Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t);
+                let w = Frame::from_normal(to_c / dist2.sqrt()).to_world(local);
+                let pdf_w = 1.0 / (2.0 * std::f32::consts::PI * (1.0 - cos_max));
+                return (pdf_w.is_finite() && pdf_w > 0.0).then_some((w, pdf_w));
             }
+        }
+        if point_light {
+            Some((sample_uniform_sphere(u), uniform_sphere_pdf()))
+        } else {
+            let l = sample_cosine_hemisphere(u);
+            let pdf_w = cosine_hemisphere_pdf(l.z);
+            (pdf_w > 0.0).then(|| (Frame::from_normal(n).to_world(l), pdf_w))
         }
     }
 }
@@ -159,7 +177,7 @@ pub fn trace_path(
             let le = s.emitters[e as usize].radiance;
             visitor.emitter(&EmitterVertex { p: y, n, weight: inv_n / (pmf * pdf_a), emission: le, point: false });
             counts.emitter_vertices += 1;
-            let Some((w, pdf_w)) = emission.sample_dir(n, false, u_dir) else {
+            let Some((w, pdf_w)) = emission.sample_dir(y, n, false, u_dir) else {
                 return;
             };
             let cos0 = n.dot(w);
@@ -178,7 +196,7 @@ pub fn trace_path(
                 point: true,
             });
             counts.emitter_vertices += 1;
-            let Some((w, pdf_w)) = emission.sample_dir(Vec3::Z, true, u_dir) else {
+            let Some((w, pdf_w)) = emission.sample_dir(pl.position, Vec3::Z, true, u_dir) else {
                 return;
             };
             (pl.position, w, pl.intensity / (pmf * pdf_w))
@@ -245,4 +263,71 @@ pub fn trace_paths(
         trace_path(world, emission, n_paths, seed, stream_id, pass, i, visitor, &mut counts);
     }
     counts
+}
+
+/// A caustic vertex with its raw (un-normalised) throughput.
+#[derive(Clone, Copy, Debug)]
+pub struct CausticVertex {
+    /// Position.
+    pub p: Vec3,
+    /// Geometric normal on the lit side.
+    pub n: Vec3,
+    /// Direction toward the previous (Dirac) vertex.
+    pub w_in: Vec3,
+    /// Path throughput β for one launched path (divide by the paths launched).
+    pub beta: Rgb,
+}
+
+/// Light paths launched per parallel block in `collect_caustic_vertices`.
+pub const BLOCK: u64 = 16_384;
+
+/// Traces light paths 0, 1, 2, … (stream `(seed, stream_id, 0, i)`) until `target` caustic
+/// vertices (non-specular hits after a Dirac vertex) are collected or `max_paths` are launched.
+/// Returns the vertices of whole paths `0..P` and `P`, the normaliser: deterministic for any
+/// thread count, since blocks run in parallel but are concatenated in path order.
+pub fn collect_caustic_vertices(
+    world: &World,
+    emission: Emission,
+    target: u64,
+    max_paths: u64,
+    seed: u64,
+    stream_id: u64,
+) -> (Vec<CausticVertex>, u64) {
+    use rayon::prelude::*;
+    struct Collect(Vec<CausticVertex>);
+    impl ParticleVisitor for Collect {
+        fn surface(&mut self, v: &SurfaceVertex) -> bool {
+            if v.prev_dirac && !v.material.is_black() {
+                let n = if v.ng.dot(v.w_in) >= 0.0 { v.ng } else { -v.ng };
+                self.0.push(CausticVertex { p: v.p, n, w_in: v.w_in, beta: v.beta });
+            }
+            true
+        }
+    }
+    let mut out = Vec::new();
+    let mut paths = 0u64;
+    if world.scene.dirac_bounds().is_none() {
+        return (out, 0);
+    }
+    while target > 0 && (out.len() as u64) < target && paths < max_paths {
+        let start = paths;
+        let block: Vec<Vec<CausticVertex>> = (start..start + BLOCK)
+            .into_par_iter()
+            .map(|i| {
+                let mut c = Collect(Vec::new());
+                let mut counts = TraceCounts::default();
+                // n_paths = 1: raw β, normalised by the caller with the paths kept
+                trace_path(world, emission, 1, seed, stream_id, 0, i, &mut c, &mut counts);
+                c.0
+            })
+            .collect();
+        for list in block {
+            paths += 1;
+            out.extend(list);
+            if out.len() as u64 >= target {
+                break;
+            }
+        }
+    }
+    (out, paths)
 }
