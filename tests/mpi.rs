@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-const METHODS: &[&str] = &["pt"];
+const METHODS: &[&str] = &["pt", "iws", "iws-pm", "iws-cf"];
 
 fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_forecast")

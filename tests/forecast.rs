@@ -1,0 +1,211 @@
+//! Correctness tests of `iws-cf` (Caustic Forecasting, spec §8): agreement with `pt` by a
+//! Šidák-corrected per-pixel Welch z-test (family-wise α = 1e-3) for the dual table, the single
+//! table and k-means; the glass furnace (L = 1 exactly); degenerate preprocesses (no Dirac
+//! objects, all photons missing, a single cluster, max-rank 0); the serialization round trip.
+//! Negative controls show that the same statistics reject a 3% error.
+//! The table samplers' χ² and the estimator-level unbiasedness tests live next to the tables
+//! (`src/forecast/direction_table.rs`).
+
+use forecast::accel::World;
+use forecast::forecast::cluster::ClusteringMethod;
+use forecast::forecast::estimator::{CausticForecast, TableKind};
+use forecast::integrators::{self, Integrator, Method, MethodOptions};
+use forecast::render::{film::Film, render_pass};
+use forecast::stats::z_test_threshold;
+use std::path::Path;
+
+fn world(path: &str) -> World {
+    World::build(forecast::scene::load(Path::new(path)).expect("scene loads"))
+}
+
+fn render(world: &World, integ: &mut dyn Integrator, w: u32, h: u32, passes: u64, seed: u64) -> Film {
+    let cam = world.scene.camera.with_resolution(w, h);
+    let mut film = Film::new(w as usize, h as usize);
+    for pass in 0..passes {
+        integ.begin_pass(world, seed, pass);
+        render_pass(world, &*integ, &cam, seed, pass, &mut film);
+    }
+    film
+}
+
+fn opts() -> MethodOptions {
+    let mut o = MethodOptions { max_depth: 64, vpl_paths: 64, forecast_photons: Some(20_000), ..Default::default() };
+    o.forecast.clusters = 16;
+    o
+}
+
+/// Runs the CF preprocess and builds the integrator through the broadcast bytes, as a rank would.
+fn iws_cf(world: &World, o: &MethodOptions) -> (Box<dyn Integrator>, CausticForecast) {
+    let bytes = integrators::preprocess(Method::IwsCf, world, o, 17).unwrap();
+    let cf = CausticForecast::from_bytes(&bytes).unwrap();
+    (integrators::build(Method::IwsCf, world, o, &bytes).unwrap(), cf)
+}
+
+fn pt(world: &World, w: u32, h: u32, spp: u64) -> Film {
+    let mut p = integrators::build(Method::Pt, world, &opts(), &[]).unwrap();
+    render(world, p.as_mut(), w, h, spp, 11)
+}
+
+/// Welch z of the whole-image sum (all pixels and channels): far more power against a global bias.
+fn global_z(a: &Film, b: &Film) -> f64 {
+    let (ma, va, mb, vb) = (a.mean(), a.variance_of_mean(), b.mean(), b.variance_of_mean());
+    let (mut d, mut v) = (0.0f64, 0.0f64);
+    for i in 0..ma.len() {
+        for c in 0..3 {
+            d += ma[i][c] as f64 - mb[i][c] as f64;
+            v += (va[i][c] + vb[i][c]) as f64;
+        }
+    }
+    d / v.sqrt()
+}
+
+/// Max per-pixel Welch |z| between two films.
+fn max_z(a: &Film, b: &Film) -> (f64, usize) {
+    let (ma, va, mb, vb) = (a.mean(), a.variance_of_mean(), b.mean(), b.variance_of_mean());
+    let mut zmax = 0.0f64;
+    for i in 0..ma.len() {
+        for c in 0..3 {
+            let d = ma[i][c] as f64 - mb[i][c] as f64;
+            let v = (va[i][c] + vb[i][c]) as f64;
+            if d != 0.0 {
+                zmax = zmax.max(if v > 0.0 { d.abs() / v.sqrt() } else { f64::INFINITY });
+            }
+        }
+    }
+    (zmax, ma.len() * 3)
+}
+
+fn scaled(f: &Film, s: f64) -> Film {
+    let mut data = f.data.clone();
+    for px in data.chunks_exact_mut(forecast::render::film::STRIDE) {
+        for c in 0..3 {
+            px[c] *= s;
+            px[c + 3] *= s * s;
+        }
+    }
+    Film::from_data(f.width, f.height, data).unwrap()
+}
+
+/// `iws-cf` with options `o` agrees with `pt` on the Cornell box (16×16).
+fn agrees_with_pt(o: &MethodOptions, label: &str) -> CausticForecast {
+    let w = world("scenes/cornell-box.toml");
+    let reference = pt(&w, 16, 16, 4096);
+    let (mut cf, product) = iws_cf(&w, o);
+    let img = render(&w, cf.as_mut(), 16, 16, 384, 3);
+    let (z, n) = max_z(&img, &reference);
+    let thr = z_test_threshold(1e-3, n);
+    eprintln!("{label}: max|z| = {z:.2}, threshold {thr:.2} over {n} tests");
+    assert!(z < thr, "{label} disagrees with pt: max|z| {z} ≥ {thr}");
+    // the whole-image mean: one more test at α = 1e-3 (pixels are independent)
+    let (zg, thr1) = (global_z(&img, &reference), z_test_threshold(1e-3, 1));
+    eprintln!("{label}: global z = {zg:.2}, threshold {thr1:.2}");
+    assert!(zg.abs() < thr1, "{label}: image mean differs from pt, z {zg}");
+    let zg3 = global_z(&scaled(&img, 0.97), &reference);
+    assert!(zg3.abs() > thr1, "{label}: the test cannot detect a 3% error (global z {zg3})");
+    product
+}
+
+#[test]
+fn dual_table_agrees_with_pt() {
+    let p = agrees_with_pt(&opts(), "iws-cf dual/vq");
+    assert!(p.stats.stored >= 20_000 && p.stats.clusters_kept > 0 && p.radius > 0.0);
+}
+
+#[test]
+fn single_table_agrees_with_pt() {
+    let mut o = opts();
+    o.forecast.table = TableKind::Single;
+    agrees_with_pt(&o, "iws-cf single");
+}
+
+#[test]
+fn kmeans_agrees_with_pt() {
+    let mut o = opts();
+    o.forecast.clustering = ClusteringMethod::KMeans;
+    agrees_with_pt(&o, "iws-cf kmeans");
+}
+
+#[test]
+fn single_cluster_and_max_rank_zero_agree_with_pt() {
+    let mut o = opts();
+    o.forecast.clusters = 1;
+    let p = agrees_with_pt(&o, "iws-cf one cluster");
+    assert_eq!(p.clustering.clusters.len(), 1);
+    let mut o = opts();
+    o.forecast.max_rank = 0;
+    let p = agrees_with_pt(&o, "iws-cf max-rank 0");
+    assert!(p.stats.clusters_kept >= 1 && p.stats.clusters_kept < p.stats.clusters);
+}
+
+#[test]
+fn glass_furnace_is_exactly_one() {
+    let w = world("tests/scenes/glass-furnace-white.toml");
+    let (mut cf, product) = iws_cf(&w, &opts());
+    assert!(product.stats.stored > 1000, "the white ball must receive caustic light");
+    let img = render(&w, cf.as_mut(), 16, 16, 512, 5);
+    let (m, v) = (img.mean(), img.variance_of_mean());
+    let thr = z_test_threshold(1e-3, m.len() * 3);
+    let mut zmax = 0.0f64;
+    for i in 0..m.len() {
+        for c in 0..3 {
+            let d = (m[i][c] - 1.0) as f64;
+            if v[i][c] > 0.0 {
+                zmax = zmax.max(d.abs() / (v[i][c] as f64).sqrt());
+            } else {
+                assert!(d.abs() < 1e-4, "pixel {i}: {} with zero variance", m[i][c]);
+            }
+        }
+    }
+    eprintln!("glass furnace: max|z| = {zmax:.2}, threshold {thr:.2}");
+    assert!(zmax < thr, "glass furnace: max|z| {zmax} ≥ {thr}");
+    let mean: f64 = m.iter().map(|p| p[0] as f64).sum::<f64>() / m.len() as f64;
+    assert!((mean - 1.0).abs() < 0.01, "furnace mean {mean}");
+}
+
+#[test]
+fn no_dirac_objects_means_no_forecasters_and_iws_cf_equals_pt() {
+    let w = world("tests/scenes/cornell-nodirac.toml");
+    let (mut cf, product) = iws_cf(&w, &opts());
+    assert_eq!(product.stats.stored, 0);
+    assert_eq!(product.stats.clusters_kept, 0);
+    let reference = pt(&w, 12, 12, 2048);
+    let img = render(&w, cf.as_mut(), 12, 12, 256, 3);
+    let (z, n) = max_z(&img, &reference);
+    assert!(z < z_test_threshold(1e-3, n), "max|z| {z}");
+}
+
+#[test]
+fn all_photons_missing_still_agrees_with_pt() {
+    // target box above the ceiling: the downward light never shoots into it
+    let src = std::fs::read_to_string("scenes/cornell-box.toml").unwrap()
+        + "\n[forecast]\ntarget_box = [[-0.1, 5.0, -0.1], [0.1, 5.2, 0.1]]\n";
+    let scene = forecast::scene::load_str(&src, "cornell-missing.toml", Path::new("scenes")).unwrap();
+    let w = World::build(scene);
+    let mut o = opts();
+    o.forecast_photons = Some(100);
+    let (mut cf, product) = iws_cf(&w, &o);
+    assert_eq!(product.stats.stored, 0, "no forecaster can be stored");
+    assert!(product.stats.paths > 0);
+    let reference = pt(&w, 12, 12, 4096);
+    let img = render(&w, cf.as_mut(), 12, 12, 384, 3);
+    let (z, n) = max_z(&img, &reference);
+    let thr = z_test_threshold(1e-3, n);
+    assert!(z < thr, "max|z| {z} ≥ {thr}");
+}
+
+#[test]
+fn forecast_product_round_trips_through_bytes() {
+    let w = world("scenes/cornell-box.toml");
+    let o = opts();
+    let bytes = integrators::preprocess(Method::IwsCf, &w, &o, 17).unwrap();
+    let a = CausticForecast::from_bytes(&bytes).unwrap();
+    assert!(CausticForecast::from_bytes(&a.to_bytes()).unwrap() == a, "decode(encode(x)) != x");
+    assert!(a.to_bytes() == bytes, "encoding is not deterministic");
+    assert!(CausticForecast::from_bytes(&bytes[..bytes.len() / 2]).is_err());
+    // the preprocess is a pure function of the seed (its timing figures aside)
+    let mut b = CausticForecast::from_bytes(&integrators::preprocess(Method::IwsCf, &w, &o, 17).unwrap()).unwrap();
+    b.stats.tracing_s = a.stats.tracing_s;
+    b.stats.clustering_s = a.stats.clustering_s;
+    b.stats.kdtree_s = a.stats.kdtree_s;
+    assert!(b == a, "the preprocess product depends on more than the seed");
+}
