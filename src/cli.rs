@@ -34,6 +34,9 @@ pub enum Command {
     },
     /// Check every MPI collective with known data (run under mpirun).
     MpiSelftest,
+    /// Caustic Forecasting preprocess only: caustic points coloured by cluster rank (PNG) and
+    /// the preprocess figures (JSON), incl. the yield of targeted vs untargeted shooting.
+    ForecastMap(ForecastMapArgs),
 }
 
 /// `render` options.
@@ -144,6 +147,17 @@ impl RenderArgs {
             },
         }
     }
+}
+
+/// `forecast-map` options (the CF options of `render` are reused).
+#[derive(Args, Debug, Clone)]
+pub struct ForecastMapArgs {
+    /// The render options (scene, resolution, seed, CF options, `--out PREFIX`).
+    #[command(flatten)]
+    pub render: RenderArgs,
+    /// Light paths for the untargeted-yield comparison (0: skip it).
+    #[arg(long, default_value_t = 1_000_000)]
+    pub compare_paths: u64,
 }
 
 /// `diff` options.

@@ -106,6 +106,7 @@ fn run() -> Result<(), String> {
             }
             Ok(())
         }
+        Command::ForecastMap(a) => forecast_map(&a),
         Command::MpiSelftest => {
             let c = distributed::try_init()?;
             let r = distributed::self_test(c.as_ref());
@@ -118,6 +119,56 @@ fn run() -> Result<(), String> {
             r
         }
     }
+}
+
+fn forecast_map(a: &forecast::cli::ForecastMapArgs) -> Result<(), String> {
+    use forecast::integrators::{build_forecast, iws_forecast, DEFAULT_FORECAST_PHOTONS};
+    use forecast::transport::particle::Emission;
+    let r = &a.render;
+    let scene = forecast::scene::load(&r.scene).map_err(|e| e.to_string())?;
+    let world = accel::World::build(scene);
+    let opts = r.method_options();
+    let seed = r.seed.unwrap_or(world.scene.render.seed);
+    let target = opts.forecast_photons.or(world.scene.forecast_photons).unwrap_or(DEFAULT_FORECAST_PHOTONS);
+    let pool = pipeline::thread_pool(r.threads)?;
+    let (cf, untargeted) = pool.install(|| {
+        let cf = build_forecast(&world, target, opts.forecast.clone(), seed);
+        let n = a.compare_paths;
+        let untargeted = (n > 0).then(|| {
+            let (pts, paths) = forecast::transport::particle::collect_caustic_vertices(
+                &world,
+                Emission::Cosine,
+                u64::MAX,
+                n,
+                seed,
+                forecast::sampling::rng::stream::FORECAST,
+            );
+            (pts.len() as u64, paths)
+        });
+        (cf, untargeted)
+    });
+    let (w, h) = r.resolution.unwrap_or((world.scene.camera.width, world.scene.camera.height));
+    let camera = world.scene.camera.with_resolution(w, h);
+    let img = forecast::forecast::view::render_view(&world, &camera, &cf);
+    forecast::forecast::view::write_view(&r.out, &img)?;
+    let targeted_yield = cf.stats.yield_per_path;
+    let untargeted_yield = untargeted.map(|(n, p)| n as f64 / p.max(1) as f64);
+    let report = serde_json::json!({
+        "scene": world.scene.path,
+        "preprocess": cf.stats,
+        "options": cf.opts,
+        "targeted_emission": format!("{:?}", iws_forecast::targeted_emission(&world)),
+        "yield_targeted_per_path": targeted_yield,
+        "yield_untargeted_per_path": untargeted_yield,
+        "targeted_gain": untargeted_yield.map(|u| if u > 0.0 { targeted_yield / u } else { f64::INFINITY }),
+        "clusters": cf.clustering.clusters.iter().map(|c| serde_json::json!({
+            "rank": c.rank, "points": c.members.len(), "power": c.power, "area": c.area, "density": c.density,
+        })).collect::<Vec<_>>(),
+    });
+    let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+    image_io::atomic_write(&pipeline::with_ext(&r.out, "json"), text.as_bytes())?;
+    println!("{text}");
+    Ok(())
 }
 
 fn main() -> ExitCode {

@@ -9,3 +9,4 @@ pub mod cluster_map;
 pub mod direction_table;
 pub mod estimator;
 pub mod forecast_map;
+pub mod view;
