@@ -122,6 +122,9 @@ pub struct RenderArgs {
     /// iws-cf: splitting factor S0 at diffuse depth 0 for rank 0 (S = max(1, S0 >> rank); 1 at depth >= 1).
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
     pub split: u32,
+    /// iws-cf: table-cache cell edge as a fraction of the search radius (0 = build per point).
+    #[arg(long, default_value_t = 0.5)]
+    pub table_cache: f32,
 }
 
 impl RenderArgs {
@@ -144,6 +147,7 @@ impl RenderArgs {
                 table: self.table,
                 photon_weight: self.photon_weight,
                 s0: self.split,
+                cache_cell: self.table_cache.max(0.0),
             },
         }
     }

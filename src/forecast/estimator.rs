@@ -20,6 +20,8 @@ use crate::math::{luminance, Frame, Rgb, Vec3};
 use crate::sampling::rng::Rng;
 use crate::scene::Material;
 use std::cell::RefCell;
+use std::collections::HashMap;
+use std::rc::Rc;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 use std::time::Instant;
 
@@ -64,6 +66,10 @@ pub struct ForecastOptions {
     pub photon_weight: PhotonWeight,
     /// Splitting at diffuse depth 0 for rank 0 (S = max(1, S0 >> rank)).
     pub s0: u32,
+    /// Table cache cell edge as a fraction of the search radius r (0 disables the cache).
+    /// Lambertian, flat shading points reuse the tables of their cell: a deterministic function
+    /// of x, so still unbiased (spec §9 "caching tables per cluster cell").
+    pub cache_cell: f32,
 }
 
 impl Default for ForecastOptions {
@@ -76,6 +82,7 @@ impl Default for ForecastOptions {
             table: TableKind::Dual,
             photon_weight: PhotonWeight::Paper,
             s0: 4,
+            cache_cell: 0.5,
         }
     }
 }
@@ -135,10 +142,29 @@ pub struct ForecastCounters {
     pub samples: AtomicU64,
     /// Nanoseconds spent gathering and building tables ("creating CDFs").
     pub cdf_ns: AtomicU64,
+    /// Tables built.
+    pub tables_built: AtomicU64,
+    /// Table-cache hits.
+    pub cache_hits: AtomicU64,
+}
+
+/// Thread-local table cache: (owner, cell, normal bits, side) → (cluster, tables) or outside.
+type CacheKey = (u64, [i32; 3], [u32; 3]);
+type CacheEntry = Option<(usize, Rc<ForecastTables>)>;
+
+/// Entries per thread before the cache is cleared (bounds memory at ~1 KB × this).
+const CACHE_CAP: usize = 1 << 17;
+
+static NEXT_OWNER: AtomicU64 = AtomicU64::new(1);
+
+/// A fresh cache owner id (one per integrator instance, so caches never mix products).
+pub fn new_cache_owner() -> u64 {
+    NEXT_OWNER.fetch_add(1, Relaxed)
 }
 
 thread_local! {
     static GATHER: RefCell<Vec<(f32, u32)>> = const { RefCell::new(Vec::new()) };
+    static TABLES: RefCell<HashMap<CacheKey, CacheEntry>> = RefCell::new(HashMap::new());
 }
 
 impl CausticForecast {
@@ -172,7 +198,59 @@ impl CausticForecast {
         }
     }
 
+    /// Gathers forecasters around `at` in cluster `c` and builds the tables in `frame`.
+    fn build_tables(&self, c: usize, at: Vec3, frame: &Frame, weight: impl Fn(&CausticPoint, Vec3) -> f32, brdf_cos: impl Fn(Vec3) -> f32) -> ForecastTables {
+        GATHER.with(|buf| {
+            let mut buf = buf.borrow_mut();
+            self.maps.gather(c, at, self.opts.gather, self.radius, &mut buf);
+            let photons = buf.iter().filter_map(|&(_, id)| {
+                let cp = self.points.get(id as usize)?;
+                let local = frame.to_local(cp.wi());
+                // [spec §4] skip photons from below: also stops thin-wall leaks
+                (local.z > 0.0).then(|| (local, weight(cp, local)))
+            });
+            let mode = match self.opts.table {
+                TableKind::Dual => TableMode::Dual,
+                TableKind::Single => TableMode::Single { alpha: 0.1 },
+            };
+            ForecastTables::build(photons, brdf_cos, mode)
+        })
+    }
+
+    /// The (cluster, tables) of a cacheable point: a pure function of its cell, normal and side.
+    fn cached_tables(&self, owner: u64, p: Vec3, ng: Vec3, counters: &ForecastCounters) -> CacheEntry {
+        let cell = self.radius * self.opts.cache_cell;
+        let q = (p / cell).floor();
+        let key: CacheKey = (owner, [q.x as i32, q.y as i32, q.z as i32], ng.to_array().map(f32::to_bits));
+        if let Some(e) = TABLES.with(|t| t.borrow().get(&key).cloned()) {
+            counters.cache_hits.fetch_add(1, Relaxed);
+            return e;
+        }
+        let t0 = Instant::now();
+        let center = (q + Vec3::splat(0.5)) * cell;
+        let entry = self.cluster_map.query(center, ng).map(|c| {
+            let frame = Frame::from_normal(ng);
+            // Lambertian: f is constant, so it cancels in each normalised table
+            let w = |cp: &CausticPoint, l: Vec3| match self.opts.photon_weight {
+                PhotonWeight::Paper => cp.energy() * l.z,
+                PhotonWeight::Flux => cp.energy(),
+            };
+            (c, Rc::new(self.build_tables(c, center, &frame, w, |l| l.z)))
+        });
+        counters.tables_built.fetch_add(1, Relaxed);
+        counters.cdf_ns.fetch_add(t0.elapsed().as_nanos() as u64, Relaxed);
+        TABLES.with(|t| {
+            let mut t = t.borrow_mut();
+            if t.len() >= CACHE_CAP {
+                t.clear();
+            }
+            t.insert(key, entry.clone());
+        });
+        entry
+    }
+
     /// Ĺ_c(x, ωo, d). `g(ωi, rng)` returns the integrand f·|cos|·1[first hit Dirac]·L̂ (world ωi).
+    /// `cache_owner` enables the table cache for Lambertian, flat-shaded points.
     #[allow(clippy::too_many_arguments)]
     pub fn estimate(
         &self,
@@ -182,12 +260,33 @@ impl CausticForecast {
         depth: u32,
         rng: &mut Rng,
         counters: &ForecastCounters,
+        cache_owner: Option<u64>,
         mut g: impl FnMut(Vec3, &mut Rng) -> Rgb,
     ) -> Rgb {
         counters.queries.fetch_add(1, Relaxed);
         let (ng, ns) = if wo.dot(sp.ng) >= 0.0 { (sp.ng, sp.ns) } else { (-sp.ng, -sp.ns) };
-        let cluster = if self.radius > 0.0 { self.cluster_map.query(sp.p, ng) } else { None };
-        let Some(c) = cluster else {
+        let cacheable = self.opts.cache_cell > 0.0 && matches!(m, Material::Diffuse { .. }) && sp.ns == sp.ng;
+        let found: CacheEntry = match cache_owner {
+            _ if self.radius <= 0.0 => None,
+            Some(owner) if cacheable => self.cached_tables(owner, sp.p, ng, counters),
+            _ => self.cluster_map.query(sp.p, ng).map(|c| {
+                let t0 = Instant::now();
+                let frame = Frame::from_normal(ns);
+                let w = |cp: &CausticPoint, l: Vec3| {
+                    let f = luminance(bsdf::eval(m, sp, wo, cp.wi()));
+                    match self.opts.photon_weight {
+                        PhotonWeight::Paper => cp.energy() * f * l.z,
+                        PhotonWeight::Flux => cp.energy() * f,
+                    }
+                };
+                let brdf_cos = |l: Vec3| luminance(bsdf::eval(m, sp, wo, frame.to_world(l))) * l.z;
+                let t = self.build_tables(c, sp.p, &frame, w, brdf_cos);
+                counters.tables_built.fetch_add(1, Relaxed);
+                counters.cdf_ns.fetch_add(t0.elapsed().as_nanos() as u64, Relaxed);
+                (c, Rc::new(t))
+            }),
+        };
+        let Some((c, tables)) = found else {
             // outside valid clusters: one BSDF (cosine for Lambert) sample
             counters.samples.fetch_add(1, Relaxed);
             let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
@@ -198,32 +297,8 @@ impl CausticForecast {
             return g(bs.wi, rng) / bs.pdf_w;
         };
         counters.inside.fetch_add(1, Relaxed);
-        let t0 = Instant::now();
-        let frame = Frame::from_normal(ns);
-        let tables = GATHER.with(|buf| {
-            let mut buf = buf.borrow_mut();
-            self.maps.gather(c, sp.p, self.opts.gather, self.radius, &mut buf);
-            let photons = buf.iter().filter_map(|&(_, id)| {
-                let cp = self.points.get(id as usize)?;
-                let wi = cp.wi();
-                let local = frame.to_local(wi);
-                if local.z <= 0.0 {
-                    return None; // [spec §4] skip photons from below: also stops thin-wall leaks
-                }
-                let f = luminance(bsdf::eval(m, sp, wo, wi));
-                let w = match self.opts.photon_weight {
-                    PhotonWeight::Paper => cp.energy() * f * local.z,
-                    PhotonWeight::Flux => cp.energy() * f,
-                };
-                Some((local, w))
-            });
-            let mode = match self.opts.table {
-                TableKind::Dual => TableMode::Dual,
-                TableKind::Single => TableMode::Single { alpha: 0.1 },
-            };
-            ForecastTables::build(photons, |l| luminance(bsdf::eval(m, sp, wo, frame.to_world(l))) * l.z, mode)
-        });
-        counters.cdf_ns.fetch_add(t0.elapsed().as_nanos() as u64, Relaxed);
+        // cached tables live in the frame of the geometric normal (equal to ns there)
+        let frame = if cacheable && cache_owner.is_some() { Frame::from_normal(ng) } else { Frame::from_normal(ns) };
         let s = self.split_count(self.clustering.clusters[c].rank, depth);
         let mut samples = Vec::with_capacity(2 * s);
         tables.for_each_sample(s, rng, |ts| samples.push(ts));
@@ -252,6 +327,8 @@ impl ForecastCounters {
             "fraction_inside_clusters": self.inside.load(Relaxed) as f64 / q,
             "mean_splitting_factor": self.samples.load(Relaxed) as f64 / q,
             "creating_cdfs_s": self.cdf_ns.load(Relaxed) as f64 * 1e-9,
+            "tables_built": self.tables_built.load(Relaxed),
+            "table_cache_hits": self.cache_hits.load(Relaxed),
         })
     }
 }

@@ -15,7 +15,9 @@ use super::iws::{follow_dirac_chain, rr_weight, CausticEstimator, Recurse};
 use crate::accel::{offset_origin, World};
 use crate::bsdf::{self, ShadingPoint};
 use crate::forecast::caustic_point::CausticPoint;
-use crate::forecast::estimator::{CausticForecast, ForecastCounters, ForecastOptions, PreprocessStats};
+use crate::forecast::estimator::{
+    new_cache_owner, CausticForecast, ForecastCounters, ForecastOptions, PreprocessStats,
+};
 use crate::math::{Rgb, Vec3};
 use crate::sampling::rng::{stream, Rng};
 use crate::scene::{Material, NO_EMITTER};
@@ -75,12 +77,13 @@ pub struct ForecastCaustics {
     /// The broadcast product.
     pub cf: CausticForecast,
     counters: ForecastCounters,
+    cache_owner: u64,
 }
 
 impl ForecastCaustics {
     /// Wraps a product.
     pub fn new(cf: CausticForecast) -> Self {
-        ForecastCaustics { cf, counters: ForecastCounters::default() }
+        ForecastCaustics { cf, counters: ForecastCounters::default(), cache_owner: new_cache_owner() }
     }
 }
 
@@ -122,7 +125,7 @@ impl CausticEstimator for ForecastCaustics {
                 None => Rgb::ZERO,
             }
         };
-        self.cf.estimate(x, m, wo, depth, rng, &self.counters, g)
+        self.cf.estimate(x, m, wo, depth, rng, &self.counters, Some(self.cache_owner), g)
     }
 
     fn stats(&self) -> serde_json::Value {
