@@ -125,6 +125,9 @@ pub struct RenderArgs {
     /// iws-cf: table-cache cell edge as a fraction of the search radius (0 = build per point).
     #[arg(long, default_value_t = 0.5)]
     pub table_cache: f32,
+    /// iws-cf: use the photon tables at diffuse depths below this (deeper: one BSDF sample).
+    #[arg(long, default_value_t = 1)]
+    pub table_depth: u32,
 }
 
 impl RenderArgs {
@@ -148,6 +151,7 @@ impl RenderArgs {
                 photon_weight: self.photon_weight,
                 s0: self.split,
                 cache_cell: self.table_cache.max(0.0),
+                table_depth: self.table_depth,
             },
         }
     }

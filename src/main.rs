@@ -171,7 +171,25 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs) -> Result<(), String> {
     Ok(())
 }
 
+/// Restores the default SIGPIPE action so that `forecast diff … | head` ends quietly like other
+/// Unix tools instead of panicking on a closed stdout (Rust ignores SIGPIPE by default).
+fn default_sigpipe() {
+    #[cfg(unix)]
+    {
+        extern "C" {
+            fn signal(signum: i32, handler: usize) -> usize;
+        }
+        const SIGPIPE: i32 = 13;
+        const SIG_DFL: usize = 0;
+        // SAFETY: resetting a signal disposition to its default before any thread is started.
+        unsafe {
+            signal(SIGPIPE, SIG_DFL);
+        }
+    }
+}
+
 fn main() -> ExitCode {
+    default_sigpipe();
     match run() {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

@@ -70,6 +70,10 @@ pub struct ForecastOptions {
     /// Lambertian, flat shading points reuse the tables of their cell: a deterministic function
     /// of x, so still unbiased (spec §9 "caching tables per cluster cell").
     pub cache_cell: f32,
+    /// Photon tables are used at diffuse depths d < table_depth; deeper, one BSDF sample
+    /// (S_cos = 1, spec §4). The dual table doubles the samples per vertex, so tables at every
+    /// depth make the recursion branch; the choice depends on d only, so it stays unbiased.
+    pub table_depth: u32,
 }
 
 impl Default for ForecastOptions {
@@ -83,6 +87,7 @@ impl Default for ForecastOptions {
             photon_weight: PhotonWeight::Paper,
             s0: 4,
             cache_cell: 0.5,
+            table_depth: 1,
         }
     }
 }
@@ -267,7 +272,7 @@ impl CausticForecast {
         let (ng, ns) = if wo.dot(sp.ng) >= 0.0 { (sp.ng, sp.ns) } else { (-sp.ng, -sp.ns) };
         let cacheable = self.opts.cache_cell > 0.0 && matches!(m, Material::Diffuse { .. }) && sp.ns == sp.ng;
         let found: CacheEntry = match cache_owner {
-            _ if self.radius <= 0.0 => None,
+            _ if self.radius <= 0.0 || depth >= self.opts.table_depth => None,
             Some(owner) if cacheable => self.cached_tables(owner, sp.p, ng, counters),
             _ => self.cluster_map.query(sp.p, ng).map(|c| {
                 let t0 = Instant::now();
