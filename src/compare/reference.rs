@@ -54,6 +54,9 @@ pub fn run_reference(
     let spp = if time.is_some() { None } else { Some(base.spp.or(scene.render.spp).unwrap_or(16)) };
     let prefix = base.out.clone();
     let resume = base.resume.as_deref().map(resume_prefix);
+    if let Some(dir) = prefix.parent().filter(|d| !d.as_os_str().is_empty() && cluster.rank() == 0) {
+        std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    }
     let mut results = Vec::new();
     for k in 0..2u64 {
         let resume_k = resume.as_ref().map(|r| with_ext(&half_prefix(r, k), "ckpt"));

@@ -129,8 +129,16 @@ fn fmt_e(v: f64) -> String {
     }
 }
 
+fn fmt_f(v: f64, digits: usize) -> String {
+    if v.is_finite() {
+        format!("{v:.digits$}")
+    } else {
+        "–".into()
+    }
+}
+
 fn ok_runs<'a>(runs: &'a [RunRecord], method: &'a str, budget: f64) -> impl Iterator<Item = &'a RunRecord> + 'a {
-    runs.iter().filter(move |r| r.method == method && r.budget_s == budget && r.error.is_none())
+    runs.iter().filter(move |r| r.method == method && r.budget_s == budget && r.error.is_none() && r.spp > 0)
 }
 
 fn region_rel(r: &RunRecord, region: &str) -> Option<f64> {
@@ -267,7 +275,7 @@ pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -
 
     // Tables.
     let mut sum_h: Vec<String> =
-        ["method", "budget", "runs ok", "mean spp", "mean wall s", "preprocess share"].map(String::from).to_vec();
+        ["method", "budget", "runs measured", "mean spp", "mean wall s", "preprocess share"].map(String::from).to_vec();
     for reg in &o.regions {
         sum_h.push(format!("relMSE {} (mean)", reg.name));
         sum_h.push(format!("relMSE {} (min–max)", reg.name));
@@ -276,15 +284,21 @@ pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -
     for m in &methods {
         for &b in &budgets {
             let runs: Vec<&RunRecord> = ok_runs(&o.runs, m, b).collect();
-            let n_all = o.runs.iter().filter(|r| &r.method == m && r.budget_s == b).count();
+            let all: Vec<&RunRecord> = o.runs.iter().filter(|r| &r.method == m && r.budget_s == b).collect();
+            let zero = all.iter().filter(|r| r.error.is_none() && r.spp == 0).count();
             let a = |f: fn(&RunRecord) -> f64| aggregate(runs.iter().map(|r| f(r))).map_or(f64::NAN, |a| a.mean);
             let mut row = vec![
                 m.clone(),
                 budget_label(b),
-                format!("{}/{}", runs.len(), n_all),
-                format!("{:.1}", a(|r| r.spp as f64)),
-                format!("{:.2}", a(|r| r.wall_s)),
-                format!("{:.3}", a(|r| r.preprocess_share)),
+                format!(
+                    "{}/{}{}",
+                    runs.len(),
+                    all.len(),
+                    if zero > 0 { format!(" ({zero} with 0 spp)") } else { String::new() }
+                ),
+                fmt_f(a(|r| r.spp as f64), 1),
+                fmt_f(a(|r| r.wall_s), 2),
+                fmt_f(a(|r| r.preprocess_share), 3),
             ];
             for reg in &o.regions {
                 match aggregate(runs.iter().filter_map(|r| region_rel(r, &reg.name))) {
@@ -311,7 +325,11 @@ pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -
                 r.method.clone(),
                 budget_label(r.budget_s),
                 r.seed.to_string(),
-                r.error.as_ref().map_or("ok".into(), |e| format!("FAILED: {e}")),
+                match &r.error {
+                    Some(e) => format!("FAILED: {e}"),
+                    None if r.spp == 0 => "0 spp: no pass fit in the budget (left out of means and charts)".into(),
+                    None => "ok".into(),
+                },
                 r.spp.to_string(),
                 format!("{:.3}", r.wall_s),
                 format!("{:.3}", r.preprocess_s),
