@@ -200,7 +200,7 @@ fn reference_halves_and_compare_end_to_end() {
         out: d.join("cmp2"),
         ..cfg
     };
-    let e = compare::run_compare(&cfg2, &Local::new()).err().expect("resolution mismatch must fail");
+    let e = compare::run_compare(&cfg2, &Local::new()).expect_err("resolution mismatch must fail");
     assert!(e.contains("ref.exr") && e.contains("16x16"), "{e}");
 }
 

@@ -246,7 +246,7 @@ pub fn run_suite(cfg: &StabilityConfig) -> Result<Vec<StabilityRecord>, String> 
         let scene_path = cfg.scenes.join(case.file);
         if !refs.iter().any(|(f, _)| f == case.file) {
             let prefix = cfg.out.join("refs").join(case.file.trim_end_matches(".toml"));
-            let j = job(&scene_path, Method::Pt, &base, cfg, cfg.reference_time, 0x5EED_4EF, prefix);
+            let j = job(&scene_path, Method::Pt, &base, cfg, cfg.reference_time, 0x05EE_D4EF, prefix);
             let img = match guarded_render(&j) {
                 Ok(r) => Some(pipeline::image_from_film(&r.film)),
                 Err((e, _)) => {
