@@ -11,8 +11,8 @@ mod path;
 pub mod photon_map;
 
 pub use iws::{BsdfCaustics, CausticEstimator, Iws, IwsParams, NoCaustics};
-pub use iws_forecast::{build_forecast, ForecastCaustics, DEFAULT_FORECAST_PHOTONS};
 pub use path::{PathTracer, RR_DEPTH};
+pub use iws_forecast::{build_forecast, ForecastCaustics, DEFAULT_FORECAST_PHOTONS};
 pub use photon_map::PhotonMap;
 
 use crate::forecast::estimator::{CausticForecast, ForecastOptions};
