@@ -37,6 +37,13 @@ pub enum Command {
     /// Caustic Forecasting preprocess only: caustic points coloured by cluster rank (PNG) and
     /// the preprocess figures (JSON), incl. the yield of targeted vs untargeted shooting.
     ForecastMap(ForecastMapArgs),
+    /// Long `pt` reference: PREFIX.exr (mean + variance) and two independent halves
+    /// PREFIX.half0/half1.exr; resumable (`--resume PREFIX`).
+    Reference(RenderArgs),
+    /// Time-boxed comparison of methods against a reference: tables, charts, crops, report.md/html.
+    Compare(CompareArgs),
+    /// Edge-case suite (scenes/stability): finishes, finite output, warnings; stability.md/html.
+    Stability(StabilityArgs),
 }
 
 /// `render` options.
@@ -251,4 +258,53 @@ fn parse_crop(s: &str) -> Result<(usize, usize, usize, usize), String> {
         [x, y, w, h] if *w > 0 && *h > 0 => Ok((*x, *y, *w, *h)),
         _ => Err(format!("bad crop `{s}` (expected x,y,w,h with w,h > 0)")),
     }
+}
+
+/// `compare` options (the render options are reused; `--out` is the report directory).
+#[derive(Args, Debug, Clone)]
+pub struct CompareArgs {
+    /// Render options: scene, resolution, threads, method options; `--out DIR` is the output directory.
+    #[command(flatten)]
+    pub render: RenderArgs,
+    /// Methods to compare, comma-separated.
+    #[arg(long, default_value = "pt,iws-pm,iws-cf")]
+    pub methods: String,
+    /// Time budgets, comma-separated (preprocess included).
+    #[arg(long, default_value = "30s,1m,2m,4m")]
+    pub budgets: String,
+    /// Seeds per method and budget (seed, seed+1, ...).
+    #[arg(long, default_value_t = 3)]
+    pub seeds: u64,
+    /// Reference image (from `forecast reference`).
+    #[arg(long)]
+    pub reference: PathBuf,
+}
+
+/// `stability` options.
+#[derive(Args, Debug, Clone)]
+pub struct StabilityArgs {
+    /// Directory of the suite's scenes.
+    #[arg(long, default_value = "scenes/stability")]
+    pub scenes: PathBuf,
+    /// Resolution override, WxH (default: the scenes' 64x64).
+    #[arg(long, value_parser = parse_resolution)]
+    pub resolution: Option<(u32, u32)>,
+    /// Time box per run.
+    #[arg(long, value_parser = parse_secs, default_value = "3s")]
+    pub time_per_run: f64,
+    /// Time of each scene's pt reference (default: 4 x --time-per-run).
+    #[arg(long, value_parser = parse_secs)]
+    pub reference_time: Option<f64>,
+    /// Methods, comma-separated.
+    #[arg(long, default_value = "pt,iws,iws-pm,iws-cf")]
+    pub methods: String,
+    /// Only these cases, comma-separated (default: all).
+    #[arg(long)]
+    pub only: Option<String>,
+    /// Worker threads.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Output directory.
+    #[arg(long, default_value = "out/stability")]
+    pub out: PathBuf,
 }

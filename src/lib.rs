@@ -16,6 +16,7 @@ pub mod bsdf;
 pub mod chart;
 pub mod checkpoint;
 pub mod cli;
+pub mod compare;
 pub mod distributed;
 pub mod forecast;
 pub mod image_io;

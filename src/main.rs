@@ -2,7 +2,7 @@
 
 use clap::Parser;
 use forecast::cli::{Cli, Command};
-use forecast::{accel, bench, distributed, image_io, metrics, pipeline, scenegen};
+use forecast::{accel, bench, compare, distributed, image_io, metrics, pipeline, scenegen};
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -107,6 +107,57 @@ fn run() -> Result<(), String> {
             Ok(())
         }
         Command::ForecastMap(a) => forecast_map(&a),
+        Command::Reference(a) => {
+            let cluster = distributed::try_init()?;
+            if let Some(r) = compare::reference::run_reference(&a, cluster.as_ref(), started)? {
+                eprintln!("reference: {} spp -> {}.{{exr,json}} + .half0/.half1", r["spp"], a.out.display());
+            }
+            Ok(())
+        }
+        Command::Compare(a) => {
+            let cluster = distributed::try_init()?;
+            let cfg = compare::CompareConfig {
+                base: compare::job_from_args(&a.render),
+                methods: compare::parse_methods(&a.methods)?,
+                budgets: compare::parse_budgets(&a.budgets)?,
+                seeds: a.seeds,
+                reference: a.reference.clone(),
+                out: a.render.out.clone(),
+            };
+            if compare::run_compare(&cfg, cluster.as_ref())?.is_some() {
+                eprintln!("compare: report in {}", cfg.out.join("report.html").display());
+            }
+            Ok(())
+        }
+        Command::Stability(a) => {
+            let cluster = distributed::try_init()?;
+            if cluster.size() > 1 {
+                return Err("stability runs single-process; start it without mpirun".into());
+            }
+            let cfg = compare::stability::StabilityConfig {
+                scenes: a.scenes.clone(),
+                resolution: a.resolution,
+                time_per_run: a.time_per_run,
+                reference_time: a.reference_time.unwrap_or(4.0 * a.time_per_run),
+                methods: compare::parse_methods(&a.methods)?,
+                only: a.only.as_deref().map_or(Vec::new(), |s| s.split(',').map(|t| t.trim().to_string()).collect()),
+                threads: a.threads,
+                out: a.out.clone(),
+            };
+            let recs = compare::stability::run_suite(&cfg)?;
+            compare::stability::write_stability_report(&cfg.out, &cfg, &recs)?;
+            let bad = recs.iter().filter(|r| !r.ok()).count();
+            eprintln!(
+                "stability: {} of {} runs ok; report in {}",
+                recs.len() - bad,
+                recs.len(),
+                cfg.out.join("stability.html").display()
+            );
+            if bad > 0 {
+                return Err(format!("stability: {bad} run(s) failed"));
+            }
+            Ok(())
+        }
         Command::MpiSelftest => {
             let c = distributed::try_init()?;
             let r = distributed::self_test(c.as_ref());

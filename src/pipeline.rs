@@ -70,7 +70,9 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
     let (rank, size) = (cluster.rank(), cluster.size());
     let pool = thread_pool(job.threads)?;
     let t_load = Instant::now();
-    let scene = crate::scene::load(&job.scene).map_err(|e| e.to_string())?;
+    let mut scene = crate::scene::load(&job.scene).map_err(|e| e.to_string())?;
+    let limitations = crate::compare::stability::scene_warnings(&scene);
+    scene.warnings.extend(limitations);
     let load_s = secs(t_load);
     if rank == 0 {
         for w in &scene.warnings {

@@ -1,0 +1,361 @@
+//! Time-boxed method comparisons: `forecast compare`, `forecast reference`, `forecast stability`.
+//!
+//! * [`run_compare`] renders every (method, budget, seed) as a time box (`RenderJob::time`,
+//!   counted from just before the render starts, so scene loading and the caustic preprocess are
+//!   inside the budget) and measures each result against a reference EXR: RMSE and relMSE
+//!   (`metrics`, ε = 0.01) of the whole image and of every `[[roi]]` of the scene, spp reached
+//!   and the preprocess share `preprocess_s / total_s`.
+//! * Under MPI every rank runs the same loop (each render is collective and the whole job shares
+//!   the budget); only rank 0 measures and writes. Failed runs are recorded, not fatal.
+//! * ROIs are given at the scene camera's resolution; [`scale_roi`] maps them to the render
+//!   resolution (outward rounding, clamped to the image, never empty).
+//!
+//! Submodules: [`reference`] (two independent halves + their mean), [`report`] (charts, crops,
+//! `report.md`/`report.html`/`results.json`), [`stability`] (the edge-case suite and the scene
+//! warnings every render emits).
+
+pub mod reference;
+pub mod report;
+pub mod stability;
+
+use crate::cli::RenderArgs;
+use crate::distributed::Cluster;
+use crate::image_io::{self, Image};
+use crate::integrators::Method;
+use crate::metrics::{self, Rect, REL_MSE_EPS};
+use crate::pipeline::{self, RenderJob};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// A named image region; `rect: None` is the whole image.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Region {
+    /// `full` for the whole image, else the ROI's name.
+    pub name: String,
+    /// Crop `(x, y, w, h)` at the render resolution.
+    pub rect: Option<Rect>,
+}
+
+/// Errors of one image in one region.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RegionError {
+    /// Region name.
+    pub region: String,
+    /// Root mean squared error against the reference.
+    pub rmse: f64,
+    /// Relative MSE against the reference (ε = [`REL_MSE_EPS`]).
+    pub rel_mse: f64,
+}
+
+/// One time-boxed run and its measurements.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunRecord {
+    /// Method name.
+    pub method: String,
+    /// Time budget in seconds.
+    pub budget_s: f64,
+    /// Seed index (0-based) within the comparison.
+    pub seed_index: u64,
+    /// The seed used.
+    pub seed: u64,
+    /// `None` when the run finished; else its error.
+    pub error: Option<String>,
+    /// Samples per pixel reached.
+    pub spp: u64,
+    /// Wall time of the run (`timings.total_s`).
+    pub wall_s: f64,
+    /// Preprocess time.
+    pub preprocess_s: f64,
+    /// `preprocess_s / wall_s`.
+    pub preprocess_share: f64,
+    /// Non-finite samples caught by the renderer.
+    pub nonfinite_samples: u64,
+    /// Errors per region (`full` first).
+    pub regions: Vec<RegionError>,
+    /// Output prefix of the run's images (`PREFIX.exr`, `.png`, `.json`).
+    pub prefix: PathBuf,
+}
+
+/// Maps an ROI rectangle given at resolution `from` to resolution `to`: edges scale by `to/from`,
+/// rounding outward, clamped to the image; `None` if the ROI lies outside the image.
+pub fn scale_roi(rect: [u32; 4], from: (u32, u32), to: (u32, u32)) -> Option<Rect> {
+    let [x, y, w, h] = rect.map(|v| v as u64);
+    let (fw, fh, tw, th) = (from.0.max(1) as u64, from.1.max(1) as u64, to.0 as u64, to.1 as u64);
+    let x0 = (x * tw / fw).min(tw);
+    let y0 = (y * th / fh).min(th);
+    let x1 = ((x + w) * tw).div_ceil(fw).min(tw).max(x0 + 1);
+    let y1 = ((y + h) * th).div_ceil(fh).min(th).max(y0 + 1);
+    if x0 >= tw || y0 >= th {
+        return None;
+    }
+    Some((x0 as usize, y0 as usize, (x1 - x0) as usize, (y1 - y0) as usize))
+}
+
+/// `full` plus every `[[roi]]` of `scene` that falls inside an image of `res` (scaled from the
+/// camera resolution).
+pub fn regions(scene: &crate::scene::Scene, res: (u32, u32)) -> Vec<Region> {
+    let cam = (scene.camera.width, scene.camera.height);
+    let mut v = vec![Region { name: "full".into(), rect: None }];
+    for r in &scene.rois {
+        if let Some(rect) = scale_roi(r.rect, cam, res) {
+            v.push(Region { name: r.name.clone(), rect: Some(rect) });
+        }
+    }
+    v
+}
+
+/// RMSE and relMSE of `img` against `reference` in every region.
+pub fn measure(img: &Image, reference: &Image, regions: &[Region]) -> Result<Vec<RegionError>, String> {
+    regions
+        .iter()
+        .map(|r| {
+            Ok(RegionError {
+                region: r.name.clone(),
+                rmse: metrics::rmse(img, reference, r.rect)?,
+                rel_mse: metrics::rel_mse(img, reference, REL_MSE_EPS, r.rect)?,
+            })
+        })
+        .collect()
+}
+
+/// Parses `pt,iws-pm,iws-cf`.
+pub fn parse_methods(s: &str) -> Result<Vec<Method>, String> {
+    let v: Vec<Method> = s
+        .split(',')
+        .filter(|t| !t.trim().is_empty())
+        .map(|t| Method::from_name(t.trim()).ok_or_else(|| format!("unknown method `{}`", t.trim())))
+        .collect::<Result<_, _>>()?;
+    if v.is_empty() {
+        return Err(format!("no methods in `{s}`"));
+    }
+    Ok(v)
+}
+
+/// Parses `30s,1m,2m` into seconds (each > 0).
+pub fn parse_budgets(s: &str) -> Result<Vec<f64>, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .filter(|t| !t.trim().is_empty())
+        .map(|t| crate::scene::parse_duration(t.trim()))
+        .collect::<Result<_, _>>()?;
+    if v.is_empty() || v.iter().any(|b| !b.is_finite() || *b <= 0.0) {
+        return Err(format!("budgets `{s}` must be a non-empty list of positive durations"));
+    }
+    Ok(v)
+}
+
+/// A budget as a short label: `500ms`, `30s`, `1.5s`, `4m`, `1h`.
+pub fn budget_label(secs: f64) -> String {
+    if secs < 1.0 {
+        format!("{}ms", (secs * 1000.0).round())
+    } else if secs >= 3600.0 && secs % 3600.0 == 0.0 {
+        format!("{}h", secs / 3600.0)
+    } else if secs >= 60.0 && secs % 60.0 == 0.0 {
+        format!("{}m", secs / 60.0)
+    } else {
+        format!("{}s", (secs * 100.0).round() / 100.0)
+    }
+}
+
+/// The render job `args` describe (as `forecast render` builds it).
+pub fn job_from_args(a: &RenderArgs) -> RenderJob {
+    RenderJob {
+        scene: a.scene.clone(),
+        method: a.method,
+        opts: a.method_options(),
+        spp: a.spp,
+        time: a.time,
+        seed: a.seed,
+        resolution: a.resolution,
+        out: a.out.clone(),
+        progress: !a.quiet,
+        checkpoint_every: a.checkpoint_every,
+        resume: a.resume.clone(),
+        checkpoint_path: None,
+        max_rounds: a.max_rounds,
+        threads: a.threads,
+    }
+}
+
+/// What `forecast compare` does.
+#[derive(Clone, Debug)]
+pub struct CompareConfig {
+    /// Base job: scene, options, resolution, threads (method, time, seed, out are replaced).
+    pub base: RenderJob,
+    /// Methods.
+    pub methods: Vec<Method>,
+    /// Budgets in seconds.
+    pub budgets: Vec<f64>,
+    /// Seeds per (method, budget).
+    pub seeds: u64,
+    /// Reference EXR.
+    pub reference: PathBuf,
+    /// Output directory.
+    pub out: PathBuf,
+}
+
+/// The measured comparison (rank 0).
+#[derive(Clone, Debug, Serialize)]
+pub struct CompareOutcome {
+    /// Scene file.
+    pub scene: String,
+    /// Reference EXR.
+    pub reference: PathBuf,
+    /// Render resolution.
+    pub resolution: (u32, u32),
+    /// Regions measured.
+    pub regions: Vec<Region>,
+    /// Every run, in order.
+    pub runs: Vec<RunRecord>,
+    /// Warnings of the scene (also in every run's JSON).
+    pub warnings: Vec<String>,
+}
+
+fn with_ext(p: &Path, e: &str) -> PathBuf {
+    pipeline::with_ext(p, e)
+}
+
+/// Rank 0 reads the reference and decides the resolution; every rank learns it (or the error).
+fn agree_resolution(cfg: &CompareConfig, cluster: &dyn Cluster) -> Result<(Option<Image>, (u32, u32)), String> {
+    let mut payload = Vec::new();
+    let mut reference = None;
+    if cluster.rank() == 0 {
+        let decided = image_io::read_exr(&cfg.reference).and_then(|img| {
+            let rr = (img.width as u32, img.height as u32);
+            match cfg.base.resolution {
+                Some(r) if r != rr => Err(format!(
+                    "{}: reference is {}x{} but --resolution is {}x{}; render the reference at the same resolution",
+                    cfg.reference.display(),
+                    rr.0,
+                    rr.1,
+                    r.0,
+                    r.1
+                )),
+                _ => Ok((img, rr)),
+            }
+        });
+        payload = match decided {
+            Ok((img, (w, h))) => {
+                reference = Some(img);
+                let mut p = vec![0u8];
+                p.extend(w.to_le_bytes());
+                p.extend(h.to_le_bytes());
+                p
+            }
+            Err(e) => {
+                let mut p = vec![1u8];
+                p.extend(e.as_bytes());
+                p
+            }
+        };
+    }
+    cluster.broadcast_bytes(&mut payload);
+    match payload.first() {
+        Some(0) if payload.len() == 9 => {
+            let w = u32::from_le_bytes(payload[1..5].try_into().map_err(|_| "bad broadcast")?);
+            let h = u32::from_le_bytes(payload[5..9].try_into().map_err(|_| "bad broadcast")?);
+            Ok((reference, (w, h)))
+        }
+        _ => Err(String::from_utf8_lossy(payload.get(1..).unwrap_or_default()).into_owned()),
+    }
+}
+
+/// Runs the comparison on every rank; returns `Some` on rank 0 (after writing the report).
+pub fn run_compare(cfg: &CompareConfig, cluster: &dyn Cluster) -> Result<Option<CompareOutcome>, String> {
+    if cfg.seeds == 0 {
+        return Err("--seeds must be at least 1".into());
+    }
+    let scene = crate::scene::load(&cfg.base.scene).map_err(|e| e.to_string())?;
+    let (reference, res) = agree_resolution(cfg, cluster)?;
+    let regions = regions(&scene, res);
+    let base_seed = cfg.base.seed.unwrap_or(scene.render.seed);
+    let runs_dir = cfg.out.join("runs");
+    if cluster.rank() == 0 {
+        std::fs::create_dir_all(&runs_dir).map_err(|e| format!("cannot create {}: {e}", runs_dir.display()))?;
+    }
+    let mut runs = Vec::new();
+    for &method in &cfg.methods {
+        for &budget in &cfg.budgets {
+            for k in 0..cfg.seeds {
+                let seed = base_seed.wrapping_add(k);
+                let prefix = runs_dir.join(format!("{}_{}_s{k}", method.name(), budget_label(budget)));
+                let job = RenderJob {
+                    method: Some(method),
+                    time: Some(budget),
+                    spp: None,
+                    seed: Some(seed),
+                    resolution: Some(res),
+                    out: prefix.clone(),
+                    progress: false,
+                    checkpoint_every: None,
+                    resume: None,
+                    checkpoint_path: None,
+                    max_rounds: None,
+                    ..cfg.base.clone()
+                };
+                let result = pipeline::render(&job, cluster, Instant::now());
+                let Some(reference) = &reference else { continue };
+                let mut rec = RunRecord {
+                    method: method.name().into(),
+                    budget_s: budget,
+                    seed_index: k,
+                    seed,
+                    error: None,
+                    spp: 0,
+                    wall_s: 0.0,
+                    preprocess_s: 0.0,
+                    preprocess_share: 0.0,
+                    nonfinite_samples: 0,
+                    regions: Vec::new(),
+                    prefix: prefix.clone(),
+                };
+                match result {
+                    Ok(Some(r)) => {
+                        let rep = &r.report;
+                        rec.spp = rep["spp"].as_u64().unwrap_or(0);
+                        rec.wall_s = rep["timings"]["total_s"].as_f64().unwrap_or(0.0);
+                        rec.preprocess_s = rep["timings"]["preprocess_s"].as_f64().unwrap_or(0.0);
+                        rec.preprocess_share = rec.preprocess_s / rec.wall_s.max(1e-12);
+                        rec.nonfinite_samples = rep["nonfinite_samples"].as_u64().unwrap_or(0);
+                        let img = pipeline::image_from_film(&r.film);
+                        match measure(&img, reference, &regions) {
+                            Ok(m) => rec.regions = m,
+                            Err(e) => rec.error = Some(format!("{}: {e}", with_ext(&prefix, "exr").display())),
+                        }
+                    }
+                    Ok(None) => rec.error = Some("no result on rank 0".into()),
+                    Err(e) => rec.error = Some(e),
+                }
+                if let Some(e) = &rec.error {
+                    eprintln!("compare: {} {} seed {k}: FAILED: {e}", method.name(), budget_label(budget));
+                } else {
+                    eprintln!(
+                        "compare: {} {} seed {k}: {} spp in {:.2} s, relMSE {:.4e}",
+                        method.name(),
+                        budget_label(budget),
+                        rec.spp,
+                        rec.wall_s,
+                        rec.regions.first().map_or(f64::NAN, |r| r.rel_mse)
+                    );
+                }
+                runs.push(rec);
+            }
+        }
+    }
+    let Some(reference) = reference else { return Ok(None) };
+    let outcome = CompareOutcome {
+        scene: scene.path.clone(),
+        reference: cfg.reference.clone(),
+        resolution: res,
+        regions,
+        runs,
+        warnings: {
+            let mut w = scene.warnings.clone();
+            w.extend(stability::scene_warnings(&scene));
+            w
+        },
+    };
+    report::write_compare_report(&cfg.out, &outcome, &reference)?;
+    Ok(Some(outcome))
+}

@@ -1,0 +1,425 @@
+//! The stability suite (`forecast stability`) and the scene warnings every render emits.
+//!
+//! * [`scene_warnings`]: scene-level limitations, called by `pipeline::render` for every render
+//!   (printed on stderr, stored in the JSON `warnings`). Today: point lights together with Dirac
+//!   objects, whose caustics `pt` and `iws-cf` cannot sample (BAJ08 limitation).
+//! * [`run_suite`]: every [`CASES`] scene (`scenes/stability/`, 64×64 cameras) with every method,
+//!   each a short time box. A run's error or panic is caught and recorded (never aborting the
+//!   suite); per run: finished, NaN/Inf samples caught (`nonfinite_samples`), whether the image is
+//!   finite, whether the expected warnings fired, relMSE and mean difference against the scene's
+//!   `pt` reference (rendered by the suite with an independent seed), the time and spp.
+//! * [`write_stability_report`]: `stability.json`, `stability.md`, `stability.html`.
+//!
+//! Single-process only (catching a panic on one MPI rank would leave the others waiting).
+
+use super::report::{esc, html_page, table_html, table_md};
+use crate::distributed::local::Local;
+use crate::image_io::{atomic_write, Image};
+use crate::integrators::{Method, MethodOptions};
+use crate::metrics::{self, REL_MSE_EPS};
+use crate::pipeline::{self, RenderJob, RenderResult};
+use crate::scene::Scene;
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The distinctive part of the point-light caustic warning (tests look for it).
+pub const POINT_LIGHT_WARNING: &str = "cannot be sampled by `pt` and `iws-cf`";
+
+/// Warnings about scene-level limitations of the methods; empty when there are none.
+pub fn scene_warnings(scene: &Scene) -> Vec<String> {
+    let mut w = Vec::new();
+    let n = scene.point_lights.len();
+    if n > 0 && scene.dirac_bounds().is_some() {
+        w.push(format!(
+            "{}: {n} point light(s) and Dirac (mirror/glass) objects: caustics lit by point lights (paths L S+ D) \
+             {POINT_LIGHT_WARNING} (BAJ08 limitation: a point light is never hit, and a Dirac chain cannot be \
+             connected to it); those methods leave them out, `iws-pm` includes them",
+            scene.path
+        ));
+    }
+    w
+}
+
+/// One scene of the suite.
+#[derive(Clone, Copy, Debug)]
+pub struct Case {
+    /// Case name.
+    pub name: &'static str,
+    /// Scene file name in the suite directory.
+    pub file: &'static str,
+    /// IWS bound `b` as a multiple of the default `0.25·π·N/A_D` (`None`: the default).
+    pub bound_factor: Option<f64>,
+    /// Substrings that must each appear in some warning of every run.
+    pub expect_warnings: &'static [&'static str],
+    /// What it tests.
+    pub what: &'static str,
+}
+
+/// The suite.
+pub const CASES: &[Case] = &[
+    Case {
+        name: "point-glass",
+        file: "point-glass.toml",
+        bound_factor: None,
+        expect_warnings: &[POINT_LIGHT_WARNING],
+        what: "point light casting a caustic through glass (pt and iws-cf cannot sample it)",
+    },
+    Case {
+        name: "no-dirac",
+        file: "no-dirac.toml",
+        bound_factor: None,
+        expect_warnings: &[],
+        what: "no Dirac objects: iws-cf reduces to IWS and agrees with pt",
+    },
+    Case {
+        name: "tiny-glass",
+        file: "tiny-glass.toml",
+        bound_factor: None,
+        expect_warnings: &[],
+        what: "a 1 cm glass sphere far from the light (few or no caustic points)",
+    },
+    Case {
+        name: "thin-wall",
+        file: "thin-wall.toml",
+        bound_factor: None,
+        expect_warnings: &[],
+        what: "2 mm wall with a caustic on one side (photon-map light bleeding)",
+    },
+    Case {
+        name: "light-in-shell",
+        file: "light-in-shell.toml",
+        bound_factor: None,
+        expect_warnings: &[],
+        what: "the only light inside a glass shell",
+    },
+    Case {
+        name: "bound-1e-6",
+        file: "cornell-small.toml",
+        bound_factor: Some(1e-6),
+        expect_warnings: &[],
+        what: "IWS bound b = 1e-6 x default",
+    },
+    Case {
+        name: "bound-1e6",
+        file: "cornell-small.toml",
+        bound_factor: Some(1e6),
+        expect_warnings: &[],
+        what: "IWS bound b = 1e6 x default",
+    },
+    Case {
+        name: "degenerate-obj",
+        file: "degenerate-obj.toml",
+        bound_factor: None,
+        expect_warnings: &["degenerate triangle", "NaN or zero vertex normals"],
+        what: "OBJ with zero-area triangles, NaN/zero normals, duplicate vertices",
+    },
+    Case {
+        name: "fireflies",
+        file: "fireflies.toml",
+        bound_factor: None,
+        expect_warnings: &[],
+        what: "a tiny, very bright light (fireflies)",
+    },
+];
+
+/// What `forecast stability` does.
+#[derive(Clone, Debug)]
+pub struct StabilityConfig {
+    /// Directory of the suite's scenes (`scenes/stability`).
+    pub scenes: PathBuf,
+    /// Resolution override (default: the scenes' 64×64).
+    pub resolution: Option<(u32, u32)>,
+    /// Time box per run, seconds.
+    pub time_per_run: f64,
+    /// Time of each scene's `pt` reference, seconds.
+    pub reference_time: f64,
+    /// Methods.
+    pub methods: Vec<Method>,
+    /// Only these cases (empty: all).
+    pub only: Vec<String>,
+    /// Worker threads.
+    pub threads: Option<usize>,
+    /// Output directory.
+    pub out: PathBuf,
+}
+
+/// The outcome of one (case, method) run.
+#[derive(Clone, Debug, Serialize)]
+pub struct StabilityRecord {
+    /// Case name.
+    pub case: String,
+    /// Method name.
+    pub method: String,
+    /// Finished without error or panic.
+    pub finished: bool,
+    /// It panicked (caught).
+    pub panicked: bool,
+    /// Error or panic message.
+    pub error: Option<String>,
+    /// Wall time of the run in seconds.
+    pub wall_s: f64,
+    /// spp reached.
+    pub spp: u64,
+    /// NaN/Inf samples caught by the renderer.
+    pub nonfinite_samples: u64,
+    /// Every pixel of the output is finite.
+    pub image_finite: bool,
+    /// The warnings of the run's JSON.
+    pub warnings: Vec<String>,
+    /// Every expected warning fired.
+    pub expected_warnings_ok: bool,
+    /// IWS bound `b` in use (`method_stats.b`), if the method has one.
+    pub b: Option<f64>,
+    /// relMSE against the scene's reference, if it has one.
+    pub rel_mse: Option<f64>,
+    /// Relative difference of mean luminance against the reference.
+    pub mean_rel_diff: Option<f64>,
+}
+
+impl StabilityRecord {
+    /// Finished, finite, and the expected warnings fired.
+    pub fn ok(&self) -> bool {
+        self.finished && self.image_finite && self.expected_warnings_ok
+    }
+}
+
+fn panic_text(p: &(dyn std::any::Any + Send)) -> String {
+    p.downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| p.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "panic".into())
+}
+
+/// Renders `job` single-process, turning a panic into `Err((message, true))`.
+pub fn guarded_render(job: &RenderJob) -> Result<RenderResult, (String, bool)> {
+    match catch_unwind(AssertUnwindSafe(|| pipeline::render(job, &Local::new(), Instant::now()))) {
+        Ok(Ok(Some(r))) => Ok(r),
+        Ok(Ok(None)) => Err(("no result".into(), false)),
+        Ok(Err(e)) => Err((e, false)),
+        Err(p) => Err((format!("panic: {}", panic_text(p.as_ref())), true)),
+    }
+}
+
+fn lum(m: [f64; 3]) -> f64 {
+    0.2126 * m[0] + 0.7152 * m[1] + 0.0722 * m[2]
+}
+
+fn job(
+    scene: &Path,
+    method: Method,
+    opts: &MethodOptions,
+    cfg: &StabilityConfig,
+    time: f64,
+    seed: u64,
+    out: PathBuf,
+) -> RenderJob {
+    RenderJob {
+        scene: scene.to_path_buf(),
+        method: Some(method),
+        opts: opts.clone(),
+        spp: None,
+        time: Some(time),
+        seed: Some(seed),
+        resolution: cfg.resolution,
+        out,
+        progress: false,
+        checkpoint_every: None,
+        resume: None,
+        checkpoint_path: None,
+        max_rounds: None,
+        threads: cfg.threads,
+    }
+}
+
+/// Runs the suite; never stops at a failing run. Errors only for an unwritable output directory.
+pub fn run_suite(cfg: &StabilityConfig) -> Result<Vec<StabilityRecord>, String> {
+    let runs_dir = cfg.out.join("runs");
+    std::fs::create_dir_all(&runs_dir).map_err(|e| format!("cannot create {}: {e}", runs_dir.display()))?;
+    let mut base = MethodOptions { photons: 20_000, ..MethodOptions::default() };
+    base.forecast_photons = Some(20_000);
+    let mut refs: Vec<(String, Option<Image>)> = Vec::new();
+    let mut out = Vec::new();
+    for case in CASES.iter().filter(|c| cfg.only.is_empty() || cfg.only.iter().any(|o| o == c.name)) {
+        let scene_path = cfg.scenes.join(case.file);
+        if !refs.iter().any(|(f, _)| f == case.file) {
+            let prefix = cfg.out.join("refs").join(case.file.trim_end_matches(".toml"));
+            let j = job(&scene_path, Method::Pt, &base, cfg, cfg.reference_time, 0x05EE_D4EF, prefix);
+            let img = match guarded_render(&j) {
+                Ok(r) => Some(pipeline::image_from_film(&r.film)),
+                Err((e, _)) => {
+                    eprintln!("stability: reference of {} failed: {e}", case.file);
+                    None
+                }
+            };
+            refs.push((case.file.to_string(), img));
+        }
+        let reference = refs.iter().find(|(f, _)| f == case.file).and_then(|(_, i)| i.as_ref());
+        let mut opts = base.clone();
+        if let Some(f) = case.bound_factor {
+            match crate::scene::load(&scene_path) {
+                Ok(s) => {
+                    let world = crate::accel::World::build(s);
+                    let b = crate::integrators::iws::default_bound(&world, opts.vpl_paths) as f64 * f;
+                    opts.bound = Some(b as f32);
+                }
+                Err(e) => eprintln!("stability: {}: {e}", case.name),
+            }
+        }
+        for &m in &cfg.methods {
+            let prefix = runs_dir.join(format!("{}_{}", case.name, m.name()));
+            let t = Instant::now();
+            let r = guarded_render(&job(&scene_path, m, &opts, cfg, cfg.time_per_run, 1, prefix));
+            let wall = t.elapsed().as_secs_f64();
+            let rec = match r {
+                Ok(r) => {
+                    let img = pipeline::image_from_film(&r.film);
+                    let warnings: Vec<String> = r.report["warnings"]
+                        .as_array()
+                        .map(|a| a.iter().filter_map(|w| w.as_str().map(String::from)).collect())
+                        .unwrap_or_default();
+                    let cmp = reference.filter(|rf| rf.same_size(&img));
+                    StabilityRecord {
+                        case: case.name.into(),
+                        method: m.name().into(),
+                        finished: true,
+                        panicked: false,
+                        error: None,
+                        wall_s: r.report["timings"]["total_s"].as_f64().unwrap_or(wall),
+                        spp: r.report["spp"].as_u64().unwrap_or(0),
+                        nonfinite_samples: r.report["nonfinite_samples"].as_u64().unwrap_or(0),
+                        image_finite: img.pixels.iter().all(|p| p.iter().all(|v| v.is_finite())),
+                        expected_warnings_ok: case
+                            .expect_warnings
+                            .iter()
+                            .all(|e| warnings.iter().any(|w| w.contains(e))),
+                        warnings,
+                        b: r.report["method_stats"]["b"].as_f64(),
+                        rel_mse: cmp.and_then(|rf| metrics::rel_mse(&img, rf, REL_MSE_EPS, None).ok()),
+                        mean_rel_diff: cmp.map(|rf| {
+                            let (a, b) = (lum(img.mean()), lum(rf.mean()));
+                            if b > 0.0 {
+                                a / b - 1.0
+                            } else if a == 0.0 {
+                                0.0
+                            } else {
+                                f64::INFINITY
+                            }
+                        }),
+                    }
+                }
+                Err((e, panicked)) => StabilityRecord {
+                    case: case.name.into(),
+                    method: m.name().into(),
+                    finished: false,
+                    panicked,
+                    error: Some(e),
+                    wall_s: wall,
+                    spp: 0,
+                    nonfinite_samples: 0,
+                    image_finite: false,
+                    warnings: Vec::new(),
+                    expected_warnings_ok: false,
+                    b: None,
+                    rel_mse: None,
+                    mean_rel_diff: None,
+                },
+            };
+            eprintln!(
+                "stability: {:<15} {:<7} {} ({} spp, {:.2} s)",
+                rec.case,
+                rec.method,
+                if rec.ok() { "ok" } else { "FAILED" },
+                rec.spp,
+                rec.wall_s
+            );
+            out.push(rec);
+        }
+    }
+    Ok(out)
+}
+
+fn opt_e(v: Option<f64>) -> String {
+    v.map_or("–".into(), |v| format!("{v:.3e}"))
+}
+
+/// Writes `stability.json`, `stability.md` and `stability.html` into `dir`.
+pub fn write_stability_report(dir: &Path, cfg: &StabilityConfig, recs: &[StabilityRecord]) -> Result<(), String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let json = serde_json::to_string_pretty(recs).map_err(|e| e.to_string())?;
+    atomic_write(&dir.join("stability.json"), json.as_bytes())?;
+    let headers: Vec<String> = [
+        "case",
+        "method",
+        "result",
+        "finite image",
+        "NaN/Inf samples caught",
+        "expected warnings",
+        "spp",
+        "time s",
+        "b",
+        "relMSE vs ref",
+        "mean diff",
+        "error",
+    ]
+    .map(String::from)
+    .to_vec();
+    let rows: Vec<Vec<String>> = recs
+        .iter()
+        .map(|r| {
+            vec![
+                r.case.clone(),
+                r.method.clone(),
+                if r.ok() {
+                    "ok".into()
+                } else if r.panicked {
+                    "PANIC".into()
+                } else {
+                    "FAILED".into()
+                },
+                if r.image_finite { "yes".into() } else { "NO".into() },
+                r.nonfinite_samples.to_string(),
+                if r.expected_warnings_ok { "yes".into() } else { "MISSING".into() },
+                r.spp.to_string(),
+                format!("{:.2}", r.wall_s),
+                opt_e(r.b),
+                opt_e(r.rel_mse),
+                r.mean_rel_diff.map_or("–".into(), |d| format!("{:+.1}%", 100.0 * d)),
+                r.error.clone().unwrap_or_default(),
+            ]
+        })
+        .collect();
+    let n_ok = recs.iter().filter(|r| r.ok()).count();
+    let summary = format!(
+        "{n_ok} of {} runs ok. Time box {:.2} s per run; each scene's reference is a {:.2} s `pt` render with an \
+         independent seed (for point-light caustics it is itself missing them, see the warnings). Resolution: {}.",
+        recs.len(),
+        cfg.time_per_run,
+        cfg.reference_time,
+        cfg.resolution.map_or("the scenes' own (64x64)".into(), |(w, h)| format!("{w}x{h}"))
+    );
+    let case_rows: Vec<Vec<String>> = CASES
+        .iter()
+        .filter(|c| recs.iter().any(|r| r.case == c.name))
+        .map(|c| {
+            let mut ws: Vec<String> = Vec::new();
+            for r in recs.iter().filter(|r| r.case == c.name) {
+                for w in &r.warnings {
+                    if !ws.contains(w) {
+                        ws.push(w.clone());
+                    }
+                }
+            }
+            vec![c.name.into(), c.file.into(), c.what.into(), ws.join(" / ")]
+        })
+        .collect();
+    let case_h: Vec<String> = ["case", "scene", "what", "warnings emitted"].map(String::from).to_vec();
+    let mut md = format!("# Stability suite\n\n{summary}\n\n## Runs\n\n{}\n## Cases\n\n", table_md(&headers, &rows));
+    md.push_str(&table_md(&case_h, &case_rows));
+    atomic_write(&dir.join("stability.md"), md.as_bytes())?;
+    let mut body = format!("<p>{}</p>\n<h2>Runs</h2>\n{}", esc(&summary), table_html(&headers, &rows));
+    let _ = write!(body, "<h2>Cases</h2>\n{}", table_html(&case_h, &case_rows));
+    atomic_write(&dir.join("stability.html"), html_page("Stability suite", &body).as_bytes())
+}
