@@ -91,7 +91,7 @@ pub struct RenderArgs {
     #[arg(long, value_parser = parse_bound)]
     pub bound: Option<f32>,
     /// IWS light paths per pass N.
-    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..))]
     pub vpl_paths: u32,
     /// IWS VPLs evaluated at diffuse depth >= 1 (unbiased uniform subset; 0 = all).
     #[arg(long, default_value_t = 16)]

@@ -139,6 +139,8 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
         let round_start = first_pass + round * size as u64;
         let more = match total_passes {
             Some(t) => round_start < t,
+            // the first round always runs, so a time-boxed image is never empty
+            None if round == 0 => true,
             None => distributed::all_agree(cluster, deadline.should_start_next(Instant::now(), timer.mean_secs())),
         };
         if !more || job.max_rounds.is_some_and(|m| round >= m) {

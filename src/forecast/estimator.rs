@@ -204,7 +204,14 @@ impl CausticForecast {
     }
 
     /// Gathers forecasters around `at` in cluster `c` and builds the tables in `frame`.
-    fn build_tables(&self, c: usize, at: Vec3, frame: &Frame, weight: impl Fn(&CausticPoint, Vec3) -> f32, brdf_cos: impl Fn(Vec3) -> f32) -> ForecastTables {
+    fn build_tables(
+        &self,
+        c: usize,
+        at: Vec3,
+        frame: &Frame,
+        weight: impl Fn(&CausticPoint, Vec3) -> f32,
+        brdf_cos: impl Fn(Vec3) -> f32,
+    ) -> ForecastTables {
         GATHER.with(|buf| {
             let mut buf = buf.borrow_mut();
             self.maps.gather(c, at, self.opts.gather, self.radius, &mut buf);

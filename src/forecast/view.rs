@@ -76,4 +76,3 @@ pub fn write_view(prefix: &std::path::Path, img: &Image) -> Result<(), String> {
     s.push(".png");
     image_io::write_png_srgb(std::path::Path::new(&s), img, 0.0)
 }
-

@@ -51,11 +51,8 @@ pub fn trace_forecasters(world: &World, emission: Emission, target: u64, seed: u
     let max_paths = target.saturating_mul(PATH_FACTOR).max(particle::BLOCK);
     let (verts, paths) = particle::collect_caustic_vertices(world, emission, target, max_paths, seed, stream::FORECAST);
     let inv = if paths > 0 { 1.0 / paths as f32 } else { 0.0 };
-    let points = verts
-        .iter()
-        .map(|v| CausticPoint::new(v.p, v.n, v.w_in, v.beta * inv))
-        .filter(|c| c.is_finite())
-        .collect();
+    let points =
+        verts.iter().map(|v| CausticPoint::new(v.p, v.n, v.w_in, v.beta * inv)).filter(|c| c.is_finite()).collect();
     (points, paths, t0.elapsed().as_secs_f64())
 }
 

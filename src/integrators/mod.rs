@@ -11,8 +11,8 @@ mod path;
 pub mod photon_map;
 
 pub use iws::{BsdfCaustics, CausticEstimator, Iws, IwsParams, NoCaustics};
-pub use path::{PathTracer, RR_DEPTH};
 pub use iws_forecast::{build_forecast, ForecastCaustics, DEFAULT_FORECAST_PHOTONS};
+pub use path::{PathTracer, RR_DEPTH};
 pub use photon_map::PhotonMap;
 
 use crate::forecast::estimator::{CausticForecast, ForecastOptions};
@@ -72,7 +72,7 @@ pub struct MethodOptions {
     pub max_depth: u32,
     /// IWS clamp bound `b` (None: spec §2 default `0.25·π·N/A_D`).
     pub bound: Option<f32>,
-    /// IWS light paths per pass `N` (default 512, spec §5).
+    /// IWS light paths per pass `N` (default 32: tuned by timing, see the README).
     pub vpl_paths: u32,
     /// VPLs evaluated (uniform subset, unbiased) at diffuse depth ≥ 1; 0 = all (default 16, spec §2).
     pub vpl_subset: u32,
@@ -93,7 +93,7 @@ impl Default for MethodOptions {
         MethodOptions {
             max_depth: 0,
             bound: None,
-            vpl_paths: 512,
+            vpl_paths: 32,
             vpl_subset: 16,
             photons: 200_000,
             gather: 100,

@@ -81,7 +81,8 @@ impl PhotonMap {
     pub fn build(world: &World, target: u64, k: u32, max_radius: Option<f32>, seed: u64) -> PhotonMap {
         let t0 = Instant::now();
         let limit = target.saturating_mul(PATH_FACTOR).max(BLOCK);
-        let (verts, paths) = particle::collect_caustic_vertices(world, Emission::Cosine, target, limit, seed, stream::PHOTON);
+        let (verts, paths) =
+            particle::collect_caustic_vertices(world, Emission::Cosine, target, limit, seed, stream::PHOTON);
         let inv = if paths > 0 { 1.0 / paths as f32 } else { 0.0 };
         let items: Vec<([f32; 3], Photon)> = verts
             .iter()
