@@ -12,22 +12,7 @@ fn run() -> Result<(), String> {
     match cli.command {
         Command::Render(a) => {
             let cluster = distributed::try_init()?;
-            let job = pipeline::RenderJob {
-                scene: a.scene.clone(),
-                method: a.method,
-                opts: a.method_options(),
-                spp: a.spp,
-                time: a.time,
-                seed: a.seed,
-                resolution: a.resolution,
-                out: a.out.clone(),
-                progress: !a.quiet,
-                checkpoint_every: a.checkpoint_every,
-                resume: a.resume.clone(),
-                checkpoint_path: None,
-                max_rounds: a.max_rounds,
-                threads: a.threads,
-            };
+            let job = forecast::compare::job_from_args(&a);
             let res = pipeline::render(&job, cluster.as_ref(), started)?;
             if let Some(r) = res {
                 if !a.quiet {

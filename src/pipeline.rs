@@ -169,18 +169,7 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
                     if let Some(r) = &resumed {
                         add_resumed(&mut total, r)?;
                     }
-                    let ck = Checkpoint {
-                        scene_hash: world.scene.hash,
-                        seed,
-                        method: method.name().to_string(),
-                        width: w,
-                        height: h,
-                        passes_done,
-                        next_pass: passes_done,
-                        spp: passes_done,
-                        elapsed_secs: secs(started) + resumed.as_ref().map_or(0.0, |r| r.elapsed_secs),
-                        film: total.data.clone(),
-                    };
+                    let ck = checkpoint_of(&world, seed, method, (w, h), passes_done, &total, started, &resumed);
                     ck.save(&ckpt_path).map_err(|e| e.to_string())?;
                     write_images(&job.out, &total)?;
                 }
@@ -218,20 +207,9 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
         .map(|b| serde_json::from_slice(b).unwrap_or(serde_json::Value::Null))
         .collect();
     let t_write = Instant::now();
-    if let Some(every) = job.checkpoint_every {
-        let _ = every;
-        let ck = Checkpoint {
-            scene_hash: world.scene.hash,
-            seed,
-            method: method.name().to_string(),
-            width: w,
-            height: h,
-            passes_done,
-            next_pass: passes_done,
-            spp: passes_done,
-            elapsed_secs: secs(started) + resumed.as_ref().map_or(0.0, |r| r.elapsed_secs),
-            film: total.data.clone(),
-        };
+    if job.checkpoint_every.is_some() {
+        // the final state too, so a finished run can be extended with --resume
+        let ck = checkpoint_of(&world, seed, method, (w, h), passes_done, &total, started, &resumed);
         ck.save(&ckpt_path).map_err(|e| e.to_string())?;
     }
     write_images(&job.out, &total)?;
@@ -284,6 +262,32 @@ pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, String> 
         (cores / local.max(1)).max(1)
     });
     rayon::ThreadPoolBuilder::new().num_threads(n).build().map_err(|e| e.to_string())
+}
+
+/// The checkpoint of `total` after `passes_done` contiguous passes.
+#[allow(clippy::too_many_arguments)]
+fn checkpoint_of(
+    world: &World,
+    seed: u64,
+    method: Method,
+    (w, h): (u32, u32),
+    passes_done: u64,
+    total: &Film,
+    started: Instant,
+    resumed: &Option<Checkpoint>,
+) -> Checkpoint {
+    Checkpoint {
+        scene_hash: world.scene.hash,
+        seed,
+        method: method.name().to_string(),
+        width: w,
+        height: h,
+        passes_done,
+        next_pass: passes_done,
+        spp: passes_done,
+        elapsed_secs: secs(started) + resumed.as_ref().map_or(0.0, |r| r.elapsed_secs),
+        film: total.data.clone(),
+    }
 }
 
 fn add_resumed(total: &mut Film, r: &Checkpoint) -> Result<(), String> {

@@ -115,19 +115,34 @@ impl CausticEstimator for BsdfCaustics {
         let Some(bs) = bsdf::sample(m, x, wo, u, Mode::Radiance) else {
             return Rgb::ZERO;
         };
-        let Some(hit) = world.intersect(offset_origin(x.p, x.ng, bs.wi), bs.wi, f32::INFINITY) else {
-            return Rgb::ZERO;
-        };
-        if world.scene.emitter_of(hit.prim) != NO_EMITTER || !world.scene.material_of(hit.prim).is_dirac() {
-            return Rgb::ZERO; // spec §1: L_d owns diffuse and emitter first hits
-        }
-        let Some(w) = rr_weight(bs.weight, depth + 1, rng) else {
-            return Rgb::ZERO;
-        };
-        match follow_dirac_chain(world, hit, bs.wi, w, MAX_VERTICES, rng) {
-            Some((z, d, beta)) => beta * full.l_hat(world, &z, -d, depth + 1, rng),
-            None => Rgb::ZERO,
-        }
+        caustic_chain(world, x, bs.wi, bs.weight, depth, rng, full)
+    }
+}
+
+/// The L_c integrand along `wi` from `x`, times `weight` (f·|cos|/p or f·|cos|): 0 unless the
+/// first hit is Dirac (spec §1: L_d owns diffuse and emitter first hits); else RR, the Dirac
+/// chain, and `L̂` at its end with diffuse depth + 1.
+pub fn caustic_chain(
+    world: &World,
+    x: &ShadingPoint,
+    wi: Vec3,
+    weight: Rgb,
+    depth: u32,
+    rng: &mut Rng,
+    full: &dyn Recurse,
+) -> Rgb {
+    let Some(hit) = world.intersect(offset_origin(x.p, x.ng, wi), wi, f32::INFINITY) else {
+        return Rgb::ZERO;
+    };
+    if world.scene.emitter_of(hit.prim) != NO_EMITTER || !world.scene.material_of(hit.prim).is_dirac() {
+        return Rgb::ZERO;
+    }
+    let Some(w) = rr_weight(weight, depth + 1, rng) else {
+        return Rgb::ZERO;
+    };
+    match follow_dirac_chain(world, hit, wi, w, MAX_VERTICES, rng) {
+        Some((z, d, beta)) => beta * full.l_hat(world, &z, -d, depth + 1, rng),
+        None => Rgb::ZERO,
     }
 }
 

@@ -11,8 +11,8 @@
 //!
 //! CLI: `forecast render scenes/cornell-box.toml --method iws-cf --time 4m`.
 
-use super::iws::{follow_dirac_chain, rr_weight, CausticEstimator, Recurse};
-use crate::accel::{offset_origin, World};
+use super::iws::{caustic_chain, CausticEstimator, Recurse};
+use crate::accel::World;
 use crate::bsdf::{self, ShadingPoint};
 use crate::forecast::caustic_point::CausticPoint;
 use crate::forecast::estimator::{
@@ -20,7 +20,7 @@ use crate::forecast::estimator::{
 };
 use crate::math::{Rgb, Vec3};
 use crate::sampling::rng::{stream, Rng};
-use crate::scene::{Material, NO_EMITTER};
+use crate::scene::Material;
 use crate::transport::particle::{self, Emission, MAX_VERTICES};
 use std::time::Instant;
 
@@ -102,25 +102,13 @@ impl CausticEstimator for ForecastCaustics {
         if depth + 1 >= MAX_VERTICES {
             return Rgb::ZERO;
         }
-        let s = &world.scene;
         // g(ωi) = f·|cos|·1[first hit Dirac]·(chain throughput)·L̂(chain end)
         let g = |wi: Vec3, rng: &mut Rng| -> Rgb {
             let f = bsdf::eval(m, x, wo, wi);
             if f == Rgb::ZERO {
                 return Rgb::ZERO;
             }
-            let Some(hit) = world.intersect(offset_origin(x.p, x.ng, wi), wi, f32::INFINITY) else {
-                return Rgb::ZERO;
-            };
-            if s.emitter_of(hit.prim) != NO_EMITTER || !s.material_of(hit.prim).is_dirac() {
-                return Rgb::ZERO; // spec §1: L_d owns diffuse and emitter first hits
-            }
-            let fcos = f * wi.dot(x.ns).abs();
-            let Some(w) = rr_weight(fcos, depth + 1, rng) else { return Rgb::ZERO };
-            match follow_dirac_chain(world, hit, wi, w, MAX_VERTICES, rng) {
-                Some((z, d, beta)) => beta * full.l_hat(world, &z, -d, depth + 1, rng),
-                None => Rgb::ZERO,
-            }
+            caustic_chain(world, x, wi, f * wi.dot(x.ns).abs(), depth, rng, full)
         };
         self.cf.estimate(x, m, wo, depth, rng, &self.counters, Some(self.cache_owner), g)
     }
