@@ -2,7 +2,8 @@
 //! the same image as an uninterrupted render of the same passes (up to f64 summation order,
 //! bounded at relative 1e-6), and a stale checkpoint (other seed) is refused with a clear error.
 
-use forecast::image_io::read_exr;
+mod common;
+use common::assert_same_image;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -20,17 +21,6 @@ fn tmp(name: &str) -> PathBuf {
 
 fn scene() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml")
-}
-
-fn assert_same_image(a: &Path, b: &Path) {
-    let (a, b) = (read_exr(a).unwrap(), read_exr(b).unwrap());
-    assert_eq!((a.width, a.height), (b.width, b.height));
-    for (i, (p, q)) in a.pixels.iter().zip(&b.pixels).enumerate() {
-        for c in 0..3 {
-            let tol = 1e-6 * p[c].abs().max(q[c].abs()) + 1e-12;
-            assert!((p[c] - q[c]).abs() <= tol, "pixel {i} channel {c}: {} vs {}", p[c], q[c]);
-        }
-    }
 }
 
 #[test]

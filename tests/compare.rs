@@ -160,7 +160,10 @@ fn reference_halves_and_compare_end_to_end() {
     };
     let o = compare::run_compare(&cfg, &Local::new()).unwrap().unwrap();
     assert_eq!(o.runs.len(), 4);
-    assert_eq!(o.regions.iter().map(|r| r.name.as_str()).collect::<Vec<_>>(), ["full", "glass-caustic", "wall-caustic"]);
+    assert_eq!(
+        o.regions.iter().map(|r| r.name.as_str()).collect::<Vec<_>>(),
+        ["full", "glass-caustic", "wall-caustic"]
+    );
     for r in &o.runs {
         assert!(r.error.is_none(), "{} {}: {:?}", r.method, r.budget_s, r.error);
         assert!(r.spp > 0 && r.wall_s > 0.0 && r.wall_s < r.budget_s + 2.0, "{r:?}");

@@ -6,26 +6,18 @@
 //! The table samplers' χ² and the estimator-level unbiasedness tests live next to the tables
 //! (`src/forecast/direction_table.rs`).
 
+mod common;
+use common::{global_z, max_z, render_passes as render, scaled};
 use forecast::accel::World;
 use forecast::forecast::cluster::ClusteringMethod;
 use forecast::forecast::estimator::{CausticForecast, TableKind};
 use forecast::integrators::{self, Integrator, Method, MethodOptions};
-use forecast::render::{film::Film, render_pass};
+use forecast::render::film::Film;
 use forecast::stats::z_test_threshold;
 use std::path::Path;
 
 fn world(path: &str) -> World {
     World::build(forecast::scene::load(Path::new(path)).expect("scene loads"))
-}
-
-fn render(world: &World, integ: &mut dyn Integrator, w: u32, h: u32, passes: u64, seed: u64) -> Film {
-    let cam = world.scene.camera.with_resolution(w, h);
-    let mut film = Film::new(w as usize, h as usize);
-    for pass in 0..passes {
-        integ.begin_pass(world, seed, pass);
-        render_pass(world, &*integ, &cam, seed, pass, &mut film);
-    }
-    film
 }
 
 fn opts() -> MethodOptions {
@@ -46,53 +38,13 @@ fn pt(world: &World, w: u32, h: u32, spp: u64) -> Film {
     render(world, p.as_mut(), w, h, spp, 11)
 }
 
-/// Welch z of the whole-image sum (all pixels and channels): far more power against a global bias.
-fn global_z(a: &Film, b: &Film) -> f64 {
-    let (ma, va, mb, vb) = (a.mean(), a.variance_of_mean(), b.mean(), b.variance_of_mean());
-    let (mut d, mut v) = (0.0f64, 0.0f64);
-    for i in 0..ma.len() {
-        for c in 0..3 {
-            d += ma[i][c] as f64 - mb[i][c] as f64;
-            v += (va[i][c] + vb[i][c]) as f64;
-        }
-    }
-    d / v.sqrt()
-}
-
-/// Max per-pixel Welch |z| between two films.
-fn max_z(a: &Film, b: &Film) -> (f64, usize) {
-    let (ma, va, mb, vb) = (a.mean(), a.variance_of_mean(), b.mean(), b.variance_of_mean());
-    let mut zmax = 0.0f64;
-    for i in 0..ma.len() {
-        for c in 0..3 {
-            let d = ma[i][c] as f64 - mb[i][c] as f64;
-            let v = (va[i][c] + vb[i][c]) as f64;
-            if d != 0.0 {
-                zmax = zmax.max(if v > 0.0 { d.abs() / v.sqrt() } else { f64::INFINITY });
-            }
-        }
-    }
-    (zmax, ma.len() * 3)
-}
-
-fn scaled(f: &Film, s: f64) -> Film {
-    let mut data = f.data.clone();
-    for px in data.chunks_exact_mut(forecast::render::film::STRIDE) {
-        for c in 0..3 {
-            px[c] *= s;
-            px[c + 3] *= s * s;
-        }
-    }
-    Film::from_data(f.width, f.height, data).unwrap()
-}
-
 /// `iws-cf` with options `o` agrees with `pt` on the Cornell box (16×16).
 fn agrees_with_pt(o: &MethodOptions, label: &str) -> CausticForecast {
     let w = world("scenes/cornell-box.toml");
     let reference = pt(&w, 16, 16, 4096);
     let (mut cf, product) = iws_cf(&w, o);
     let img = render(&w, cf.as_mut(), 16, 16, 384, 3);
-    let (z, n) = max_z(&img, &reference);
+    let (z, n) = max_z(&img, &reference, None);
     let thr = z_test_threshold(1e-3, n);
     eprintln!("{label}: max|z| = {z:.2}, threshold {thr:.2} over {n} tests");
     assert!(z < thr, "{label} disagrees with pt: max|z| {z} ≥ {thr}");
@@ -170,7 +122,7 @@ fn no_dirac_objects_means_no_forecasters_and_iws_cf_equals_pt() {
     assert_eq!(product.stats.clusters_kept, 0);
     let reference = pt(&w, 12, 12, 2048);
     let img = render(&w, cf.as_mut(), 12, 12, 256, 3);
-    let (z, n) = max_z(&img, &reference);
+    let (z, n) = max_z(&img, &reference, None);
     assert!(z < z_test_threshold(1e-3, n), "max|z| {z}");
 }
 
@@ -188,7 +140,7 @@ fn all_photons_missing_still_agrees_with_pt() {
     assert!(product.stats.paths > 0);
     let reference = pt(&w, 12, 12, 4096);
     let img = render(&w, cf.as_mut(), 12, 12, 384, 3);
-    let (z, n) = max_z(&img, &reference);
+    let (z, n) = max_z(&img, &reference, None);
     let thr = z_test_threshold(1e-3, n);
     assert!(z < thr, "max|z| {z} ≥ {thr}");
 }

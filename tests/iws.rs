@@ -6,10 +6,12 @@
 //! Cheap tests run with `cargo test --release --test iws`. The photon-map consistency study is
 //! `#[ignore]`d (minutes on 2 cores): `cargo test --release --test iws -- --ignored --nocapture`.
 
+mod common;
+use common::{max_z, render_passes as render, scaled};
 use forecast::accel::World;
 use forecast::integrators::{self, BsdfCaustics, Integrator, Iws, IwsParams, Method, MethodOptions, NoCaustics};
 use forecast::math::{Rgb, Vec3};
-use forecast::render::{film::Film, render_pass};
+use forecast::render::film::Film;
 use forecast::sampling::rng::{stream, Rng};
 use forecast::sampling::warp::sample_uniform_sphere;
 use forecast::stats::z_test_threshold;
@@ -21,42 +23,6 @@ fn world(path: &str) -> World {
 
 fn params(vpl_paths: u32, bound: Option<f32>) -> IwsParams {
     IwsParams { vpl_paths, bound, vpl_subset: 16, max_depth: 64 }
-}
-
-/// Renders `passes` passes at `w×h` (one sample per pixel per pass).
-fn render(world: &World, integ: &mut dyn Integrator, w: u32, h: u32, passes: u64, seed: u64) -> Film {
-    let cam = world.scene.camera.with_resolution(w, h);
-    let mut film = Film::new(w as usize, h as usize);
-    for pass in 0..passes {
-        integ.begin_pass(world, seed, pass);
-        render_pass(world, &*integ, &cam, seed, pass, &mut film);
-    }
-    film
-}
-
-/// Per-pixel, per-channel Welch z statistics; returns (max |z|, number of tests).
-fn max_z(a: &Film, b: &Film, add: Option<&Film>) -> (f64, usize) {
-    let (ma, va) = (a.mean(), a.variance_of_mean());
-    let (mb, vb) = (b.mean(), b.variance_of_mean());
-    let (mc, vc) = match add {
-        Some(c) => (c.mean(), c.variance_of_mean()),
-        None => (vec![[0.0; 3]; ma.len()], vec![[0.0; 3]; ma.len()]),
-    };
-    let mut zmax = 0.0f64;
-    let mut n = 0;
-    for i in 0..ma.len() {
-        for c in 0..3 {
-            let d = (ma[i][c] + mc[i][c]) as f64 - mb[i][c] as f64;
-            let v = (va[i][c] + vc[i][c] + vb[i][c]) as f64;
-            n += 1;
-            if d == 0.0 {
-                continue;
-            }
-            let z = if v > 0.0 { d.abs() / v.sqrt() } else { f64::INFINITY };
-            zmax = zmax.max(z);
-        }
-    }
-    (zmax, n)
 }
 
 /// Mean and standard error of (estimate − expected) over rays from `origin`, with the
@@ -143,18 +109,6 @@ fn iws_agrees_with_pt_without_dirac_surfaces() {
     // negative control: a 3% darker image is rejected by the same test
     let (z3, _) = max_z(&scaled(&img, 0.97), &reference, None);
     assert!(z3 > thr, "the agreement test cannot detect a 3% error (max|z| {z3})");
-}
-
-/// The film of `s·X` for the film of `X` (sums ×s, sums of squares ×s²).
-fn scaled(f: &Film, s: f64) -> Film {
-    let mut data = f.data.clone();
-    for px in data.chunks_exact_mut(forecast::render::film::STRIDE) {
-        for c in 0..3 {
-            px[c] *= s;
-            px[c + 3] *= s * s;
-        }
-    }
-    Film::from_data(f.width, f.height, data).unwrap()
 }
 
 #[test]

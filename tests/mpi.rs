@@ -3,7 +3,8 @@
 //! the time box, and checkpoint/resume across ranks.
 #![cfg(feature = "mpi")]
 
-use forecast::image_io::read_exr;
+mod common;
+use common::assert_same_image;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
@@ -40,18 +41,6 @@ fn mpirun(n: usize, args: &[&str]) -> std::process::Output {
 
 fn json(prefix: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(format!("{}.json", prefix.display())).unwrap()).unwrap()
-}
-
-/// Relative difference bound for float summation order (the only allowed difference).
-fn assert_same_image(a: &Path, b: &Path) {
-    let (a, b) = (read_exr(a).unwrap(), read_exr(b).unwrap());
-    assert_eq!((a.width, a.height), (b.width, b.height));
-    for (i, (p, q)) in a.pixels.iter().zip(&b.pixels).enumerate() {
-        for c in 0..3 {
-            let tol = 1e-6 * p[c].abs().max(q[c].abs()) + 1e-12;
-            assert!((p[c] - q[c]).abs() <= tol, "pixel {i} channel {c}: {} vs {}", p[c], q[c]);
-        }
-    }
 }
 
 #[test]

@@ -124,3 +124,79 @@ pub fn brute_hits(s: &Scene, o: Vec3, d: Vec3, tmax: f64) -> Vec<(f64, u32)> {
     v.sort_by(|a, b| a.0.total_cmp(&b.0));
     v
 }
+
+/// Renders `passes` passes of `integ` at `w×h` (one sample per pixel per pass).
+pub fn render_passes(
+    world: &forecast::accel::World,
+    integ: &mut dyn forecast::integrators::Integrator,
+    w: u32,
+    h: u32,
+    passes: u64,
+    seed: u64,
+) -> Film {
+    let cam = world.scene.camera.with_resolution(w, h);
+    let mut film = Film::new(w as usize, h as usize);
+    for pass in 0..passes {
+        integ.begin_pass(world, seed, pass);
+        forecast::render::render_pass(world, &*integ, &cam, seed, pass, &mut film);
+    }
+    film
+}
+
+/// Per-pixel, per-channel Welch z statistics of `a (+ add)` against `b`: (max |z|, tests).
+pub fn max_z(a: &Film, b: &Film, add: Option<&Film>) -> (f64, usize) {
+    let (ma, va) = (a.mean(), a.variance_of_mean());
+    let (mb, vb) = (b.mean(), b.variance_of_mean());
+    let (mc, vc) = match add {
+        Some(c) => (c.mean(), c.variance_of_mean()),
+        None => (vec![[0.0; 3]; ma.len()], vec![[0.0; 3]; ma.len()]),
+    };
+    let mut zmax = 0.0f64;
+    for i in 0..ma.len() {
+        for c in 0..3 {
+            let d = (ma[i][c] + mc[i][c]) as f64 - mb[i][c] as f64;
+            let v = (va[i][c] + vc[i][c] + vb[i][c]) as f64;
+            if d != 0.0 {
+                zmax = zmax.max(if v > 0.0 { d.abs() / v.sqrt() } else { f64::INFINITY });
+            }
+        }
+    }
+    (zmax, ma.len() * 3)
+}
+
+/// Welch z of the whole-image sum (all pixels and channels): far more power against a global bias.
+pub fn global_z(a: &Film, b: &Film) -> f64 {
+    let (ma, va, mb, vb) = (a.mean(), a.variance_of_mean(), b.mean(), b.variance_of_mean());
+    let (mut d, mut v) = (0.0f64, 0.0f64);
+    for i in 0..ma.len() {
+        for c in 0..3 {
+            d += ma[i][c] as f64 - mb[i][c] as f64;
+            v += (va[i][c] + vb[i][c]) as f64;
+        }
+    }
+    d / v.sqrt()
+}
+
+/// The film of `s·X` for the film of `X` (sums ×s, sums of squares ×s²): a negative control.
+pub fn scaled(f: &Film, s: f64) -> Film {
+    let mut data = f.data.clone();
+    for px in data.chunks_exact_mut(forecast::render::film::STRIDE) {
+        for c in 0..3 {
+            px[c] *= s;
+            px[c + 3] *= s * s;
+        }
+    }
+    Film::from_data(f.width, f.height, data).unwrap()
+}
+
+/// Two EXR images agree to float summation order (relative 1e-6).
+pub fn assert_same_image(a: &Path, b: &Path) {
+    let (a, b) = (forecast::image_io::read_exr(a).unwrap(), forecast::image_io::read_exr(b).unwrap());
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    for (i, (p, q)) in a.pixels.iter().zip(&b.pixels).enumerate() {
+        for c in 0..3 {
+            let tol = 1e-6 * p[c].abs().max(q[c].abs()) + 1e-12;
+            assert!((p[c] - q[c]).abs() <= tol, "pixel {i} channel {c}: {} vs {}", p[c], q[c]);
+        }
+    }
+}
