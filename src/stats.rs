@@ -328,12 +328,20 @@ fn grid_chi2(
             observed[n_cells] += 1.0;
             continue;
         }
-        let mut phi = (w.y as f64).atan2(w.x as f64);
-        if phi < 0.0 {
-            phi += two_pi;
+        // Cells in f32 with the same formula as the samplers' own binning (e.g. the CF tables'
+        // `bin_of`): for power-of-two refinements the cell edges then coincide bit for bit, so a
+        // sample on a shared edge is never attributed to a neighbouring zero-pdf cell.
+        let mut phi32 = w.y.atan2(w.x);
+        if phi32 < 0.0 {
+            phi32 += 2.0 * std::f32::consts::PI;
         }
-        let j = ((phi / two_pi * n_phi as f64) as usize).min(n_phi - 1);
-        let l = (((mu - mu_lo) / mu_span * n_mu as f64) as usize).min(n_mu - 1);
+        let j = ((phi32 * (n_phi as f32 / (2.0 * std::f32::consts::PI))) as usize).min(n_phi - 1);
+        let mu32 = w.z / w.length();
+        let l = if mu_lo == 0.0 {
+            ((mu32 * n_mu as f32) as usize).min(n_mu - 1)
+        } else {
+            (((mu - mu_lo) / mu_span * n_mu as f64) as usize).min(n_mu - 1)
+        };
         observed[l * n_phi + j] += 1.0;
     }
     // Expected counts: N · ∫_cell pdf_w dω, with dω = dφ dμ; midpoint rule on RES×RES sub-cells.

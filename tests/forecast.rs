@@ -71,6 +71,13 @@ fn single_table_agrees_with_pt() {
 }
 
 #[test]
+fn dual_defensive_table_agrees_with_pt() {
+    let mut o = opts();
+    o.forecast.table = TableKind::DualDefensive;
+    agrees_with_pt(&o, "iws-cf dual-defensive");
+}
+
+#[test]
 fn kmeans_agrees_with_pt() {
     let mut o = opts();
     o.forecast.clustering = ClusteringMethod::KMeans;

@@ -180,6 +180,13 @@ impl DirectionTable {
 pub enum TableMode {
     /// CF dual table: T1 (photons) + T2 (f·cos on the empty bins), estimates summed.
     Dual,
+    /// Dual table whose T1 is itself defensive on its own bins: `(1−α) w/W + α v/V₁` over
+    /// Ω₁ = {w > 0}, so a bin holding only weak photons keeps an f·cos share (fewer fireflies);
+    /// T2 as in `Dual`. Still a partition of the hemisphere, so still unbiased.
+    DualDefensive {
+        /// Share of the f·cos fill inside T1 (clamped to [0, 1]).
+        alpha: f32,
+    },
     /// One defensive mixture `(1−α) w/W + α v/V`.
     Single {
         /// Mixture weight of the f·cos fill (clamped to [1e-4, 1]).
@@ -241,9 +248,25 @@ impl ForecastTables {
             }
         }
         match mode {
-            TableMode::Dual => {
+            TableMode::Dual | TableMode::DualDefensive { .. } => {
                 // T1 skipped if k = 0 / zero total (from_weights → None).
-                let t1 = DirectionTable::from_weights(&w);
+                let t1 = match mode {
+                    TableMode::DualDefensive { alpha } if alpha > 0.0 => {
+                        let alpha = alpha.min(1.0);
+                        let v1 = fill_values((0..N_BINS).filter(|&i| w[i] > 0.0), &brdf_cos);
+                        let (big_w, big_v): (f32, f32) = (w.iter().sum(), v1.iter().sum());
+                        let mut m = [0.0f32; N_BINS];
+                        if big_w > 0.0 && big_v > 0.0 {
+                            for i in 0..N_BINS {
+                                if w[i] > 0.0 {
+                                    m[i] = (1.0 - alpha) * w[i] / big_w + alpha * v1[i] / big_v;
+                                }
+                            }
+                        }
+                        DirectionTable::from_weights(&m)
+                    }
+                    _ => DirectionTable::from_weights(&w),
+                };
                 let empty = (0..N_BINS).filter(|&i| !(w[i] > 0.0));
                 // T2 on exactly Ω_2 = {w_i = 0}; skipped if Ω_2 = ∅.
                 let t2 = if empty.clone().next().is_some() {
@@ -428,6 +451,8 @@ mod tests {
             tables.push((name, d.t2.unwrap()));
             let s = ForecastTables::build(set.iter().copied(), lambert, TableMode::Single { alpha: 0.1 });
             tables.push((name, s.t1.unwrap()));
+            let dd = ForecastTables::build(set.iter().copied(), lambert, TableMode::DualDefensive { alpha: 0.25 });
+            tables.push((name, dd.t1.unwrap()));
         }
         // Cosine-fallback table (k = 0) and a sharp glossy lobe whose fill relies on the floor.
         let cos = ForecastTables::build(std::iter::empty(), lambert, TableMode::Dual);
@@ -494,6 +519,9 @@ mod tests {
         let single = ForecastTables::build(photons.iter().copied(), lambert, TableMode::Single { alpha: 0.1 });
         let (m, se) = mean_se(n, 13, |r| single.estimate(1, r, g));
         assert!((m - t).abs() < 4.0 * se, "single: {m} vs {t} ± {se}");
+        let dd = ForecastTables::build(photons.iter().copied(), lambert, TableMode::DualDefensive { alpha: 0.25 });
+        let (m, se) = mean_se(n, 17, |r| dd.estimate(1, r, g));
+        assert!((m - t).abs() < 4.0 * se, "dual-defensive: {m} vs {t} ± {se}");
         // Generic value type: the Rgb estimate equals the scalar one channel-wise.
         let mut r1 = Rng::keyed(1, stream::MISC, 0, 0);
         let mut r2 = r1.clone();

@@ -45,6 +45,8 @@ pub enum TableKind {
     /// CF dual table (T1 + T2 on the empty bins, summed).
     #[default]
     Dual,
+    /// Dual table with a defensive f·cos share (α = 0.25) inside T1's own bins.
+    DualDefensive,
     /// One defensive table (α = 0.1), for the ablation.
     Single,
 }
@@ -223,6 +225,7 @@ impl CausticForecast {
             });
             let mode = match self.opts.table {
                 TableKind::Dual => TableMode::Dual,
+                TableKind::DualDefensive => TableMode::DualDefensive { alpha: 0.25 },
                 TableKind::Single => TableMode::Single { alpha: 0.1 },
             };
             ForecastTables::build(photons, brdf_cos, mode)
