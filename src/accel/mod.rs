@@ -260,5 +260,3 @@ fn sphere_t(c: Vec3, r: f32, ray: &Ray) -> f32 {
     }
 }
 
-#[cfg(test)]
-mod tests;
