@@ -212,7 +212,7 @@ fn empty_scene_and_no_lights() {
 #[test]
 fn toml_syntax_error_has_a_line() {
     let src = with("fov", "fov = [40.0 #<");
-    let e = load_str(&src, "bad.toml", Path::new(".")).err().expect("rejected");
+    let e = load_str(&src, "bad.toml", Path::new(".")).expect_err("rejected");
     // the parser reports the position where it gave up: the marked line or the next one
     assert!(e.line == marked_line(&src) || e.line == marked_line(&src) + 1, "{e}");
     assert!(e.to_string().starts_with("bad.toml:"), "{e}");
@@ -223,10 +223,10 @@ fn load_reports_the_path_and_unreadable_files() {
     let dir = tmp_dir("bad-load");
     let p = dir.join("scene.toml");
     std::fs::write(&p, with("fov", "fov = 0.0 #<")).unwrap();
-    let e = load(&p).err().expect("rejected");
+    let e = load(&p).expect_err("rejected");
     assert_eq!((e.line, e.key.as_str()), (4, "camera.fov"));
     assert!(e.to_string().contains(&p.display().to_string()), "{e}");
-    let e = load(&dir.join("missing.toml")).err().expect("a missing file is an error");
+    let e = load(&dir.join("missing.toml")).expect_err("a missing file is an error");
     assert!(e.to_string().contains("missing.toml"), "{e}");
 }
 

@@ -12,6 +12,7 @@
 //!   within 1e-5 (barycentric) of a triangle edge, or within relative 1e-5 of the ray's tmax, or the
 //!   ray is tangent to a sphere (discriminant within 1e-5 of zero). Such cases are measure-zero for
 //!   random rays, so at most 1e-3 of the rays may use any of these exemptions (counted, asserted).
+//!
 //! `occluded(o, d, tmax)` must equal "brute force has a hit in (0, tmax)" under the same rules.
 
 mod common;
@@ -220,7 +221,7 @@ fn compare(w: &World, o: Vec3, d: Vec3, tmax: f32, tally: &mut Tally) {
         }
     }
     let occ = w.occluded(o, d, tmax);
-    if occ != !brute.is_empty() {
+    if occ == brute.is_empty() {
         let explained = brute.first().is_some_and(|&(t, p)| {
             near_tmax(t) || edge_case(s, p, o, d) || (tally.allow_near_misses && t < OBVHS_NODE_EPSILON as f64)
         }) || hit.is_some_and(|h| edge_case(s, h.prim, o, d) || near_tmax(h.t as f64));

@@ -11,6 +11,7 @@
 //! - 8×8-pixel blocks, per channel: |z| below the two-sided threshold at family-wise α = 0.01,
 //!   Šidák-corrected over all blocks × channels of the image (≈ 3.5 for 48 tests), plus the same
 //!   1e-4 allowance. This catches a localised bias (e.g. one side of the sphere) that the mean hides.
+//!
 //! Seeds are fixed, so results are deterministic.
 
 mod common;

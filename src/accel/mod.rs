@@ -259,4 +259,3 @@ fn sphere_t(c: Vec3, r: f32, ray: &Ray) -> f32 {
         f32::INFINITY
     }
 }
-

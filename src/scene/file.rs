@@ -446,7 +446,8 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
                 let t = translate.unwrap_or([0.0; 3]);
                 let sc = scale.unwrap_or(1.0);
                 let ry = rotate_y.unwrap_or(0.0);
-                if !finite3(t) || !(sc.is_finite() && sc > 0.0) || !ry.is_finite() {
+                let scale_ok = sc.is_finite() && sc > 0.0;
+                if !finite3(t) || !scale_ok || !ry.is_finite() {
                     return Err(cx.err(ss, &key("scale"), "transform values must be finite and scale positive"));
                 }
                 let path = dir.join(f);
