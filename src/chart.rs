@@ -192,6 +192,20 @@ fn render<DB: DrawingBackend>(
     root.present().map_err(err_str)
 }
 
+/// A short tick label: 3 significant digits, scientific outside [1e-2, 1e4).
+fn tick(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 {
+        "0".into()
+    } else if !(1e-2..1e4).contains(&a) {
+        format!("{v:.1e}")
+    } else {
+        let s = format!("{v:.3}");
+        let s = s.trim_end_matches('0').trim_end_matches('.');
+        s.to_string()
+    }
+}
+
 fn plot<DB, X, Y>(
     root: &DrawingArea<DB, Shift>,
     spec: &ChartSpec,
@@ -220,6 +234,10 @@ where
         .label_style(("sans-serif", 13))
         .axis_desc_style(("sans-serif", 15))
         .light_line_style(RGBColor(235, 235, 235))
+        .x_labels(8)
+        .y_labels(8)
+        .x_label_formatter(&|v| tick(*v))
+        .y_label_formatter(&|v| tick(*v))
         .draw()
         .map_err(err_str)?;
 
