@@ -6,9 +6,10 @@
 //! missing OBJ, an empty scene) is an error, never a panic.
 
 use super::{
-    obj, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere, Triangle, NO_EMITTER,
+    light_power, obj, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere, Triangle,
+    NO_EMITTER,
 };
-use crate::math::{luminance, Vec3, PI};
+use crate::math::{Vec3, PI};
 use crate::sampling::distribution::Distribution1D;
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -533,20 +534,13 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
     }
     let mut lights: Vec<LightRef> = (0..emitters.len() as u32).map(LightRef::Area).collect();
     lights.extend((0..point_lights.len() as u32).map(LightRef::Point));
-    let powers: Vec<f32> = lights
-        .iter()
-        .map(|l| match *l {
-            LightRef::Area(i) => luminance(emitters[i as usize].radiance) * emitters[i as usize].area * PI,
-            LightRef::Point(i) => 4.0 * PI * luminance(point_lights[i as usize].intensity),
-        })
-        .collect();
+    let powers: Vec<f32> = lights.iter().map(|&l| light_power(&emitters, &point_lights, l)).collect();
     let light_pick = Distribution1D::new(&powers).ok_or_else(|| SceneError {
         file: cx.file.clone(),
         line: 1,
         key: "shape.emission".into(),
         message: "the scene has no light with positive power (add `emission` to a shape or a [[light]])".into(),
     })?;
-    let emitter_light_index = (0..emitters.len() as u32).collect();
 
     // regions of interest and forecast options
     let mut rois = Vec::new();
@@ -607,7 +601,6 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
         point_lights,
         lights,
         light_pick,
-        emitter_light_index,
         rois,
         forecast_target,
         forecast_photons,

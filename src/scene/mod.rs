@@ -98,6 +98,17 @@ pub struct RenderDefaults {
     pub max_depth: u32,
 }
 
+/// Power (luminance, W) of a light, the weight of light selection.
+pub fn light_power(emitters: &[Emitter], point_lights: &[PointLight], l: LightRef) -> f32 {
+    match l {
+        LightRef::Area(i) => {
+            let e = &emitters[i as usize];
+            luminance(e.radiance) * e.area * PI
+        }
+        LightRef::Point(i) => 4.0 * PI * luminance(point_lights[i as usize].intensity),
+    }
+}
+
 /// A light that next-event estimation can pick.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum LightRef {
@@ -128,12 +139,11 @@ pub struct Scene {
     pub emitters: Vec<Emitter>,
     /// Point lights.
     pub point_lights: Vec<PointLight>,
-    /// All lights, in `light_pick` order.
+    /// All lights, in `light_pick` order: the area emitters first (emitter `e` is light `e`),
+    /// then the point lights.
     pub lights: Vec<LightRef>,
-    /// Light selection ∝ power.
+    /// Light selection ∝ power (`light_power`).
     pub light_pick: Distribution1D,
-    /// Emitter index → position in `lights`.
-    pub emitter_light_index: Vec<u32>,
     /// Regions of interest.
     pub rois: Vec<Roi>,
     /// Optional Caustic Forecasting target box override (min, max).
@@ -171,17 +181,6 @@ impl Scene {
             self.triangles[prim as usize].emitter
         } else {
             self.spheres[(prim - self.ntri()) as usize].emitter
-        }
-    }
-
-    /// Power (luminance, W) of a light, used for light selection.
-    pub fn light_power(&self, l: LightRef) -> f32 {
-        match l {
-            LightRef::Area(i) => {
-                let e = &self.emitters[i as usize];
-                luminance(e.radiance) * e.area * PI
-            }
-            LightRef::Point(i) => 4.0 * PI * luminance(self.point_lights[i as usize].intensity),
         }
     }
 

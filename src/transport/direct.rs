@@ -19,7 +19,7 @@ pub fn emitter_pdf_w(world: &World, emitter: u32, dist2: f32, cos_l: f32) -> f32
     if cos_l <= 0.0 {
         return 0.0;
     }
-    let li = s.emitter_light_index[emitter as usize] as usize;
+    let li = emitter as usize; // area emitters come first in `Scene::lights`
     s.light_pick.pmf(li) / s.emitters[emitter as usize].area * dist2 / cos_l
 }
 
