@@ -5,16 +5,15 @@
 //! warning; everything else that is wrong (NaN, negative values, zero-area lights, a bad fov, a
 //! missing OBJ, an empty scene) is an error, never a panic.
 
+use super::schema::{Doc, LightDef, MaterialDef, ShapeDef};
 use super::{
     light_power, obj, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere, Triangle,
     NO_EMITTER,
 };
 use crate::math::{Vec3, PI};
 use crate::sampling::distribution::Distribution1D;
-use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::Path;
-use toml::Spanned;
 
 /// A scene loading error with its location.
 #[derive(Clone, Debug, PartialEq)]
@@ -40,110 +39,6 @@ impl std::fmt::Display for SceneError {
 }
 
 impl std::error::Error for SceneError {}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct Doc {
-    camera: Spanned<CameraDef>,
-    render: Option<Spanned<RenderDef>>,
-    #[serde(default)]
-    materials: BTreeMap<String, Spanned<MaterialDef>>,
-    #[serde(default)]
-    shape: Vec<Spanned<ShapeDef>>,
-    #[serde(default)]
-    light: Vec<Spanned<LightDef>>,
-    #[serde(default)]
-    roi: Vec<Spanned<RoiDef>>,
-    forecast: Option<Spanned<ForecastDef>>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct CameraDef {
-    position: [f32; 3],
-    look_at: [f32; 3],
-    #[serde(default = "default_up")]
-    up: [f32; 3],
-    fov: f32,
-    resolution: [u32; 2],
-}
-
-fn default_up() -> [f32; 3] {
-    [0.0, 1.0, 0.0]
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RenderDef {
-    method: Option<String>,
-    spp: Option<u64>,
-    time: Option<String>,
-    seed: Option<u64>,
-    max_depth: Option<u32>,
-}
-
-#[derive(Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-enum MaterialDef {
-    Diffuse { albedo: [f32; 3] },
-    Glossy { albedo: [f32; 3], specular: [f32; 3], exponent: f32 },
-    Mirror { reflectance: [f32; 3] },
-    Glass { ior: f32 },
-}
-
-#[derive(Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-enum ShapeDef {
-    Quad {
-        corner: [f32; 3],
-        u: [f32; 3],
-        v: [f32; 3],
-        material: Option<String>,
-        emission: Option<[f32; 3]>,
-    },
-    Sphere {
-        center: [f32; 3],
-        radius: f32,
-        material: Option<String>,
-        emission: Option<[f32; 3]>,
-        #[serde(default)]
-        inward: bool,
-    },
-    Mesh {
-        file: String,
-        #[serde(default = "default_normals")]
-        normals: String,
-        material: Option<String>,
-        emission: Option<[f32; 3]>,
-        translate: Option<[f32; 3]>,
-        scale: Option<f32>,
-        rotate_y: Option<f32>,
-    },
-}
-
-fn default_normals() -> String {
-    "flat".into()
-}
-
-#[derive(Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-enum LightDef {
-    Point { position: [f32; 3], intensity: [f32; 3] },
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RoiDef {
-    name: String,
-    rect: [u32; 4],
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ForecastDef {
-    target_box: Option<[[f32; 3]; 2]>,
-    photons: Option<u64>,
-}
 
 /// Parses a duration such as `500ms`, `30s`, `4m`, `1h` or `1m30s` into seconds.
 pub fn parse_duration(s: &str) -> Result<f64, String> {

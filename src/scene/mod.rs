@@ -11,6 +11,7 @@ mod camera;
 mod file;
 mod material;
 mod obj;
+mod schema;
 
 pub use camera::Camera;
 pub use file::{load, load_str, parse_duration, SceneError};
