@@ -99,8 +99,10 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
 
     // Caustic preprocess on rank 0, broadcast to the others.
     let t_pre = Instant::now();
-    let mut product = if rank == 0 { integrators::preprocess(method, &world, &opts, seed)? } else { Vec::new() };
+    let pre = if rank == 0 { integrators::preprocess(method, &world, &opts, seed) } else { Ok(Vec::new()) };
     let preprocess_s = secs(t_pre);
+    // every rank must leave together when rank 0 fails, or the others wait in the broadcast
+    let mut product = agree_or_fail(cluster, pre, "the caustic preprocess")?;
     let t_bc = Instant::now();
     cluster.broadcast_bytes(&mut product);
     let broadcast_s = secs(t_bc);
@@ -111,17 +113,16 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
 
     // Resume: rank 0 validates the checkpoint; everyone learns the first pass.
     let ckpt_path = job.checkpoint_path.clone().unwrap_or_else(|| with_ext(&job.out, "ckpt"));
-    let mut resumed: Option<Checkpoint> = None;
-    let mut first = vec![0u8; 8];
-    if rank == 0 {
-        if let Some(p) = &job.resume {
-            let c = Checkpoint::load(p).map_err(|e| e.to_string())?;
+    let loaded = match (&job.resume, rank) {
+        (Some(p), 0) => Checkpoint::load(p).map_err(|e| e.to_string()).and_then(|c| {
             c.validate(world.scene.hash, seed, method.name(), w, h)
-                .map_err(|e| format!("{}: cannot resume: {e}", p.display()))?;
-            first = c.next_pass.to_le_bytes().to_vec();
-            resumed = Some(c);
-        }
-    }
+                .map_err(|e| format!("{}: cannot resume: {e}", p.display()))
+                .map(|()| Some(c))
+        }),
+        _ => Ok(None),
+    };
+    let resumed: Option<Checkpoint> = agree_or_fail(cluster, loaded, "resuming")?;
+    let mut first = resumed.as_ref().map_or(0u64, |c| c.next_pass).to_le_bytes().to_vec();
     cluster.broadcast_bytes(&mut first);
     let first_pass = u64::from_le_bytes(first.as_slice().try_into().map_err(|_| "bad resume broadcast")?);
     let total_passes = spp.map(|s| s.max(first_pass));
@@ -163,12 +164,8 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
         if let Some(every) = job.checkpoint_every {
             let want = if rank == 0 && last_ckpt.elapsed().as_secs_f64() >= every { 1.0 } else { 0.0 };
             if cluster.all_reduce_max(want) > 0.0 {
-                let sums = cluster.reduce_sum(&film.data);
-                if let Some(sums) = sums {
-                    let mut total = Film::from_data(w as usize, h as usize, sums).ok_or("film size mismatch")?;
-                    if let Some(r) = &resumed {
-                        add_resumed(&mut total, r)?;
-                    }
+                if let Some(sums) = cluster.reduce_sum(&film.data) {
+                    let total = total_film(w, h, sums, &resumed)?;
                     let ck = checkpoint_of(&world, seed, method, (w, h), passes_done, &total, started, &resumed);
                     ck.save(&ckpt_path).map_err(|e| e.to_string())?;
                     write_images(&job.out, &total)?;
@@ -197,10 +194,7 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
     });
     let gathered = cluster.gather_bytes(rank_stats.to_string().as_bytes());
     let Some(sums) = sums else { return Ok(None) };
-    let mut total = Film::from_data(w as usize, h as usize, sums).ok_or("film size mismatch")?;
-    if let Some(r) = &resumed {
-        add_resumed(&mut total, r)?;
-    }
+    let total = total_film(w, h, sums, &resumed)?;
     let per_rank: Vec<serde_json::Value> = gathered
         .unwrap_or_default()
         .iter()
@@ -290,10 +284,24 @@ fn checkpoint_of(
     }
 }
 
-fn add_resumed(total: &mut Film, r: &Checkpoint) -> Result<(), String> {
-    let prev = Film::from_data(total.width, total.height, r.film.clone()).ok_or("checkpoint film size mismatch")?;
-    total.merge(&prev);
-    Ok(())
+/// The reduced sums of this run plus the resumed checkpoint's (rank 0).
+fn total_film(w: u32, h: u32, sums: Vec<f64>, resumed: &Option<Checkpoint>) -> Result<Film, String> {
+    let mut total = Film::from_data(w as usize, h as usize, sums).ok_or("film size mismatch")?;
+    if let Some(r) = resumed {
+        let prev = Film::from_data(total.width, total.height, r.film.clone()).ok_or("checkpoint film size mismatch")?;
+        total.merge(&prev);
+    }
+    Ok(total)
+}
+
+/// Rank 0's `result` if every rank got `Ok`; an error on every rank otherwise (collective).
+fn agree_or_fail<T>(cluster: &dyn Cluster, result: Result<T, String>, what: &str) -> Result<T, String> {
+    let ok = distributed::all_agree(cluster, result.is_ok());
+    match result {
+        Ok(v) if ok => Ok(v),
+        Err(e) => Err(e),
+        Ok(_) => Err(format!("{what} failed on rank 0")),
+    }
 }
 
 /// The film's mean as an image.
