@@ -5,6 +5,7 @@
 use crate::forecast::cluster::ClusteringMethod;
 use crate::forecast::estimator::{ForecastOptions, PhotonWeight, TableKind};
 use crate::integrators::{Method, MethodOptions};
+use crate::pipeline::RenderJob;
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 
@@ -138,6 +139,26 @@ pub struct RenderArgs {
 }
 
 impl RenderArgs {
+    /// The render job these arguments describe (as `forecast render` runs it).
+    pub fn job(&self) -> RenderJob {
+        RenderJob {
+            scene: self.scene.clone(),
+            method: self.method,
+            opts: self.method_options(),
+            spp: self.spp,
+            time: self.time,
+            seed: self.seed,
+            resolution: self.resolution,
+            out: self.out.clone(),
+            progress: !self.quiet,
+            checkpoint_every: self.checkpoint_every,
+            resume: self.resume.clone(),
+            checkpoint_path: None,
+            max_rounds: self.max_rounds,
+            threads: self.threads,
+        }
+    }
+
     /// The method options these arguments select.
     pub fn method_options(&self) -> MethodOptions {
         MethodOptions {

@@ -12,7 +12,7 @@ fn run() -> Result<(), String> {
     match cli.command {
         Command::Render(a) => {
             let cluster = distributed::try_init()?;
-            let job = forecast::compare::job_from_args(&a);
+            let job = a.job();
             let res = pipeline::render(&job, cluster.as_ref(), started)?;
             if let Some(r) = res {
                 if !a.quiet {
@@ -102,7 +102,7 @@ fn run() -> Result<(), String> {
         Command::Compare(a) => {
             let cluster = distributed::try_init()?;
             let cfg = compare::CompareConfig {
-                base: compare::job_from_args(&a.render),
+                base: a.render.job(),
                 methods: compare::parse_methods(&a.methods)?,
                 budgets: compare::parse_budgets(&a.budgets)?,
                 seeds: a.seeds,

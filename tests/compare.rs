@@ -151,7 +151,7 @@ fn reference_halves_and_compare_end_to_end() {
         panic!("not a compare command")
     };
     let cfg = compare::CompareConfig {
-        base: compare::job_from_args(&ca.render),
+        base: ca.render.job(),
         methods: compare::parse_methods(&ca.methods).unwrap(),
         budgets: compare::parse_budgets(&ca.budgets).unwrap(),
         seeds: ca.seeds,

@@ -18,7 +18,6 @@ pub mod reference;
 pub mod report;
 pub mod stability;
 
-use crate::cli::RenderArgs;
 use crate::distributed::Cluster;
 use crate::image_io::{self, Image};
 use crate::integrators::Method;
@@ -155,26 +154,6 @@ pub fn budget_label(secs: f64) -> String {
         format!("{}m", secs / 60.0)
     } else {
         format!("{}s", (secs * 100.0).round() / 100.0)
-    }
-}
-
-/// The render job `args` describe (as `forecast render` builds it).
-pub fn job_from_args(a: &RenderArgs) -> RenderJob {
-    RenderJob {
-        scene: a.scene.clone(),
-        method: a.method,
-        opts: a.method_options(),
-        spp: a.spp,
-        time: a.time,
-        seed: a.seed,
-        resolution: a.resolution,
-        out: a.out.clone(),
-        progress: !a.quiet,
-        checkpoint_every: a.checkpoint_every,
-        resume: a.resume.clone(),
-        checkpoint_path: None,
-        max_rounds: a.max_rounds,
-        threads: a.threads,
     }
 }
 

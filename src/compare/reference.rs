@@ -47,7 +47,7 @@ pub fn run_reference(
     if args.method.is_some_and(|m| m != Method::Pt) {
         return Err("reference: only `--method pt` (the unbiased reference) is supported".into());
     }
-    let base = super::job_from_args(args);
+    let base = args.job();
     let scene = crate::scene::load(&base.scene).map_err(|e| e.to_string())?;
     let seed = base.seed.unwrap_or(scene.render.seed);
     let time = base.time.or(if base.spp.is_some() { None } else { scene.render.time });
