@@ -339,8 +339,9 @@ impl Iws {
         if cos_x <= 0.0 {
             return Rgb::ZERO;
         }
-        let shade_x = w.dot(x.ns).abs() / cos_x; // eye-side shading-normal factor
-                                                 // spec §2: G = |n_x·ŵ||n_y·ŵ|/r² on geometric normals; min(G, b) except point lights
+        // eye-side shading-normal factor
+        let shade_x = w.dot(x.ns).abs() / cos_x;
+        // spec §2: G = |n_x·ŵ||n_y·ŵ|/r² on geometric normals; min(G, b) except point lights
         let (e, g) = match v.kind {
             VplKind::Point => (Rgb::ONE, cos_x / r2),
             VplKind::Area => {
