@@ -74,21 +74,7 @@ fn soup(rng: &mut Rng, n: usize, extent: f32, size: f32) -> Vec<[Vec3; 3]> {
 /// Barycentric distance to the nearest edge of triangle `p` of the point where the ray meets its
 /// plane (negative outside); None if the ray is parallel to the plane.
 fn edge_distance(p: [Vec3; 3], o: Vec3, d: Vec3) -> Option<f64> {
-    let f = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
-    let (p0, p1, p2, o, d) = (f(p[0]), f(p[1]), f(p[2]), f(o), f(d));
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let cross =
-        |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let (e1, e2) = (sub(p1, p0), sub(p2, p0));
-    let pv = cross(d, e2);
-    let det = dot(e1, pv);
-    if det == 0.0 {
-        return None;
-    }
-    let tv = sub(o, p0);
-    let u = dot(tv, pv) / det;
-    let v = dot(d, cross(tv, e1)) / det;
+    let (u, v, _, _) = common::plane_hit(p, o, d)?;
     Some(u.min(v).min(1.0 - u - v))
 }
 

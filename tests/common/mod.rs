@@ -58,8 +58,9 @@ pub fn render_film(job: &RenderJob) -> Film {
     r.film
 }
 
-/// Möller–Trumbore in f64; returns t in (tmin, tmax) or None. No back-face culling.
-pub fn tri_t(p: [Vec3; 3], o: Vec3, d: Vec3, tmin: f64, tmax: f64) -> Option<f64> {
+/// Möller–Trumbore in f64 against the plane of triangle `p`: the barycentrics (u, v) of the
+/// point where the ray meets the plane, and its t; None if the ray is parallel (det = 0).
+pub fn plane_hit(p: [Vec3; 3], o: Vec3, d: Vec3) -> Option<(f64, f64, f64, f64)> {
     let f = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
     let (p0, p1, p2, o, d) = (f(p[0]), f(p[1]), f(p[2]), f(o), f(d));
     let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
@@ -69,21 +70,21 @@ pub fn tri_t(p: [Vec3; 3], o: Vec3, d: Vec3, tmin: f64, tmax: f64) -> Option<f64
     let (e1, e2) = (sub(p1, p0), sub(p2, p0));
     let pv = cross(d, e2);
     let det = dot(e1, pv);
-    if det == 0.0 || !det.is_finite() {
+    if det == 0.0 {
         return None;
     }
     let inv = 1.0 / det;
     let tv = sub(o, p0);
-    let u = dot(tv, pv) * inv;
-    if !(0.0..=1.0).contains(&u) {
-        return None;
-    }
     let qv = cross(tv, e1);
-    let v = dot(d, qv) * inv;
-    if v < 0.0 || u + v > 1.0 {
+    Some((dot(tv, pv) * inv, dot(d, qv) * inv, dot(e2, qv) * inv, det))
+}
+
+/// Möller–Trumbore in f64; returns t in (tmin, tmax) or None. No back-face culling.
+pub fn tri_t(p: [Vec3; 3], o: Vec3, d: Vec3, tmin: f64, tmax: f64) -> Option<f64> {
+    let (u, v, t, det) = plane_hit(p, o, d)?;
+    if !det.is_finite() || !(0.0..=1.0).contains(&u) || v < 0.0 || u + v > 1.0 {
         return None;
     }
-    let t = dot(e2, qv) * inv;
     (t > tmin && t < tmax).then_some(t)
 }
 
