@@ -112,66 +112,19 @@ fn time_box_ends_within_budget_plus_one_pass() {
 #[test]
 fn checkpoint_and_resume_across_ranks() {
     let d = tmp("ckpt");
-    let full = d.join("full");
-    let part = d.join("part");
-    mpirun(
-        2,
-        &[
-            "render",
-            &scene(),
-            "--spp",
-            "12",
-            "--resolution",
-            "32x32",
-            "--seed",
-            "5",
-            "--quiet",
-            "--out",
-            full.to_str().unwrap(),
-        ],
-    );
+    let (full, part, res) = (d.join("full"), d.join("part"), d.join("res"));
+    let ckpt = format!("{}.ckpt", part.display());
+    // the same 12-pass render, with `extra` options, written to `out`
+    let render12 = |extra: &[&str], out: &Path| {
+        let common = ["render", &scene(), "--spp", "12", "--resolution", "32x32", "--seed", "5", "--quiet"];
+        mpirun(2, &[&common[..], extra, &["--out", out.to_str().unwrap()][..]].concat());
+    };
+    render12(&[], &full);
     // stop after 2 rounds (4 passes) with a checkpoint, then resume to 12 passes
-    mpirun(
-        2,
-        &[
-            "render",
-            &scene(),
-            "--spp",
-            "12",
-            "--resolution",
-            "32x32",
-            "--seed",
-            "5",
-            "--quiet",
-            "--checkpoint-every",
-            "1ms",
-            "--max-rounds",
-            "2",
-            "--out",
-            part.to_str().unwrap(),
-        ],
-    );
-    let ck = forecast::checkpoint::Checkpoint::load(&PathBuf::from(format!("{}.ckpt", part.display()))).unwrap();
+    render12(&["--checkpoint-every", "1ms", "--max-rounds", "2"], &part);
+    let ck = forecast::checkpoint::Checkpoint::load(&PathBuf::from(&ckpt)).unwrap();
     assert_eq!(ck.passes_done, 4);
-    let res = d.join("res");
-    mpirun(
-        2,
-        &[
-            "render",
-            &scene(),
-            "--spp",
-            "12",
-            "--resolution",
-            "32x32",
-            "--seed",
-            "5",
-            "--quiet",
-            "--resume",
-            &format!("{}.ckpt", part.display()),
-            "--out",
-            res.to_str().unwrap(),
-        ],
-    );
+    render12(&["--resume", &ckpt], &res);
     assert_eq!(json(&res)["spp"], 12);
     assert_same_image(&res.with_extension("exr"), &full.with_extension("exr"));
 }
