@@ -206,7 +206,7 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
         let ck = checkpoint_of(&world, seed, method, (w, h), passes_done, &total, started, &resumed);
         ck.save(&ckpt_path).map_err(|e| e.to_string())?;
     }
-    write_images(&job.out, &total)?;
+    let image = write_images(&job.out, &total)?;
     let write_s = secs(t_write);
     let pixels = (w as f64) * (h as f64);
     let samples_total = total.total_samples();
@@ -235,7 +235,7 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
         "options": opts,
         "per_rank": per_rank,
         "warnings": world.scene.warnings,
-        "image_mean": image_from_film(&total).mean(),
+        "image_mean": image.mean(),
     });
     let json_path = with_ext(&job.out, "json");
     let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
@@ -309,15 +309,16 @@ pub fn image_from_film(f: &Film) -> Image {
     Image { width: f.width, height: f.height, pixels: f.mean() }
 }
 
-/// Writes PREFIX.exr (mean + variance-of-mean layer) and PREFIX.png, atomically.
-pub fn write_images(prefix: &Path, film: &Film) -> Result<(), String> {
+/// Writes PREFIX.exr (mean + variance-of-mean layer) and PREFIX.png, atomically; returns the mean.
+pub fn write_images(prefix: &Path, film: &Film) -> Result<Image, String> {
     if let Some(dir) = prefix.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     }
     let img = image_from_film(film);
     let var = Image { width: film.width, height: film.height, pixels: film.variance_of_mean() };
     image_io::write_exr_layers(&with_ext(prefix, "exr"), &img, Some(&var))?;
-    image_io::write_png_srgb(&with_ext(prefix, "png"), &img, 1.0)
+    image_io::write_png_srgb(&with_ext(prefix, "png"), &img, 1.0)?;
+    Ok(img)
 }
 
 /// `prefix` + "." + `ext` (keeps dots inside the prefix).

@@ -84,9 +84,8 @@ pub fn run_reference(
         return Err(format!("{}: the two halves have different sizes", prefix.display()));
     }
     film.merge(&h1.film);
-    pipeline::write_images(&prefix, &film)?;
+    let mean = pipeline::write_images(&prefix, &film)?;
     let spp_total = h0.report["spp"].as_u64().unwrap_or(0) + h1.report["spp"].as_u64().unwrap_or(0);
-    let mean = pipeline::image_from_film(&film);
     let nonfinite_pixels = mean.pixels.iter().filter(|p| p.iter().any(|v| !v.is_finite())).count();
     let report = json!({
         "kind": "reference",
