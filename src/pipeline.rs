@@ -317,7 +317,7 @@ pub fn write_images(prefix: &Path, film: &Film) -> Result<Image, String> {
     let img = image_from_film(film);
     let var = Image { width: film.width, height: film.height, pixels: film.variance_of_mean() };
     image_io::write_exr_layers(&with_ext(prefix, "exr"), &img, Some(&var))?;
-    image_io::write_png_srgb(&with_ext(prefix, "png"), &img, 1.0)?;
+    image_io::write_png_srgb(&with_ext(prefix, "png"), &img, 0.0)?; // exposure in stops: 0 = as rendered
     Ok(img)
 }
 
