@@ -19,7 +19,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 /// PNG exposure of crops and strips, in stops (the same as the render PNGs).
-pub const CROP_EXPOSURE: f32 = 1.0;
+pub const CROP_EXPOSURE: f32 = 0.0;
 /// Crops are upscaled by an integer factor until at least this many pixels tall.
 pub const CROP_MIN_HEIGHT: usize = 160;
 
