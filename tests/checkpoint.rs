@@ -3,7 +3,7 @@
 //! bounded at relative 1e-6), and a stale checkpoint (other seed) is refused with a clear error.
 
 mod common;
-use common::assert_same_image;
+use common::{assert_same_image, tmp_dir};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -12,20 +12,13 @@ fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_forecast")
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("forecast-ckpt-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
 fn scene() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml")
 }
 
 #[test]
 fn killed_render_resumes_to_the_uninterrupted_image() {
-    let d = tmp("kill");
+    let d = tmp_dir("kill");
     let spp = "600";
     let full = d.join("full");
     let st = Command::new(bin())
@@ -76,7 +69,7 @@ fn killed_render_resumes_to_the_uninterrupted_image() {
 
 #[test]
 fn resume_with_another_seed_is_refused() {
-    let d = tmp("seed");
+    let d = tmp_dir("seed");
     let out = d.join("a");
     let st = Command::new(bin())
         .args(["render", scene().to_str().unwrap(), "--spp", "4", "--resolution", "16x16", "--seed", "1", "--quiet"])

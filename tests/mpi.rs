@@ -4,7 +4,7 @@
 #![cfg(feature = "mpi")]
 
 mod common;
-use common::assert_same_image;
+use common::{assert_same_image, tmp_dir};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
@@ -13,13 +13,6 @@ const METHODS: &[&str] = &["pt", "iws", "iws-pm", "iws-cf"];
 
 fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_forecast")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("forecast-mpi-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 fn scene() -> String {
@@ -51,7 +44,7 @@ fn selftest_of_every_collective() {
 
 #[test]
 fn two_ranks_equal_one_process_for_every_method() {
-    let d = tmp("equiv");
+    let d = tmp_dir("equiv");
     for m in METHODS {
         let one = d.join(format!("{m}-1"));
         let two = d.join(format!("{m}-2"));
@@ -75,7 +68,7 @@ fn two_ranks_equal_one_process_for_every_method() {
 
 #[test]
 fn time_box_ends_within_budget_plus_one_pass() {
-    let d = tmp("time");
+    let d = tmp_dir("time");
     let out = d.join("t");
     let t = Instant::now();
     mpirun(
@@ -111,7 +104,7 @@ fn time_box_ends_within_budget_plus_one_pass() {
 
 #[test]
 fn checkpoint_and_resume_across_ranks() {
-    let d = tmp("ckpt");
+    let d = tmp_dir("ckpt");
     let (full, part, res) = (d.join("full"), d.join("part"), d.join("res"));
     let ckpt = format!("{}.ckpt", part.display());
     // the same 12-pass render, with `extra` options, written to `out`
