@@ -6,7 +6,7 @@
 //! hit points (shadow rays) — the incoherent mix a path tracer produces.
 
 use crate::accel::{offset_origin, World};
-use crate::integrators::{self, Method, MethodOptions};
+use crate::integrators::{Method, MethodArgs};
 use crate::math::{Frame, Vec3};
 use crate::render::{film::Film, render_pass};
 use crate::sampling::rng::{stream, Rng};
@@ -84,8 +84,9 @@ pub fn run(world: &World, resolution: (u32, u32), repeats: usize) -> Result<Benc
     let mut pt = Vec::new();
     let (w, h) = resolution;
     let camera = world.scene.camera.with_resolution(w, h);
-    let opts = MethodOptions { max_depth: world.scene.render.max_depth, ..Default::default() };
-    let integ = integrators::build(Method::Pt, world, &opts, &[])?;
+    let mut args = MethodArgs::default();
+    args.pt.max_depth = Some(world.scene.render.max_depth);
+    let integ = Method::Pt.build(world, &args, &Method::Pt.preprocess(world, &args, 7)?)?;
     let mut rays_per_sample = (0.0, 0.0);
     for r in 0..repeats.max(1) {
         let t = Instant::now();

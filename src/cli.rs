@@ -1,13 +1,16 @@
 //! Command-line interface (clap derive). The `render` contract is fixed:
 //! `forecast render SCENE [--method pt] [--spp N | --time DURATION] [--resolution WxH]
-//! [--seed S] [--threads N] [--out PREFIX] [--quiet]`.
+//! [--seed S] [--threads N] [--out PREFIX] [--quiet]`. Each method's flags come from its own
+//! file (`integrators::MethodArgs`, flattened here); lists are typed (`--methods`, `--budgets`,
+//! `--only` split by clap).
 
-use crate::forecast::cluster::ClusteringMethod;
-use crate::forecast::estimator::{ForecastOptions, PhotonWeight, TableKind};
-use crate::integrators::{Method, MethodOptions};
+use crate::compare::stability::StabilityConfig;
+use crate::compare::CompareConfig;
+use crate::integrators::{Method, MethodArgs};
 use crate::pipeline::RenderJob;
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
+use std::time::Duration;
 
 /// Unbiased global illumination with Caustic Forecasting (Budge, Anderson, Joy 2008).
 #[derive(Parser, Debug)]
@@ -76,9 +79,6 @@ pub struct RenderArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
-    /// Safety cap on path vertices (default: the scene's `render.max_depth`, 64).
-    #[arg(long)]
-    pub max_depth: Option<u32>,
     /// Write a checkpoint (PREFIX.ckpt) and the current image this often (e.g. 30s).
     #[arg(long, value_parser = parse_secs)]
     pub checkpoint_every: Option<f64>,
@@ -88,54 +88,9 @@ pub struct RenderArgs {
     /// Stop after this many rounds of passes (testing kill/resume).
     #[arg(long, hide = true)]
     pub max_rounds: Option<u64>,
-    /// IWS clamp bound b (default 0.25·π·N/A_D, spec §2; 0 = pure compensation, inf = no clamping).
-    #[arg(long, value_parser = parse_bound)]
-    pub bound: Option<f32>,
-    /// IWS light paths per pass N.
-    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..))]
-    pub vpl_paths: u32,
-    /// IWS VPLs evaluated at diffuse depth >= 1 (unbiased uniform subset; 0 = all).
-    #[arg(long, default_value_t = 16)]
-    pub vpl_subset: u32,
-    /// iws-pm: caustic photons to store.
-    #[arg(long, default_value_t = 200_000)]
-    pub photons: u64,
-    /// iws-pm: photons per radiance estimate (k).
-    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
-    pub gather: u32,
-    /// iws-pm: maximum gather radius in scene units (default 2% of the scene diagonal).
-    #[arg(long, value_parser = parse_positive)]
-    pub max_radius: Option<f32>,
-    /// iws-cf: forecast photons to store (default: the scene's `[forecast] photons`, else 200k).
-    #[arg(long)]
-    pub forecast_photons: Option<u64>,
-    /// iws-cf: clustering algorithm.
-    #[arg(long, value_enum, default_value = "vq")]
-    pub clustering: ClusteringMethod,
-    /// iws-cf: codebook size k (clusters).
-    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
-    pub clusters: u32,
-    /// iws-cf: clusters with rank above this are culled (cosine sampling only).
-    #[arg(long, default_value_t = 6)]
-    pub max_rank: u32,
-    /// iws-cf: forecasters gathered per table (n).
-    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(1..))]
-    pub forecasters: u32,
-    /// iws-cf: dual table (BAJ08) or one defensive table (ablation).
-    #[arg(long, value_enum, default_value = "dual")]
-    pub table: TableKind,
-    /// iws-cf: photon weight in the table: lum(Φ)·f·cos (paper) or lum(Φ)·f (flux).
-    #[arg(long, value_enum, default_value = "paper")]
-    pub photon_weight: PhotonWeight,
-    /// iws-cf: splitting factor S0 at diffuse depth 0 for rank 0 (S = max(1, S0 >> rank); 1 at depth >= 1).
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
-    pub split: u32,
-    /// iws-cf: table-cache cell edge as a fraction of the search radius (0 = build per point).
-    #[arg(long, default_value_t = 0.5)]
-    pub table_cache: f32,
-    /// iws-cf: use the photon tables at diffuse depths below this (deeper: one BSDF sample).
-    #[arg(long, default_value_t = 1)]
-    pub table_depth: u32,
+    /// Every method's parameters (flags from each method's file).
+    #[command(flatten)]
+    pub method_args: MethodArgs,
 }
 
 impl RenderArgs {
@@ -144,7 +99,7 @@ impl RenderArgs {
         RenderJob {
             scene: self.scene.clone(),
             method: self.method,
-            opts: self.method_options(),
+            args: self.method_args.clone(),
             spp: self.spp,
             time: self.time,
             seed: self.seed,
@@ -156,31 +111,6 @@ impl RenderArgs {
             checkpoint_path: None,
             max_rounds: self.max_rounds,
             threads: self.threads,
-        }
-    }
-
-    /// The method options these arguments select.
-    pub fn method_options(&self) -> MethodOptions {
-        MethodOptions {
-            max_depth: self.max_depth.unwrap_or(0),
-            bound: self.bound,
-            vpl_paths: self.vpl_paths,
-            vpl_subset: self.vpl_subset,
-            photons: self.photons,
-            gather: self.gather,
-            max_radius: self.max_radius,
-            forecast_photons: self.forecast_photons,
-            forecast: ForecastOptions {
-                clusters: self.clusters as usize,
-                clustering: self.clustering,
-                max_rank: self.max_rank,
-                gather: self.forecasters as usize,
-                table: self.table,
-                photon_weight: self.photon_weight,
-                s0: self.split,
-                cache_cell: self.table_cache.max(0.0),
-                table_depth: self.table_depth,
-            },
         }
     }
 }
@@ -234,28 +164,17 @@ pub struct BenchArgs {
     pub threads: Option<usize>,
 }
 
-fn parse_bound(s: &str) -> Result<f32, String> {
-    let t = s.trim();
-    let b = if t.eq_ignore_ascii_case("inf") {
-        f32::INFINITY
-    } else {
-        t.parse::<f32>().map_err(|_| format!("bad bound `{s}`"))?
-    };
-    if b.is_nan() || b < 0.0 {
-        return Err(format!("bound `{s}` must be >= 0 (or `inf`)"));
-    }
-    Ok(b)
-}
-
-fn parse_positive(s: &str) -> Result<f32, String> {
-    match s.trim().parse::<f32>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        _ => Err(format!("`{s}` must be a positive number")),
-    }
-}
-
 fn parse_secs(s: &str) -> Result<f64, String> {
     crate::scene::parse_duration(s)
+}
+
+/// A positive duration (`30s`, `4m`, `500ms`).
+fn parse_budget(s: &str) -> Result<Duration, String> {
+    let v = crate::scene::parse_duration(s)?;
+    if !(v.is_finite() && v > 0.0) {
+        return Err(format!("budget `{s}` must be a positive duration"));
+    }
+    Ok(Duration::from_secs_f64(v))
 }
 
 /// Parses `WxH`.
@@ -288,17 +207,31 @@ pub struct CompareArgs {
     #[command(flatten)]
     pub render: RenderArgs,
     /// Methods to compare, comma-separated.
-    #[arg(long, default_value = "pt,iws-pm,iws-cf")]
-    pub methods: String,
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "pt,iws-pm,iws-cf", required = true)]
+    pub methods: Vec<Method>,
     /// Time budgets, comma-separated (preprocess included).
-    #[arg(long, default_value = "30s,1m,2m,4m")]
-    pub budgets: String,
+    #[arg(long, value_delimiter = ',', value_parser = parse_budget, default_value = "30s,1m,2m,4m", required = true)]
+    pub budgets: Vec<Duration>,
     /// Seeds per method and budget (seed, seed+1, ...).
     #[arg(long, default_value_t = 3)]
     pub seeds: u64,
     /// Reference image (from `forecast reference`).
     #[arg(long)]
     pub reference: PathBuf,
+}
+
+impl CompareArgs {
+    /// The comparison these arguments describe.
+    pub fn config(&self) -> CompareConfig {
+        CompareConfig {
+            base: self.render.job(),
+            methods: self.methods.clone(),
+            budgets: self.budgets.iter().map(Duration::as_secs_f64).collect(),
+            seeds: self.seeds,
+            reference: self.reference.clone(),
+            out: self.render.out.clone(),
+        }
+    }
 }
 
 /// `stability` options.
@@ -317,15 +250,31 @@ pub struct StabilityArgs {
     #[arg(long, value_parser = parse_secs)]
     pub reference_time: Option<f64>,
     /// Methods, comma-separated.
-    #[arg(long, default_value = "pt,iws,iws-pm,iws-cf")]
-    pub methods: String,
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "pt,iws,iws-pm,iws-cf", required = true)]
+    pub methods: Vec<Method>,
     /// Only these cases, comma-separated (default: all).
-    #[arg(long)]
-    pub only: Option<String>,
+    #[arg(long, value_delimiter = ',')]
+    pub only: Vec<String>,
     /// Worker threads.
     #[arg(long)]
     pub threads: Option<usize>,
     /// Output directory.
     #[arg(long, default_value = "out/stability")]
     pub out: PathBuf,
+}
+
+impl StabilityArgs {
+    /// The suite run these arguments describe.
+    pub fn config(&self) -> StabilityConfig {
+        StabilityConfig {
+            scenes: self.scenes.clone(),
+            resolution: self.resolution,
+            time_per_run: self.time_per_run,
+            reference_time: self.reference_time.unwrap_or(4.0 * self.time_per_run),
+            methods: self.methods.clone(),
+            only: self.only.iter().map(|t| t.trim().to_string()).filter(|t| !t.is_empty()).collect(),
+            threads: self.threads,
+            out: self.out.clone(),
+        }
+    }
 }

@@ -120,6 +120,14 @@ impl Image {
     }
 }
 
+/// `prefix` + "." + `ext` (keeps dots inside the prefix, unlike `Path::with_extension`).
+pub fn with_ext(prefix: &Path, ext: &str) -> PathBuf {
+    let mut s = prefix.as_os_str().to_owned();
+    s.push(".");
+    s.push(ext);
+    PathBuf::from(s)
+}
+
 /// The temporary path a writer uses before renaming onto `path`: `path` with `.tmp` appended to
 /// its file name, in the same directory (so the rename is atomic on one file system).
 pub fn atomic_path(path: &Path) -> PathBuf {

@@ -3,11 +3,11 @@
 //!
 //! Data flow (and module order):
 //! ```text
-//! scene (TOML, OBJ) → accel::World (CWBVH) → integrators::preprocess (rank 0; caustic maps)
+//! scene (TOML, OBJ) → accel::World (CWBVH) → Method::preprocess (rank 0; caustic maps)
 //!   → distributed broadcast → per pass: Integrator::begin_pass (IWS point lights) → render::render_pass
 //!   → render::film::Film sums → distributed reduce → image_io (EXR, PNG) + JSON report
 //! ```
-//! Methods: `pt` (reference), `iws`, `iws-pm`, `iws-cf`; see `integrators`.
+//! Methods: `pt` (reference), `iws`, `iws-pm`, `iws-cf`; see `integrators` and ARCHITECTURE.md.
 #![warn(missing_docs)]
 
 pub mod accel;
@@ -24,6 +24,7 @@ pub mod integrators;
 pub mod math;
 pub mod metrics;
 pub mod pipeline;
+pub mod profile;
 pub mod progress;
 pub mod render;
 pub mod sampling;

@@ -19,11 +19,11 @@ fn run() -> Result<(), String> {
                     let rep = &r.report;
                     eprintln!(
                         "{}: {} spp in {:.2} s ({:.2} Msamples/s, {:.1} Mrays/s) -> {}.{{exr,png,json}}",
-                        rep["method"].as_str().unwrap_or("?"),
-                        rep["spp"],
-                        rep["timings"]["total_s"].as_f64().unwrap_or(0.0),
-                        rep["samples_per_s"].as_f64().unwrap_or(0.0) / 1e6,
-                        rep["mrays_per_s"].as_f64().unwrap_or(0.0),
+                        rep.method.name(),
+                        rep.spp,
+                        rep.timings.total_s,
+                        rep.samples_per_s / 1e6,
+                        rep.mrays_per_s,
                         a.out.display()
                     );
                 }
@@ -95,20 +95,13 @@ fn run() -> Result<(), String> {
         Command::Reference(a) => {
             let cluster = distributed::try_init()?;
             if let Some(r) = compare::reference::run_reference(&a, cluster.as_ref(), started)? {
-                eprintln!("reference: {} spp -> {}.{{exr,json}} + .half0/.half1", r["spp"], a.out.display());
+                eprintln!("reference: {} spp -> {}.{{exr,json}} + .half0/.half1", r.spp, a.out.display());
             }
             Ok(())
         }
         Command::Compare(a) => {
             let cluster = distributed::try_init()?;
-            let cfg = compare::CompareConfig {
-                base: a.render.job(),
-                methods: compare::parse_methods(&a.methods)?,
-                budgets: compare::parse_budgets(&a.budgets)?,
-                seeds: a.seeds,
-                reference: a.reference.clone(),
-                out: a.render.out.clone(),
-            };
+            let cfg = a.config();
             if compare::run_compare(&cfg, cluster.as_ref())?.is_some() {
                 eprintln!("compare: report in {}", cfg.out.join("report.html").display());
             }
@@ -119,16 +112,7 @@ fn run() -> Result<(), String> {
             if cluster.size() > 1 {
                 return Err("stability runs single-process; start it without mpirun".into());
             }
-            let cfg = compare::stability::StabilityConfig {
-                scenes: a.scenes.clone(),
-                resolution: a.resolution,
-                time_per_run: a.time_per_run,
-                reference_time: a.reference_time.unwrap_or(4.0 * a.time_per_run),
-                methods: compare::parse_methods(&a.methods)?,
-                only: a.only.as_deref().map_or(Vec::new(), |s| s.split(',').map(|t| t.trim().to_string()).collect()),
-                threads: a.threads,
-                out: a.out.clone(),
-            };
+            let cfg = a.config();
             let recs = compare::stability::run_suite(&cfg)?;
             compare::stability::write_stability_report(&cfg.out, &cfg, &recs)?;
             let bad = recs.iter().filter(|r| !r.ok()).count();
@@ -158,17 +142,17 @@ fn run() -> Result<(), String> {
 }
 
 fn forecast_map(a: &forecast::cli::ForecastMapArgs) -> Result<(), String> {
-    use forecast::integrators::{build_forecast, iws_forecast, DEFAULT_FORECAST_PHOTONS};
+    use forecast::integrators::iws_forecast::{self, build_forecast};
     use forecast::transport::particle::Emission;
     let r = &a.render;
     let scene = forecast::scene::load(&r.scene).map_err(|e| e.to_string())?;
     let world = accel::World::build(scene);
-    let opts = r.method_options();
+    let cf_args = &r.method_args.cf;
     let seed = r.seed.unwrap_or(world.scene.render.seed);
-    let target = opts.forecast_photons.or(world.scene.forecast_photons).unwrap_or(DEFAULT_FORECAST_PHOTONS);
+    let target = cf_args.target_photons(&world);
     let pool = pipeline::thread_pool(r.threads)?;
     let (cf, untargeted) = pool.install(|| {
-        let cf = build_forecast(&world, target, opts.forecast.clone(), seed);
+        let cf = build_forecast(&world, target, cf_args.options(), seed);
         let n = a.compare_paths;
         let untargeted = (n > 0).then(|| {
             let (pts, paths) = forecast::transport::particle::collect_caustic_vertices(
@@ -202,7 +186,7 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs) -> Result<(), String> {
         })).collect::<Vec<_>>(),
     });
     let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
-    image_io::atomic_write(&pipeline::with_ext(&r.out, "json"), text.as_bytes())?;
+    image_io::atomic_write(&image_io::with_ext(&r.out, "json"), text.as_bytes())?;
     println!("{text}");
     Ok(())
 }

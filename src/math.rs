@@ -1,5 +1,5 @@
-//! Math vocabulary shared by every module: glam re-exports, `Rgb`, luminance and an orthonormal
-//! shading `Frame`.
+//! Math vocabulary shared by every module: glam re-exports, `Rgb`, luminance, an orthonormal
+//! shading `Frame` and the FNV-1a hash (scene and mesh content hashes).
 //!
 //! Invariants: `Frame` is right-handed and orthonormal; `to_local(n) == (0,0,1)`. Local directions
 //! have `z = cos θ` against the frame normal.
@@ -79,4 +79,13 @@ mod tests {
             assert!((f.to_world(f.to_local(v)) - v).length() < 1e-5);
         }
     }
+}
+
+/// FNV-1a over bytes, continuing from `h` (start from `0xcbf2_9ce4_8422_2325`).
+pub fn fnv1a(mut h: u64, bytes: &[u8]) -> u64 {
+    for &b in bytes {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    h
 }

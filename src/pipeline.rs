@@ -1,5 +1,6 @@
 //! The render pipeline, top to bottom, and the only place the stages meet:
-//! scene → BVH → caustic preprocess (rank 0, broadcast) → interleaved passes → reduce → image.
+//! scene → [`RenderJob::resolve`] → BVH → [`preprocess`] (rank 0, broadcast) → [`agree_resume`]
+//! → [`run_passes`] (interleaved passes, checkpoints) → [`reduce`] → images + [`RenderReport`].
 //!
 //! Ranks: rank r renders passes r, r+N, … in rounds of N passes; all ranks agree once per round
 //! whether to start another (time boxes), so finished passes are always a contiguous range
@@ -11,24 +12,26 @@ use crate::accel::World;
 use crate::checkpoint::Checkpoint;
 use crate::distributed::schedule::{Deadline, PassTimer};
 use crate::distributed::{self, Cluster};
-use crate::image_io::{self, Image};
-use crate::integrators::{self, Method, MethodOptions};
+use crate::image_io::{self, with_ext, Image};
+use crate::integrators::{Integrator, Method, MethodArgs};
 use crate::progress::Progress;
 use crate::render::film::Film;
 use crate::render::{render_pass, PassCounters};
-use serde_json::json;
+use crate::scene::Scene;
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// Everything a render needs (resolved from the CLI and the scene's defaults).
+/// Everything a render needs, as requested (the scene's defaults fill the `None`s, see
+/// [`RenderJob::resolve`]).
 #[derive(Clone, Debug)]
 pub struct RenderJob {
     /// Scene file.
     pub scene: PathBuf,
     /// Method (`None`: the scene's default).
     pub method: Option<Method>,
-    /// Method options.
-    pub opts: MethodOptions,
+    /// Every method's parameters.
+    pub args: MethodArgs,
     /// Samples per pixel (one per pass).
     pub spp: Option<u64>,
     /// Time budget in seconds, preprocess included.
@@ -53,12 +56,153 @@ pub struct RenderJob {
     pub threads: Option<usize>,
 }
 
+/// A job with every default resolved against its scene.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// Method.
+    pub method: Method,
+    /// Seed.
+    pub seed: u64,
+    /// Method parameters (`max_depth` resolved).
+    pub args: MethodArgs,
+    /// Time budget (exclusive with `spp`).
+    pub time: Option<f64>,
+    /// Samples per pixel (exclusive with `time`).
+    pub spp: Option<u64>,
+    /// Image size.
+    pub resolution: (u32, u32),
+}
+
+impl RenderJob {
+    /// Fills the job's `None`s from the scene's `[render]` defaults.
+    pub fn resolve(&self, scene: &Scene) -> Result<Plan, String> {
+        let r = &scene.render;
+        let method = match self.method {
+            Some(m) => m,
+            None => Method::from_name(&r.method)
+                .ok_or_else(|| format!("{}: method `{}` is not available", scene.path, r.method))?,
+        };
+        let mut args = self.args.clone();
+        if args.pt.max_depth.is_none_or(|d| d == 0) {
+            args.pt.max_depth = Some(r.max_depth);
+        }
+        let time = self.time.or(if self.spp.is_some() { None } else { r.time });
+        let spp = if time.is_some() { None } else { Some(self.spp.or(r.spp).unwrap_or(16)) };
+        let resolution = self.resolution.unwrap_or((scene.camera.width, scene.camera.height));
+        Ok(Plan { method, seed: self.seed.unwrap_or(r.seed), args, time, spp, resolution })
+    }
+}
+
+/// Wall-clock seconds of each stage (rank 0's).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Timings {
+    /// Scene loading.
+    pub load_s: f64,
+    /// BVH build.
+    pub bvh_s: f64,
+    /// Caustic preprocess (rank 0).
+    pub preprocess_s: f64,
+    /// Its broadcast.
+    pub broadcast_s: f64,
+    /// The passes.
+    pub render_s: f64,
+    /// The reduce.
+    pub reduce_s: f64,
+    /// Writing images, checkpoint and JSON.
+    pub write_s: f64,
+    /// Since the process started.
+    pub total_s: f64,
+}
+
+/// Rays traced by all ranks.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct Rays {
+    /// Closest-hit rays.
+    pub closest: u64,
+    /// Shadow rays.
+    pub shadow: u64,
+}
+
+/// One rank's figures (gathered on rank 0).
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct RankStats {
+    /// Rank.
+    pub rank: usize,
+    /// Passes it rendered.
+    pub passes: u64,
+    /// Its preprocess seconds (0 except on rank 0).
+    pub preprocess_s: f64,
+    /// Its broadcast seconds.
+    pub broadcast_s: f64,
+    /// Its render seconds.
+    pub render_s: f64,
+    /// Its reduce seconds.
+    pub reduce_s: f64,
+    /// Bytes of the broadcast product.
+    pub bytes_broadcast: usize,
+    /// Checksum of the product it built its integrator from.
+    pub product_hash: u64,
+    /// Samples it took.
+    pub samples: u64,
+    /// Its closest-hit rays.
+    pub closest_rays: u64,
+    /// Its shadow rays.
+    pub shadow_rays: u64,
+}
+
+/// The JSON report written next to the image (`PREFIX.json`).
+#[derive(Clone, Debug, Serialize)]
+pub struct RenderReport {
+    /// Method.
+    pub method: Method,
+    /// Scene file.
+    pub scene: String,
+    /// Image size.
+    pub resolution: [u32; 2],
+    /// Samples per pixel in the image.
+    pub spp: u64,
+    /// Passes done (resumed ones included).
+    pub passes: u64,
+    /// First pass of this run.
+    pub first_pass: u64,
+    /// Whether it continued a checkpoint.
+    pub resumed: bool,
+    /// Seed.
+    pub seed: u64,
+    /// MPI ranks.
+    pub ranks: usize,
+    /// Time budget, seconds.
+    pub time_budget_s: Option<f64>,
+    /// Stage timings.
+    pub timings: Timings,
+    /// Rays traced.
+    pub rays: Rays,
+    /// Million rays per second of render time.
+    pub mrays_per_s: f64,
+    /// Samples per second of render time.
+    pub samples_per_s: f64,
+    /// NaN/Inf samples replaced by zero.
+    pub nonfinite_samples: u64,
+    /// Bytes of the broadcast product.
+    pub bytes_broadcast: usize,
+    /// The integrator's own figures.
+    pub method_stats: serde_json::Value,
+    /// The method parameters in use.
+    pub options: MethodArgs,
+    /// Every rank's figures (`None` if one could not be read).
+    pub per_rank: Vec<Option<RankStats>>,
+    /// Scene warnings.
+    pub warnings: Vec<String>,
+    /// Mean of the image, per channel.
+    pub image_mean: [f64; 3],
+}
+
 /// The outcome on rank 0.
 pub struct RenderResult {
     /// The accumulated film (rank 0).
     pub film: Film,
-    /// The JSON report written next to the image.
-    pub report: serde_json::Value,
+    /// The report written next to the image.
+    pub report: RenderReport,
 }
 
 fn secs(t: Instant) -> f64 {
@@ -67,11 +211,36 @@ fn secs(t: Instant) -> f64 {
 
 /// Runs a render on every rank of `cluster`; returns `Some` on rank 0.
 pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Result<Option<RenderResult>, String> {
-    let (rank, size) = (cluster.rank(), cluster.size());
     let pool = thread_pool(job.threads)?;
+    let (world, plan, mut timings) = load(job, cluster.rank())?;
+    let deadline = distributed::shared_deadline(cluster, started, plan.time);
+    let mut pre = preprocess(&world, &plan, cluster)?;
+    timings.preprocess_s = pre.stats.preprocess_s;
+    timings.broadcast_s = pre.stats.broadcast_s;
+    let resumed = agree_resume(job, &world, &plan, cluster)?;
+    let run = Run { job, world: &world, plan: &plan, cluster, pool: &pool, started, resumed: &resumed };
+    let passes = run_passes(&run, pre.integrator.as_mut(), deadline)?;
+    timings.render_s = passes.render_s;
+    let Some(reduced) = reduce(&run, &passes, &pre.stats, &mut timings)? else { return Ok(None) };
+    let t_write = Instant::now();
+    if job.checkpoint_every.is_some() {
+        // the final state too, so a finished run can be extended with --resume
+        run.checkpoint(passes.passes_done, &reduced.film).save(&run.ckpt_path()).map_err(|e| e.to_string())?;
+    }
+    let image = write_images(&job.out, &reduced.film)?;
+    timings.write_s = secs(t_write);
+    timings.total_s = secs(started);
+    let report = run.report(&passes, reduced.parts, timings, pre.integrator.stats(&passes.counters.profile), &image);
+    let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+    image_io::atomic_write(&with_ext(&job.out, "json"), text.as_bytes())?;
+    Ok(Some(RenderResult { film: reduced.film, report }))
+}
+
+/// Stage 1: load the scene (warnings printed on rank 0), resolve the job, build the BVH.
+fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), String> {
     let t_load = Instant::now();
     let mut scene = crate::scene::load(&job.scene).map_err(|e| e.to_string())?;
-    let limitations = crate::compare::stability::scene_warnings(&scene);
+    let limitations = crate::scene::scene_warnings(&scene);
     scene.warnings.extend(limitations);
     let load_s = secs(t_load);
     if rank == 0 {
@@ -79,169 +248,264 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
             eprintln!("warning: {w}");
         }
     }
-    let method = match job.method {
-        Some(m) => m,
-        None => Method::from_name(&scene.render.method)
-            .ok_or_else(|| format!("{}: method `{}` is not available", scene.path, scene.render.method))?,
-    };
-    let seed = job.seed.unwrap_or(scene.render.seed);
-    let mut opts = job.opts.clone();
-    if opts.max_depth == 0 {
-        opts.max_depth = scene.render.max_depth;
-    }
-    let time = job.time.or(if job.spp.is_some() { None } else { scene.render.time });
-    let spp = if time.is_some() { None } else { Some(job.spp.or(scene.render.spp).unwrap_or(16)) };
-    let (w, h) = job.resolution.unwrap_or((scene.camera.width, scene.camera.height));
-    let camera = scene.camera.with_resolution(w, h);
+    let plan = job.resolve(&scene)?;
     let world = World::build(scene);
     let bvh_s = world.build_secs;
-    let deadline: Deadline = distributed::shared_deadline(cluster, started, time);
+    Ok((world, plan, Timings { load_s, bvh_s, ..Timings::default() }))
+}
 
-    // Caustic preprocess on rank 0, broadcast to the others.
+/// The integrator built from the broadcast preprocess product, with the figures of both.
+struct Prepared {
+    integrator: Box<dyn Integrator>,
+    stats: RankStats,
+}
+
+/// Stage 2: the caustic preprocess on rank 0, broadcast to the others; every rank builds its
+/// integrator from the same bytes.
+fn preprocess(world: &World, plan: &Plan, cluster: &dyn Cluster) -> Result<Prepared, String> {
     let t_pre = Instant::now();
-    let pre = if rank == 0 { integrators::preprocess(method, &world, &opts, seed) } else { Ok(Vec::new()) };
+    let pre = if cluster.rank() == 0 { plan.method.preprocess(world, &plan.args, plan.seed) } else { Ok(Vec::new()) };
     let preprocess_s = secs(t_pre);
     // every rank must leave together when rank 0 fails, or the others wait in the broadcast
     let mut product = agree_or_fail(cluster, pre, "the caustic preprocess")?;
     let t_bc = Instant::now();
     cluster.broadcast_bytes(&mut product);
-    let broadcast_s = secs(t_bc);
-    let bytes_broadcast = product.len();
-    let product_hash = crate::checkpoint::checksum(&product);
-    let mut integrator = integrators::build(method, &world, &opts, &product)?;
-    drop(product);
+    let stats = RankStats {
+        rank: cluster.rank(),
+        preprocess_s,
+        broadcast_s: secs(t_bc),
+        bytes_broadcast: product.len(),
+        product_hash: crate::checkpoint::checksum(&product),
+        ..RankStats::default()
+    };
+    let integrator = plan.method.build(world, &plan.args, &product)?;
+    Ok(Prepared { integrator, stats })
+}
 
-    // Resume: rank 0 validates the checkpoint; everyone learns the first pass.
-    let ckpt_path = job.checkpoint_path.clone().unwrap_or_else(|| with_ext(&job.out, "ckpt"));
-    let loaded = match (&job.resume, rank) {
+/// A checkpoint to continue and the first pass of this run.
+struct Resume {
+    checkpoint: Option<Checkpoint>,
+    first_pass: u64,
+}
+
+/// Stage 3: rank 0 validates the checkpoint; every rank learns the first pass.
+fn agree_resume(job: &RenderJob, world: &World, plan: &Plan, cluster: &dyn Cluster) -> Result<Resume, String> {
+    let (w, h) = plan.resolution;
+    let loaded = match (&job.resume, cluster.rank()) {
         (Some(p), 0) => Checkpoint::load(p).map_err(|e| e.to_string()).and_then(|c| {
-            c.validate(world.scene.hash, seed, method.name(), w, h)
+            c.validate(world.scene.hash, plan.seed, plan.method.name(), w, h)
                 .map_err(|e| format!("{}: cannot resume: {e}", p.display()))
                 .map(|()| Some(c))
         }),
         _ => Ok(None),
     };
-    let resumed: Option<Checkpoint> = agree_or_fail(cluster, loaded, "resuming")?;
-    let mut first = resumed.as_ref().map_or(0u64, |c| c.next_pass).to_le_bytes().to_vec();
+    let checkpoint: Option<Checkpoint> = agree_or_fail(cluster, loaded, "resuming")?;
+    let mut first = checkpoint.as_ref().map_or(0u64, |c| c.next_pass).to_le_bytes().to_vec();
     cluster.broadcast_bytes(&mut first);
     let first_pass = u64::from_le_bytes(first.as_slice().try_into().map_err(|_| "bad resume broadcast")?);
-    let total_passes = spp.map(|s| s.max(first_pass));
+    Ok(Resume { checkpoint, first_pass })
+}
 
-    let progress = Progress::new(job.progress && rank == 0, total_passes.map(|t| t - first_pass), time);
-    let mut film = Film::new(w as usize, h as usize);
-    let mut counters = PassCounters::default();
-    let mut timer = PassTimer::new();
-    let t_render = Instant::now();
-    let mut last_ckpt = Instant::now();
-    let mut my_passes = 0u64;
-    let mut round = 0u64;
-    let mut passes_done = first_pass;
-    loop {
-        let round_start = first_pass + round * size as u64;
-        let more = match total_passes {
+/// What the stages after the preprocess share.
+struct Run<'a> {
+    job: &'a RenderJob,
+    world: &'a World,
+    plan: &'a Plan,
+    cluster: &'a dyn Cluster,
+    pool: &'a rayon::ThreadPool,
+    started: Instant,
+    resumed: &'a Resume,
+}
+
+/// This rank's passes.
+struct Passes {
+    film: Film,
+    counters: PassCounters,
+    my_passes: u64,
+    passes_done: u64,
+    render_s: f64,
+}
+
+/// Stage 4: rounds of interleaved passes until the spp or the time box is reached, with
+/// checkpoints at round boundaries.
+fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) -> Result<Passes, String> {
+    let (rank, size) = (run.cluster.rank() as u64, run.cluster.size() as u64);
+    let (first_pass, total) = (run.resumed.first_pass, run.plan.spp.map(|s| s.max(run.resumed.first_pass)));
+    let (w, h) = run.plan.resolution;
+    let camera = run.world.scene.camera.with_resolution(w, h);
+    let progress = Progress::new(run.job.progress && rank == 0, total.map(|t| t - first_pass), run.plan.time);
+    let mut p = Passes {
+        film: Film::new(w as usize, h as usize),
+        counters: PassCounters::default(),
+        my_passes: 0,
+        passes_done: first_pass,
+        render_s: 0.0,
+    };
+    let (t_render, mut last_ckpt, mut timer) = (Instant::now(), Instant::now(), PassTimer::new());
+    for round in 0u64.. {
+        let round_start = first_pass + round * size;
+        let more = match total {
             Some(t) => round_start < t,
             // the first round always runs, so a time-boxed image is never empty
             None if round == 0 => true,
-            None => distributed::all_agree(cluster, deadline.should_start_next(Instant::now(), timer.mean_secs())),
+            None => distributed::all_agree(run.cluster, deadline.should_start_next(Instant::now(), timer.mean_secs())),
         };
-        if !more || job.max_rounds.is_some_and(|m| round >= m) {
+        if !more || run.job.max_rounds.is_some_and(|m| round >= m) {
             break;
         }
-        let pass = round_start + rank as u64;
-        if total_passes.is_none_or(|t| pass < t) {
+        let pass = round_start + rank;
+        if total.is_none_or(|t| pass < t) {
             let t_pass = Instant::now();
-            integrator.begin_pass(&world, seed, pass);
-            let integ = integrator.as_ref();
-            let c = pool.install(|| render_pass(&world, integ, &camera, seed, pass, &mut film));
-            counters.add(&c);
+            integrator.begin_pass(run.world, run.plan.seed, pass);
+            let integ = &*integrator;
+            let (world, seed, film) = (run.world, run.plan.seed, &mut p.film);
+            let c = run.pool.install(|| render_pass(world, integ, &camera, seed, pass, film));
+            p.counters.add(&c);
             timer.record(secs(t_pass));
-            my_passes += 1;
+            p.my_passes += 1;
         }
-        round += 1;
-        passes_done = total_passes.map_or(round_start + size as u64, |t| (round_start + size as u64).min(t));
-        let rays = counters.closest_rays + counters.shadow_rays;
-        progress.update(passes_done - first_pass, passes_done, secs(t_render), secs(started), rays * size as u64);
-        if let Some(every) = job.checkpoint_every {
-            let want = if rank == 0 && last_ckpt.elapsed().as_secs_f64() >= every { 1.0 } else { 0.0 };
-            if cluster.all_reduce_max(want) > 0.0 {
-                if let Some(sums) = cluster.reduce_sum(&film.data) {
-                    let total = total_film(w, h, sums, &resumed)?;
-                    let ck = checkpoint_of(&world, seed, method, (w, h), passes_done, &total, started, &resumed);
-                    ck.save(&ckpt_path).map_err(|e| e.to_string())?;
-                    write_images(&job.out, &total)?;
-                }
-                last_ckpt = Instant::now();
-            }
-        }
+        p.passes_done = total.map_or(round_start + size, |t| (round_start + size).min(t));
+        let rays = p.counters.closest_rays + p.counters.shadow_rays;
+        progress.update(p.passes_done - first_pass, p.passes_done, secs(t_render), secs(run.started), rays * size);
+        run.maybe_checkpoint(&p, &mut last_ckpt)?;
     }
-    let render_s = secs(t_render);
+    p.render_s = secs(t_render);
     progress.finish();
+    Ok(p)
+}
 
-    // Reduce the sums to rank 0.
+/// The summed film (rank 0) and the run-wide figures.
+struct Reduced {
+    film: Film,
+    parts: Totals,
+}
+
+/// Figures summed over ranks.
+struct Totals {
+    rays: Rays,
+    nonfinite: u64,
+    samples: f64,
+    film_samples: f64,
+    bytes_broadcast: usize,
+    per_rank: Vec<Option<RankStats>>,
+}
+
+/// Stage 5: reduce the sums and counters to rank 0 and gather every rank's figures.
+fn reduce(run: &Run, p: &Passes, pre: &RankStats, timings: &mut Timings) -> Result<Option<Reduced>, String> {
     let t_red = Instant::now();
-    let sums = cluster.reduce_sum(&film.data);
-    let totals = cluster.all_reduce_sum(&[
-        counters.closest_rays as f64,
-        counters.shadow_rays as f64,
-        counters.nonfinite as f64,
-        counters.samples as f64,
+    let sums = run.cluster.reduce_sum(&p.film.data);
+    let c = &p.counters;
+    let t = run.cluster.all_reduce_sum(&[
+        c.closest_rays as f64,
+        c.shadow_rays as f64,
+        c.nonfinite as f64,
+        c.samples as f64,
     ]);
-    let reduce_s = secs(t_red);
-    let rank_stats = json!({
-        "rank": rank, "passes": my_passes, "preprocess_s": preprocess_s, "broadcast_s": broadcast_s,
-        "render_s": render_s, "reduce_s": reduce_s, "bytes_broadcast": bytes_broadcast, "product_hash": product_hash,
-        "samples": counters.samples, "closest_rays": counters.closest_rays, "shadow_rays": counters.shadow_rays,
-    });
-    let gathered = cluster.gather_bytes(rank_stats.to_string().as_bytes());
+    timings.reduce_s = secs(t_red);
+    let mine = RankStats {
+        passes: p.my_passes,
+        render_s: p.render_s,
+        reduce_s: timings.reduce_s,
+        samples: c.samples,
+        closest_rays: c.closest_rays,
+        shadow_rays: c.shadow_rays,
+        ..pre.clone()
+    };
+    let json = serde_json::to_vec(&mine).unwrap_or_default();
+    let gathered = run.cluster.gather_bytes(&json);
     let Some(sums) = sums else { return Ok(None) };
-    let total = total_film(w, h, sums, &resumed)?;
-    let per_rank: Vec<serde_json::Value> = gathered
-        .unwrap_or_default()
-        .iter()
-        .map(|b| serde_json::from_slice(b).unwrap_or(serde_json::Value::Null))
-        .collect();
-    let t_write = Instant::now();
-    if job.checkpoint_every.is_some() {
-        // the final state too, so a finished run can be extended with --resume
-        let ck = checkpoint_of(&world, seed, method, (w, h), passes_done, &total, started, &resumed);
-        ck.save(&ckpt_path).map_err(|e| e.to_string())?;
+    let film = run.total_film(sums)?;
+    let per_rank = gathered.unwrap_or_default().iter().map(|b| serde_json::from_slice(b).ok()).collect();
+    let rays = Rays { closest: t[0] as u64, shadow: t[1] as u64 };
+    let (film_samples, bytes_broadcast) = (film.total_samples(), pre.bytes_broadcast);
+    let parts = Totals { rays, nonfinite: t[2] as u64, samples: t[3], film_samples, bytes_broadcast, per_rank };
+    Ok(Some(Reduced { film, parts }))
+}
+
+impl Run<'_> {
+    fn ckpt_path(&self) -> PathBuf {
+        self.job.checkpoint_path.clone().unwrap_or_else(|| with_ext(&self.job.out, "ckpt"))
     }
-    let image = write_images(&job.out, &total)?;
-    let write_s = secs(t_write);
-    let pixels = (w as f64) * (h as f64);
-    let samples_total = total.total_samples();
-    let (closest, shadow) = (totals[0] as u64, totals[1] as u64);
-    let report = json!({
-        "method": method.name(),
-        "scene": world.scene.path,
-        "resolution": [w, h],
-        "spp": (samples_total / pixels).round() as u64,
-        "passes": passes_done,
-        "first_pass": first_pass,
-        "resumed": resumed.is_some(),
-        "seed": seed,
-        "ranks": size,
-        "time_budget_s": time,
-        "timings": {
-            "load_s": load_s, "bvh_s": bvh_s, "preprocess_s": preprocess_s, "broadcast_s": broadcast_s,
-            "render_s": render_s, "reduce_s": reduce_s, "write_s": write_s, "total_s": secs(started),
-        },
-        "rays": { "closest": closest, "shadow": shadow },
-        "mrays_per_s": (closest + shadow) as f64 / render_s.max(1e-9) / 1e6,
-        "samples_per_s": totals[3] / render_s.max(1e-9),
-        "nonfinite_samples": totals[2] as u64,
-        "bytes_broadcast": bytes_broadcast,
-        "method_stats": integrator.stats(),
-        "options": opts,
-        "per_rank": per_rank,
-        "warnings": world.scene.warnings,
-        "image_mean": image.mean(),
-    });
-    let json_path = with_ext(&job.out, "json");
-    let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
-    image_io::atomic_write(&json_path, text.as_bytes())?;
-    let _ = &mut integrator;
-    Ok(Some(RenderResult { film: total, report }))
+
+    /// A checkpoint at this round boundary if rank 0's interval has passed (collective).
+    fn maybe_checkpoint(&self, p: &Passes, last: &mut Instant) -> Result<(), String> {
+        let Some(every) = self.job.checkpoint_every else { return Ok(()) };
+        let want = if self.cluster.rank() == 0 && last.elapsed().as_secs_f64() >= every { 1.0 } else { 0.0 };
+        if self.cluster.all_reduce_max(want) > 0.0 {
+            if let Some(sums) = self.cluster.reduce_sum(&p.film.data) {
+                let total = self.total_film(sums)?;
+                self.checkpoint(p.passes_done, &total).save(&self.ckpt_path()).map_err(|e| e.to_string())?;
+                write_images(&self.job.out, &total)?;
+            }
+            *last = Instant::now();
+        }
+        Ok(())
+    }
+
+    /// The checkpoint of `total` after `passes_done` contiguous passes.
+    fn checkpoint(&self, passes_done: u64, total: &Film) -> Checkpoint {
+        let (width, height) = self.plan.resolution;
+        Checkpoint {
+            scene_hash: self.world.scene.hash,
+            seed: self.plan.seed,
+            method: self.plan.method.name().to_string(),
+            width,
+            height,
+            passes_done,
+            next_pass: passes_done,
+            spp: passes_done,
+            elapsed_secs: secs(self.started) + self.resumed.checkpoint.as_ref().map_or(0.0, |r| r.elapsed_secs),
+            film: total.data.clone(),
+        }
+    }
+
+    /// The reduced sums of this run plus the resumed checkpoint's (rank 0).
+    fn total_film(&self, sums: Vec<f64>) -> Result<Film, String> {
+        let (w, h) = self.plan.resolution;
+        let mut total = Film::from_data(w as usize, h as usize, sums).ok_or("film size mismatch")?;
+        if let Some(r) = &self.resumed.checkpoint {
+            let prev =
+                Film::from_data(total.width, total.height, r.film.clone()).ok_or("checkpoint film size mismatch")?;
+            total.merge(&prev);
+        }
+        Ok(total)
+    }
+
+    /// Stage 6: the typed report.
+    fn report(
+        &self,
+        p: &Passes,
+        t: Totals,
+        timings: Timings,
+        method_stats: serde_json::Value,
+        image: &Image,
+    ) -> RenderReport {
+        let (w, h) = self.plan.resolution;
+        let render_s = timings.render_s.max(1e-9);
+        RenderReport {
+            method: self.plan.method,
+            scene: self.world.scene.path.clone(),
+            resolution: [w, h],
+            spp: (t.film_samples / ((w as f64) * (h as f64))).round() as u64,
+            passes: p.passes_done,
+            first_pass: self.resumed.first_pass,
+            resumed: self.resumed.checkpoint.is_some(),
+            seed: self.plan.seed,
+            ranks: self.cluster.size(),
+            time_budget_s: self.plan.time,
+            mrays_per_s: (t.rays.closest + t.rays.shadow) as f64 / render_s / 1e6,
+            samples_per_s: t.samples / render_s,
+            nonfinite_samples: t.nonfinite,
+            bytes_broadcast: t.bytes_broadcast,
+            rays: t.rays,
+            timings,
+            method_stats,
+            options: self.plan.args.clone(),
+            per_rank: t.per_rank,
+            warnings: self.world.scene.warnings.clone(),
+            image_mean: image.mean(),
+        }
+    }
 }
 
 /// A rayon pool of `threads` workers (default: cores ÷ ranks on this node, from MPICH's
@@ -256,42 +520,6 @@ pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, String> 
         (cores / local.max(1)).max(1)
     });
     rayon::ThreadPoolBuilder::new().num_threads(n).build().map_err(|e| e.to_string())
-}
-
-/// The checkpoint of `total` after `passes_done` contiguous passes.
-#[allow(clippy::too_many_arguments)]
-fn checkpoint_of(
-    world: &World,
-    seed: u64,
-    method: Method,
-    (w, h): (u32, u32),
-    passes_done: u64,
-    total: &Film,
-    started: Instant,
-    resumed: &Option<Checkpoint>,
-) -> Checkpoint {
-    Checkpoint {
-        scene_hash: world.scene.hash,
-        seed,
-        method: method.name().to_string(),
-        width: w,
-        height: h,
-        passes_done,
-        next_pass: passes_done,
-        spp: passes_done,
-        elapsed_secs: secs(started) + resumed.as_ref().map_or(0.0, |r| r.elapsed_secs),
-        film: total.data.clone(),
-    }
-}
-
-/// The reduced sums of this run plus the resumed checkpoint's (rank 0).
-fn total_film(w: u32, h: u32, sums: Vec<f64>, resumed: &Option<Checkpoint>) -> Result<Film, String> {
-    let mut total = Film::from_data(w as usize, h as usize, sums).ok_or("film size mismatch")?;
-    if let Some(r) = resumed {
-        let prev = Film::from_data(total.width, total.height, r.film.clone()).ok_or("checkpoint film size mismatch")?;
-        total.merge(&prev);
-    }
-    Ok(total)
 }
 
 /// Rank 0's `result` if every rank got `Ok`; an error on every rank otherwise (collective).
@@ -319,12 +547,4 @@ pub fn write_images(prefix: &Path, film: &Film) -> Result<Image, String> {
     image_io::write_exr_layers(&with_ext(prefix, "exr"), &img, Some(&var))?;
     image_io::write_png_srgb(&with_ext(prefix, "png"), &img, 0.0)?; // exposure in stops: 0 = as rendered
     Ok(img)
-}
-
-/// `prefix` + "." + `ext` (keeps dots inside the prefix).
-pub fn with_ext(prefix: &Path, ext: &str) -> PathBuf {
-    let mut s = prefix.as_os_str().to_owned();
-    s.push(".");
-    s.push(ext);
-    PathBuf::from(s)
 }

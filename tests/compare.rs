@@ -71,11 +71,21 @@ fn metrics_of_regions_by_hand() {
 
 #[test]
 fn budgets_and_methods_parse() {
-    assert_eq!(compare::parse_budgets("30s,1m,2m,4m").unwrap(), vec![30.0, 60.0, 120.0, 240.0]);
-    assert!(compare::parse_budgets("").is_err());
-    assert!(compare::parse_budgets("0s").is_err());
-    assert_eq!(compare::parse_methods("pt,iws-pm,iws-cf").unwrap(), vec![Method::Pt, Method::IwsPm, Method::IwsCf]);
-    assert!(compare::parse_methods("pt,nope").is_err());
+    let parse = |extra: &[&str]| {
+        let args = [&["compare", "s.toml", "--reference", "r.exr"], extra].concat();
+        Cli::try_parse_from(std::iter::once("forecast").chain(args.iter().copied()))
+    };
+    let Ok(Cli { command: Command::Compare(ca) }) = parse(&[]) else { panic!("compare parses") };
+    let cfg = ca.config();
+    assert_eq!(cfg.budgets, vec![30.0, 60.0, 120.0, 240.0]);
+    assert_eq!(cfg.methods, vec![Method::Pt, Method::IwsPm, Method::IwsCf]);
+    let Ok(Cli { command: Command::Compare(ca) }) = parse(&["--budgets", "500ms,2m", "--methods", "iws,pt"]) else {
+        panic!("compare parses")
+    };
+    assert_eq!((ca.config().budgets, ca.methods), (vec![0.5, 120.0], vec![Method::Iws, Method::Pt]));
+    assert!(parse(&["--budgets", ""]).is_err());
+    assert!(parse(&["--budgets", "0s"]).is_err());
+    assert!(parse(&["--methods", "pt,nope"]).is_err());
     assert_eq!(
         [0.5, 1.0, 30.0, 60.0, 240.0, 90.0].map(compare::budget_label),
         ["500ms", "1s", "30s", "1m", "4m", "90s"].map(String::from)
@@ -116,7 +126,7 @@ fn reference_halves_and_compare_end_to_end() {
         panic!("not a reference command")
     };
     let rep = compare::reference::run_reference(&ra, &Local::new(), Instant::now()).unwrap().unwrap();
-    assert_eq!(rep["spp"], 64);
+    assert_eq!(rep.spp, 64);
     let read = |s: &str| image_io::read_exr(&d.join(s)).unwrap();
     let (mean, h0, h1) = (read("ref.exr"), read("ref.half0.exr"), read("ref.half1.exr"));
     assert!(image_io::read_exr_variance(&d.join("ref.exr")).unwrap().is_some(), "reference lacks var.* channels");
@@ -150,14 +160,8 @@ fn reference_halves_and_compare_end_to_end() {
     ]) else {
         panic!("not a compare command")
     };
-    let cfg = compare::CompareConfig {
-        base: ca.render.job(),
-        methods: compare::parse_methods(&ca.methods).unwrap(),
-        budgets: compare::parse_budgets(&ca.budgets).unwrap(),
-        seeds: ca.seeds,
-        reference: ca.reference.clone(),
-        out: out.clone(),
-    };
+    let cfg = ca.config();
+    assert_eq!(cfg.out, out);
     let o = compare::run_compare(&cfg, &Local::new()).unwrap().unwrap();
     assert_eq!(o.runs.len(), 4);
     assert_eq!(

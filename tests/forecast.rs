@@ -11,7 +11,7 @@ use common::{global_z, max_z, render_passes as render, scaled};
 use forecast::accel::World;
 use forecast::forecast::cluster::ClusteringMethod;
 use forecast::forecast::estimator::{CausticForecast, TableKind};
-use forecast::integrators::{self, Integrator, Method, MethodOptions};
+use forecast::integrators::{Integrator, Method, MethodArgs};
 use forecast::render::film::Film;
 use forecast::stats::z_test_threshold;
 use std::path::Path;
@@ -20,26 +20,26 @@ fn world(path: &str) -> World {
     World::build(forecast::scene::load(Path::new(path)).expect("scene loads"))
 }
 
-fn opts() -> MethodOptions {
-    let mut o = MethodOptions { max_depth: 64, vpl_paths: 64, forecast_photons: Some(20_000), ..Default::default() };
-    o.forecast.clusters = 16;
+fn opts() -> MethodArgs {
+    let mut o = MethodArgs::default();
+    (o.pt.max_depth, o.iws.vpl_paths, o.cf.forecast_photons, o.cf.clusters) = (Some(64), 64, Some(20_000), 16);
     o
 }
 
 /// Runs the CF preprocess and builds the integrator through the broadcast bytes, as a rank would.
-fn iws_cf(world: &World, o: &MethodOptions) -> (Box<dyn Integrator>, CausticForecast) {
-    let bytes = integrators::preprocess(Method::IwsCf, world, o, 17).unwrap();
+fn iws_cf(world: &World, o: &MethodArgs) -> (Box<dyn Integrator>, CausticForecast) {
+    let bytes = Method::IwsCf.preprocess(world, o, 17).unwrap();
     let cf = CausticForecast::from_bytes(&bytes).unwrap();
-    (integrators::build(Method::IwsCf, world, o, &bytes).unwrap(), cf)
+    (Method::IwsCf.build(world, o, &bytes).unwrap(), cf)
 }
 
 fn pt(world: &World, w: u32, h: u32, spp: u64) -> Film {
-    let mut p = integrators::build(Method::Pt, world, &opts(), &[]).unwrap();
+    let mut p = Method::Pt.build(world, &opts(), &[]).unwrap();
     render(world, p.as_mut(), w, h, spp, 11)
 }
 
 /// `iws-cf` with options `o` agrees with `pt` on the Cornell box (16×16).
-fn agrees_with_pt(o: &MethodOptions, label: &str) -> CausticForecast {
+fn agrees_with_pt(o: &MethodArgs, label: &str) -> CausticForecast {
     let w = world("scenes/cornell-box.toml");
     let reference = pt(&w, 16, 16, 4096);
     let (mut cf, product) = iws_cf(&w, o);
@@ -66,32 +66,32 @@ fn dual_table_agrees_with_pt() {
 #[test]
 fn single_table_agrees_with_pt() {
     let mut o = opts();
-    o.forecast.table = TableKind::Single;
+    o.cf.table = TableKind::Single;
     agrees_with_pt(&o, "iws-cf single");
 }
 
 #[test]
 fn dual_defensive_table_agrees_with_pt() {
     let mut o = opts();
-    o.forecast.table = TableKind::DualDefensive;
+    o.cf.table = TableKind::DualDefensive;
     agrees_with_pt(&o, "iws-cf dual-defensive");
 }
 
 #[test]
 fn kmeans_agrees_with_pt() {
     let mut o = opts();
-    o.forecast.clustering = ClusteringMethod::KMeans;
+    o.cf.clustering = ClusteringMethod::KMeans;
     agrees_with_pt(&o, "iws-cf kmeans");
 }
 
 #[test]
 fn single_cluster_and_max_rank_zero_agree_with_pt() {
     let mut o = opts();
-    o.forecast.clusters = 1;
+    o.cf.clusters = 1;
     let p = agrees_with_pt(&o, "iws-cf one cluster");
     assert_eq!(p.clustering.clusters.len(), 1);
     let mut o = opts();
-    o.forecast.max_rank = 0;
+    o.cf.max_rank = 0;
     let p = agrees_with_pt(&o, "iws-cf max-rank 0");
     assert!(p.stats.clusters_kept >= 1 && p.stats.clusters_kept < p.stats.clusters);
 }
@@ -141,7 +141,7 @@ fn all_photons_missing_still_agrees_with_pt() {
     let scene = forecast::scene::load_str(&src, "cornell-missing.toml", Path::new("scenes")).unwrap();
     let w = World::build(scene);
     let mut o = opts();
-    o.forecast_photons = Some(100);
+    o.cf.forecast_photons = Some(100);
     let (mut cf, product) = iws_cf(&w, &o);
     assert_eq!(product.stats.stored, 0, "no forecaster can be stored");
     assert!(product.stats.paths > 0);
@@ -156,13 +156,13 @@ fn all_photons_missing_still_agrees_with_pt() {
 fn forecast_product_round_trips_through_bytes() {
     let w = world("scenes/cornell-box.toml");
     let o = opts();
-    let bytes = integrators::preprocess(Method::IwsCf, &w, &o, 17).unwrap();
+    let bytes = Method::IwsCf.preprocess(&w, &o, 17).unwrap();
     let a = CausticForecast::from_bytes(&bytes).unwrap();
     assert!(CausticForecast::from_bytes(&a.to_bytes()).unwrap() == a, "decode(encode(x)) != x");
     assert!(a.to_bytes() == bytes, "encoding is not deterministic");
     assert!(CausticForecast::from_bytes(&bytes[..bytes.len() / 2]).is_err());
     // the preprocess is a pure function of the seed (its timing figures aside)
-    let mut b = CausticForecast::from_bytes(&integrators::preprocess(Method::IwsCf, &w, &o, 17).unwrap()).unwrap();
+    let mut b = CausticForecast::from_bytes(&Method::IwsCf.preprocess(&w, &o, 17).unwrap()).unwrap();
     b.stats.tracing_s = a.stats.tracing_s;
     b.stats.clustering_s = a.stats.clustering_s;
     b.stats.kdtree_s = a.stats.kdtree_s;

@@ -1,13 +1,17 @@
-//! Furnace tests (spec §8): closed scenes whose radiance is known analytically, rendered with `pt`.
-//! Derivations are in the scene files under `tests/scenes/`.
+//! Furnace tests (spec §8): closed scenes whose radiance is known analytically, rendered with
+//! every method (`Method::ALL`: `pt`, `iws`, `iws-pm`, `iws-cf`). Derivations are in the scene
+//! files under `tests/scenes/`. None of the scenes has a diffuse surface reached through a
+//! Dirac vertex, so `L_c = 0` and even `iws` (which omits it) and `iws-pm` (biased only in `L_c`)
+//! must give the exact answer; the preprocesses store few photons (there are none to find).
 //!
-//! Tolerances. Every pixel has the same expected value L. The film keeps per-pixel sums of x and x²,
-//! so for any set of pixels we pool their samples and get the mean and its standard error
-//! σ = sqrt(s²/n) (pixels are independent; pooling is valid because all share the mean L).
-//! - whole image, per channel: |mean − L| < 5σ + 1e-4. 5σ: two-sided normal tail 5.7e-7 (the
-//!   estimate of σ from ≥ 65k samples is accurate to ~1%); 1e-4 absolute covers the remaining
-//!   deterministic bias: RR is unbiased, the 64-vertex cap truncates ≤ 0.5^64 (diffuse) and f32
-//!   accumulation of each path's throughput (< 100 roundings of 6e-8) biases by < 1e-5.
+//! Tolerances. Every pixel has the same expected value L. Each pass is rendered into its own film
+//! and a set of pixels is summarised by its mean in each pass; passes are independent (IWS
+//! samples within one pass share the pass's point lights, so pixels are not), so the mean over
+//! passes has standard error σ = sd(pass means)/sqrt(passes) (≥ 256 passes).
+//! - whole image, per channel: |mean − L| < 5σ + 1e-4. 5σ: two-sided normal tail 5.7e-7; 1e-4
+//!   absolute covers the remaining deterministic bias: RR is unbiased, the 64-vertex cap truncates
+//!   ≤ 0.5^64 (diffuse) and f32 accumulation of each path's throughput (< 100 roundings of 6e-8)
+//!   biases by < 1e-5.
 //! - 8×8-pixel blocks, per channel: |z| below the two-sided threshold at family-wise α = 0.01,
 //!   Šidák-corrected over all blocks × channels of the image (≈ 3.5 for 48 tests), plus the same
 //!   1e-4 allowance. This catches a localised bias (e.g. one side of the sphere) that the mean hides.
@@ -16,49 +20,71 @@
 
 mod common;
 
-use common::{job, render_film, root, tmp_dir};
-use forecast::integrators::Method;
+use common::root;
+use forecast::accel::World;
+use forecast::integrators::{Method, MethodArgs};
 use forecast::render::film::{Film, STRIDE};
+use forecast::render::render_pass;
 use forecast::stats::z_test_threshold;
 
 const BIAS_ALLOWANCE: f64 = 1e-4;
 
-/// Pooled (mean, standard error) of channel `ch` over pixels [x0, x0+w) × [y0, y0+h).
-fn pooled(f: &Film, x0: usize, y0: usize, w: usize, h: usize, ch: usize) -> (f64, f64) {
-    let (mut s, mut s2, mut n) = (0.0, 0.0, 0.0);
-    for y in y0..y0 + h {
-        for x in x0..x0 + w {
-            let d = &f.data[(y * f.width + x) * STRIDE..][..STRIDE];
-            s += d[ch];
-            s2 += d[ch + 3];
-            n += d[6];
-        }
-    }
-    let m = s / n;
-    let var = ((s2 / n - m * m) * n / (n - 1.0)).max(0.0);
-    (m, (var / n).sqrt())
+/// (mean, standard error) over passes of channel `ch`'s mean over pixels [x0, x0+w) × [y0, y0+h).
+fn pooled(passes: &[Film], (x0, y0, w, h): (usize, usize, usize, usize), ch: usize) -> (f64, f64) {
+    let means: Vec<f64> = passes
+        .iter()
+        .map(|f| {
+            let (mut s, mut n) = (0.0, 0.0);
+            for y in y0..y0 + h {
+                for x in x0..x0 + w {
+                    let d = &f.data[(y * f.width + x) * STRIDE..][..STRIDE];
+                    s += d[ch];
+                    n += d[6];
+                }
+            }
+            s / n
+        })
+        .collect();
+    let k = means.len() as f64;
+    let m = means.iter().sum::<f64>() / k;
+    let var = means.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (k - 1.0);
+    (m, (var / k).sqrt())
 }
 
-fn render(scene: &str, spp: u64, seed: u64) -> Film {
-    let dir = tmp_dir(&format!("furnace-{scene}-{seed}"));
-    let f = render_film(&job(
-        &root().join("tests/scenes").join(scene),
-        Method::Pt,
-        spp,
-        seed,
-        (32, 32),
-        2,
-        &dir.join("out"),
-    ));
-    assert_eq!(f.total_samples(), (32 * 32 * spp) as f64);
-    let _ = std::fs::remove_dir_all(dir);
+/// Renders `spp` passes of `method` at 32×32, each into its own film, as the pipeline would
+/// (preprocess, encode, build from the bytes; passes keyed by (seed, pass)).
+fn render(scene: &str, method: Method, spp: u64, seed: u64) -> Vec<Film> {
+    let world = World::build(forecast::scene::load(&root().join("tests/scenes").join(scene)).unwrap());
+    let mut args = MethodArgs::default();
+    args.pt.max_depth = Some(world.scene.render.max_depth);
+    // no caustic paths exist here: keep the photon searches (PATH_FACTOR × target paths) short
+    (args.pm.photons, args.cf.forecast_photons) = (100, Some(100));
+    let product = method.preprocess(&world, &args, seed).unwrap();
+    let mut integ = method.build(&world, &args, &product).unwrap();
+    let cam = world.scene.camera.with_resolution(32, 32);
+    (0..spp)
+        .map(|pass| {
+            let mut f = Film::new(32, 32);
+            integ.begin_pass(&world, seed, pass);
+            render_pass(&world, integ.as_ref(), &cam, seed, pass, &mut f);
+            assert_eq!(f.total_samples(), (32 * 32) as f64);
+            f
+        })
+        .collect()
+}
+
+/// The mean film of a list of passes.
+fn merged(passes: &[Film]) -> Film {
+    let mut f = Film::new(32, 32);
+    passes.iter().for_each(|p| f.merge(p));
     f
 }
 
 /// Asserts every pixel group has mean `l` within the tolerances in the module docs.
-fn assert_uniform(name: &str, f: &Film, l: f64) {
+fn assert_uniform(name: &str, f: &[Film], l: f64) {
+    let (w, h) = (f[0].width, f[0].height);
     for ch in 0..3 {
-        let (m, se) = pooled(f, 0, 0, f.width, f.height, ch);
+        let (m, se) = pooled(f, (0, 0, w, h), ch);
         if ch == 0 {
             eprintln!("{name}: mean {m:.6} σ {se:.2e}");
         }
@@ -70,12 +96,12 @@ fn assert_uniform(name: &str, f: &Film, l: f64) {
         );
     }
     let b = 8;
-    let (bx, by) = (f.width / b, f.height / b);
+    let (bx, by) = (w / b, h / b);
     let zc = z_test_threshold(0.01, bx * by * 3);
     for j in 0..by {
         for i in 0..bx {
             for ch in 0..3 {
-                let (m, se) = pooled(f, i * b, j * b, b, b, ch);
+                let (m, se) = pooled(f, (i * b, j * b, b, b), ch);
                 assert!(
                     (m - l).abs() < zc * se + BIAS_ALLOWANCE,
                     "{name}: block ({i},{j}) channel {ch}: mean {m:.6} vs {l} (σ = {se:.2e}, limit {zc:.2}σ)"
@@ -87,19 +113,23 @@ fn assert_uniform(name: &str, f: &Film, l: f64) {
 
 #[test]
 fn point_light_in_diffuse_sphere_gives_one() {
-    let f = render("furnace.toml", 1024, 1);
-    assert_uniform("point-light furnace", &f, 1.0);
-    // the estimator is noisy (multiple bounces): a zero σ would mean the test has no power
-    assert!(pooled(&f, 0, 0, 32, 32, 0).1 > 1e-4);
+    for &m in Method::ALL {
+        let f = render("furnace.toml", m, 1024, 1);
+        assert_uniform(&format!("{} point-light furnace", m.name()), &f, 1.0);
+        // the estimator is noisy (multiple bounces): a zero σ would mean the test has no power
+        assert!(pooled(&f, (0, 0, 32, 32), 0).1 > 1e-4, "{}: no noise", m.name());
+    }
 }
 
 #[test]
 fn mirror_ball_in_emissive_enclosure_is_exactly_one() {
     // No randomness reaches the value: every sample must be 1 (f32-exact products of ones).
-    let f = render("furnace_mirror.toml", 4, 2);
-    for (i, p) in f.mean().iter().enumerate() {
-        for c in p {
-            assert!((c - 1.0).abs() < 1e-5, "pixel {i}: {p:?}");
+    for &m in Method::ALL {
+        let f = render("furnace_mirror.toml", m, 4, 2);
+        for (i, p) in merged(&f).mean().iter().enumerate() {
+            for c in p {
+                assert!((c - 1.0).abs() < 1e-5, "{}: pixel {i}: {p:?}", m.name());
+            }
         }
     }
     // and the ball is actually in view: some camera ray must hit it (checked through the scene)
@@ -116,22 +146,26 @@ fn mirror_ball_in_emissive_enclosure_is_exactly_one() {
 
 #[test]
 fn glass_ball_in_emissive_enclosure_gives_one() {
-    let f = render("furnace_glass.toml", 256, 3);
-    assert_uniform("glass furnace", &f, 1.0);
+    for &m in Method::ALL {
+        let f = render("furnace_glass.toml", m, 256, 3);
+        assert_uniform(&format!("{} glass furnace", m.name()), &f, 1.0);
+    }
 }
 
 #[test]
 fn diffuse_ball_in_uniform_field_gives_albedo_times_le() {
-    let f = render("furnace_diffuse_ball.toml", 512, 4);
-    assert_uniform("diffuse ball in uniform field", &f, 0.25);
-    assert!(pooled(&f, 0, 0, 32, 32, 0).1 > 1e-5);
+    for &m in Method::ALL {
+        let f = render("furnace_diffuse_ball.toml", m, 512, 4);
+        assert_uniform(&format!("{} diffuse ball in uniform field", m.name()), &f, 0.25);
+        assert!(pooled(&f, (0, 0, 32, 32), 0).1 > 1e-5, "{}: no noise", m.name());
+    }
 }
 
 /// Negative control: the harness rejects a wrong answer. The point-light furnace judged against
 /// 0.98 (a 2% bias, e.g. a missing bounce at ρ = 0.5 would be far larger) must fail.
 #[test]
 fn furnace_check_can_fail() {
-    let f = render("furnace.toml", 64, 5);
+    let f = render("furnace.toml", Method::Pt, 256, 5);
     let r = std::panic::catch_unwind(|| assert_uniform("negative control", &f, 0.98));
     assert!(r.is_err(), "a 2% error went undetected");
 }

@@ -9,8 +9,10 @@
 mod common;
 use common::{max_z, render_passes as render, scaled};
 use forecast::accel::World;
-use forecast::integrators::{self, BsdfCaustics, Integrator, Iws, IwsParams, Method, MethodOptions, NoCaustics};
+use forecast::integrators::iws::Iws;
+use forecast::integrators::{BsdfCaustics, Context, Integrator, Method, MethodArgs, NoCaustics};
 use forecast::math::{Rgb, Vec3};
+use forecast::profile::Profile;
 use forecast::render::film::Film;
 use forecast::sampling::rng::{stream, Rng};
 use forecast::sampling::warp::sample_uniform_sphere;
@@ -21,23 +23,32 @@ fn world(path: &str) -> World {
     World::build(forecast::scene::load(Path::new(path)).expect("scene loads"))
 }
 
-fn params(vpl_paths: u32, bound: Option<f32>) -> IwsParams {
-    IwsParams { vpl_paths, bound, vpl_subset: 16, max_depth: 64 }
+fn params(vpl_paths: u32, bound: Option<f32>) -> MethodArgs {
+    let mut a = MethodArgs::default();
+    (a.iws.vpl_paths, a.iws.bound, a.iws.vpl_subset, a.pt.max_depth) = (vpl_paths, bound, 16, Some(64));
+    a
+}
+
+/// Method arguments with the given stored photons (and 64-vertex cap, `vpl_paths` IWS paths).
+fn pm_args(photons: u64, vpl_paths: u32) -> MethodArgs {
+    let mut a = params(vpl_paths, None);
+    a.pm.photons = photons;
+    a
 }
 
 /// Mean and standard error of (estimate − expected) over rays from `origin`, with the
 /// standard error taken over per-pass means (samples within a pass share the VPLs).
 fn furnace(world: &World, origin: Vec3, b: f32, expected: impl Fn(Vec3) -> f32) -> (f64, f64) {
-    let mut iws = Iws::new("iws", world, params(64, Some(b)), Box::new(NoCaustics));
+    let mut iws = Iws::new(world, &params(64, Some(b)), Box::new(NoCaustics));
     let (passes, per_pass) = (200u64, 300u64);
     let mut means = Vec::new();
     for pass in 0..passes {
         iws.begin_pass(world, 7, pass);
         let mut sum = 0.0f64;
         for i in 0..per_pass {
-            let mut rng = Rng::keyed(7, stream::MISC, pass, i);
-            let d = sample_uniform_sphere(rng.next_2d());
-            let l: Rgb = iws.radiance(world, origin, d, &mut rng);
+            let mut ctx = Context::new(Rng::keyed(7, stream::MISC, pass, i));
+            let d = sample_uniform_sphere(ctx.rng.next_2d());
+            let l: Rgb = iws.radiance(world, origin, d, &mut ctx);
             sum += (l.y - expected(d)) as f64;
         }
         means.push(sum / per_pass as f64);
@@ -91,8 +102,7 @@ fn furnace_area_light_b_sweep() {
 }
 
 fn pt(world: &World, w: u32, h: u32, spp: u64) -> Film {
-    let mut p =
-        integrators::build(Method::Pt, world, &MethodOptions { max_depth: 64, ..Default::default() }, &[]).unwrap();
+    let mut p = Method::Pt.build(world, &params(32, None), &[]).unwrap();
     render(world, p.as_mut(), w, h, spp, 11)
 }
 
@@ -100,7 +110,7 @@ fn pt(world: &World, w: u32, h: u32, spp: u64) -> Film {
 fn iws_agrees_with_pt_without_dirac_surfaces() {
     let w = world("tests/scenes/cornell-nodirac.toml");
     let reference = pt(&w, 24, 24, 2048);
-    let mut iws = Iws::new("iws", &w, params(64, None), Box::new(NoCaustics));
+    let mut iws = Iws::new(&w, &params(64, None), Box::new(NoCaustics));
     let img = render(&w, &mut iws, 24, 24, 256, 3);
     let (z, n) = max_z(&img, &reference, None);
     let thr = z_test_threshold(1e-3, n);
@@ -119,7 +129,7 @@ fn iws_is_invariant_to_b() {
     // small b leaves most direct light to compensation rays that rarely hit the small light:
     // a skewed per-pixel distribution, so that image needs many more passes for the z-test
     for (b, passes) in [(b0 / 10.0, 2048), (b0, 256), (b0 * 10.0, 256)] {
-        let mut iws = Iws::new("iws", &w, params(64, Some(b)), Box::new(NoCaustics));
+        let mut iws = Iws::new(&w, &params(64, Some(b)), Box::new(NoCaustics));
         films.push(render(&w, &mut iws, 12, 12, passes, 5 + films.len() as u64));
     }
     let thr = z_test_threshold(1e-3, 2 * 12 * 12 * 3);
@@ -136,14 +146,14 @@ fn split_is_complete_on_cornell() {
     let w = world("scenes/cornell-box.toml");
     let (rw, rh) = (16, 16);
     let reference = pt(&w, rw, rh, 4096);
-    let mut full = Iws::new("iws+bsdf-lc", &w, params(64, None), Box::new(BsdfCaustics));
+    let mut full = Iws::new(&w, &params(64, None), Box::new(BsdfCaustics));
     let img = render(&w, &mut full, rw, rh, 768, 9);
     let n = (rw * rh * 3) as usize;
     let thr = z_test_threshold(1e-3, n);
     let (z, _) = max_z(&img, &reference, None);
     eprintln!("iws + L_c vs pt: max|z| = {z:.2}, threshold {thr:.2}");
     assert!(z < thr, "iws + L_c disagrees with pt: max|z| {z} ≥ {thr}");
-    let mut plain = Iws::new("iws", &w, params(64, None), Box::new(NoCaustics));
+    let mut plain = Iws::new(&w, &params(64, None), Box::new(NoCaustics));
     let no_lc = render(&w, &mut plain, rw, rh, 256, 9);
     let (z0, _) = max_z(&no_lc, &reference, None);
     eprintln!("negative control, iws without L_c vs pt: max|z| = {z0:.2}");
@@ -153,13 +163,13 @@ fn split_is_complete_on_cornell() {
 #[test]
 fn photon_map_roundtrips_through_bitcode() {
     let w = world("scenes/cornell-box.toml");
-    let opts = MethodOptions { photons: 2000, max_depth: 64, ..Default::default() };
-    let bytes = integrators::preprocess(Method::IwsPm, &w, &opts, 1).unwrap();
-    let integ = integrators::build(Method::IwsPm, &w, &opts, &bytes).unwrap();
-    let s = integ.stats();
+    let opts = pm_args(2000, 32);
+    let bytes = Method::IwsPm.preprocess(&w, &opts, 1).unwrap();
+    let integ = Method::IwsPm.build(&w, &opts, &bytes).unwrap();
+    let s = integ.stats(&Profile::default());
     assert!(s["caustics"]["photons_stored"].as_u64().unwrap() >= 2000);
-    assert!(integrators::build(Method::IwsPm, &w, &opts, &bytes[..bytes.len() / 2]).is_err());
-    assert!(integrators::build(Method::IwsPm, &w, &opts, &[]).is_err());
+    assert!(Method::IwsPm.build(&w, &opts, &bytes[..bytes.len() / 2]).is_err());
+    assert!(Method::IwsPm.build(&w, &opts, &[]).is_err());
 }
 
 /// Photon-map consistency (spec §6/§8): on the glass-caustic crop of the Cornell box, the RMSE
@@ -176,9 +186,9 @@ fn pm_converges_with_photon_count_and_bias_stays_visible() {
     let (reference, ref_var) = (ref_film.mean(), ref_film.variance_of_mean());
     let mut last = f64::INFINITY;
     for photons in [50_000u64, 200_000, 1_000_000] {
-        let opts = MethodOptions { photons, max_depth: 64, vpl_paths: 64, ..Default::default() };
-        let bytes = integrators::preprocess(Method::IwsPm, &w, &opts, 1).unwrap();
-        let mut integ = integrators::build(Method::IwsPm, &w, &opts, &bytes).unwrap();
+        let opts = pm_args(photons, 64);
+        let bytes = Method::IwsPm.preprocess(&w, &opts, 1).unwrap();
+        let mut integ = Method::IwsPm.build(&w, &opts, &bytes).unwrap();
         let film = render(&w, integ.as_mut(), rw, rh, 512, 21);
         let (m, v) = (film.mean(), film.variance_of_mean());
         let (mut se, mut noise) = (0.0f64, 0.0f64);

@@ -19,12 +19,12 @@ pub mod report;
 pub mod stability;
 
 use crate::distributed::Cluster;
-use crate::image_io::{self, Image};
+use crate::image_io::{self, with_ext, Image};
 use crate::integrators::Method;
 use crate::metrics::{self, Rect, REL_MSE_EPS};
 use crate::pipeline::{self, RenderJob};
 use serde::Serialize;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// A named image region; `rect: None` is the whole image.
@@ -118,32 +118,6 @@ pub fn measure(img: &Image, reference: &Image, regions: &[Region]) -> Result<Vec
         .collect()
 }
 
-/// Parses `pt,iws-pm,iws-cf`.
-pub fn parse_methods(s: &str) -> Result<Vec<Method>, String> {
-    let v: Vec<Method> = s
-        .split(',')
-        .filter(|t| !t.trim().is_empty())
-        .map(|t| Method::from_name(t.trim()).ok_or_else(|| format!("unknown method `{}`", t.trim())))
-        .collect::<Result<_, _>>()?;
-    if v.is_empty() {
-        return Err(format!("no methods in `{s}`"));
-    }
-    Ok(v)
-}
-
-/// Parses `30s,1m,2m` into seconds (each > 0).
-pub fn parse_budgets(s: &str) -> Result<Vec<f64>, String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .filter(|t| !t.trim().is_empty())
-        .map(|t| crate::scene::parse_duration(t.trim()))
-        .collect::<Result<_, _>>()?;
-    if v.is_empty() || v.iter().any(|b| !b.is_finite() || *b <= 0.0) {
-        return Err(format!("budgets `{s}` must be a non-empty list of positive durations"));
-    }
-    Ok(v)
-}
-
 /// A budget as a short label: `500ms`, `30s`, `1.5s`, `4m`, `1h`.
 pub fn budget_label(secs: f64) -> String {
     if secs < 1.0 {
@@ -189,10 +163,6 @@ pub struct CompareOutcome {
     pub runs: Vec<RunRecord>,
     /// Warnings of the scene (also in every run's JSON).
     pub warnings: Vec<String>,
-}
-
-fn with_ext(p: &Path, e: &str) -> PathBuf {
-    pipeline::with_ext(p, e)
 }
 
 /// Rank 0 reads the reference and decides the resolution; every rank learns it (or the error).
@@ -292,11 +262,11 @@ pub fn run_compare(cfg: &CompareConfig, cluster: &dyn Cluster) -> Result<Option<
                 match result {
                     Ok(Some(r)) => {
                         let rep = &r.report;
-                        rec.spp = rep["spp"].as_u64().unwrap_or(0);
-                        rec.wall_s = rep["timings"]["total_s"].as_f64().unwrap_or(0.0);
-                        rec.preprocess_s = rep["timings"]["preprocess_s"].as_f64().unwrap_or(0.0);
+                        rec.spp = rep.spp;
+                        rec.wall_s = rep.timings.total_s;
+                        rec.preprocess_s = rep.timings.preprocess_s;
                         rec.preprocess_share = rec.preprocess_s / rec.wall_s.max(1e-12);
-                        rec.nonfinite_samples = rep["nonfinite_samples"].as_u64().unwrap_or(0);
+                        rec.nonfinite_samples = rep.nonfinite_samples;
                         let img = pipeline::image_from_film(&r.film);
                         match measure(&img, reference, &regions) {
                             Ok(m) => rec.regions = m,
@@ -331,7 +301,7 @@ pub fn run_compare(cfg: &CompareConfig, cluster: &dyn Cluster) -> Result<Option<
         runs,
         warnings: {
             let mut w = scene.warnings.clone();
-            w.extend(stability::scene_warnings(&scene));
+            w.extend(crate::scene::scene_warnings(&scene));
             w
         },
     };

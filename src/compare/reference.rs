@@ -14,9 +14,9 @@
 use crate::cli::RenderArgs;
 use crate::distributed::Cluster;
 use crate::image_io;
+use crate::image_io::with_ext;
 use crate::integrators::Method;
-use crate::pipeline::{self, with_ext};
-use serde_json::json;
+use crate::pipeline::{self, RenderReport};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -37,21 +37,68 @@ fn resume_prefix(p: &Path) -> PathBuf {
     PathBuf::from(s.strip_suffix(".ckpt").unwrap_or(&s).to_string())
 }
 
-/// Renders the reference on every rank of `cluster`; returns rank 0's JSON summary
-/// (also written to `PREFIX.json`).
+/// The files of a reference.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ReferenceFiles {
+    /// The mean EXR.
+    pub mean: PathBuf,
+    /// Half 0's EXR.
+    pub half0: PathBuf,
+    /// Half 1's EXR.
+    pub half1: PathBuf,
+    /// The two halves' checkpoints.
+    pub checkpoints: [PathBuf; 2],
+}
+
+/// The reference's JSON summary (`PREFIX.json`).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ReferenceReport {
+    /// Always `reference`.
+    pub kind: &'static str,
+    /// Always `pt`.
+    pub method: Method,
+    /// Scene file.
+    pub scene: String,
+    /// Image size.
+    pub resolution: [u32; 2],
+    /// Samples per pixel of the mean (both halves).
+    pub spp: u64,
+    /// Base seed.
+    pub seed: u64,
+    /// The halves' seeds.
+    pub half_seeds: [u64; 2],
+    /// Time budget, seconds.
+    pub time_budget_s: Option<f64>,
+    /// Wall time, seconds.
+    pub total_s: f64,
+    /// Files written.
+    pub files: ReferenceFiles,
+    /// NaN/Inf samples replaced by zero (both halves).
+    pub nonfinite_samples: u64,
+    /// Non-finite pixels in the mean.
+    pub nonfinite_pixels: usize,
+    /// Mean of the image per channel.
+    pub image_mean: [f64; 3],
+    /// Scene warnings.
+    pub warnings: Vec<String>,
+    /// The halves' render reports.
+    pub halves: [RenderReport; 2],
+}
+
+/// Renders the reference on every rank of `cluster`; returns rank 0's summary (also written to
+/// `PREFIX.json`).
 pub fn run_reference(
     args: &RenderArgs,
     cluster: &dyn Cluster,
     started: Instant,
-) -> Result<Option<serde_json::Value>, String> {
+) -> Result<Option<ReferenceReport>, String> {
     if args.method.is_some_and(|m| m != Method::Pt) {
         return Err("reference: only `--method pt` (the unbiased reference) is supported".into());
     }
     let base = args.job();
     let scene = crate::scene::load(&base.scene).map_err(|e| e.to_string())?;
-    let seed = base.seed.unwrap_or(scene.render.seed);
-    let time = base.time.or(if base.spp.is_some() { None } else { scene.render.time });
-    let spp = if time.is_some() { None } else { Some(base.spp.or(scene.render.spp).unwrap_or(16)) };
+    let plan = pipeline::RenderJob { method: Some(Method::Pt), ..base.clone() }.resolve(&scene)?;
+    let (seed, time, spp) = (plan.seed, plan.time, plan.spp);
     let prefix = base.out.clone();
     let resume = base.resume.as_deref().map(resume_prefix);
     if let Some(dir) = prefix.parent().filter(|d| !d.as_os_str().is_empty() && cluster.rank() == 0) {
@@ -85,31 +132,30 @@ pub fn run_reference(
     }
     film.merge(&h1.film);
     let mean = pipeline::write_images(&prefix, &film)?;
-    let spp_total = h0.report["spp"].as_u64().unwrap_or(0) + h1.report["spp"].as_u64().unwrap_or(0);
     let nonfinite_pixels = mean.pixels.iter().filter(|p| p.iter().any(|v| !v.is_finite())).count();
-    let report = json!({
-        "kind": "reference",
-        "method": "pt",
-        "scene": h0.report["scene"],
-        "resolution": h0.report["resolution"],
-        "spp": spp_total,
-        "seed": seed,
-        "half_seeds": [half_seed(seed, 0), half_seed(seed, 1)],
-        "time_budget_s": time,
-        "total_s": started.elapsed().as_secs_f64(),
-        "files": {
-            "mean": with_ext(&prefix, "exr"),
-            "half0": with_ext(&half_prefix(&prefix, 0), "exr"),
-            "half1": with_ext(&half_prefix(&prefix, 1), "exr"),
-            "checkpoints": [with_ext(&half_prefix(&prefix, 0), "ckpt"), with_ext(&half_prefix(&prefix, 1), "ckpt")],
+    let half = |k: u64, ext: &str| with_ext(&half_prefix(&prefix, k), ext);
+    let report = ReferenceReport {
+        kind: "reference",
+        method: Method::Pt,
+        scene: h0.report.scene.clone(),
+        resolution: h0.report.resolution,
+        spp: h0.report.spp + h1.report.spp,
+        seed,
+        half_seeds: [half_seed(seed, 0), half_seed(seed, 1)],
+        time_budget_s: time,
+        total_s: started.elapsed().as_secs_f64(),
+        files: ReferenceFiles {
+            mean: with_ext(&prefix, "exr"),
+            half0: half(0, "exr"),
+            half1: half(1, "exr"),
+            checkpoints: [half(0, "ckpt"), half(1, "ckpt")],
         },
-        "nonfinite_samples": h0.report["nonfinite_samples"].as_u64().unwrap_or(0)
-            + h1.report["nonfinite_samples"].as_u64().unwrap_or(0),
-        "nonfinite_pixels": nonfinite_pixels,
-        "image_mean": mean.mean(),
-        "warnings": h0.report["warnings"],
-        "halves": [h0.report, h1.report],
-    });
+        nonfinite_samples: h0.report.nonfinite_samples + h1.report.nonfinite_samples,
+        nonfinite_pixels,
+        image_mean: mean.mean(),
+        warnings: h0.report.warnings.clone(),
+        halves: [h0.report, h1.report],
+    };
     let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
     image_io::atomic_write(&with_ext(&prefix, "json"), text.as_bytes())?;
     Ok(Some(report))

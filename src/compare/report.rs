@@ -245,7 +245,7 @@ pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -
         imgs.push(rc);
         for m in &methods {
             let Some(run) = top.and_then(|b| ok_runs(&o.runs, m, b).min_by_key(|r| r.seed_index)) else { continue };
-            let exr = crate::pipeline::with_ext(&run.prefix, "exr");
+            let exr = crate::image_io::with_ext(&run.prefix, "exr");
             let c = match image_io::read_exr(&exr).and_then(|i| cut(&i)) {
                 Ok(c) => c,
                 Err(e) => {

@@ -1,8 +1,7 @@
 //! The stability suite (`forecast stability`) and the scene warnings every render emits.
 //!
-//! * [`scene_warnings`]: scene-level limitations, called by `pipeline::render` for every render
-//!   (printed on stderr, stored in the JSON `warnings`). Today: point lights together with Dirac
-//!   objects, whose caustics `pt` and `iws-cf` cannot sample (BAJ08 limitation).
+//! * [`scene_warnings`] (re-exported from `scene`): the scene-level limitations every render
+//!   prints and stores in its JSON `warnings`; the suite checks that they fire.
 //! * [`run_suite`]: every [`CASES`] scene (`scenes/stability/`, 64×64 cameras) with every method,
 //!   each a short time box. A run's error or panic is caught and recorded (never aborting the
 //!   suite); per run: finished, NaN/Inf samples caught (`nonfinite_samples`), whether the image is
@@ -15,33 +14,16 @@
 use super::report::{esc, html_page, table_html, table_md};
 use crate::distributed::local::Local;
 use crate::image_io::{atomic_write, Image};
-use crate::integrators::{Method, MethodOptions};
+use crate::integrators::{Method, MethodArgs};
 use crate::metrics::{self, REL_MSE_EPS};
 use crate::pipeline::{self, RenderJob, RenderResult};
-use crate::scene::Scene;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// The distinctive part of the point-light caustic warning (tests look for it).
-pub const POINT_LIGHT_WARNING: &str = "cannot be sampled by `pt` and `iws-cf`";
-
-/// Warnings about scene-level limitations of the methods; empty when there are none.
-pub fn scene_warnings(scene: &Scene) -> Vec<String> {
-    let mut w = Vec::new();
-    let n = scene.point_lights.len();
-    if n > 0 && scene.dirac_bounds().is_some() {
-        w.push(format!(
-            "{}: {n} point light(s) and Dirac (mirror/glass) objects: caustics lit by point lights (paths L S+ D) \
-             {POINT_LIGHT_WARNING} (BAJ08 limitation: a point light is never hit, and a Dirac chain cannot be \
-             connected to it); those methods leave them out, `iws-pm` includes them",
-            scene.path
-        ));
-    }
-    w
-}
+pub use crate::scene::{scene_warnings, POINT_LIGHT_WARNING};
 
 /// One scene of the suite.
 #[derive(Clone, Copy, Debug)]
@@ -207,22 +189,22 @@ fn lum(m: [f64; 3]) -> f64 {
     0.2126 * m[0] + 0.7152 * m[1] + 0.0722 * m[2]
 }
 
-fn job(
-    scene: &Path,
+/// One run of the suite: a method with its parameters, a time box and a seed.
+struct RunSpec<'a> {
     method: Method,
-    opts: &MethodOptions,
-    cfg: &StabilityConfig,
+    args: &'a MethodArgs,
     time: f64,
     seed: u64,
-    out: PathBuf,
-) -> RenderJob {
+}
+
+fn job(scene: &Path, run: RunSpec, cfg: &StabilityConfig, out: PathBuf) -> RenderJob {
     RenderJob {
         scene: scene.to_path_buf(),
-        method: Some(method),
-        opts: opts.clone(),
+        method: Some(run.method),
+        args: run.args.clone(),
         spp: None,
-        time: Some(time),
-        seed: Some(seed),
+        time: Some(run.time),
+        seed: Some(run.seed),
         resolution: cfg.resolution,
         out,
         progress: false,
@@ -238,15 +220,17 @@ fn job(
 pub fn run_suite(cfg: &StabilityConfig) -> Result<Vec<StabilityRecord>, String> {
     let runs_dir = cfg.out.join("runs");
     std::fs::create_dir_all(&runs_dir).map_err(|e| format!("cannot create {}: {e}", runs_dir.display()))?;
-    let mut base = MethodOptions { photons: 20_000, ..MethodOptions::default() };
-    base.forecast_photons = Some(20_000);
+    let mut base = MethodArgs::default();
+    base.pm.photons = 20_000;
+    base.cf.forecast_photons = Some(20_000);
     let mut refs: Vec<(String, Option<Image>)> = Vec::new();
     let mut out = Vec::new();
     for case in CASES.iter().filter(|c| cfg.only.is_empty() || cfg.only.iter().any(|o| o == c.name)) {
         let scene_path = cfg.scenes.join(case.file);
         if !refs.iter().any(|(f, _)| f == case.file) {
             let prefix = cfg.out.join("refs").join(case.file.trim_end_matches(".toml"));
-            let j = job(&scene_path, Method::Pt, &base, cfg, cfg.reference_time, 0x05EE_D4EF, prefix);
+            let spec = RunSpec { method: Method::Pt, args: &base, time: cfg.reference_time, seed: 0x05EE_D4EF };
+            let j = job(&scene_path, spec, cfg, prefix);
             let img = match guarded_render(&j) {
                 Ok(r) => Some(pipeline::image_from_film(&r.film)),
                 Err((e, _)) => {
@@ -262,8 +246,8 @@ pub fn run_suite(cfg: &StabilityConfig) -> Result<Vec<StabilityRecord>, String> 
             match crate::scene::load(&scene_path) {
                 Ok(s) => {
                     let world = crate::accel::World::build(s);
-                    let b = crate::integrators::iws::default_bound(&world, opts.vpl_paths) as f64 * f;
-                    opts.bound = Some(b as f32);
+                    let b = crate::integrators::iws::default_bound(&world, opts.iws.vpl_paths) as f64 * f;
+                    opts.iws.bound = Some(b as f32);
                 }
                 Err(e) => eprintln!("stability: {}: {e}", case.name),
             }
@@ -271,15 +255,13 @@ pub fn run_suite(cfg: &StabilityConfig) -> Result<Vec<StabilityRecord>, String> 
         for &m in &cfg.methods {
             let prefix = runs_dir.join(format!("{}_{}", case.name, m.name()));
             let t = Instant::now();
-            let r = guarded_render(&job(&scene_path, m, &opts, cfg, cfg.time_per_run, 1, prefix));
+            let spec = RunSpec { method: m, args: &opts, time: cfg.time_per_run, seed: 1 };
+            let r = guarded_render(&job(&scene_path, spec, cfg, prefix));
             let wall = t.elapsed().as_secs_f64();
             let rec = match r {
                 Ok(r) => {
                     let img = pipeline::image_from_film(&r.film);
-                    let warnings: Vec<String> = r.report["warnings"]
-                        .as_array()
-                        .map(|a| a.iter().filter_map(|w| w.as_str().map(String::from)).collect())
-                        .unwrap_or_default();
+                    let warnings = r.report.warnings.clone();
                     let cmp = reference.filter(|rf| rf.same_size(&img));
                     StabilityRecord {
                         case: case.name.into(),
@@ -287,16 +269,16 @@ pub fn run_suite(cfg: &StabilityConfig) -> Result<Vec<StabilityRecord>, String> 
                         finished: true,
                         panicked: false,
                         error: None,
-                        wall_s: r.report["timings"]["total_s"].as_f64().unwrap_or(wall),
-                        spp: r.report["spp"].as_u64().unwrap_or(0),
-                        nonfinite_samples: r.report["nonfinite_samples"].as_u64().unwrap_or(0),
+                        wall_s: r.report.timings.total_s,
+                        spp: r.report.spp,
+                        nonfinite_samples: r.report.nonfinite_samples,
                         image_finite: img.pixels.iter().all(|p| p.iter().all(|v| v.is_finite())),
                         expected_warnings_ok: case
                             .expect_warnings
                             .iter()
                             .all(|e| warnings.iter().any(|w| w.contains(e))),
                         warnings,
-                        b: r.report["method_stats"]["b"].as_f64(),
+                        b: r.report.method_stats.get("b").and_then(|b| b.as_f64()),
                         rel_mse: cmp.and_then(|rf| metrics::rel_mse(&img, rf, REL_MSE_EPS, None).ok()),
                         mean_rel_diff: cmp.map(|rf| {
                             let (a, b) = (lum(img.mean()), lum(rf.mean()));

@@ -41,15 +41,12 @@ pub const AREA_FLOOR_REL: f32 = 1e-4;
 const CHUNK: usize = 8192;
 
 /// Clustering algorithm.
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, bitcode::Encode, bitcode::Decode, clap::ValueEnum, serde::Serialize,
-)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bitcode::Encode, bitcode::Decode, serde::Serialize)]
 pub enum ClusteringMethod {
     /// Frequency-sensitive competitive learning vector quantisation (BAJ08's choice).
     #[default]
     Vq,
     /// Lloyd k-means with k-means++ seeding.
-    #[value(name = "kmeans")]
     #[serde(rename = "kmeans")]
     KMeans,
 }

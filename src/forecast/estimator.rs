@@ -9,26 +9,25 @@
 //!
 //! Invariants: S depends only on the cluster rank and the diffuse depth, never on samples;
 //! the product is identical after a bitcode round trip (it is what rank 0 broadcasts).
+//! The [`TableCache`] is an explicit object owned by the estimator and shared by all worker
+//! threads: a cached entry is a pure function of its cell, so sharing it changes no image.
 
 use super::caustic_point::CausticPoint;
 use super::cluster::{cluster_points, Clustering, ClusteringMethod};
 use super::cluster_map::{ClusterMap, DEFAULT_REPRESENTATIVES};
 use super::direction_table::{ForecastTables, TableMode};
 use super::forecast_map::{search_radius, ForecastMaps};
-use crate::bsdf::{self, Mode, ShadingPoint};
+use crate::bsdf::{self, Mode};
 use crate::math::{luminance, Frame, Rgb, Vec3};
-use crate::sampling::rng::Rng;
 use crate::scene::Material;
-use std::cell::RefCell;
+use crate::transport::context::{Context, ShadingQuery};
 use std::collections::HashMap;
-use std::rc::Rc;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+use std::sync::{Arc, RwLock};
 use std::time::Instant;
 
 /// Photon weight in the T1 table.
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize, bitcode::Encode, bitcode::Decode,
-)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
 pub enum PhotonWeight {
     /// BAJ08: lum(Φ)·f·cosθ ("modulated with the BRDF and the cosine").
     #[default]
@@ -38,9 +37,7 @@ pub enum PhotonWeight {
 }
 
 /// Table layout (`--table`).
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize, bitcode::Encode, bitcode::Decode,
-)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
 pub enum TableKind {
     /// CF dual table (T1 + T2 on the empty bins, summed).
     #[default]
@@ -155,23 +152,49 @@ pub struct ForecastCounters {
     pub cache_hits: AtomicU64,
 }
 
-/// Thread-local table cache: (owner, cell, normal bits, side) → (cluster, tables) or outside.
-type CacheKey = (u64, [i32; 3], [u32; 3]);
-type CacheEntry = Option<(usize, Rc<ForecastTables>)>;
+/// Table-cache key: (cell, normal bits).
+type CacheKey = ([i32; 3], [u32; 3]);
+/// (cluster, tables) of a cell, or `None` outside every kept cluster.
+type CacheEntry = Option<(usize, Arc<ForecastTables>)>;
 
-/// Entries per thread before the cache is cleared (bounds memory at ~1 KB × this).
-const CACHE_CAP: usize = 1 << 17;
+/// Shards of the table cache (threads rarely contend on one lock).
+const SHARDS: usize = 64;
+/// Entries per shard before it is cleared (bounds memory at ~1 KB × 2^19 in all).
+const SHARD_CAP: usize = 1 << 13;
 
-static NEXT_OWNER: AtomicU64 = AtomicU64::new(1);
-
-/// A fresh cache owner id (one per integrator instance, so caches never mix products).
-pub fn new_cache_owner() -> u64 {
-    NEXT_OWNER.fetch_add(1, Relaxed)
+/// The table cache of one CF estimator, shared by every worker thread: each table is built
+/// once per cell for all threads. Entries are pure functions of their key, so which thread
+/// builds one (or whether two race to) never changes an estimate.
+pub struct TableCache {
+    shards: Vec<RwLock<HashMap<CacheKey, CacheEntry>>>,
 }
 
-thread_local! {
-    static GATHER: RefCell<Vec<(f32, u32)>> = const { RefCell::new(Vec::new()) };
-    static TABLES: RefCell<HashMap<CacheKey, CacheEntry>> = RefCell::new(HashMap::new());
+impl Default for TableCache {
+    fn default() -> Self {
+        TableCache { shards: (0..SHARDS).map(|_| RwLock::new(HashMap::new())).collect() }
+    }
+}
+
+impl TableCache {
+    fn shard(&self, k: &CacheKey) -> &RwLock<HashMap<CacheKey, CacheEntry>> {
+        let [a, b, c] = k.0;
+        let h = (a as u32).wrapping_mul(0x9E37_79B1)
+            ^ (b as u32).wrapping_mul(0x85EB_CA77)
+            ^ (c as u32).wrapping_mul(0xC2B2_AE3D);
+        &self.shards[(h ^ k.1[0] ^ k.1[1].rotate_left(7) ^ k.1[2].rotate_left(13)) as usize % SHARDS]
+    }
+
+    fn get(&self, k: &CacheKey) -> Option<CacheEntry> {
+        self.shard(k).read().unwrap_or_else(|e| e.into_inner()).get(k).cloned()
+    }
+
+    fn insert(&self, k: CacheKey, e: CacheEntry) {
+        let mut m = self.shard(&k).write().unwrap_or_else(|e| e.into_inner());
+        if m.len() >= SHARD_CAP {
+            m.clear();
+        }
+        m.insert(k, e);
+    }
 }
 
 impl CausticForecast {
@@ -205,39 +228,42 @@ impl CausticForecast {
         }
     }
 
-    /// Gathers forecasters around `at` in cluster `c` and builds the tables in `frame`.
+    /// Gathers forecasters around `at` in cluster `c` (scratch `buf`) and builds the tables in
+    /// `frame`.
     fn build_tables(
         &self,
-        c: usize,
-        at: Vec3,
-        frame: &Frame,
+        (c, at, frame): (usize, Vec3, &Frame),
+        buf: &mut Vec<(f32, u32)>,
         weight: impl Fn(&CausticPoint, Vec3) -> f32,
         brdf_cos: impl Fn(Vec3) -> f32,
     ) -> ForecastTables {
-        GATHER.with(|buf| {
-            let mut buf = buf.borrow_mut();
-            self.maps.gather(c, at, self.opts.gather, self.radius, &mut buf);
-            let photons = buf.iter().filter_map(|&(_, id)| {
-                let cp = self.points.get(id as usize)?;
-                let local = frame.to_local(cp.wi());
-                // [spec §4] skip photons from below: also stops thin-wall leaks
-                (local.z > 0.0).then(|| (local, weight(cp, local)))
-            });
-            let mode = match self.opts.table {
-                TableKind::Dual => TableMode::Dual,
-                TableKind::DualDefensive => TableMode::DualDefensive { alpha: 0.25 },
-                TableKind::Single => TableMode::Single { alpha: 0.1 },
-            };
-            ForecastTables::build(photons, brdf_cos, mode)
-        })
+        self.maps.gather(c, at, self.opts.gather, self.radius, buf);
+        let photons = buf.iter().filter_map(|&(_, id)| {
+            let cp = self.points.get(id as usize)?;
+            let local = frame.to_local(cp.wi());
+            // [spec §4] skip photons from below: also stops thin-wall leaks
+            (local.z > 0.0).then(|| (local, weight(cp, local)))
+        });
+        let mode = match self.opts.table {
+            TableKind::Dual => TableMode::Dual,
+            TableKind::DualDefensive => TableMode::DualDefensive { alpha: 0.25 },
+            TableKind::Single => TableMode::Single { alpha: 0.1 },
+        };
+        ForecastTables::build(photons, brdf_cos, mode)
     }
 
     /// The (cluster, tables) of a cacheable point: a pure function of its cell, normal and side.
-    fn cached_tables(&self, owner: u64, p: Vec3, ng: Vec3, counters: &ForecastCounters) -> CacheEntry {
+    fn cached_tables(
+        &self,
+        cache: &TableCache,
+        (p, ng): (Vec3, Vec3),
+        ctx: &mut Context,
+        counters: &ForecastCounters,
+    ) -> CacheEntry {
         let cell = self.radius * self.opts.cache_cell;
         let q = (p / cell).floor();
-        let key: CacheKey = (owner, [q.x as i32, q.y as i32, q.z as i32], ng.to_array().map(f32::to_bits));
-        if let Some(e) = TABLES.with(|t| t.borrow().get(&key).cloned()) {
+        let key: CacheKey = ([q.x as i32, q.y as i32, q.z as i32], ng.to_array().map(f32::to_bits));
+        if let Some(e) = cache.get(&key) {
             counters.cache_hits.fetch_add(1, Relaxed);
             return e;
         }
@@ -250,76 +276,80 @@ impl CausticForecast {
                 PhotonWeight::Paper => cp.energy() * l.z,
                 PhotonWeight::Flux => cp.energy(),
             };
-            (c, Rc::new(self.build_tables(c, center, &frame, w, |l| l.z)))
+            (c, Arc::new(self.build_tables((c, center, &frame), &mut ctx.knn, w, |l| l.z)))
         });
         counters.tables_built.fetch_add(1, Relaxed);
         counters.cdf_ns.fetch_add(t0.elapsed().as_nanos() as u64, Relaxed);
-        TABLES.with(|t| {
-            let mut t = t.borrow_mut();
-            if t.len() >= CACHE_CAP {
-                t.clear();
-            }
-            t.insert(key, entry.clone());
-        });
+        cache.insert(key, entry.clone());
         entry
     }
 
-    /// Ĺ_c(x, ωo, d). `g(ωi, rng)` returns the integrand f·|cos|·1[first hit Dirac]·L̂ (world ωi).
-    /// `cache_owner` enables the table cache for Lambertian, flat-shaded points.
-    #[allow(clippy::too_many_arguments)]
+    /// The (cluster, tables) at a point that is not cached (tables in the shading frame).
+    fn point_tables(
+        &self,
+        q: &ShadingQuery,
+        ng: Vec3,
+        frame: &Frame,
+        ctx: &mut Context,
+        counters: &ForecastCounters,
+    ) -> CacheEntry {
+        let (sp, m, wo) = (q.x, q.m, q.wo);
+        self.cluster_map.query(sp.p, ng).map(|c| {
+            let t0 = Instant::now();
+            let w = |cp: &CausticPoint, l: Vec3| {
+                let f = luminance(bsdf::eval(m, sp, wo, cp.wi()));
+                match self.opts.photon_weight {
+                    PhotonWeight::Paper => cp.energy() * f * l.z,
+                    PhotonWeight::Flux => cp.energy() * f,
+                }
+            };
+            let brdf_cos = |l: Vec3| luminance(bsdf::eval(m, sp, wo, frame.to_world(l))) * l.z;
+            let t = self.build_tables((c, sp.p, frame), &mut ctx.knn, w, brdf_cos);
+            counters.tables_built.fetch_add(1, Relaxed);
+            counters.cdf_ns.fetch_add(t0.elapsed().as_nanos() as u64, Relaxed);
+            (c, Arc::new(t))
+        })
+    }
+
+    /// Ĺ_c at `q`. `g(ωi, ctx)` returns the integrand f·|cos|·1[first hit Dirac]·L̂ (world ωi).
+    /// `cache` enables the table cache for Lambertian, flat-shaded points.
     pub fn estimate(
         &self,
-        sp: &ShadingPoint,
-        m: &Material,
-        wo: Vec3,
-        depth: u32,
-        rng: &mut Rng,
+        q: &ShadingQuery,
+        ctx: &mut Context,
         counters: &ForecastCounters,
-        cache_owner: Option<u64>,
-        mut g: impl FnMut(Vec3, &mut Rng) -> Rgb,
+        cache: Option<&TableCache>,
+        mut g: impl FnMut(Vec3, &mut Context) -> Rgb,
     ) -> Rgb {
         counters.queries.fetch_add(1, Relaxed);
+        let (sp, m, wo) = (q.x, q.m, q.wo);
         let (ng, ns) = if wo.dot(sp.ng) >= 0.0 { (sp.ng, sp.ns) } else { (-sp.ng, -sp.ns) };
         let cacheable = self.opts.cache_cell > 0.0 && matches!(m, Material::Diffuse { .. }) && sp.ns == sp.ng;
-        let found: CacheEntry = match cache_owner {
-            _ if self.radius <= 0.0 || depth >= self.opts.table_depth => None,
-            Some(owner) if cacheable => self.cached_tables(owner, sp.p, ng, counters),
-            _ => self.cluster_map.query(sp.p, ng).map(|c| {
-                let t0 = Instant::now();
-                let frame = Frame::from_normal(ns);
-                let w = |cp: &CausticPoint, l: Vec3| {
-                    let f = luminance(bsdf::eval(m, sp, wo, cp.wi()));
-                    match self.opts.photon_weight {
-                        PhotonWeight::Paper => cp.energy() * f * l.z,
-                        PhotonWeight::Flux => cp.energy() * f,
-                    }
-                };
-                let brdf_cos = |l: Vec3| luminance(bsdf::eval(m, sp, wo, frame.to_world(l))) * l.z;
-                let t = self.build_tables(c, sp.p, &frame, w, brdf_cos);
-                counters.tables_built.fetch_add(1, Relaxed);
-                counters.cdf_ns.fetch_add(t0.elapsed().as_nanos() as u64, Relaxed);
-                (c, Rc::new(t))
-            }),
+        let cache = cache.filter(|_| cacheable);
+        // cached tables live in the frame of the geometric normal (equal to ns there)
+        let frame = if cache.is_some() { Frame::from_normal(ng) } else { Frame::from_normal(ns) };
+        let found: CacheEntry = match cache {
+            _ if self.radius <= 0.0 || q.depth >= self.opts.table_depth => None,
+            Some(cache) => self.cached_tables(cache, (sp.p, ng), ctx, counters),
+            None => self.point_tables(q, ng, &frame, ctx, counters),
         };
         let Some((c, tables)) = found else {
             // outside valid clusters: one BSDF (cosine for Lambert) sample
             counters.samples.fetch_add(1, Relaxed);
-            let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+            let u = [ctx.rng.next_f32(), ctx.rng.next_f32(), ctx.rng.next_f32()];
             let Some(bs) = bsdf::sample(m, sp, wo, u, Mode::Radiance) else { return Rgb::ZERO };
             if bs.pdf_w <= 0.0 {
                 return Rgb::ZERO;
             }
-            return g(bs.wi, rng) / bs.pdf_w;
+            return g(bs.wi, ctx) / bs.pdf_w;
         };
         counters.inside.fetch_add(1, Relaxed);
-        // cached tables live in the frame of the geometric normal (equal to ns there)
-        let frame = if cacheable && cache_owner.is_some() { Frame::from_normal(ng) } else { Frame::from_normal(ns) };
-        let s = self.split_count(self.clustering.clusters[c].rank, depth);
+        let s = self.split_count(self.clustering.clusters[c].rank, q.depth);
         let mut samples = Vec::with_capacity(2 * s);
-        tables.for_each_sample(s, rng, |ts| samples.push(ts));
+        tables.for_each_sample(s, &mut ctx.rng, |ts| samples.push(ts));
         counters.samples.fetch_add(samples.len() as u64, Relaxed);
         // [BAJ08 §3.2] each table is sampled S times and the two estimates are added
-        samples.iter().map(|ts| g(frame.to_world(ts.dir), rng) * ts.weight).fold(Rgb::ZERO, |a, b| a + b)
+        samples.iter().map(|ts| g(frame.to_world(ts.dir), ctx) * ts.weight).fold(Rgb::ZERO, |a, b| a + b)
     }
 
     /// Encodes for the broadcast.

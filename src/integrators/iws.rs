@@ -10,270 +10,79 @@
 //!   `t_max = sqrt(cosθ_x/b)`; 0 on a miss or a Dirac hit; at a non-specular hit (or an
 //!   emitter: `Le` is recovered here because direct VPLs are clamped) it recurses into `L̂` with
 //!   `d+1`, with Russian roulette at `d+1 ≥ 2` (spec §4 "Termination").
-//! - `Ĺ_c`: a [`CausticEstimator`]; `iws` uses [`NoCaustics`] (L_c omitted by design),
-//!   `iws-pm` a photon map, `iws-cf` Caustic Forecasting. [`BsdfCaustics`] is the plain
-//!   unbiased BSDF-sampled `L_c` (used by tests to check that the split is complete).
+//! - `Ĺ_c`: a [`CausticEstimator`] (`integrators::caustics`); `iws` uses [`NoCaustics`] (L_c
+//!   omitted by design), `iws-pm` a photon map, `iws-cf` Caustic Forecasting.
 //!
 //! Invariants: the same `G` function in `min(G,b)` and `(G−b)/G` (spec §10); every `b > 0` is
 //! unbiased; camera rays follow Dirac chains (Fresnel-weighted choice) to the first
 //! non-specular vertex. The only cut is the 64-vertex / 64-diffuse-depth safety cap.
+//! The point lights come from `integrators::vpl`; chains from `transport::dirac`; roulette from
+//! `transport::roulette`; timings go to the worker's `profile::Profile`.
 //! Shading normals: the eye side carries `|ŵ·n_s|/|ŵ·n_g|` and indirect VPLs the adjoint factor
 //! `|ω_in·n_s|/|ω_in·n_g|` (Veach eq. 5.19), so `G` itself stays geometric.
 
-use super::Integrator;
+use super::caustics::{CausticEstimator, NoCaustics, Recurse, ShadingQuery};
+use super::vpl::{generate_vpls, Vpl, VplKind};
+use super::{Context, Integrator, MethodArgs, MethodSpec};
 use crate::accel::{offset_origin, ray_epsilon, Hit, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
-use crate::math::{luminance, Rgb, Vec3, PI};
-use crate::sampling::rng::{stream, Rng};
+use crate::math::{Rgb, Vec3, PI};
+use crate::profile::{Phase, Profile, Stopwatch};
 use crate::scene::{Material, NO_EMITTER};
-use crate::transport::particle::{self, Emission, EmitterVertex, ParticleVisitor, SurfaceVertex, MAX_VERTICES};
-use std::cell::Cell;
-use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+use crate::transport::dirac::follow_dirac_chain;
+use crate::transport::particle::MAX_VERTICES;
+use crate::transport::roulette::{q_recursion, roulette};
 use std::time::Instant;
 
-/// Chain vertices after which Russian roulette may end a Dirac chain (as `pt`).
-const CHAIN_RR_VERTICES: u32 = 5;
-
-/// Full estimator `L̂(y, ω_o, d)` at a hit, given to caustic estimators so that Dirac chains
-/// ending at a non-specular vertex can recurse (spec §1 "Chain following").
-pub trait Recurse {
-    /// `L̂(y→ω_o)` at `hit` with diffuse depth `depth`: `Le` on emitters, the full estimator at
-    /// non-specular hits, 0 on Dirac hits.
-    fn l_hat(&self, world: &World, hit: &Hit, wo: Vec3, depth: u32, rng: &mut Rng) -> Rgb;
-}
-
-/// The caustic term `Ĺ_c(x, ω_o, d)` plugged into the IWS recursion (spec §1).
-pub trait CausticEstimator: Send + Sync {
-    /// Short name for the stats.
-    fn name(&self) -> &'static str;
-    /// One estimate of `L_c` at the non-specular point `x` (material `m`) toward `wo`, at
-    /// diffuse depth `depth`; `full` evaluates `L̂` at chain ends.
-    #[allow(clippy::too_many_arguments)]
-    fn estimate(
-        &self,
-        world: &World,
-        x: &ShadingPoint,
-        m: &Material,
-        wo: Vec3,
-        depth: u32,
-        rng: &mut Rng,
-        full: &dyn Recurse,
-    ) -> Rgb;
-    /// Statistics for the JSON report.
-    fn stats(&self) -> serde_json::Value {
-        serde_json::json!({})
-    }
-}
-
-/// `Ĺ_c = 0`: the plain `iws` method ("Total Without Caustics").
-pub struct NoCaustics;
-
-impl CausticEstimator for NoCaustics {
-    fn name(&self) -> &'static str {
-        "none"
-    }
-    fn estimate(
-        &self,
-        _: &World,
-        _: &ShadingPoint,
-        _: &Material,
-        _: Vec3,
-        _: u32,
-        _: &mut Rng,
-        _: &dyn Recurse,
-    ) -> Rgb {
-        Rgb::ZERO
-    }
-    fn stats(&self) -> serde_json::Value {
-        serde_json::json!({ "caustics": "omitted (L_c not estimated)" })
-    }
-}
-
-/// Unbiased `Ĺ_c` by one BSDF-sampled direction: it counts only if the first hit is Dirac
-/// (spec §1), then follows the chain and evaluates `L̂` at its end (what CF does outside kept
-/// clusters, spec §4). Noisy but exact; used to test the completeness of the split.
-pub struct BsdfCaustics;
-
-impl CausticEstimator for BsdfCaustics {
-    fn name(&self) -> &'static str {
-        "bsdf"
-    }
-    fn estimate(
-        &self,
-        world: &World,
-        x: &ShadingPoint,
-        m: &Material,
-        wo: Vec3,
-        depth: u32,
-        rng: &mut Rng,
-        full: &dyn Recurse,
-    ) -> Rgb {
-        if depth + 1 >= MAX_VERTICES {
-            return Rgb::ZERO;
-        }
-        let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
-        let Some(bs) = bsdf::sample(m, x, wo, u, Mode::Radiance) else {
-            return Rgb::ZERO;
-        };
-        caustic_chain(world, x, bs.wi, bs.weight, depth, rng, full)
-    }
-}
-
-/// The L_c integrand along `wi` from `x`, times `weight` (f·|cos|/p or f·|cos|): 0 unless the
-/// first hit is Dirac (spec §1: L_d owns diffuse and emitter first hits); else RR, the Dirac
-/// chain, and `L̂` at its end with diffuse depth + 1.
-pub fn caustic_chain(
-    world: &World,
-    x: &ShadingPoint,
-    wi: Vec3,
-    weight: Rgb,
-    depth: u32,
-    rng: &mut Rng,
-    full: &dyn Recurse,
-) -> Rgb {
-    let Some(hit) = world.intersect(offset_origin(x.p, x.ng, wi), wi, f32::INFINITY) else {
-        return Rgb::ZERO;
-    };
-    if world.scene.emitter_of(hit.prim) != NO_EMITTER || !world.scene.material_of(hit.prim).is_dirac() {
-        return Rgb::ZERO;
-    }
-    let Some(w) = rr_weight(weight, depth + 1, rng) else {
-        return Rgb::ZERO;
-    };
-    match follow_dirac_chain(world, hit, wi, w, MAX_VERTICES, rng) {
-        Some((z, d, beta)) => beta * full.l_hat(world, &z, -d, depth + 1, rng),
-        None => Rgb::ZERO,
-    }
-}
-
-/// Russian roulette on a recursive `L̂` call (spec §4 "Termination"): at `depth ≥ 2`,
-/// survive with `q = clamp(lum(weight), 0.05, 0.95)` and return `weight/q`.
-#[inline]
-pub fn rr_weight(weight: Rgb, depth: u32, rng: &mut Rng) -> Option<Rgb> {
-    if depth < 2 {
-        return Some(weight);
-    }
-    let q = luminance(weight).clamp(0.05, 0.95);
-    (rng.next_f32() < q).then(|| weight / q)
-}
-
-/// Follows a Dirac chain from `hit` (reached along `d`) with throughput `beta`: Fresnel-weighted
-/// choice at glass, RR after [`CHAIN_RR_VERTICES`]. Returns the first non-Dirac hit (possibly an
-/// emitter), the direction that reached it and the throughput; `None` on escape, absorption or
-/// the vertex cap `cap` (at most [`MAX_VERTICES`]).
-pub fn follow_dirac_chain(
-    world: &World,
-    mut hit: Hit,
-    mut d: Vec3,
-    mut beta: Rgb,
-    cap: u32,
-    rng: &mut Rng,
-) -> Option<(Hit, Vec3, Rgb)> {
-    let s = &world.scene;
-    for v in 0..cap.min(MAX_VERTICES) {
-        let m = s.material_of(hit.prim);
-        if s.emitter_of(hit.prim) != NO_EMITTER || !m.is_dirac() {
-            return Some((hit, d, beta));
-        }
-        let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
-        let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
-        let bs = bsdf::sample(m, &sp, -d, u, Mode::Radiance)?;
-        beta *= bs.weight;
-        if v + 1 >= CHAIN_RR_VERTICES {
-            let q = beta.max_element().min(0.95);
-            if q <= 0.0 || rng.next_f32() >= q {
-                return None;
-            }
-            beta /= q;
-        }
-        d = bs.wi;
-        hit = world.intersect(offset_origin(hit.p, hit.ng, d), d, f32::INFINITY)?;
-    }
-    None
-}
-
-/// What a point light is.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum VplKind {
-    /// On an area emitter: profile `Le`, clamped.
-    Area,
-    /// A scene point light: intensity, never clamped.
-    Point,
-    /// At a non-specular light-path vertex: profile `f(y, ω_in, ·)`, clamped.
-    Surface(Material),
-}
-
-/// One point light of a pass.
-#[derive(Clone, Copy, Debug)]
-struct Vpl {
-    p: Vec3,
-    ng: Vec3,
-    ns: Vec3,
-    w_in: Vec3,
-    /// `W0·Le`, `W0·I` or `β/N`.
-    power: Rgb,
-    kind: VplKind,
-}
-
-#[derive(Default)]
-struct VplCollector(Vec<Vpl>);
-
-impl ParticleVisitor for VplCollector {
-    fn emitter(&mut self, v: &EmitterVertex) {
-        let kind = if v.point { VplKind::Point } else { VplKind::Area };
-        self.0.push(Vpl { p: v.p, ng: v.n, ns: v.n, w_in: v.n, power: v.emission * v.weight, kind });
-    }
-    fn surface(&mut self, v: &SurfaceVertex) -> bool {
-        if !v.material.is_black() {
-            let kind = VplKind::Surface(*v.material);
-            self.0.push(Vpl { p: v.p, ng: v.ng, ns: v.ns, w_in: v.w_in, power: v.beta, kind });
-        }
-        true
-    }
-}
-
-/// IWS parameters (see `MethodOptions`).
-#[derive(Clone, Copy, Debug)]
-pub struct IwsParams {
-    /// Light paths per pass `N`.
-    pub vpl_paths: u32,
-    /// Clamp bound `b` (None: spec §2 default `0.25·π·N/A_D`).
+/// IWS parameters (shared by `iws`, `iws-pm` and `iws-cf`).
+#[derive(clap::Args, Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct IwsArgs {
+    /// IWS clamp bound b (default 0.25·π·N/A_D, spec §2; 0 = pure compensation, inf = no clamping).
+    #[arg(long, value_parser = parse_bound)]
     pub bound: Option<f32>,
-    /// VPLs evaluated at diffuse depth ≥ 1 (uniform subset with replacement, weight `N_v/m`; 0: all).
+    /// IWS light paths per pass N.
+    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..))]
+    pub vpl_paths: u32,
+    /// IWS VPLs evaluated at diffuse depth >= 1 (unbiased uniform subset; 0 = all).
+    #[arg(long, default_value_t = 16)]
     pub vpl_subset: u32,
-    /// Safety cap on camera-chain vertices.
-    pub max_depth: u32,
 }
 
-thread_local! {
-    /// Per-thread (compensation rays, gather ns, caustic ns) of the current sample.
-    static LOCAL: Cell<(u64, u64, u64)> = const { Cell::new((0, 0, 0)) };
+fn parse_bound(s: &str) -> Result<f32, String> {
+    let t = s.trim();
+    let b = if t.eq_ignore_ascii_case("inf") {
+        f32::INFINITY
+    } else {
+        t.parse::<f32>().map_err(|_| format!("bad bound `{s}`"))?
+    };
+    if b.is_nan() || b < 0.0 {
+        return Err(format!("bound `{s}` must be >= 0 (or `inf`)"));
+    }
+    Ok(b)
 }
 
-#[inline]
-fn bump(comp: u64, gather_ns: u64, caustic_ns: u64) {
-    LOCAL.with(|c| {
-        let (a, b, d) = c.get();
-        c.set((a + comp, b + gather_ns, d + caustic_ns));
-    });
+impl MethodSpec for Iws {
+    type Product = ();
+    fn preprocess(_: &World, _: &MethodArgs, _: u64) -> Result<(), String> {
+        Ok(())
+    }
+    fn build(world: &World, args: &MethodArgs, _: ()) -> Result<Box<dyn Integrator>, String> {
+        Ok(Box::new(Iws::new(world, args, Box::new(NoCaustics))))
+    }
 }
 
 /// The IWS integrator with a pluggable caustic estimator.
 pub struct Iws {
-    name: &'static str,
-    params: IwsParams,
+    params: IwsArgs,
+    /// Safety cap on camera-chain vertices.
+    max_depth: u32,
     /// The clamp bound in use.
     b: f32,
     vpls: Vec<Vpl>,
     caustics: Box<dyn CausticEstimator>,
-    passes: AtomicU64,
-    vpls_total: AtomicU64,
-    vpl_trace_ns: AtomicU64,
-    samples: AtomicU64,
-    comp_rays: AtomicU64,
-    gather_ns: AtomicU64,
-    caustic_ns: AtomicU64,
-    radiance_ns: AtomicU64,
+    passes: u64,
+    vpls_total: u64,
+    vpl_trace_ns: u64,
 }
 
 /// The spec §2 default bound `b = κ·π·N/A_D` with `κ = 0.25` (one clamped Lambertian VPL adds
@@ -288,38 +97,19 @@ pub fn default_bound(world: &World, vpl_paths: u32) -> f32 {
 }
 
 impl Iws {
-    /// An IWS integrator named `name` (`iws`, `iws-pm`, ...) with caustic term `caustics`.
+    /// An IWS integrator with `args.iws` and the cap `args.pt`, and caustic term `caustics`.
     /// A negative or NaN `bound` is replaced by the default.
-    pub fn new(name: &'static str, world: &World, params: IwsParams, caustics: Box<dyn CausticEstimator>) -> Iws {
+    pub fn new(world: &World, args: &MethodArgs, caustics: Box<dyn CausticEstimator>) -> Iws {
+        let params = args.iws;
         let b = match params.bound {
             Some(b) if b >= 0.0 => b,
             _ => default_bound(world, params.vpl_paths.max(1)),
         };
-        Iws {
-            name,
-            params,
-            b,
-            vpls: Vec::new(),
-            caustics,
-            passes: AtomicU64::new(0),
-            vpls_total: AtomicU64::new(0),
-            vpl_trace_ns: AtomicU64::new(0),
-            samples: AtomicU64::new(0),
-            comp_rays: AtomicU64::new(0),
-            gather_ns: AtomicU64::new(0),
-            caustic_ns: AtomicU64::new(0),
-            radiance_ns: AtomicU64::new(0),
-        }
-    }
-
-    /// The clamp bound `b` in use.
-    pub fn bound(&self) -> f32 {
-        self.b
-    }
-
-    /// Number of point lights in the current pass.
-    pub fn vpl_count(&self) -> usize {
-        self.vpls.len()
+        let max_depth = match args.pt.cap() {
+            0 => MAX_VERTICES,
+            c => c,
+        };
+        Iws { params, max_depth, b, vpls: Vec::new(), caustics, passes: 0, vpls_total: 0, vpl_trace_ns: 0 }
     }
 
     /// One VPL's bounded contribution at `x` (spec §2 `VPL_b` term, before the weight).
@@ -373,33 +163,35 @@ impl Iws {
     }
 
     /// `VPL_b(x, ω_o)`: all VPLs at depth 0, a uniform subset (weight `N_v/m`) deeper.
-    fn gather(&self, world: &World, x: &ShadingPoint, m: &Material, wo: Vec3, depth: u32, rng: &mut Rng) -> Rgb {
+    fn gather(&self, world: &World, q: &ShadingQuery, ctx: &mut Context) -> Rgb {
+        let (x, m, wo) = (q.x, q.m, q.wo);
         let n = self.vpls.len();
         if n == 0 {
             return Rgb::ZERO;
         }
-        let t0 = Instant::now();
+        let t0 = Stopwatch::start();
         let m_sub = self.params.vpl_subset as usize;
         let mut l = Rgb::ZERO;
-        if depth == 0 || m_sub == 0 || m_sub >= n {
+        if q.depth == 0 || m_sub == 0 || m_sub >= n {
             for v in &self.vpls {
                 l += self.vpl_term(world, x, m, wo, v);
             }
         } else {
             // spec §2 "Cost control": unbiased uniform subset with replacement
             for _ in 0..m_sub {
-                let v = &self.vpls[rng.below(n as u32) as usize];
+                let v = &self.vpls[ctx.rng.below(n as u32) as usize];
                 l += self.vpl_term(world, x, m, wo, v);
             }
             l *= n as f32 / m_sub as f32;
         }
-        bump(0, t0.elapsed().as_nanos() as u64, 0);
+        ctx.profile.record(Phase::Gather, t0);
         l
     }
 
     /// Bias compensation `C(x, ω_o, d)` (spec §2): one BSDF ray, weight `(G−b)/G` if `G > b`.
-    fn compensate(&self, world: &World, x: &ShadingPoint, m: &Material, wo: Vec3, depth: u32, rng: &mut Rng) -> Rgb {
-        let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+    fn compensate(&self, world: &World, q: &ShadingQuery, ctx: &mut Context) -> Rgb {
+        let (x, m, wo, depth) = (q.x, q.m, q.wo, q.depth);
+        let u = [ctx.rng.next_f32(), ctx.rng.next_f32(), ctx.rng.next_f32()];
         if self.b.is_infinite() || depth + 1 >= MAX_VERTICES {
             return Rgb::ZERO;
         }
@@ -412,7 +204,7 @@ impl Iws {
         }
         // G > b implies r² < cosθ_x/b (pbrt-v2 maxDist); slack for the origin offset
         let t_max = if self.b > 0.0 { (cos_x / self.b).sqrt() + 2.0 * ray_epsilon(x.p) } else { f32::INFINITY };
-        bump(1, 0, 0);
+        ctx.profile.compensation_rays += 1;
         let Some(hit) = world.intersect(offset_origin(x.p, x.ng, bs.wi), bs.wi, t_max) else {
             return Rgb::ZERO;
         };
@@ -430,28 +222,28 @@ impl Iws {
             return Rgb::ZERO;
         }
         let w = bs.weight * ((g - self.b) / g);
-        let Some(w) = rr_weight(w, depth + 1, rng) else {
+        let Some(w) = roulette(w, q_recursion(w, depth + 1), &mut ctx.rng) else {
             return Rgb::ZERO;
         };
-        w * self.l_hat(world, &hit, -bs.wi, depth + 1, rng)
+        w * self.l_hat(world, &hit, -bs.wi, depth + 1, ctx)
     }
 
     /// Estimator at a non-specular, non-emitting point.
-    fn at_surface(&self, world: &World, x: &ShadingPoint, m: &Material, wo: Vec3, depth: u32, rng: &mut Rng) -> Rgb {
-        if m.is_black() {
+    fn at_surface(&self, world: &World, q: &ShadingQuery, ctx: &mut Context) -> Rgb {
+        if q.m.is_black() {
             return Rgb::ZERO;
         }
-        let mut l = self.gather(world, x, m, wo, depth, rng);
-        l += self.compensate(world, x, m, wo, depth, rng);
-        let t0 = Instant::now();
-        let lc = self.caustics.estimate(world, x, m, wo, depth, rng, self);
-        bump(0, 0, t0.elapsed().as_nanos() as u64);
+        let mut l = self.gather(world, q, ctx);
+        l += self.compensate(world, q, ctx);
+        let t0 = Stopwatch::start();
+        let lc = self.caustics.estimate(world, q, ctx, self);
+        ctx.profile.record(Phase::Caustics, t0);
         l + lc
     }
 }
 
 impl Recurse for Iws {
-    fn l_hat(&self, world: &World, hit: &Hit, wo: Vec3, depth: u32, rng: &mut Rng) -> Rgb {
+    fn l_hat(&self, world: &World, hit: &Hit, wo: Vec3, depth: u32, ctx: &mut Context) -> Rgb {
         let s = &world.scene;
         let e = s.emitter_of(hit.prim);
         if e != NO_EMITTER {
@@ -463,61 +255,47 @@ impl Recurse for Iws {
             return Rgb::ZERO;
         }
         let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
-        self.at_surface(world, &sp, m, wo, depth, rng)
+        self.at_surface(world, &ShadingQuery { x: &sp, m, wo, depth }, ctx)
     }
 }
 
 impl Integrator for Iws {
-    fn name(&self) -> &'static str {
-        self.name
-    }
-
     fn begin_pass(&mut self, world: &World, seed: u64, pass: u64) {
         let t0 = Instant::now();
-        let mut c = VplCollector(std::mem::take(&mut self.vpls));
-        c.0.clear();
-        let n = self.params.vpl_paths as u64;
-        particle::trace_paths(world, Emission::Cosine, n, seed, stream::VPL, pass, &mut c);
-        self.vpls = c.0;
-        self.passes.fetch_add(1, Relaxed);
-        self.vpls_total.fetch_add(self.vpls.len() as u64, Relaxed);
-        self.vpl_trace_ns.fetch_add(t0.elapsed().as_nanos() as u64, Relaxed);
+        generate_vpls(world, self.params.vpl_paths as u64, seed, pass, &mut self.vpls);
+        self.passes += 1;
+        self.vpls_total += self.vpls.len() as u64;
+        self.vpl_trace_ns += t0.elapsed().as_nanos() as u64;
     }
 
-    fn radiance(&self, world: &World, origin: Vec3, dir: Vec3, rng: &mut Rng) -> Rgb {
-        let t0 = Instant::now();
-        LOCAL.with(|c| c.set((0, 0, 0)));
-        let cap = if self.params.max_depth == 0 { MAX_VERTICES } else { self.params.max_depth };
+    fn radiance(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> Rgb {
+        let t0 = Stopwatch::start();
         let mut l = Rgb::ZERO;
         if let Some(hit) = world.intersect(origin, dir, f32::INFINITY) {
             // the camera ray follows Dirac chains to the first non-specular vertex (spec §1)
-            if let Some((z, d, beta)) = follow_dirac_chain(world, hit, dir, Rgb::ONE, cap, rng) {
-                l = beta * self.l_hat(world, &z, -d, 0, rng);
+            if let Some((z, d, beta)) = follow_dirac_chain(world, hit, dir, Rgb::ONE, self.max_depth, &mut ctx.rng) {
+                l = beta * self.l_hat(world, &z, -d, 0, ctx);
             }
         }
-        let (comp, g_ns, c_ns) = LOCAL.with(|c| c.get());
-        self.samples.fetch_add(1, Relaxed);
-        self.comp_rays.fetch_add(comp, Relaxed);
-        self.gather_ns.fetch_add(g_ns, Relaxed);
-        self.caustic_ns.fetch_add(c_ns, Relaxed);
-        self.radiance_ns.fetch_add(t0.elapsed().as_nanos() as u64, Relaxed);
+        ctx.profile.samples += 1;
+        ctx.profile.record(Phase::Radiance, t0);
         l
     }
 
-    fn stats(&self) -> serde_json::Value {
-        let passes = self.passes.load(Relaxed).max(1) as f64;
-        let samples = self.samples.load(Relaxed).max(1) as f64;
-        let ns = |a: &AtomicU64| a.load(Relaxed) as f64 * 1e-9;
-        let (total, gather, caustic) = (ns(&self.radiance_ns), ns(&self.gather_ns), ns(&self.caustic_ns));
+    fn stats(&self, profile: &Profile) -> serde_json::Value {
+        let passes = self.passes.max(1) as f64;
+        let samples = profile.samples.max(1) as f64;
+        let total = profile.secs(Phase::Radiance);
+        let (gather, caustic) = (profile.secs(Phase::Gather), profile.secs(Phase::Caustics));
         serde_json::json!({
             "b": self.b,
             "b_default": self.params.bound.is_none(),
             "vpl_paths_per_pass": self.params.vpl_paths,
             "vpl_subset_deeper": self.params.vpl_subset,
-            "point_lights_per_pass": self.vpls_total.load(Relaxed) as f64 / passes,
-            "compensation_rays_per_sample": self.comp_rays.load(Relaxed) as f64 / samples,
+            "point_lights_per_pass": self.vpls_total as f64 / passes,
+            "compensation_rays_per_sample": profile.compensation_rays as f64 / samples,
             "timing_note": "cpu_s are summed over worker threads; compensation_and_rest = radiance - gather - caustics (caustics includes nested recursion for recursive L_c estimators)",
-            "vpl_trace_s_per_pass": ns(&self.vpl_trace_ns) / passes,
+            "vpl_trace_s_per_pass": self.vpl_trace_ns as f64 * 1e-9 / passes,
             "radiance_cpu_s": total,
             "gather_cpu_s": gather,
             "caustics_cpu_s": caustic,

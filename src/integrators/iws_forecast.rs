@@ -11,25 +11,116 @@
 //!
 //! CLI: `forecast render scenes/cornell-box.toml --method iws-cf --time 4m`.
 
-use super::iws::{caustic_chain, CausticEstimator, Recurse};
+use super::caustics::{caustic_chain, CausticEstimator, Recurse, ShadingQuery};
+use super::iws::Iws;
+use super::{Context, Integrator, MethodArgs, MethodSpec};
 use crate::accel::World;
-use crate::bsdf::{self, ShadingPoint};
+use crate::bsdf;
 use crate::forecast::caustic_point::CausticPoint;
+use crate::forecast::cluster::ClusteringMethod;
 use crate::forecast::estimator::{
-    new_cache_owner, CausticForecast, ForecastCounters, ForecastOptions, PreprocessStats,
+    CausticForecast, ForecastCounters, ForecastOptions, PhotonWeight, PreprocessStats, TableCache, TableKind,
 };
 use crate::math::{Rgb, Vec3};
-use crate::sampling::rng::{stream, Rng};
-use crate::scene::Material;
+use crate::sampling::rng::stream;
 use crate::transport::particle::{self, Emission, MAX_VERTICES};
+use clap::builder::{PossibleValuesParser, TypedValueParser};
+use serde::ser::SerializeMap;
 use std::time::Instant;
 
 /// Default forecast photons to store when neither the CLI nor the scene sets it (the paper's
 /// Cornell box count).
 pub const DEFAULT_FORECAST_PHOTONS: u64 = 200_000;
 
-/// Give up after this many light paths per requested forecaster (scenes without caustics).
-const PATH_FACTOR: u64 = 100;
+/// `iws-cf` parameters (the CLI's names; [`CfArgs::options`] maps them onto the domain's
+/// [`ForecastOptions`]). Serialized as `forecast_photons` and `forecast` (the options).
+#[derive(clap::Args, Clone, Debug, PartialEq)]
+pub struct CfArgs {
+    /// iws-cf: forecast photons to store (default: the scene's `[forecast] photons`, else 200k).
+    #[arg(long)]
+    pub forecast_photons: Option<u64>,
+    /// iws-cf: clustering algorithm.
+    #[arg(long, default_value = "vq", value_parser = choice(&[("vq", ClusteringMethod::Vq), ("kmeans", ClusteringMethod::KMeans)]))]
+    pub clustering: ClusteringMethod,
+    /// iws-cf: codebook size k (clusters).
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
+    pub clusters: u32,
+    /// iws-cf: clusters with rank above this are culled (cosine sampling only).
+    #[arg(long, default_value_t = 6)]
+    pub max_rank: u32,
+    /// iws-cf: forecasters gathered per table (n).
+    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(1..))]
+    pub forecasters: u32,
+    /// iws-cf: dual table (BAJ08) or one defensive table (ablation).
+    #[arg(long, default_value = "dual", value_parser = choice(&[
+        ("dual", TableKind::Dual), ("dual-defensive", TableKind::DualDefensive), ("single", TableKind::Single),
+    ]))]
+    pub table: TableKind,
+    /// iws-cf: photon weight in the table: lum(Φ)·f·cos (paper) or lum(Φ)·f (flux).
+    #[arg(long, default_value = "paper", value_parser = choice(&[("paper", PhotonWeight::Paper), ("flux", PhotonWeight::Flux)]))]
+    pub photon_weight: PhotonWeight,
+    /// iws-cf: splitting factor S0 at diffuse depth 0 for rank 0 (S = max(1, S0 >> rank); 1 at depth >= 1).
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
+    pub split: u32,
+    /// iws-cf: table-cache cell edge as a fraction of the search radius (0 = build per point).
+    #[arg(long, default_value_t = 0.5)]
+    pub table_cache: f32,
+    /// iws-cf: use the photon tables at diffuse depths below this (deeper: one BSDF sample).
+    #[arg(long, default_value_t = 1)]
+    pub table_depth: u32,
+}
+
+/// A clap parser for a domain enum from its (name, value) table (the enums stay free of clap).
+fn choice<T: Clone + Send + Sync + 'static>(
+    table: &'static [(&'static str, T)],
+) -> impl TypedValueParser<Value = T> {
+    PossibleValuesParser::new(table.iter().map(|(n, _)| *n))
+        .map(move |s| table.iter().find(|(n, _)| *n == s).map_or_else(|| table[0].1.clone(), |(_, v)| v.clone()))
+}
+
+impl CfArgs {
+    /// The domain options these arguments select.
+    pub fn options(&self) -> ForecastOptions {
+        ForecastOptions {
+            clusters: self.clusters as usize,
+            clustering: self.clustering,
+            max_rank: self.max_rank,
+            gather: self.forecasters as usize,
+            table: self.table,
+            photon_weight: self.photon_weight,
+            s0: self.split,
+            cache_cell: self.table_cache.max(0.0),
+            table_depth: self.table_depth,
+        }
+    }
+
+    /// Forecast photons to store: the CLI's, else the scene's, else [`DEFAULT_FORECAST_PHOTONS`].
+    pub fn target_photons(&self, world: &World) -> u64 {
+        self.forecast_photons.or(world.scene.forecast_photons).unwrap_or(DEFAULT_FORECAST_PHOTONS)
+    }
+}
+
+impl serde::Serialize for CfArgs {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(2))?;
+        m.serialize_entry("forecast_photons", &self.forecast_photons)?;
+        m.serialize_entry("forecast", &self.options())?;
+        m.end()
+    }
+}
+
+/// The `iws-cf` method: IWS with Caustic Forecasting as `Ĺ_c`.
+pub struct IwsCf;
+
+impl MethodSpec for IwsCf {
+    type Product = CausticForecast;
+    fn preprocess(world: &World, args: &MethodArgs, seed: u64) -> Result<CausticForecast, String> {
+        Ok(build_forecast(world, args.cf.target_photons(world), args.cf.options(), seed))
+    }
+    fn build(world: &World, args: &MethodArgs, cf: CausticForecast) -> Result<Box<dyn Integrator>, String> {
+        Ok(Box::new(Iws::new(world, args, Box::new(ForecastCaustics::new(cf)))))
+    }
+}
 
 /// The targeted emission for forecasters: the bounding sphere of the target box.
 pub fn targeted_emission(world: &World) -> Emission {
@@ -48,11 +139,8 @@ pub fn targeted_emission(world: &World) -> Emission {
 /// the number of paths, and the tracing time.
 pub fn trace_forecasters(world: &World, emission: Emission, target: u64, seed: u64) -> (Vec<CausticPoint>, u64, f64) {
     let t0 = Instant::now();
-    let max_paths = target.saturating_mul(PATH_FACTOR).max(particle::BLOCK);
-    let (verts, paths) = particle::collect_caustic_vertices(world, emission, target, max_paths, seed, stream::FORECAST);
-    let inv = if paths > 0 { 1.0 / paths as f32 } else { 0.0 };
-    let points =
-        verts.iter().map(|v| CausticPoint::new(v.p, v.n, v.w_in, v.beta * inv)).filter(|c| c.is_finite()).collect();
+    let (verts, paths) = particle::collect_caustic_points(world, emission, target, seed, stream::FORECAST);
+    let points = verts.iter().map(|v| CausticPoint::new(v.p, v.n, v.w_in, v.beta)).filter(|c| c.is_finite()).collect();
     (points, paths, t0.elapsed().as_secs_f64())
 }
 
@@ -69,18 +157,19 @@ pub fn build_forecast(world: &World, target: u64, opts: ForecastOptions, seed: u
     CausticForecast::build(points, opts, seed, stats)
 }
 
-/// `Ĺ_c` by Caustic Forecasting, plugged into the IWS recursion.
+/// `Ĺ_c` by Caustic Forecasting, plugged into the IWS recursion; owns the product, its
+/// counters and the table cache shared by all worker threads.
 pub struct ForecastCaustics {
     /// The broadcast product.
     pub cf: CausticForecast,
     counters: ForecastCounters,
-    cache_owner: u64,
+    cache: TableCache,
 }
 
 impl ForecastCaustics {
     /// Wraps a product.
     pub fn new(cf: CausticForecast) -> Self {
-        ForecastCaustics { cf, counters: ForecastCounters::default(), cache_owner: new_cache_owner() }
+        ForecastCaustics { cf, counters: ForecastCounters::default(), cache: TableCache::default() }
     }
 }
 
@@ -89,28 +178,19 @@ impl CausticEstimator for ForecastCaustics {
         "caustic-forecasting"
     }
 
-    fn estimate(
-        &self,
-        world: &World,
-        x: &ShadingPoint,
-        m: &Material,
-        wo: Vec3,
-        depth: u32,
-        rng: &mut Rng,
-        full: &dyn Recurse,
-    ) -> Rgb {
-        if depth + 1 >= MAX_VERTICES {
+    fn estimate(&self, world: &World, q: &ShadingQuery, ctx: &mut Context, full: &dyn Recurse) -> Rgb {
+        if q.depth + 1 >= MAX_VERTICES {
             return Rgb::ZERO;
         }
         // g(ωi) = f·|cos|·1[first hit Dirac]·(chain throughput)·L̂(chain end)
-        let g = |wi: Vec3, rng: &mut Rng| -> Rgb {
-            let f = bsdf::eval(m, x, wo, wi);
+        let g = |wi: Vec3, ctx: &mut Context| -> Rgb {
+            let f = bsdf::eval(q.m, q.x, q.wo, wi);
             if f == Rgb::ZERO {
                 return Rgb::ZERO;
             }
-            caustic_chain(world, x, wi, f * wi.dot(x.ns).abs(), depth, rng, full)
+            caustic_chain(world, q, wi, f * wi.dot(q.x.ns).abs(), ctx, full)
         };
-        self.cf.estimate(x, m, wo, depth, rng, &self.counters, Some(self.cache_owner), g)
+        self.cf.estimate(q, ctx, &self.counters, Some(&self.cache), g)
     }
 
     fn stats(&self) -> serde_json::Value {

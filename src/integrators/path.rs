@@ -8,17 +8,43 @@
 //!
 //! CLI: `forecast render scenes/cornell-box.toml --method pt --spp 64`.
 
-use super::Integrator;
+use super::{Context, Integrator, MethodArgs, MethodSpec};
 use crate::accel::{offset_origin, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::math::{Rgb, Vec3};
 use crate::sampling::power_heuristic;
-use crate::sampling::rng::Rng;
 use crate::scene::NO_EMITTER;
 use crate::transport::direct;
+use crate::transport::particle::MAX_VERTICES;
+use crate::transport::roulette::{q_max, roulette};
 
 /// First bounce at which Russian roulette may end a path.
 pub const RR_DEPTH: u32 = 5;
+
+/// Parameters shared by every method: the path-length safety cap.
+#[derive(clap::Args, Clone, Debug, PartialEq, serde::Serialize)]
+pub struct PtArgs {
+    /// Safety cap on path vertices (default: the scene's `render.max_depth`, 64).
+    #[arg(long)]
+    pub max_depth: Option<u32>,
+}
+
+impl PtArgs {
+    /// The cap in use (the pipeline resolves `None` to the scene's; direct callers get 64).
+    pub fn cap(&self) -> u32 {
+        self.max_depth.unwrap_or(MAX_VERTICES)
+    }
+}
+
+impl MethodSpec for PathTracer {
+    type Product = ();
+    fn preprocess(_: &World, _: &MethodArgs, _: u64) -> Result<(), String> {
+        Ok(())
+    }
+    fn build(_: &World, args: &MethodArgs, _: ()) -> Result<Box<dyn Integrator>, String> {
+        Ok(Box::new(PathTracer { max_depth: args.pt.cap() }))
+    }
+}
 
 /// The path tracer.
 pub struct PathTracer {
@@ -27,12 +53,9 @@ pub struct PathTracer {
 }
 
 impl Integrator for PathTracer {
-    fn name(&self) -> &'static str {
-        "pt"
-    }
-
-    fn radiance(&self, world: &World, origin: Vec3, dir: Vec3, rng: &mut Rng) -> Rgb {
+    fn radiance(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> Rgb {
         let s = &world.scene;
+        let rng = &mut ctx.rng;
         let (mut o, mut d) = (origin, dir);
         let mut l = Rgb::ZERO;
         let mut beta = Rgb::ONE;
@@ -64,11 +87,8 @@ impl Integrator for PathTracer {
             let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { break };
             beta *= bs.weight;
             if depth + 1 >= RR_DEPTH {
-                let q = beta.max_element().min(0.95);
-                if q <= 0.0 || rng.next_f32() >= q {
-                    break;
-                }
-                beta /= q;
+                let Some(b) = roulette(beta, q_max(beta), rng) else { break };
+                beta = b;
             }
             prev_delta = bs.is_delta;
             prev_pdf_w = bs.pdf_w;

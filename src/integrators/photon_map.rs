@@ -3,7 +3,7 @@
 //! Build (once, rank 0, in `preprocess`): light paths from the shared particle tracer
 //! (`transport::particle`, stream `PHOTON`, pass 0); every non-specular hit whose previous vertex
 //! was Dirac is stored with flux `Φ = β / paths launched` (spec §6 ⚠: never divided by the
-//! number stored). `--photons N` is the number of **stored** photons targeted (the paper's
+//! number stored; `particle::collect_caustic_points`, shared with the forecasters). `--photons N` is the number of **stored** photons targeted (the paper's
 //! "200K" counts stored photons): paths are traced in fixed-size index blocks and the map keeps
 //! exactly the paths `0..P`, where `P` is the first path count with `≥ N` photons stored, so
 //! the normaliser `P` is exact and the map is a pure function of the seed. Tracing stops at
@@ -19,23 +19,58 @@
 //!
 //! The estimate is biased (blur, boundary darkening), consistent as `N → ∞, k/N → 0`.
 
-use super::iws::{CausticEstimator, Recurse};
+use super::caustics::{CausticEstimator, Recurse, ShadingQuery};
+use super::iws::Iws;
+use super::{Context, Integrator, MethodArgs, MethodSpec};
 use crate::accel::World;
 use crate::bsdf::{self, ShadingPoint};
 use crate::math::{Rgb, Vec3, PI};
-use crate::sampling::rng::{stream, Rng};
+use crate::sampling::rng::stream;
 use crate::scene::Material;
 use crate::spatial::KdTree;
-use crate::transport::particle::{self, Emission, BLOCK};
-use std::cell::RefCell;
+use crate::transport::particle::{self, Emission};
 use std::time::Instant;
 
 /// Jensen's cone-filter constant `k_c`.
 pub const CONE_K: f32 = 1.1;
-/// Give up after this many paths per targeted photon.
-const PATH_FACTOR: u64 = 100;
 /// Minimum cosine between a photon's normal and `x`'s normal.
 const NORMAL_COS: f32 = 0.9;
+
+/// `iws-pm` parameters.
+#[derive(clap::Args, Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct PmArgs {
+    /// iws-pm: caustic photons to store.
+    #[arg(long, default_value_t = 200_000)]
+    pub photons: u64,
+    /// iws-pm: photons per radiance estimate (k).
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
+    pub gather: u32,
+    /// iws-pm: maximum gather radius in scene units (default 2% of the scene diagonal).
+    #[arg(long, value_parser = parse_positive)]
+    pub max_radius: Option<f32>,
+}
+
+fn parse_positive(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("`{s}` must be a positive number")),
+    }
+}
+
+/// The `iws-pm` method: IWS with the photon map as `Ĺ_c`.
+pub struct IwsPm;
+
+impl MethodSpec for IwsPm {
+    type Product = PhotonMap;
+    fn preprocess(world: &World, args: &MethodArgs, seed: u64) -> Result<PhotonMap, String> {
+        let pm = &args.pm;
+        Ok(PhotonMap::build(world, pm.photons, pm.gather, pm.max_radius, seed))
+    }
+    fn build(world: &World, args: &MethodArgs, pm: PhotonMap) -> Result<Box<dyn Integrator>, String> {
+        pm.validate()?;
+        Ok(Box::new(Iws::new(world, args, Box::new(pm))))
+    }
+}
 
 /// One stored caustic photon (position lives in the kd-tree).
 #[derive(Clone, Copy, Debug, PartialEq, bitcode::Encode, bitcode::Decode)]
@@ -80,14 +115,11 @@ impl PhotonMap {
     /// Traces light paths until `target` caustic photons are stored (see the module doc).
     pub fn build(world: &World, target: u64, k: u32, max_radius: Option<f32>, seed: u64) -> PhotonMap {
         let t0 = Instant::now();
-        let limit = target.saturating_mul(PATH_FACTOR).max(BLOCK);
-        let (verts, paths) =
-            particle::collect_caustic_vertices(world, Emission::Cosine, target, limit, seed, stream::PHOTON);
-        let inv = if paths > 0 { 1.0 / paths as f32 } else { 0.0 };
+        let (verts, paths) = particle::collect_caustic_points(world, Emission::Cosine, target, seed, stream::PHOTON);
         let items: Vec<([f32; 3], Photon)> = verts
             .iter()
             .map(|v| {
-                let ph = Photon { n: v.n.to_array(), w_in: v.w_in.to_array(), flux: (v.beta * inv).to_array() };
+                let ph = Photon { n: v.n.to_array(), w_in: v.w_in.to_array(), flux: v.beta.to_array() };
                 (v.p.to_array(), ph)
             })
             .collect();
@@ -124,19 +156,15 @@ impl PhotonMap {
         Ok(())
     }
 
-    /// The cone-filtered radiance estimate `L_c(x → wo)` (spec §6).
-    pub fn radiance(&self, x: &ShadingPoint, m: &Material, wo: Vec3) -> Rgb {
-        thread_local! {
-            static BUF: RefCell<Vec<(f32, u32)>> = const { RefCell::new(Vec::new()) };
-        }
+    /// The cone-filtered radiance estimate `L_c(x → wo)` (spec §6); `buf` is gather scratch.
+    pub fn radiance(&self, x: &ShadingPoint, m: &Material, wo: Vec3, buf: &mut Vec<(f32, u32)>) -> Rgb {
         if self.photons.is_empty() {
             return Rgb::ZERO;
         }
         let nx = if x.ng.dot(wo) >= 0.0 { x.ng } else { -x.ng };
-        BUF.with(|b| {
-            let mut buf = b.borrow_mut();
+        {
             let rmax2 = self.max_radius * self.max_radius;
-            self.tree.k_nearest_within(x.p.to_array(), self.k as usize, rmax2, &mut buf);
+            self.tree.k_nearest_within(x.p.to_array(), self.k as usize, rmax2, buf);
             if buf.is_empty() {
                 return Rgb::ZERO;
             }
@@ -159,7 +187,7 @@ impl PhotonMap {
             }
             // normalisation C·π·r², C = 1 − 2/(3k_c)
             sum / ((1.0 - 2.0 / (3.0 * CONE_K)) * PI * r2)
-        })
+        }
     }
 }
 
@@ -167,17 +195,8 @@ impl CausticEstimator for PhotonMap {
     fn name(&self) -> &'static str {
         "photon-map"
     }
-    fn estimate(
-        &self,
-        _: &World,
-        x: &ShadingPoint,
-        m: &Material,
-        wo: Vec3,
-        _: u32,
-        _: &mut Rng,
-        _: &dyn Recurse,
-    ) -> Rgb {
-        self.radiance(x, m, wo)
+    fn estimate(&self, _: &World, q: &ShadingQuery, ctx: &mut Context, _: &dyn Recurse) -> Rgb {
+        self.radiance(q.x, q.m, q.wo, &mut ctx.knn)
     }
     fn stats(&self) -> serde_json::Value {
         serde_json::json!({

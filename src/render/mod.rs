@@ -3,14 +3,18 @@
 //! Randomness is a pure function of (seed, pass, pixel) (`Rng::keyed` with the camera stream),
 //! and each tile's results merge into the film in tile order, so the film is bit-identical for
 //! any thread count. Non-finite samples are counted and replaced by zero (never written).
+//! Each tile runs with its own explicit `transport::context::Context` (random stream rekeyed
+//! per pixel, scratch, profile counters); the tiles' profiles are summed into the pass's.
 
 pub mod film;
 
 use crate::accel::{take_ray_counts, World};
 use crate::integrators::Integrator;
 use crate::math::Rgb;
+use crate::profile::Profile;
 use crate::sampling::rng::{stream, Rng};
 use crate::scene::Camera;
+use crate::transport::context::Context;
 use film::Film;
 use rayon::prelude::*;
 
@@ -28,6 +32,9 @@ pub struct PassCounters {
     pub nonfinite: u64,
     /// Samples taken.
     pub samples: u64,
+    /// The integrator's counters and phase times (summed over tiles).
+    #[serde(skip)]
+    pub profile: Profile,
 }
 
 impl PassCounters {
@@ -37,6 +44,7 @@ impl PassCounters {
         self.shadow_rays += o.shadow_rays;
         self.nonfinite += o.nonfinite;
         self.samples += o.samples;
+        self.profile.add(&o.profile);
     }
 }
 
@@ -59,13 +67,14 @@ pub fn render_pass(
             let (tx, ty) = (tile % tiles_x, tile / tiles_x);
             let mut out = Vec::with_capacity(TILE * TILE);
             let mut c = PassCounters::default();
+            let mut ctx = Context::new(Rng::keyed(seed, stream::CAMERA, pass, 0));
             for y in ty * TILE..((ty + 1) * TILE).min(h) {
                 for x in tx * TILE..((tx + 1) * TILE).min(w) {
                     let pixel = (y * w + x) as u64;
-                    let mut rng = Rng::keyed(seed, stream::CAMERA, pass, pixel);
-                    let [jx, jy] = rng.next_2d();
+                    ctx.rng = Rng::keyed(seed, stream::CAMERA, pass, pixel);
+                    let [jx, jy] = ctx.rng.next_2d();
                     let dir = camera.direction(x as f32 + jx, y as f32 + jy);
-                    let mut l = integrator.radiance(world, camera.position, dir, &mut rng);
+                    let mut l = integrator.radiance(world, camera.position, dir, &mut ctx);
                     if !l.is_finite() {
                         c.nonfinite += 1;
                         l = Rgb::ZERO;
@@ -77,6 +86,7 @@ pub fn render_pass(
             let (closest, shadow) = take_ray_counts();
             c.closest_rays = closest;
             c.shadow_rays = shadow;
+            c.profile = ctx.profile;
             (tile, out, c)
         })
         .collect();

@@ -10,7 +10,7 @@ use super::{
     light_power, obj, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere, Triangle,
     NO_EMITTER,
 };
-use crate::math::{Vec3, PI};
+use crate::math::{fnv1a, Vec3, PI};
 use crate::sampling::distribution::Distribution1D;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -540,13 +540,4 @@ fn make_triangle(p: [Vec3; 3], n: Option<[Vec3; 3]>, material: u32) -> Option<Tr
         })
     });
     Some(Triangle { p, n, ng, area: 0.5 * len, material, emitter: NO_EMITTER })
-}
-
-/// FNV-1a over bytes, continuing from `h`.
-pub(crate) fn fnv1a(mut h: u64, bytes: &[u8]) -> u64 {
-    for &b in bytes {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0100_0000_01b3);
-    }
-    h
 }

@@ -1,6 +1,11 @@
-//! Light-transport helpers shared by the integrators: next-event estimation with MIS
-//! (`direct`) and the one particle tracer behind VPLs, caustic photons and forecasters
-//! (`particle`).
+//! Light-transport pieces shared by the integrators: next-event estimation with MIS
+//! (`direct`), the one particle tracer behind VPLs, caustic photons and forecasters
+//! (`particle`, with the one caustic-point collector), Dirac-chain following (`dirac`), the one
+//! Russian-roulette rule (`roulette`) and the per-worker context handed down the recursion
+//! (`context`).
 
+pub mod context;
+pub mod dirac;
 pub mod direct;
 pub mod particle;
+pub mod roulette;

@@ -17,9 +17,10 @@
 //! §2, pbrt-v2 `igi.cpp`); the only cut is the documented 64-vertex safety cap ([`MAX_VERTICES`]),
 //! whose truncated energy is below `Π q ≤ 0.95^64`-scale for any physical scene.
 
+use super::roulette::{q_particle, roulette};
 use crate::accel::{offset_origin, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
-use crate::math::{luminance, Frame, Rgb, Vec3};
+use crate::math::{Frame, Rgb, Vec3};
 use crate::sampling::rng::Rng;
 use crate::sampling::warp::{
     cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_sphere, uniform_sphere_pdf,
@@ -140,20 +141,31 @@ pub struct TraceCounts {
     pub capped: u64,
 }
 
-/// Traces light path `index` of `n_paths` (the normaliser) with the random stream
+/// A batch of light paths: path `i` is a pure function of these and `i`.
+#[derive(Clone, Copy, Debug)]
+pub struct LightPaths {
+    /// How the first direction is sampled.
+    pub emission: Emission,
+    /// Paths in the batch (the normaliser N).
+    pub n_paths: u64,
+    /// Run seed.
+    pub seed: u64,
+    /// Random stream (`sampling::rng::stream`).
+    pub stream_id: u64,
+    /// Pass (0 for one-off preprocesses).
+    pub pass: u64,
+}
+
+/// Traces light path `index` of `paths` with the random stream
 /// `(seed, stream_id, pass, index)` and reports its events to `visitor`.
-#[allow(clippy::too_many_arguments)]
 pub fn trace_path(
     world: &World,
-    emission: Emission,
-    n_paths: u64,
-    seed: u64,
-    stream_id: u64,
-    pass: u64,
+    paths: &LightPaths,
     index: u64,
     visitor: &mut dyn ParticleVisitor,
     counts: &mut TraceCounts,
 ) {
+    let LightPaths { emission, n_paths, seed, stream_id, pass } = *paths;
     let s = &world.scene;
     counts.paths += 1;
     if s.lights.is_empty() || n_paths == 0 {
@@ -236,11 +248,10 @@ pub fn trace_path(
             return;
         };
         // spec §2: RR survival q = min(1, lum(f·|cos|/p)), β ← β·(f·|cos|/p)/q
-        let q = luminance(bs.weight).min(1.0);
-        if q <= 0.0 || (q < 1.0 && rng.next_f32() >= q) {
+        let Some(w) = roulette(bs.weight, q_particle(bs.weight), &mut rng) else {
             return;
-        }
-        beta *= bs.weight / q;
+        };
+        beta *= w;
         prev_dirac = bs.is_delta;
         o = offset_origin(hit.p, hit.ng, bs.wi);
         d = bs.wi;
@@ -248,19 +259,11 @@ pub fn trace_path(
     counts.capped += 1;
 }
 
-/// Traces paths `0..n_paths` of `(seed, stream_id, pass)` sequentially into one visitor.
-pub fn trace_paths(
-    world: &World,
-    emission: Emission,
-    n_paths: u64,
-    seed: u64,
-    stream_id: u64,
-    pass: u64,
-    visitor: &mut dyn ParticleVisitor,
-) -> TraceCounts {
+/// Traces paths `0..n_paths` of `paths` sequentially into one visitor.
+pub fn trace_paths(world: &World, paths: &LightPaths, visitor: &mut dyn ParticleVisitor) -> TraceCounts {
     let mut counts = TraceCounts::default();
-    for i in 0..n_paths {
-        trace_path(world, emission, n_paths, seed, stream_id, pass, i, visitor, &mut counts);
+    for i in 0..paths.n_paths {
+        trace_path(world, paths, i, visitor, &mut counts);
     }
     counts
 }
@@ -317,7 +320,8 @@ pub fn collect_caustic_vertices(
                 let mut c = Collect(Vec::new());
                 let mut counts = TraceCounts::default();
                 // n_paths = 1: raw β, normalised by the caller with the paths kept
-                trace_path(world, emission, 1, seed, stream_id, 0, i, &mut c, &mut counts);
+                let batch = LightPaths { emission, n_paths: 1, seed, stream_id, pass: 0 };
+                trace_path(world, &batch, i, &mut c, &mut counts);
                 c.0
             })
             .collect();
@@ -330,4 +334,28 @@ pub fn collect_caustic_vertices(
         }
     }
     (out, paths)
+}
+
+/// Light paths launched per requested caustic point before the collector gives up (scenes where
+/// caustics are rare or absent).
+pub const PATH_FACTOR: u64 = 100;
+
+/// The one caustic-point collector of the photon map and the forecasters: traces light paths
+/// (stream `(seed, stream_id, 0, i)`) until `target` caustic vertices are stored or
+/// `PATH_FACTOR·target` paths are launched, and normalises each vertex's throughput by the
+/// paths launched `P` (spec §6 ⚠: never by the number stored). Returns the vertices and `P`.
+pub fn collect_caustic_points(
+    world: &World,
+    emission: Emission,
+    target: u64,
+    seed: u64,
+    stream_id: u64,
+) -> (Vec<CausticVertex>, u64) {
+    let max_paths = target.saturating_mul(PATH_FACTOR).max(BLOCK);
+    let (mut verts, paths) = collect_caustic_vertices(world, emission, target, max_paths, seed, stream_id);
+    let inv = if paths > 0 { 1.0 / paths as f32 } else { 0.0 };
+    for v in &mut verts {
+        v.beta = v.beta * inv;
+    }
+    (verts, paths)
 }

@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 use forecast::distributed::local::Local;
-use forecast::integrators::{Method, MethodOptions};
+use forecast::integrators::{Method, MethodArgs};
 use forecast::math::Vec3;
 use forecast::pipeline::{render, RenderJob};
 use forecast::render::film::Film;
@@ -37,7 +37,7 @@ pub fn job(
     RenderJob {
         scene: scene.to_path_buf(),
         method: Some(method),
-        opts: MethodOptions::default(),
+        args: MethodArgs::default(),
         spp: Some(spp),
         time: None,
         seed: Some(seed),

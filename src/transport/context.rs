@@ -1,0 +1,41 @@
+//! The explicit per-worker context handed down the radiance recursion (pbrt-v4's
+//! `ScratchBuffer` idea): the sample's random stream, reusable scratch buffers and the profile
+//! counters. One per rayon work item; `render::render_pass` rekeys `rng` for every pixel, so
+//! randomness stays a pure function of (seed, pass, pixel) whatever the thread. Also the
+//! [`ShadingQuery`] of a non-specular point of the recursion.
+
+use crate::bsdf::ShadingPoint;
+use crate::math::Vec3;
+use crate::profile::Profile;
+use crate::sampling::rng::Rng;
+use crate::scene::Material;
+
+/// Per-worker state of the hot path.
+pub struct Context {
+    /// The current sample's random stream.
+    pub rng: Rng,
+    /// Scratch for k-nearest gathers (photon map, forecast maps): `(distance², id)`.
+    pub knn: Vec<(f32, u32)>,
+    /// Counters and phase times, summed into the report.
+    pub profile: Profile,
+}
+
+impl Context {
+    /// A context drawing from `rng`.
+    pub fn new(rng: Rng) -> Context {
+        Context { rng, knn: Vec::new(), profile: Profile::default() }
+    }
+}
+
+/// A non-specular shading point of the recursion: where, what, toward where, how deep.
+#[derive(Clone, Copy, Debug)]
+pub struct ShadingQuery<'a> {
+    /// The point and its normals.
+    pub x: &'a ShadingPoint,
+    /// Its material (non-Dirac).
+    pub m: &'a Material,
+    /// Direction toward the previous vertex (unit).
+    pub wo: Vec3,
+    /// Diffuse depth `d`.
+    pub depth: u32,
+}

@@ -1,0 +1,47 @@
+//! The one Russian-roulette rule: survive with probability `q`, then divide by `q`
+//! (unbiased: `E[β/q · 1[u < q]] = β`). `q ≤ 0` (or NaN) ends the path without a draw and
+//! `q ≥ 1` keeps it without a draw, so no random number is spent when the outcome is certain.
+//!
+//! The survival probabilities are the ones the methods are specified with (kept bit-exact):
+//! [`q_max`] for `pt` and Dirac chains (Mitsuba's `min(max β, 0.95)`), [`q_recursion`] for the
+//! IWS recursion (spec §4 "Termination") and [`q_particle`] for light paths (spec §2).
+
+use crate::math::{luminance, Rgb};
+use crate::sampling::rng::Rng;
+
+/// `Some(β/q)` with probability `q` (clamped to [0, 1]), else `None`.
+#[inline]
+pub fn roulette(beta: Rgb, q: f32, rng: &mut Rng) -> Option<Rgb> {
+    if !(q > 0.0) {
+        return None;
+    }
+    if q >= 1.0 {
+        return Some(beta);
+    }
+    if rng.next_f32() >= q {
+        return None;
+    }
+    Some(beta / q)
+}
+
+/// `pt` and Dirac chains: `q = min(max_c β_c, 0.95)`.
+#[inline]
+pub fn q_max(beta: Rgb) -> f32 {
+    beta.max_element().min(0.95)
+}
+
+/// The IWS recursion `L̂(·, d)` at `d ≥ 2`: `q = clamp(lum(weight), 0.05, 0.95)`; 1 below.
+#[inline]
+pub fn q_recursion(weight: Rgb, depth: u32) -> f32 {
+    if depth < 2 {
+        1.0
+    } else {
+        luminance(weight).clamp(0.05, 0.95)
+    }
+}
+
+/// Light paths: `q = min(1, lum(f·|cos|/p))` on the sampled BSDF weight.
+#[inline]
+pub fn q_particle(weight: Rgb) -> f32 {
+    luminance(weight).min(1.0)
+}
