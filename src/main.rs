@@ -10,81 +10,9 @@ fn run() -> Result<(), String> {
     let started = Instant::now();
     let cli = Cli::parse();
     match cli.command {
-        Command::Render(a) => {
-            let cluster = distributed::try_init()?;
-            let job = a.job();
-            let res = pipeline::render(&job, cluster.as_ref(), started)?;
-            if let Some(r) = res {
-                if !a.quiet {
-                    let rep = &r.report;
-                    eprintln!(
-                        "{}: {} spp in {:.2} s ({:.2} Msamples/s, {:.1} Mrays/s) -> {}.{{exr,png,json}}",
-                        rep.method.name(),
-                        rep.spp,
-                        rep.timings.total_s,
-                        rep.samples_per_s / 1e6,
-                        rep.mrays_per_s,
-                        a.out.display()
-                    );
-                }
-            }
-            Ok(())
-        }
-        Command::Diff(a) => {
-            let ia = image_io::read_exr(&a.a)?;
-            let ib = image_io::read_exr(&a.b)?;
-            let m = metrics::compare(&ia, &ib, a.crop)?;
-            println!("RMSE      {:.6e}", m.rmse);
-            println!("relMSE    {:.6e}  (eps = 0.01)", m.rel_mse);
-            println!("mean A    {:.6} {:.6} {:.6}", m.mean_a[0], m.mean_a[1], m.mean_a[2]);
-            println!("mean B    {:.6} {:.6} {:.6}", m.mean_b[0], m.mean_b[1], m.mean_b[2]);
-            println!(
-                "mean diff {:+.4}% {:+.4}% {:+.4}%",
-                100.0 * m.mean_rel_diff[0],
-                100.0 * m.mean_rel_diff[1],
-                100.0 * m.mean_rel_diff[2]
-            );
-            if let Some(p) = &a.png {
-                let crop_a = metrics::apply_crop(&ia, a.crop)?;
-                let crop_b = metrics::apply_crop(&ib, a.crop)?;
-                let scale = metrics::write_diff_png(p, &crop_a, &crop_b)?;
-                println!("diff PNG  {} (saturates at |diff| = {scale:.4e})", p.display());
-            }
-            if let (Some(h0), Some(h1)) = (&a.half0, &a.half1) {
-                let (h0, h1) = (image_io::read_exr(h0)?, image_io::read_exr(h1)?);
-                let var = image_io::read_exr_variance(&a.a)?;
-                let rep = metrics::mitsuba_agreement(&ia, var.as_ref(), &ib, &h0, &h1)?;
-                println!("{rep}");
-                if !rep.passed {
-                    return Err(format!("agreement check FAILED: {}", rep.failures.join("; ")));
-                }
-                println!("agreement check PASSED");
-            }
-            Ok(())
-        }
-        Command::Bench(a) => {
-            let scene = forecast::scene::load(&a.scene).map_err(|e| e.to_string())?;
-            let t = Instant::now();
-            let ntri = scene.triangles.len();
-            let world = accel::World::build(scene);
-            println!(
-                "scene {}: {} triangles, {} spheres, BVH {:.3} s",
-                a.scene.display(),
-                ntri,
-                world.scene.spheres.len(),
-                t.elapsed().as_secs_f64()
-            );
-            let pool = pipeline::thread_pool(a.threads)?;
-            let r = pool.install(|| bench::run(&world, a.resolution, a.repeats))?;
-            println!("threads               {}", r.threads);
-            println!("closest-hit Mrays/s   {:.2}  (median of {})", r.closest_mrays, a.repeats);
-            println!("shadow Mrays/s        {:.2}", r.shadow_mrays);
-            println!(
-                "pt samples/s          {:.0}  ({}x{}, {:.2} closest + {:.2} shadow rays/sample)",
-                r.pt_samples_per_s, a.resolution.0, a.resolution.1, r.rays_per_sample.0, r.rays_per_sample.1
-            );
-            Ok(())
-        }
+        Command::Render(a) => render(&a, started),
+        Command::Diff(a) => diff(&a),
+        Command::Bench(a) => bench_cmd(&a),
         Command::GenerateScenes { dir } => {
             for p in scenegen::write_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))? {
                 println!("wrote {}", p.display());
@@ -107,26 +35,7 @@ fn run() -> Result<(), String> {
             }
             Ok(())
         }
-        Command::Stability(a) => {
-            let cluster = distributed::try_init()?;
-            if cluster.size() > 1 {
-                return Err("stability runs single-process; start it without mpirun".into());
-            }
-            let cfg = a.config();
-            let recs = compare::stability::run_suite(&cfg)?;
-            compare::stability::write_stability_report(&cfg.out, &cfg, &recs)?;
-            let bad = recs.iter().filter(|r| !r.ok()).count();
-            eprintln!(
-                "stability: {} of {} runs ok; report in {}",
-                recs.len() - bad,
-                recs.len(),
-                cfg.out.join("stability.html").display()
-            );
-            if bad > 0 {
-                return Err(format!("stability: {bad} run(s) failed"));
-            }
-            Ok(())
-        }
+        Command::Stability(a) => stability(&a),
         Command::MpiSelftest => {
             let c = distributed::try_init()?;
             let r = distributed::self_test(c.as_ref());
@@ -139,6 +48,105 @@ fn run() -> Result<(), String> {
             r
         }
     }
+}
+
+fn render(a: &forecast::cli::RenderArgs, started: Instant) -> Result<(), String> {
+    let cluster = distributed::try_init()?;
+    let job = a.job();
+    let res = pipeline::render(&job, cluster.as_ref(), started)?;
+    if let Some(r) = res {
+        if !a.quiet {
+            let rep = &r.report;
+            eprintln!(
+                "{}: {} spp in {:.2} s ({:.2} Msamples/s, {:.1} Mrays/s) -> {}.{{exr,png,json}}",
+                rep.method.name(),
+                rep.spp,
+                rep.timings.total_s,
+                rep.samples_per_s / 1e6,
+                rep.mrays_per_s,
+                a.out.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+fn diff(a: &forecast::cli::DiffArgs) -> Result<(), String> {
+    let ia = image_io::read_exr(&a.a)?;
+    let ib = image_io::read_exr(&a.b)?;
+    let m = metrics::compare(&ia, &ib, a.crop)?;
+    println!("RMSE      {:.6e}", m.rmse);
+    println!("relMSE    {:.6e}  (eps = 0.01)", m.rel_mse);
+    println!("mean A    {:.6} {:.6} {:.6}", m.mean_a[0], m.mean_a[1], m.mean_a[2]);
+    println!("mean B    {:.6} {:.6} {:.6}", m.mean_b[0], m.mean_b[1], m.mean_b[2]);
+    println!(
+        "mean diff {:+.4}% {:+.4}% {:+.4}%",
+        100.0 * m.mean_rel_diff[0],
+        100.0 * m.mean_rel_diff[1],
+        100.0 * m.mean_rel_diff[2]
+    );
+    if let Some(p) = &a.png {
+        let crop_a = metrics::apply_crop(&ia, a.crop)?;
+        let crop_b = metrics::apply_crop(&ib, a.crop)?;
+        let scale = metrics::write_diff_png(p, &crop_a, &crop_b)?;
+        println!("diff PNG  {} (saturates at |diff| = {scale:.4e})", p.display());
+    }
+    if let (Some(h0), Some(h1)) = (&a.half0, &a.half1) {
+        let (h0, h1) = (image_io::read_exr(h0)?, image_io::read_exr(h1)?);
+        let var = image_io::read_exr_variance(&a.a)?;
+        let rep = metrics::mitsuba_agreement(&ia, var.as_ref(), &ib, &h0, &h1)?;
+        println!("{rep}");
+        if !rep.passed {
+            return Err(format!("agreement check FAILED: {}", rep.failures.join("; ")));
+        }
+        println!("agreement check PASSED");
+    }
+    Ok(())
+}
+
+fn bench_cmd(a: &forecast::cli::BenchArgs) -> Result<(), String> {
+    let scene = forecast::scene::load(&a.scene).map_err(|e| e.to_string())?;
+    let t = Instant::now();
+    let ntri = scene.triangles.len();
+    let world = accel::World::build(scene);
+    println!(
+        "scene {}: {} triangles, {} spheres, BVH {:.3} s",
+        a.scene.display(),
+        ntri,
+        world.scene.spheres.len(),
+        t.elapsed().as_secs_f64()
+    );
+    let pool = pipeline::thread_pool(a.threads)?;
+    let r = pool.install(|| bench::run(&world, a.resolution, a.repeats))?;
+    println!("threads               {}", r.threads);
+    println!("closest-hit Mrays/s   {:.2}  (median of {})", r.closest_mrays, a.repeats);
+    println!("shadow Mrays/s        {:.2}", r.shadow_mrays);
+    println!(
+        "pt samples/s          {:.0}  ({}x{}, {:.2} closest + {:.2} shadow rays/sample)",
+        r.pt_samples_per_s, a.resolution.0, a.resolution.1, r.rays_per_sample.0, r.rays_per_sample.1
+    );
+    Ok(())
+}
+
+fn stability(a: &forecast::cli::StabilityArgs) -> Result<(), String> {
+    let cluster = distributed::try_init()?;
+    if cluster.size() > 1 {
+        return Err("stability runs single-process; start it without mpirun".into());
+    }
+    let cfg = a.config();
+    let recs = compare::stability::run_suite(&cfg)?;
+    compare::stability::write_stability_report(&cfg.out, &cfg, &recs)?;
+    let bad = recs.iter().filter(|r| !r.ok()).count();
+    eprintln!(
+        "stability: {} of {} runs ok; report in {}",
+        recs.len() - bad,
+        recs.len(),
+        cfg.out.join("stability.html").display()
+    );
+    if bad > 0 {
+        return Err(format!("stability: {bad} run(s) failed"));
+    }
+    Ok(())
 }
 
 fn forecast_map(a: &forecast::cli::ForecastMapArgs) -> Result<(), String> {
