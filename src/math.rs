@@ -60,6 +60,15 @@ pub fn reflect(w: Vec3, n: Vec3) -> Vec3 {
     2.0 * w.dot(n) * n - w
 }
 
+/// FNV-1a over bytes, continuing from `h` (start from `0xcbf2_9ce4_8422_2325`).
+pub fn fnv1a(mut h: u64, bytes: &[u8]) -> u64 {
+    for &b in bytes {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    h
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -79,13 +88,4 @@ mod tests {
             assert!((f.to_world(f.to_local(v)) - v).length() < 1e-5);
         }
     }
-}
-
-/// FNV-1a over bytes, continuing from `h` (start from `0xcbf2_9ce4_8422_2325`).
-pub fn fnv1a(mut h: u64, bytes: &[u8]) -> u64 {
-    for &b in bytes {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0100_0000_01b3);
-    }
-    h
 }

@@ -355,7 +355,7 @@ pub fn collect_caustic_points(
     let (mut verts, paths) = collect_caustic_vertices(world, emission, target, max_paths, seed, stream_id);
     let inv = if paths > 0 { 1.0 / paths as f32 } else { 0.0 };
     for v in &mut verts {
-        v.beta = v.beta * inv;
+        v.beta *= inv;
     }
     (verts, paths)
 }

@@ -12,7 +12,7 @@ use crate::sampling::rng::Rng;
 /// `Some(β/q)` with probability `q` (clamped to [0, 1]), else `None`.
 #[inline]
 pub fn roulette(beta: Rgb, q: f32, rng: &mut Rng) -> Option<Rgb> {
-    if !(q > 0.0) {
+    if q.is_nan() || q <= 0.0 {
         return None;
     }
     if q >= 1.0 {
