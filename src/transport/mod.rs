@@ -3,4 +3,5 @@
 //! (`particle`).
 
 pub mod direct;
+pub mod light_select;
 pub mod particle;
