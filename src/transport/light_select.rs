@@ -27,6 +27,9 @@ use crate::sampling::rng::Rng;
 
 /// Largest number of survivors `K` per selection (reservoirs live on the stack).
 pub const MAX_SURVIVORS: u32 = 16;
+/// Candidate sets up to this size are evaluated into a buffer and the survivors drawn from its
+/// prefix sums (one uniform each); larger ones stream through weighted reservoirs.
+pub const BUFFERED: usize = 32;
 /// Largest number of candidates `M` per reservoir.
 pub const MAX_CANDIDATES: u32 = 1 << 16;
 
@@ -123,12 +126,17 @@ impl LightSelector {
         mut emit: impl FnMut(Selected<T>),
     ) {
         let k = params.survivors.clamp(1, MAX_SURVIVORS) as usize;
-        let mut res: [Pick<T>; MAX_SURVIVORS as usize] = [None; MAX_SURVIVORS as usize];
         let shared = params.shared_candidates || params.candidates == 0;
         let (rounds, per_round) = if shared { (1, k) } else { (k, 1) };
-        for r in 0..rounds {
-            let slots = &mut res[r * per_round..(r + 1) * per_round];
-            let (w_sum, m) = self.stream(params.candidates, slots, rng, &mut target);
+        let m = if params.candidates == 0 { self.source.len() } else { params.candidates as usize };
+        for _ in 0..rounds {
+            if m <= BUFFERED {
+                self.buffered(params.candidates, per_round, k, rng, &mut target, &mut emit);
+                continue;
+            }
+            let mut res: [Pick<T>; MAX_SURVIVORS as usize] = [None; MAX_SURVIVORS as usize];
+            let slots = &mut res[..per_round];
+            let w_sum = self.stream(params.candidates, slots, rng, &mut target);
             for &(index, p_hat, value) in slots.iter().flatten() {
                 let weight = (w_sum / (m as f64 * p_hat as f64) / k as f64) as f32;
                 emit(Selected { index, weight, value });
@@ -136,19 +144,66 @@ impl LightSelector {
         }
     }
 
-    /// Streams the candidates through the reservoirs `slots`; returns (Σw, M).
+    /// Candidate `j` of a set: the light, and `q` (1/n when every light is a candidate).
+    #[inline]
+    fn candidate(&self, candidates: u32, j: usize, rng: &mut Rng) -> (usize, f64) {
+        if candidates == 0 {
+            (j, 1.0 / self.source.len() as f64)
+        } else {
+            let (i, q) = self.source.sample(rng);
+            (i, q as f64)
+        }
+    }
+
+    /// Small candidate sets (M ≤ [`BUFFERED`]): evaluate all, then draw each of the `slots`
+    /// survivors from the prefix sums with one uniform (`2M + slots` words, `slots` if all lights).
+    fn buffered<T: Copy>(
+        &self,
+        candidates: u32,
+        slots: usize,
+        k: usize,
+        rng: &mut Rng,
+        target: &mut impl FnMut(usize) -> (f32, T),
+        emit: &mut impl FnMut(Selected<T>),
+    ) {
+        let m = if candidates == 0 { self.source.len() } else { candidates as usize };
+        let mut set: [Option<(usize, f32, T)>; BUFFERED] = [None; BUFFERED];
+        let mut prefix = [0.0f64; BUFFERED];
+        let mut w_sum = 0.0f64;
+        for j in 0..m {
+            let (i, q) = self.candidate(candidates, j, rng);
+            let (p_hat, value) = target(i);
+            let p_hat = if p_hat.is_finite() && p_hat > 0.0 { p_hat } else { 0.0 };
+            if p_hat > 0.0 && q > 0.0 {
+                w_sum += p_hat as f64 / q;
+                set[j] = Some((i, p_hat, value));
+            }
+            prefix[j] = w_sum;
+        }
+        for _ in 0..slots {
+            let u = rng.next_f32() as f64 * w_sum;
+            // first candidate whose prefix sum exceeds u (zero-weight candidates have no width)
+            let j = prefix[..m].partition_point(|&c| c <= u).min(m - 1);
+            let Some((index, p_hat, value)) = (0..=j).rev().find_map(|t| set[t]).filter(|_| w_sum > 0.0) else {
+                continue;
+            };
+            let weight = (w_sum / (m as f64 * p_hat as f64) / k as f64) as f32;
+            emit(Selected { index, weight, value });
+        }
+    }
+
+    /// Streams the candidates through the reservoirs `slots`; returns Σw.
     fn stream<T: Copy>(
         &self,
         candidates: u32,
         slots: &mut [Pick<T>],
         rng: &mut Rng,
         target: &mut impl FnMut(usize) -> (f32, T),
-    ) -> (f64, usize) {
-        let n = self.source.len();
-        let m = if candidates == 0 { n } else { candidates as usize };
+    ) -> f64 {
+        let m = if candidates == 0 { self.source.len() } else { candidates as usize };
         let mut w_sum = 0.0f64;
         for j in 0..m {
-            let (i, q) = if candidates == 0 { (j, 1.0 / n as f64) } else { self.source_draw(rng) };
+            let (i, q) = self.candidate(candidates, j, rng);
             let (p_hat, value) = target(i);
             let p_hat = if p_hat.is_finite() && p_hat > 0.0 { p_hat } else { 0.0 };
             let w = if p_hat > 0.0 && q > 0.0 { p_hat as f64 / q } else { 0.0 };
@@ -161,12 +216,6 @@ impl LightSelector {
                 }
             }
         }
-        (w_sum, m)
-    }
-
-    #[inline]
-    fn source_draw(&self, rng: &mut Rng) -> (usize, f64) {
-        let (i, q) = self.source.sample(rng);
-        (i, q as f64)
+        w_sum
     }
 }
