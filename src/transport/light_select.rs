@@ -4,7 +4,8 @@
 //! Replaces the full gather `Σ_i F_i·V_i` (issue #11 item 2): draw `M` candidates `i_1..i_M` from a
 //! cheap source `q` (an alias table, e.g. ∝ lum(Φ_i), built once per pass), weight each by
 //! `w_j = p̂(i_j)/q(i_j)` with the caller's target `p̂(i) = lum(|f|·min(G,b)·Φ_i)` (no visibility),
-//! keep `y = i_j` with probability `w_j/Σw` (streaming weighted reservoir), and estimate
+//! keep `y = i_j` with probability `w_j/Σw` (prefix sums for M ≤ 32, else streaming weighted
+//! reservoirs), and estimate
 //! `F(y)·V(y)·W` with the unbiased contribution weight `W = Σ_j w_j / (M·p̂(y))`.
 //! `K` survivors (K shadow rays) are averaged, so each returned weight is `W/K` and the caller's
 //! estimate is simply `Σ_k weight_k·F(y_k)·V(y_k)`.
@@ -116,8 +117,11 @@ impl LightSelector {
     }
 
     /// Selects up to `K` lights. `target(i)` returns `(p̂(i), value_i)`; `emit` receives each
-    /// survivor (none when every candidate had `p̂ = 0`). Uniforms drawn: `M·(2 + K)` (shared or
-    /// `candidates = 0`: `n·K` for all-lights) or `K·M·3` for independent reservoirs.
+    /// survivor (none when every candidate had `p̂ = 0`). `target` is called once per candidate
+    /// (`M` times when shared, `K·M` for independent reservoirs, `n` with `candidates = 0`).
+    /// 32-bit words drawn per candidate set of `M` with `S` survivors: `2M + S` when `M ≤`
+    /// [`BUFFERED`], `2M + M·S` beyond (the `2M` are absent with `candidates = 0`); one set with
+    /// `S = K` when shared, `K` sets with `S = 1` otherwise.
     pub fn select<T: Copy>(
         &self,
         params: &RisParams,
