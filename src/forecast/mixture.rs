@@ -20,7 +20,7 @@
 // `!(x > 0.0)`-style tests are deliberate: they are true for NaN (bad input is rejected).
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use super::direction_table::{DirectionTable, ForecastTables};
+use super::direction_table::{bin_of, DirectionTable, ForecastTables, BIN_SOLID_ANGLE};
 use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::math::{Frame, Rgb, Vec3};
 use crate::sampling::rng::Rng;
@@ -138,9 +138,12 @@ impl<'a> DefensiveMixture<'a> {
             return 0.0;
         }
         let mut q = self.c[0] * bsdf::pdf_w(self.m, self.sp, self.wo, wi);
-        for k in 0..2 {
-            if let Some(t) = self.tables[k].filter(|_| self.c[k + 1] > 0.0) {
-                q += self.c[k + 1] * t.pdf_w(local);
+        // one bin lookup for both tables (`DirectionTable::pdf_w` = pmf of the bin / ΔΩ)
+        if let Some(bin) = bin_of(local) {
+            for k in 0..2 {
+                if let Some(t) = self.tables[k].filter(|_| self.c[k + 1] > 0.0) {
+                    q += self.c[k + 1] * (t.bin_pmf(bin) / BIN_SOLID_ANGLE);
+                }
             }
         }
         q
