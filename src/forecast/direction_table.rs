@@ -231,6 +231,76 @@ fn fill_values(bins: impl Iterator<Item = usize> + Clone, brdf_cos: &impl Fn(Vec
     v
 }
 
+/// How a forecaster's weight is spread over the bins when a table is built (issue #11 item 6).
+/// Any spread keeps the tables valid pdfs (and the dual partition), so every choice is unbiased.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Splat {
+    /// All of it into its own bin (the paper; bit-identical to [`ForecastTables::build`]).
+    #[default]
+    None,
+    /// A separable tent of half-width `radius` bins (clamped to [1, 8]; 1 = bilinear between the
+    /// nearest bin centres) in (φ, μ) bin coordinates, φ wrapping round, rows beyond the pole or the
+    /// horizon dropped; the weights are renormalised so they sum to the forecaster's weight.
+    Tent {
+        /// Half-width in bins.
+        radius: f32,
+    },
+}
+
+/// Bin-coordinate (x, y) of a local direction: bin centres at integers, `None` as [`bin_of`].
+#[inline]
+fn bin_coords(local: Vec3) -> Option<(f32, f32)> {
+    bin_of(local)?;
+    let mu = local.z / local.length();
+    let mut phi = local.y.atan2(local.x);
+    if phi < 0.0 {
+        phi += 2.0 * PI;
+    }
+    Some((phi * (N_PHI as f32 / (2.0 * PI)) - 0.5, mu * N_MU as f32 - 0.5))
+}
+
+/// Tent weights `max(0, 1 − |x − c|/h)` of the integer centres `c` within `h` of `x`.
+#[inline]
+fn tent(x: f32, h: f32) -> impl Iterator<Item = (i32, f32)> {
+    ((x - h).ceil() as i32..=(x + h).floor() as i32).map(move |c| (c, (1.0 - (x - c as f32).abs() / h).max(0.0)))
+}
+
+/// The bin weights of a set of forecasters `(ω local, weight)`: photons with μ ≤ 0 or a weight that is
+/// not positive and finite are skipped; each photon adds exactly its weight (spread by `splat`).
+pub fn splat_histogram(photons: impl IntoIterator<Item = (Vec3, f32)>, splat: Splat) -> [f32; N_BINS] {
+    let mut w = [0.0f32; N_BINS];
+    let ok = |weight: f32| weight.is_finite() && weight > 0.0;
+    match splat {
+        Splat::None => {
+            for (dir, weight) in photons {
+                if let Some(i) = bin_of(dir) {
+                    if ok(weight) {
+                        w[i] += weight;
+                    }
+                }
+            }
+        }
+        Splat::Tent { radius } => {
+            let h = if radius.is_finite() { radius.clamp(1.0, 8.0) } else { 1.0 };
+            for (dir, weight) in photons {
+                let Some((x, y)) = bin_coords(dir).filter(|_| ok(weight)) else { continue };
+                let rows = || tent(y, h).filter(|&(l, _)| (0..N_MU as i32).contains(&l));
+                let (sx, sy): (f32, f32) = (tent(x, h).map(|t| t.1).sum(), rows().map(|t| t.1).sum());
+                if !(sx > 0.0 && sy > 0.0) {
+                    continue; // unreachable: the nearest centre always has weight > 0
+                }
+                for (l, wy) in rows() {
+                    for (j, wx) in tent(x, h) {
+                        let j = j.rem_euclid(N_PHI as i32) as usize;
+                        w[l as usize * N_PHI + j] += weight * (wx / sx) * (wy / sy);
+                    }
+                }
+            }
+        }
+    }
+    w
+}
+
 impl ForecastTables {
     /// Builds the tables from gathered forecasters `(ω_in local, weight)` (weight = lum(Φ)·f·μ or the
     /// cosine-free variant; photons with μ ≤ 0 or weight ≤ 0 are skipped) and `brdf_cos(ω)` = f·cosθ.
@@ -239,14 +309,17 @@ impl ForecastTables {
         brdf_cos: impl Fn(Vec3) -> f32,
         mode: TableMode,
     ) -> Self {
-        let mut w = [0.0f32; N_BINS];
-        for (dir, weight) in photons {
-            if let Some(i) = bin_of(dir) {
-                if weight.is_finite() && weight > 0.0 {
-                    w[i] += weight;
-                }
-            }
-        }
+        Self::build_with(photons, brdf_cos, mode, Splat::None)
+    }
+
+    /// [`Self::build`] with the forecasters spread over neighbouring bins by `splat`.
+    pub fn build_with(
+        photons: impl IntoIterator<Item = (Vec3, f32)>,
+        brdf_cos: impl Fn(Vec3) -> f32,
+        mode: TableMode,
+        splat: Splat,
+    ) -> Self {
+        let w = splat_histogram(photons, splat);
         match mode {
             TableMode::Dual | TableMode::DualDefensive { .. } => {
                 // T1 skipped if k = 0 / zero total (from_weights → None).

@@ -9,4 +9,5 @@ pub mod cluster_map;
 pub mod direction_table;
 pub mod estimator;
 pub mod forecast_map;
+pub mod mixture;
 pub mod view;

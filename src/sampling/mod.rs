@@ -1,5 +1,6 @@
 //! Random numbers, warps from the unit square, discrete distributions and MIS heuristics.
 
+pub mod alias;
 pub mod distribution;
 pub mod rng;
 pub mod warp;

@@ -7,5 +7,6 @@
 pub mod context;
 pub mod dirac;
 pub mod direct;
+pub mod light_select;
 pub mod particle;
 pub mod roulette;
