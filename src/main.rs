@@ -66,7 +66,7 @@ fn run() -> Result<(), String> {
             let scene = forecast::scene::load(&a.scene).map_err(|e| e.to_string())?;
             let t = Instant::now();
             let ntri = scene.triangles.len();
-            let world = accel::World::build(scene);
+            let world = accel::World::build(scene).map_err(|e| format!("{}: {e}", a.scene.display()))?;
             println!(
                 "scene {}: {} triangles, {} spheres, BVH {:.3} s",
                 a.scene.display(),
@@ -162,7 +162,7 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs) -> Result<(), String> {
     use forecast::transport::particle::Emission;
     let r = &a.render;
     let scene = forecast::scene::load(&r.scene).map_err(|e| e.to_string())?;
-    let world = accel::World::build(scene);
+    let world = accel::World::build(scene).map_err(|e| format!("{}: {e}", r.scene.display()))?;
     let opts = r.method_options();
     let seed = r.seed.unwrap_or(world.scene.render.seed);
     let target = opts.forecast_photons.or(world.scene.forecast_photons).unwrap_or(DEFAULT_FORECAST_PHOTONS);

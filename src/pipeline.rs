@@ -93,7 +93,7 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
     let spp = if time.is_some() { None } else { Some(job.spp.or(scene.render.spp).unwrap_or(16)) };
     let (w, h) = job.resolution.unwrap_or((scene.camera.width, scene.camera.height));
     let camera = scene.camera.with_resolution(w, h);
-    let world = World::build(scene);
+    let world = World::build(scene).map_err(|e| format!("{}: {e}", job.scene.display()))?;
     let bvh_s = world.build_secs;
     let deadline: Deadline = distributed::shared_deadline(cluster, started, time);
 

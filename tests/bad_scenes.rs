@@ -278,7 +278,7 @@ f 6//1 7//2 8//1
     let (o, d) = (forecast::math::Vec3::new(0.2, 0.2, 5.0), forecast::math::Vec3::new(1e-3, 1e-3, -1.0).normalize());
     let brute = common::brute_hits(&s, o, d, f64::INFINITY);
     assert!(brute.first().is_some_and(|b| (b.0 - 4.0).abs() < 1e-4), "brute force: {brute:?}");
-    let world = forecast::accel::World::build(s);
+    let world = forecast::accel::World::build(s).expect("BVH builds");
     let h = world.intersect(o, d, f32::INFINITY).unwrap_or_else(|| {
         panic!(
             "BVH: no hit; brute force: {brute:?}; triangles: {:?}",

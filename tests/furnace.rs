@@ -105,7 +105,7 @@ fn mirror_ball_in_emissive_enclosure_is_exactly_one() {
     // and the ball is actually in view: some camera ray must hit it (checked through the scene)
     let s = forecast::scene::load(&root().join("tests/scenes/furnace_mirror.toml")).unwrap();
     let cam = s.camera.with_resolution(32, 32);
-    let w = forecast::accel::World::build(s);
+    let w = forecast::accel::World::build(s).expect("BVH builds");
     let hits_ball = (0..32 * 32).filter(|k| {
         let d = cam.direction((k % 32) as f32 + 0.5, (k / 32) as f32 + 0.5);
         w.intersect(cam.position, d, f32::INFINITY)
