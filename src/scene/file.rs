@@ -8,8 +8,8 @@
 use super::limits::{extent_message, within_extent};
 use super::schema::{Doc, LightDef, MaterialDef, ShapeDef};
 use super::{
-    light_power, limits, obj, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere,
-    Triangle, NO_EMITTER,
+    light_power, limits, locate, obj, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene,
+    Sphere, Triangle, NO_EMITTER,
 };
 use crate::math::{Vec3, PI};
 use crate::sampling::distribution::Distribution1D;
@@ -159,12 +159,15 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
             .filter(|_| msg.contains("unknown field") || msg.contains("missing field"))
             .unwrap_or("")
             .to_string();
+        let from = e.span().map_or(0, |s| s.start);
         if msg.contains("unknown field") && !key.is_empty() {
             // the span may cover a whole table (or array of tables): find the key's own line
-            let from = e.span().map_or(0, |s| s.start);
-            if let Some(l) = key_line_after(src, from, &key) {
+            if let Some(l) = locate::key_line_after(src, from, &key) {
                 line = l;
             }
+        } else if let Some((l, path)) = e.span().and_then(|_| locate::key_path_at(src, from)) {
+            // a value error (wrong type, bad length): the span is the value's; name its key
+            return SceneError { file: cx.file.clone(), line: l, key: path, message: msg };
         }
         SceneError { file: cx.file.clone(), line, key, message: msg }
     })?;
@@ -240,7 +243,8 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
             }
             Ok(v3(a))
         };
-        let mat = match m.get_ref() {
+        let def = m.get_ref().resolve().map_err(|(k, msg)| bad(&k, &msg))?;
+        let mat = match &def {
             MaterialDef::Diffuse { albedo } => Material::Diffuse { albedo: refl("albedo", *albedo)? },
             MaterialDef::Glossy { albedo, specular, exponent } => {
                 let (a, s) = (refl("albedo", *albedo)?, refl("specular", *specular)?);
@@ -295,7 +299,8 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
                 None => Err(cx.err(ss.clone(), &key("material"), "a shape needs `material` (or `emission`)")),
             }
         };
-        match s.get_ref() {
+        let def = s.get_ref().resolve().map_err(|(k, m)| cx.err(ss.clone(), &key(&k), m))?;
+        match &def {
             ShapeDef::Quad { corner, u, v, material, emission } => {
                 for (k, a) in [("corner", corner), ("u", u), ("v", v)] {
                     if !finite3(*a) {
@@ -462,7 +467,8 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
     let mut point_lights = Vec::new();
     for (idx, l) in doc.light.iter().enumerate() {
         let ls = l.span();
-        let LightDef::Point { position, intensity } = l.get_ref();
+        let def = l.get_ref().resolve().map_err(|(k, m)| cx.err(ls.clone(), &format!("light[{idx}].{k}"), m))?;
+        let LightDef::Point { position, intensity } = &def;
         if !within_extent(v3(*position)) {
             return Err(cx.err(ls, &format!("light[{idx}].position"), extent_message("position", v3(*position))));
         }
@@ -557,19 +563,6 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
         bounds: (lo, hi),
         warnings,
     })
-}
-
-/// 1-based line of the first `key = …` at or after byte `from`.
-fn key_line_after(src: &str, from: usize, key: &str) -> Option<usize> {
-    let mut off = 0usize;
-    for (i, line) in src.split_inclusive('\n').enumerate() {
-        let t = line.trim_start();
-        if off + line.len() > from && t.starts_with(key) && t[key.len()..].trim_start().starts_with('=') {
-            return Some(i + 1);
-        }
-        off += line.len();
-    }
-    None
 }
 
 /// Builds a triangle, or `None` when degenerate (zero area or non-finite).

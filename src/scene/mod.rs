@@ -10,6 +10,7 @@
 mod camera;
 mod file;
 mod limits;
+mod locate;
 mod material;
 mod obj;
 mod schema;
