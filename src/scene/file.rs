@@ -394,20 +394,23 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
                 for (k, tri) in mesh.triangles.iter().enumerate() {
                     let p = [xf(tri[0]), xf(tri[1]), xf(tri[2])];
                     let n = mesh.normals.as_ref().map(|ns| [xn(ns[k][0]), xn(ns[k][1]), xn(ns[k][2])]);
+                    // non-finite OBJ vertices make a degenerate face (skipped below); finite ones
+                    // must stay inside the extent after the transform
+                    let far = p.iter().find(|&&q| !within_extent(q));
+                    if let (Some(&q), true) = (far, tri.iter().all(|r| r.is_finite())) {
+                        let blame = if tri.iter().any(|&r| !within_extent(r)) {
+                            "file"
+                        } else if scale.is_some() {
+                            "scale"
+                        } else {
+                            "translate"
+                        };
+                        let at = format!("(face {} of {}, after the transform)", k + 1, path.display());
+                        let msg = format!("{} {at}", extent_message("mesh vertex", q));
+                        return Err(cx.err(ss, &key(blame), msg));
+                    }
                     match make_triangle(p, n, mat) {
                         Some(t) => {
-                            if let Some(&q) = p.iter().find(|&&q| !within_extent(q)) {
-                                let blame = if tri.iter().any(|&r| !within_extent(r)) {
-                                    "file"
-                                } else if scale.is_some() {
-                                    "scale"
-                                } else {
-                                    "translate"
-                                };
-                                let at = format!("(face {} of {}, after the transform)", k + 1, path.display());
-                                let msg = format!("{} {at}", extent_message("mesh vertex", q));
-                                return Err(cx.err(ss, &key(blame), msg));
-                            }
                             flat_fallback += (n.is_some() && t.n.is_none()) as usize;
                             triangles.push(t);
                             tri_emission.push(e.map(|e| (e, idx)));
@@ -568,7 +571,9 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
 /// Builds a triangle, or `None` when degenerate (zero area or non-finite).
 fn make_triangle(p: [Vec3; 3], n: Option<[Vec3; 3]>, material: u32) -> Option<Triangle> {
     let c = (p[1] - p[0]).cross(p[2] - p[0]);
-    let len = c.length();
+    // scaled by the largest component first, so that |c|² cannot overflow (|c| up to 1e25)
+    let m = c.abs().max_element();
+    let len = if m > 0.0 { m * (c / m).length() } else { 0.0 };
     if !(len.is_finite() && len > 1e-12) {
         return None;
     }

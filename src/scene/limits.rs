@@ -5,9 +5,11 @@
 //! mesh vertices after the transform) must lie in the cube |coordinate| ≤ 1e12. Derivation, in f32
 //! (max 3.4e38): a box in the cube has half-area ≤ 3·(2e12)² = 1.2e25; the BVH builder's SAH cost
 //! sums half-areas over at most 2·2³² nodes with weights of a few units (≈ 1e11 in all), ≤ 1.2e36,
-//! 300× below f32::MAX; ray–sphere and ray–triangle products (|o − c|², r², e₁ × e₂) stay below
-//! (4e12)²·3 ≈ 5e25. Beyond it, surface areas or cost sums overflow to ∞ and obvhs panics. (f32
-//! spacing at 1e12 is 2¹⁷ units, so such scenes are useless to render, but they fail cleanly.)
+//! 300× below f32::MAX; for rays from inside the cube, ray–sphere products (|o − c|², r²) stay
+//! below 3·(2e12)² ≈ 1.2e25, a triangle's e₁ × e₂ below 8e24 per component (its length is taken
+//! scaled, `make_triangle`), and the ray–triangle numerator (e₁ × e₂)·(v₀ − o) below 5e37.
+//! Beyond it, surface areas or cost sums overflow to ∞ and obvhs panics. (f32 spacing at 1e12 is
+//! 2¹⁷ units, so such scenes are useless to render, but they fail cleanly or work.)
 
 use crate::math::Vec3;
 use std::path::Path;
