@@ -563,3 +563,25 @@ fn duplicated_triangles_agree_with_brute_force() {
     let t = random_rays_ext(&w, 4000, 12, false, 4000);
     eprintln!("duplicates: {t:?}");
 }
+
+/// A scene that fills the extent limit (|coordinate| <= MAX_EXTENT = 1e12) builds and traces:
+/// the limit is chosen so that areas, SAH costs and intersection products stay finite in f32.
+#[test]
+fn scene_at_the_extent_limit_builds_and_traces() {
+    let l = forecast::scene::MAX_EXTENT;
+    let src = format!(
+        "{HEADER}\n[[shape]]\ntype = \"quad\"\ncorner = [{m}, {m}, {m}]\nu = [{d}, 0.0, 0.0]\nv = [0.0, {d}, 0.0]\nmaterial = \"m\"\n\
+         [[shape]]\ntype = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = {r}\nmaterial = \"m\"\n",
+        m = -l,
+        d = 2.0 * l,
+        r = 0.5 * l
+    );
+    let w =
+        World::build(load_str(&src, "limit.toml", Path::new(".")).unwrap_or_else(|e| panic!("{e}"))).expect("builds");
+    let o = Vec3::new(0.0, 0.0, l);
+    let h = w.intersect(o, Vec3::new(0.0, 0.0, -1.0), f32::INFINITY).expect("hits the sphere");
+    assert!((h.t - 0.5 * l).abs() <= 1e-5 * l && h.prim == 2, "{h:?}");
+    let d = (Vec3::new(0.9 * l, 0.9 * l, -l) - o).normalize();
+    let h = w.intersect(o, d, f32::INFINITY).expect("hits the quad");
+    assert!(h.prim < 2 && (h.p.z + l).abs() <= 1e-5 * l, "{h:?}");
+}
