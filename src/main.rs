@@ -108,7 +108,7 @@ fn bench_cmd(a: &forecast::cli::BenchArgs) -> Result<(), String> {
     let scene = forecast::scene::load(&a.scene).map_err(|e| e.to_string())?;
     let t = Instant::now();
     let ntri = scene.triangles.len();
-    let world = accel::World::build(scene);
+    let world = accel::World::build(scene).map_err(|e| format!("{}: {e}", a.scene.display()))?;
     println!(
         "scene {}: {} triangles, {} spheres, BVH {:.3} s",
         a.scene.display(),
@@ -154,7 +154,7 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs) -> Result<(), String> {
     use forecast::transport::particle::Emission;
     let r = &a.render;
     let scene = forecast::scene::load(&r.scene).map_err(|e| e.to_string())?;
-    let world = accel::World::build(scene);
+    let world = accel::World::build(scene).map_err(|e| format!("{}: {e}", r.scene.display()))?;
     let cf_args = &r.method_args.cf;
     let seed = r.seed.unwrap_or(world.scene.render.seed);
     let target = cf_args.target_photons(&world);

@@ -249,7 +249,7 @@ fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), String> 
         }
     }
     let plan = job.resolve(&scene)?;
-    let world = World::build(scene);
+    let world = World::build(scene).map_err(|e| format!("{}: {e}", job.scene.display()))?;
     let bvh_s = world.build_secs;
     Ok((world, plan, Timings { load_s, bvh_s, ..Timings::default() }))
 }

@@ -278,7 +278,7 @@ f 6//1 7//2 8//1
     let (o, d) = (forecast::math::Vec3::new(0.2, 0.2, 5.0), forecast::math::Vec3::new(1e-3, 1e-3, -1.0).normalize());
     let brute = common::brute_hits(&s, o, d, f64::INFINITY);
     assert!(brute.first().is_some_and(|b| (b.0 - 4.0).abs() < 1e-4), "brute force: {brute:?}");
-    let world = forecast::accel::World::build(s);
+    let world = forecast::accel::World::build(s).expect("BVH builds");
     let h = world.intersect(o, d, f32::INFINITY).unwrap_or_else(|| {
         panic!(
             "BVH: no hit; brute force: {brute:?}; triangles: {:?}",
@@ -288,4 +288,177 @@ f 6//1 7//2 8//1
     assert!((h.t - 4.0).abs() < 1e-4 && h.ns.is_finite() && h.ng.is_finite(), "{h:?}");
     // last, the line: the warning must point at the `file =` line
     assert!(w.starts_with(&format!("deg.toml:{line}:")), "warning must point at line {line}: {w}");
+}
+
+/// A mesh shape (shape[3]) with a one-triangle OBJ in `dir` and the given extra keys.
+fn with_small_mesh(dir: &Path, extra: &str) -> String {
+    std::fs::write(dir.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    format!("{BASE}\n[[shape]]\ntype = \"mesh\"\nfile = \"tri.obj\"\nmaterial = \"white\"\n{extra}")
+}
+
+// Issue #9 §2: bounds that overflow f32 made obvhs panic (bvh2_to_cwbvh.rs:369 and :465); they
+// are now extent errors (|coordinate| <= MAX_EXTENT) at the offending key.
+
+#[test]
+fn reproducer_sphere_radius_1e19() {
+    let src = with("radius", "radius = 1e19 #<");
+    let e = expect_err("radius 1e19", &src, Path::new("."), marked_line(&src), "shape[1].radius");
+    assert!(e.message.contains("extent"), "{e}");
+}
+
+#[test]
+fn reproducer_sheared_quad_v_3_4e38() {
+    let src = with("v        = [0.0, 0.0, 2.0]", "v        = [3.4e38, 0.0, 2.0] #<");
+    let e = expect_err("sheared quad", &src, Path::new("."), marked_line(&src), "shape[0].v");
+    assert!(e.message.contains("extent"), "{e}");
+}
+
+#[test]
+fn reproducer_mesh_translate_3_4e38() {
+    let dir = tmp_dir("bad-translate");
+    let src = with_small_mesh(&dir, "translate = [3.4e38, 0.8, -0.15] #<\n");
+    let e = expect_err("mesh translate", &src, &dir, marked_line(&src), "shape[3].translate");
+    assert!(e.message.contains("extent"), "{e}");
+    // a scale that carries the vertices out names `scale`, and the vertex
+    let src = with_small_mesh(&dir, "scale = 1e13 #<\n");
+    let e = expect_err("mesh scale", &src, &dir, marked_line(&src), "shape[3].scale");
+    assert!(e.message.contains("tri.obj") && e.message.contains("extent"), "{e}");
+}
+
+#[test]
+fn world_build_refuses_out_of_range_primitives() {
+    use forecast::accel::{BuildError, World};
+    let s = load_str(BASE, "base.toml", Path::new(".")).unwrap();
+    let mut big = s.clone();
+    big.spheres[0].radius = 1e19;
+    assert!(matches!(World::build(big), Err(BuildError::OutOfRange { prim: 4, .. })));
+    let mut inf = s.clone();
+    inf.triangles[1].p[2].x = f32::INFINITY;
+    let e = World::build(inf).err().expect("an infinite vertex is refused");
+    assert!(e.to_string().contains("extent"), "{e}");
+    assert!(World::build(s).is_ok());
+}
+
+/// Runs `f` on a thread and fails the test if it does not return within 10 s (a blocked read).
+fn within_10s<T: Send + 'static>(what: &str, f: impl FnOnce() -> T + Send + 'static) -> T {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(f());
+    });
+    rx.recv_timeout(std::time::Duration::from_secs(10)).unwrap_or_else(|_| panic!("{what}: blocked for 10 s"))
+}
+
+#[test]
+fn fifo_scene_and_mesh_are_refused() {
+    let dir = tmp_dir("bad-fifo");
+    let fifo = dir.join("pipe");
+    let ok = std::process::Command::new("mkfifo").arg(&fifo).status().map(|s| s.success()).unwrap_or(false);
+    assert!(ok, "mkfifo failed");
+    let p = fifo.clone();
+    let e = within_10s("scene FIFO", move || load(&p)).expect_err("a FIFO scene is refused");
+    assert!(e.message.contains("not a regular file") && e.to_string().contains("pipe"), "{e}");
+    let src = with_mesh("pipe", "");
+    let d = dir.clone();
+    let line = marked_line(&src);
+    let e = within_10s("mesh FIFO", move || load_str(&src, "bad.toml", &d)).expect_err("a FIFO mesh is refused");
+    assert_eq!((e.line, e.key.as_str()), (line, "shape[3].file"), "{e}");
+    assert!(e.message.contains("not a regular file"), "{e}");
+    let e = load(&dir).expect_err("a directory is refused");
+    assert!(e.message.contains("directory"), "{e}");
+}
+
+// Issue #9 §5: messages that misled.
+
+#[test]
+fn type_errors_name_the_key_on_its_own_line() {
+    let mut f = Vec::new();
+    // inside the second [[shape]], not at the first [[shape]] header
+    case(&mut f, "radius string", &with("radius", "radius = \"big\" #<"), "shape[1].radius");
+    case(&mut f, "fov string", &with("fov", "fov = \"wide\" #<"), "camera.fov");
+    case(&mut f, "emission element", &with("emission", "emission = [5.0, \"x\", 5.0] #<"), "shape[2].emission");
+    case(&mut f, "albedo length", &with("albedo = [0.5", "albedo = [0.5, 0.5] #<"), "materials.white.albedo");
+    case(&mut f, "unknown shape type", &with("type     = \"sphere\"", "type = \"cone\" #<"), "shape[1].type");
+    case(&mut f, "key of another type", &with("radius", "radius = 0.5\nu = [1.0, 0.0, 0.0] #<"), "shape[1].u");
+    case(
+        &mut f,
+        "unknown material type",
+        &with("type   = \"diffuse\"", "type = \"velvet\" #<"),
+        "materials.white.type",
+    );
+    finish(f);
+}
+
+#[test]
+fn overflowing_light_power_names_the_light() {
+    let light = "\n[[light]]\ntype = \"point\"\nposition = [0.0, 1.5, 0.0]\nintensity = [3e38, 3e38, 3e38] #<\n";
+    let src = format!("{BASE}{light}");
+    let e = expect_err("point 3e38", &src, Path::new("."), marked_line(&src), "light[0].intensity");
+    assert!(e.message.contains("overflows") && !e.message.contains("no light"), "{e}");
+    // an emissive sphere of radius 1e30 leaves the extent; one of radius 1e11 overflows by its power
+    let sphere = |r: &str, e: &str| {
+        format!("{BASE}\n[[shape]]\ntype = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = {r}\nemission = {e}\n")
+    };
+    let src = sphere("1e30 #<", "[1.0, 1.0, 1.0]");
+    expect_err("emissive radius 1e30", &src, Path::new("."), marked_line(&src), "shape[3].radius");
+    let src = sphere("1e11", "[1e17, 1e17, 1e17] #<");
+    let e = expect_err("emissive power", &src, Path::new("."), marked_line(&src), "shape[3].emission");
+    assert!(e.message.contains("overflows"), "{e}");
+}
+
+#[test]
+fn huge_camera_position_is_an_extent_error() {
+    let src = with("position", "position = [3e38, 1.0, 3.0] #<");
+    let e = expect_err("camera 3e38", &src, Path::new("."), marked_line(&src), "camera.position");
+    assert!(e.message.contains("extent") && !e.message.contains("parallel"), "{e}");
+    // a huge but finite `up` is only a direction: it loads
+    let src = with("fov", "fov = 40.0\nup = [0.0, 3e38, 0.0]");
+    load_str(&src, "up.toml", Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+}
+
+#[test]
+fn mesh_transform_errors_name_their_own_key() {
+    let dir = tmp_dir("bad-transform");
+    let mut f = Vec::new();
+    for (extra, key) in [
+        ("rotate_y = inf #<", "shape[3].rotate_y"),
+        ("scale = -1.0 #<", "shape[3].scale"),
+        ("translate = [nan, 0.0, 0.0] #<", "shape[3].translate"),
+    ] {
+        let src = with_small_mesh(&dir, &format!("{extra}\n"));
+        if let Err(m) = try_err(extra, &src, &dir, marked_line(&src), key) {
+            f.push(m);
+        }
+    }
+    finish(f);
+}
+
+#[test]
+fn zero_emission_without_material_is_a_black_shape() {
+    let src = format!(
+        "{BASE}\n[[shape]]\ntype = \"quad\"\ncorner = [2.0, 0.0, 0.0]\nu = [1.0, 0.0, 0.0]\nv = [0.0, 1.0, 0.0]\nemission = [0.0, 0.0, 0.0]\n"
+    );
+    let s = load_str(&src, "zero.toml", Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let t = s.triangles.last().unwrap();
+    assert!(s.materials[t.material as usize].is_black() && t.emitter == forecast::scene::NO_EMITTER);
+    assert_eq!(s.emitters.len(), 2, "the zero-emission quad is no emitter");
+}
+
+#[test]
+fn overflowing_quad_is_an_error_not_dropped() {
+    let src = with("u        = [2.0", "u        = [3e38, 0.0, 0.0] #<").replacen(
+        "v        = [0.0, 0.0, 2.0]",
+        "v        = [0.0, 0.0, 3e38]",
+        1,
+    );
+    expect_err("quad u×v overflow", &src, Path::new("."), marked_line(&src), "shape[0].u");
+}
+
+#[test]
+fn roi_rect_overflow_is_refused() {
+    let mut f = Vec::new();
+    for rect in ["[4294967295, 0, 1, 1]", "[0, 4294967295, 1, 1]", "[1, 0, 4294967295, 1]"] {
+        let src = format!("{BASE}\n[[roi]]\nname = \"r\"\nrect = {rect} #<\n");
+        case(&mut f, rect, &src, "roi[0].rect");
+    }
+    finish(f);
 }

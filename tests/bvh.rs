@@ -286,7 +286,7 @@ fn random_triangle_soup() {
     let dir = tmp_dir("bvh-soup");
     let mut rng = Rng::keyed(1, stream::MISC, 0, 0);
     let tris = soup(&mut rng, 2000, 1.0, 0.2);
-    let w = World::build(mesh_scene(&dir, &tris, "", ""));
+    let w = World::build(mesh_scene(&dir, &tris, "", "")).expect("BVH builds");
     assert_eq!(w.scene.triangles.len(), 2000);
     let t = random_rays(&w, 20_000, 11);
     eprintln!("soup: {t:?}");
@@ -312,7 +312,7 @@ fn triangles_and_spheres_mixed() {
     // a few quads, one axis-aligned
     extra.push_str("[[shape]]\ntype = \"quad\"\ncorner = [-1.5, -1.0, -1.5]\nu = [3.0, 0.0, 0.0]\nv = [0.0, 0.0, 3.0]\nmaterial = \"m\"\n");
     extra.push_str("[[shape]]\ntype = \"quad\"\ncorner = [-1.0, -1.0, 1.3]\nu = [2.0, 0.5, 0.0]\nv = [0.0, 2.0, 0.3]\nmaterial = \"m\"\n");
-    let w = World::build(mesh_scene(&dir, &tris, &extra, ""));
+    let w = World::build(mesh_scene(&dir, &tris, &extra, "")).expect("BVH builds");
     assert_eq!(w.scene.spheres.len(), 40);
     let t = random_rays(&w, 20_000, 12);
     eprintln!("mixed: {t:?}");
@@ -336,7 +336,7 @@ fn spheres_only() {
         )
         .unwrap();
     }
-    let w = World::build(load_str(&src, "spheres.toml", Path::new(".")).unwrap());
+    let w = World::build(load_str(&src, "spheres.toml", Path::new(".")).unwrap()).expect("BVH builds");
     assert_eq!(w.scene.ntri(), 0);
     let t = random_rays(&w, 20_000, 13);
     eprintln!("spheres: {t:?}");
@@ -372,7 +372,7 @@ fn degenerate_and_coincident_triangles() {
         tris.push(tris[k]);
         tris.push([tris[50 + k][0], tris[50 + k][2], tris[50 + k][1]]);
     }
-    let w = World::build(mesh_scene(&dir, &tris, "", ""));
+    let w = World::build(mesh_scene(&dir, &tris, "", "")).expect("BVH builds");
     assert_eq!(w.scene.triangles.len(), n_good + 100, "the 3 zero-area triangles must be skipped");
     assert!(
         w.scene.warnings.iter().any(|m| m.contains("skipped 3 degenerate") && m.contains("bvh.toml")),
@@ -400,7 +400,7 @@ fn rays_parallel_to_faces() {
     ] {
         writeln!(src, "[[shape]]\ntype = \"quad\"\ncorner = {c:?}\nu = {u:?}\nv = {v:?}\nmaterial = \"m\"\n").unwrap();
     }
-    let w = World::build(load_str(&src, "parallel.toml", Path::new(".")).unwrap());
+    let w = World::build(load_str(&src, "parallel.toml", Path::new(".")).unwrap()).expect("BVH builds");
     let mut rng = Rng::keyed(5, stream::MISC, 0, 0);
     let mut tally = Tally::default();
     for k in 0..5000 {
@@ -425,7 +425,7 @@ fn very_large_and_very_small_scales() {
         let mut rng = Rng::keyed(seed, stream::MISC, 0, 0);
         let tris = soup(&mut rng, 500, 1.0, 0.3);
         let transform = format!("scale = {scale:e}\ntranslate = [{offset:e}, 0.0, {:e}]", -offset);
-        let w = World::build(mesh_scene(&dir, &tris, "", &transform));
+        let w = World::build(mesh_scene(&dir, &tris, "", &transform)).expect("BVH builds");
         assert_eq!(w.scene.triangles.len(), 500, "{name}: no triangle may be dropped as degenerate");
         let t = random_rays_ext(&w, 10_000, seed + 100, true, 10);
         eprintln!("{name}: {t:?}");
@@ -442,7 +442,7 @@ fn comparison_detects_a_wrong_bvh() {
     let tris = soup(&mut rng, 200, 1.0, 0.3);
     let full = mesh_scene(&dir, &tris, "", "");
     let half = mesh_scene(&dir, &tris[..100], "", "");
-    let mut w = World::build(half);
+    let mut w = World::build(half).expect("BVH builds");
     w.scene = full; // the brute force now sees 200 triangles, the BVH only 100
     let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| random_rays(&w, 2000, 16)));
     assert!(r.is_err(), "missing primitives went undetected");
@@ -457,7 +457,7 @@ fn hits_closer_than_1e4_are_found() {
     let src = format!(
         "{HEADER}\n[[shape]]\ntype = \"quad\"\ncorner = [-2e-5, -2e-5, 5e-5]\nu = [4e-5, 0.0, 0.0]\nv = [0.0, 4e-5, 0.0]\nmaterial = \"m\"\n\n[[shape]]\ntype = \"quad\"\ncorner = [-1.0, -1.0, 1.0]\nu = [2.0, 0.0, 0.0]\nv = [0.0, 2.0, 0.0]\nmaterial = \"m\"\n"
     );
-    let w = World::build(load_str(&src, "tiny.toml", Path::new(".")).unwrap());
+    let w = World::build(load_str(&src, "tiny.toml", Path::new(".")).unwrap()).expect("BVH builds");
     // along +z: the 40 µm quad at z = 5e-5 is first, the big one at z = 1 second (the origin is off
     // both quads' diagonals, so no shared edge is involved)
     let (o, d) = (Vec3::new(0.5e-5, 0.3e-5, 0.0), Vec3::Z);
@@ -484,7 +484,7 @@ fn hits_closer_than_1e4_are_found() {
 #[test]
 fn ray_through_shared_edge_hits() {
     let src = format!("{HEADER}\n[[shape]]\ntype = \"quad\"\ncorner = [-1.0, -1.0, 1.0]\nu = [2.0, 0.0, 0.0]\nv = [0.0, 2.0, 0.0]\nmaterial = \"m\"\n");
-    let w = World::build(load_str(&src, "edge.toml", Path::new(".")).unwrap());
+    let w = World::build(load_str(&src, "edge.toml", Path::new(".")).unwrap()).expect("BVH builds");
     assert_eq!(
         brute_hits(&w.scene, Vec3::ZERO, Vec3::Z, f64::INFINITY).len(),
         2,
@@ -506,11 +506,82 @@ fn ray_through_shared_edge_hits() {
 fn negative_zero_direction_components_hit() {
     let src =
         format!("{HEADER}\n[[shape]]\ntype = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\nmaterial = \"m\"\n");
-    let w = World::build(load_str(&src, "negzero.toml", Path::new(".")).unwrap());
+    let w = World::build(load_str(&src, "negzero.toml", Path::new(".")).unwrap()).expect("BVH builds");
     let o = Vec3::new(0.2, 0.2, 5.0);
     let plus = w.intersect(o, Vec3::new(0.0, 0.0, -1.0), f32::INFINITY).map(|h| h.t);
     assert!(plus.is_some_and(|t| (t - 4.0408).abs() < 1e-3), "control with +0.0: {plus:?}");
     let minus = w.intersect(o, -Vec3::Z, f32::INFINITY).map(|h| h.t);
     assert_eq!(minus, plus, "direction (-0, -0, -1) must hit the sphere like (0, 0, -1)");
     assert!(w.occluded(o, -Vec3::Z, 100.0), "occluded() with a -0.0 component");
+}
+
+/// Coincident primitives (issue #9): PLOC's tie-break made the build O(n²) on identical bounds
+/// (8k / 16k / 32k identical faces: 2.4 / 9.8 / 39.6 s). 32k identical faces must build within
+/// 20× the time of 32k distinct faces, plus 1 s for scheduling noise on a shared machine: an
+/// n·log n build of identical boxes does no more work than one of distinct boxes (the grouping sort
+/// is the same order as PLOC's Morton sort), so 20× is a generous margin, and the quadratic build
+/// (≈ 40 s here, against ≈ 0.05 s for distinct faces) fails it by an order of magnitude.
+#[test]
+fn coincident_triangles_build_in_bounded_time() {
+    let n = 32_768;
+    let dir = tmp_dir("bvh-coincident");
+    let mut rng = Rng::keyed(7, stream::MISC, 0, 0);
+    let distinct = mesh_scene(&dir, &soup(&mut rng, n, 1.0, 0.05), "", "");
+    let t = std::time::Instant::now();
+    let w = World::build(distinct).expect("BVH builds");
+    let t_distinct = t.elapsed().as_secs_f64();
+    assert_eq!(w.scene.triangles.len(), n);
+    let tri = [Vec3::new(-0.5, -0.5, 0.0), Vec3::new(0.5, -0.5, 0.0), Vec3::new(0.0, 0.5, 0.0)];
+    let same = mesh_scene(&dir, &vec![tri; n], "", "");
+    let t = std::time::Instant::now();
+    let w = World::build(same).expect("BVH builds");
+    let t_same = t.elapsed().as_secs_f64();
+    let bound = 20.0 * t_distinct + 1.0;
+    eprintln!("32k faces: distinct {t_distinct:.3} s, identical {t_same:.3} s (bound {bound:.3} s)");
+    assert!(t_same < bound, "32k identical faces took {t_same:.3} s, bound {bound:.3} s");
+    assert_eq!(w.scene.triangles.len(), n);
+    // every primitive is in the tree: a ray through the triangle hits one of them at t = 10
+    let h = w.intersect(Vec3::new(0.0, 0.0, 10.0), Vec3::new(0.0, 0.0, -1.0), f32::INFINITY).expect("hit");
+    assert!((h.t - 10.0).abs() < 1e-5 && (h.prim as usize) < n, "{h:?}");
+}
+
+/// A soup where every triangle appears 1 to 4 times and one triangle 3000 times: the grouped build
+/// agrees with brute force (ties between coincident copies are expected, so the tie exemption is
+/// unbounded here; hits and t are still checked on every ray).
+#[test]
+fn duplicated_triangles_agree_with_brute_force() {
+    let dir = tmp_dir("bvh-duplicates");
+    let mut rng = Rng::keyed(8, stream::MISC, 0, 0);
+    let base = soup(&mut rng, 600, 1.0, 0.3);
+    let mut tris = Vec::new();
+    for (i, t) in base.iter().enumerate() {
+        tris.extend(std::iter::repeat_n(*t, 1 + i % 4));
+    }
+    tris.extend(std::iter::repeat_n(base[0], 3000));
+    let w = World::build(mesh_scene(&dir, &tris, "", "")).expect("BVH builds");
+    assert_eq!(w.scene.triangles.len(), tris.len());
+    let t = random_rays_ext(&w, 4000, 12, false, 4000);
+    eprintln!("duplicates: {t:?}");
+}
+
+/// A scene that fills the extent limit (|coordinate| <= MAX_EXTENT = 1e12) builds and traces:
+/// the limit is chosen so that areas, SAH costs and intersection products stay finite in f32.
+#[test]
+fn scene_at_the_extent_limit_builds_and_traces() {
+    let l = forecast::scene::MAX_EXTENT;
+    let src = format!(
+        "{HEADER}\n[[shape]]\ntype = \"quad\"\ncorner = [{m}, {m}, {m}]\nu = [{d}, 0.0, 0.0]\nv = [0.0, {d}, 0.0]\nmaterial = \"m\"\n\
+         [[shape]]\ntype = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = {r}\nmaterial = \"m\"\n",
+        m = -l,
+        d = 2.0 * l,
+        r = 0.5 * l
+    );
+    let w =
+        World::build(load_str(&src, "limit.toml", Path::new(".")).unwrap_or_else(|e| panic!("{e}"))).expect("builds");
+    let o = Vec3::new(0.0, 0.0, l);
+    let h = w.intersect(o, Vec3::new(0.0, 0.0, -1.0), f32::INFINITY).expect("hits the sphere");
+    assert!((h.t - 0.5 * l).abs() <= 1e-5 * l && h.prim == 2, "{h:?}");
+    let d = (Vec3::new(0.9 * l, 0.9 * l, -l) - o).normalize();
+    let h = w.intersect(o, d, f32::INFINITY).expect("hits the quad");
+    assert!(h.prim < 2 && (h.p.z + l).abs() <= 1e-5 * l, "{h:?}");
 }

@@ -17,7 +17,7 @@ use forecast::stats::z_test_threshold;
 use std::path::Path;
 
 fn world(path: &str) -> World {
-    World::build(forecast::scene::load(Path::new(path)).expect("scene loads"))
+    World::build(forecast::scene::load(Path::new(path)).expect("scene loads")).expect("BVH builds")
 }
 
 fn opts() -> MethodArgs {
@@ -139,7 +139,7 @@ fn all_photons_missing_still_agrees_with_pt() {
     let src = std::fs::read_to_string("scenes/cornell-box.toml").unwrap()
         + "\n[forecast]\ntarget_box = [[-0.1, 5.0, -0.1], [0.1, 5.2, 0.1]]\n";
     let scene = forecast::scene::load_str(&src, "cornell-missing.toml", Path::new("scenes")).unwrap();
-    let w = World::build(scene);
+    let w = World::build(scene).expect("BVH builds");
     let mut o = opts();
     o.cf.forecast_photons = Some(100);
     let (mut cf, product) = iws_cf(&w, &o);

@@ -54,7 +54,7 @@ fn pooled(passes: &[Film], (x0, y0, w, h): (usize, usize, usize, usize), ch: usi
 /// Renders `spp` passes of `method` at 32×32, each into its own film, as the pipeline would
 /// (preprocess, encode, build from the bytes; passes keyed by (seed, pass)).
 fn render(scene: &str, method: Method, spp: u64, seed: u64) -> Vec<Film> {
-    let world = World::build(forecast::scene::load(&root().join("tests/scenes").join(scene)).unwrap());
+    let world = World::build(forecast::scene::load(&root().join("tests/scenes").join(scene)).unwrap()).expect("BVH builds");
     let mut args = MethodArgs::default();
     args.pt.max_depth = Some(world.scene.render.max_depth);
     // no caustic paths exist here: keep the photon searches (PATH_FACTOR × target paths) short
@@ -135,7 +135,7 @@ fn mirror_ball_in_emissive_enclosure_is_exactly_one() {
     // and the ball is actually in view: some camera ray must hit it (checked through the scene)
     let s = forecast::scene::load(&root().join("tests/scenes/furnace_mirror.toml")).unwrap();
     let cam = s.camera.with_resolution(32, 32);
-    let w = forecast::accel::World::build(s);
+    let w = forecast::accel::World::build(s).expect("BVH builds");
     let hits_ball = (0..32 * 32).filter(|k| {
         let d = cam.direction((k % 32) as f32 + 0.5, (k / 32) as f32 + 0.5);
         w.intersect(cam.position, d, f32::INFINITY)

@@ -20,7 +20,7 @@ use forecast::stats::z_test_threshold;
 use std::path::Path;
 
 fn world(path: &str) -> World {
-    World::build(forecast::scene::load(Path::new(path)).expect("scene loads"))
+    World::build(forecast::scene::load(Path::new(path)).expect("scene loads")).expect("BVH builds")
 }
 
 fn params(vpl_paths: u32, bound: Option<f32>) -> MethodArgs {

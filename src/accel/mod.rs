@@ -1,6 +1,9 @@
 //! `World`: the scene plus its ray-tracing acceleration structure (the only obvhs user).
 //!
-//! One CWBVH (obvhs, `medium_build`) over the AABBs of every triangle and analytic sphere.
+//! One CWBVH (obvhs, `medium_build`, made robust to coincident primitives in `build`) over the
+//! AABBs of every triangle and analytic sphere. `World::build` refuses primitives whose box is not
+//! finite or leaves the scene extent limit (`scene::MAX_EXTENT`): obvhs panics on such boxes, and
+//! the loader should have rejected them already (this is the last line of defence).
 //! Triangles are reordered into BVH slot order as `RtTriangle`s, so traversal needs no indirection.
 //! Closest-hit and occlusion queries; ray counts are kept in thread-local counters
 //! (`take_ray_counts`).
@@ -11,14 +14,15 @@
 
 use crate::math::{Vec3, Vec3A};
 use crate::scene::Scene;
+mod build;
+
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::{builder::build_cwbvh, CwBvh};
+use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle as ObvTriangle;
 use obvhs::BvhBuildParams;
 use std::cell::Cell;
-use std::time::Duration;
 
 thread_local! {
     static RAY_COUNTS: Cell<(u64, u64)> = const { Cell::new((0, 0)) };
@@ -69,6 +73,38 @@ pub fn offset_origin(p: Vec3, ng: Vec3, dir: Vec3) -> Vec3 {
     }
 }
 
+/// Why `World::build` refused a scene.
+#[derive(Clone, Debug, PartialEq)]
+pub enum BuildError {
+    /// A primitive's bounding box is not finite or leaves `[-MAX_EXTENT, MAX_EXTENT]³`.
+    OutOfRange {
+        /// Primitive id (triangles, then spheres).
+        prim: u32,
+        /// Box minimum.
+        lo: [f32; 3],
+        /// Box maximum.
+        hi: [f32; 3],
+    },
+    /// More primitives than 32-bit ids can name.
+    TooManyPrimitives(usize),
+}
+
+impl std::fmt::Display for BuildError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            BuildError::OutOfRange { prim, lo, hi } => write!(
+                f,
+                "cannot build the BVH: primitive {prim} has bounds {lo:?}..{hi:?}, outside the scene extent limit \
+                 |coordinate| <= {:e}",
+                crate::scene::MAX_EXTENT
+            ),
+            BuildError::TooManyPrimitives(n) => write!(f, "cannot build the BVH: {n} primitives (at most 2^32 - 2)"),
+        }
+    }
+}
+
+impl std::error::Error for BuildError {}
+
 /// The scene with its BVH.
 pub struct World {
     /// The scene.
@@ -81,9 +117,14 @@ pub struct World {
 }
 
 impl World {
-    /// Builds the BVH over the scene's primitives.
-    pub fn build(scene: Scene) -> World {
+    /// Builds the BVH over the scene's primitives; refuses boxes that are not finite or exceed
+    /// `scene::MAX_EXTENT` (obvhs would panic on them).
+    pub fn build(scene: Scene) -> Result<World, BuildError> {
         let t0 = std::time::Instant::now();
+        let nprim = scene.triangles.len() + scene.spheres.len();
+        if nprim >= u32::MAX as usize - 1 {
+            return Err(BuildError::TooManyPrimitives(nprim));
+        }
         let ntri = scene.ntri();
         let mut aabbs: Vec<Aabb> = scene
             .triangles
@@ -97,7 +138,14 @@ impl World {
         aabbs.extend(scene.spheres.iter().map(|s| {
             Aabb::new(Vec3A::from(s.center - Vec3::splat(s.radius)), Vec3A::from(s.center + Vec3::splat(s.radius)))
         }));
-        let bvh = build_cwbvh(&aabbs, BvhBuildParams::medium_build(), &mut Duration::default());
+        if let Some(i) = aabbs
+            .iter()
+            .position(|b| !crate::scene::within_extent(b.min.into()) || !crate::scene::within_extent(b.max.into()))
+        {
+            let b = aabbs[i];
+            return Err(BuildError::OutOfRange { prim: i as u32, lo: b.min.to_array(), hi: b.max.to_array() });
+        }
+        let bvh = build::build_cwbvh(&aabbs, BvhBuildParams::medium_build());
         let slot_prim: Vec<u32> = bvh.primitive_indices.clone();
         let dummy = ObvTriangle { v0: Vec3A::ZERO, v1: Vec3A::X, v2: Vec3A::Y };
         let slot_tri = slot_prim
@@ -111,7 +159,7 @@ impl World {
                 }
             })
             .collect();
-        World { scene, bvh, slot_tri, slot_prim, build_secs: t0.elapsed().as_secs_f64() }
+        Ok(World { scene, bvh, slot_tri, slot_prim, build_secs: t0.elapsed().as_secs_f64() })
     }
 
     #[inline]

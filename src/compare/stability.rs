@@ -244,11 +244,13 @@ pub fn run_suite(cfg: &StabilityConfig) -> Result<Vec<StabilityRecord>, String> 
         let mut opts = base.clone();
         if let Some(f) = case.bound_factor {
             match crate::scene::load(&scene_path) {
-                Ok(s) => {
-                    let world = crate::accel::World::build(s);
-                    let b = crate::integrators::iws::default_bound(&world, opts.iws.vpl_paths) as f64 * f;
-                    opts.iws.bound = Some(b as f32);
-                }
+                Ok(s) => match crate::accel::World::build(s) {
+                    Ok(world) => {
+                        let b = crate::integrators::iws::default_bound(&world, opts.iws.vpl_paths) as f64 * f;
+                        opts.iws.bound = Some(b as f32);
+                    }
+                    Err(e) => eprintln!("stability: {}: {e}", case.name),
+                },
                 Err(e) => eprintln!("stability: {}: {e}", case.name),
             }
         }

@@ -5,10 +5,11 @@
 //! warning; everything else that is wrong (NaN, negative values, zero-area lights, a bad fov, a
 //! missing OBJ, an empty scene) is an error, never a panic.
 
+use super::limits::{extent_message, within_extent};
 use super::schema::{Doc, LightDef, MaterialDef, ShapeDef};
 use super::{
-    light_power, obj, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere, Triangle,
-    NO_EMITTER,
+    light_power, limits, locate, obj, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene,
+    Sphere, Triangle, NO_EMITTER,
 };
 use crate::math::{fnv1a, Vec3, PI};
 use crate::sampling::distribution::Distribution1D;
@@ -139,12 +140,9 @@ fn v3(a: [f32; 3]) -> Vec3 {
 /// Loads a scene file (and the OBJ files it names).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let file = path.display().to_string();
-    let src = std::fs::read_to_string(path).map_err(|e| SceneError {
-        file: file.clone(),
-        line: 0,
-        key: String::new(),
-        message: format!("cannot read scene file: {e}"),
-    })?;
+    let fail = |message: String| SceneError { file: file.clone(), line: 0, key: String::new(), message };
+    limits::check_regular_file(path, "scene file").map_err(fail)?;
+    let src = std::fs::read_to_string(path).map_err(|e| fail(format!("cannot read scene file: {e}")))?;
     let dir = path.parent().unwrap_or(Path::new("."));
     load_str(&src, &file, dir)
 }
@@ -161,12 +159,15 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
             .filter(|_| msg.contains("unknown field") || msg.contains("missing field"))
             .unwrap_or("")
             .to_string();
+        let from = e.span().map_or(0, |s| s.start);
         if msg.contains("unknown field") && !key.is_empty() {
             // the span may cover a whole table (or array of tables): find the key's own line
-            let from = e.span().map_or(0, |s| s.start);
-            if let Some(l) = key_line_after(src, from, &key) {
+            if let Some(l) = locate::key_line_after(src, from, &key) {
                 line = l;
             }
+        } else if let Some((l, path)) = e.span().and_then(|_| locate::key_path_at(src, from)) {
+            // a value error (wrong type, bad length): the span is the value's; name its key
+            return SceneError { file: cx.file.clone(), line: l, key: path, message: msg };
         }
         SceneError { file: cx.file.clone(), line, key, message: msg }
     })?;
@@ -176,9 +177,16 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
     // camera
     let cs = doc.camera.span();
     let c = doc.camera.get_ref();
-    if !finite3(c.position) || !finite3(c.look_at) || !finite3(c.up) {
-        return Err(cx.err(cs, "camera.position", "camera vectors must be finite"));
+    for (k, p) in [("position", c.position), ("look_at", c.look_at)] {
+        if !within_extent(v3(p)) {
+            return Err(cx.err(cs, &format!("camera.{k}"), extent_message(&format!("camera {k}"), v3(p))));
+        }
     }
+    if !finite3(c.up) || v3(c.up).abs().max_element() == 0.0 {
+        return Err(cx.err(cs, "camera.up", "up must be finite and non-zero"));
+    }
+    // scaled to max |component| 1, so that normalizing cannot overflow
+    let up = v3(c.up) / v3(c.up).abs().max_element();
     if !(c.fov.is_finite() && c.fov > 0.0 && c.fov < 180.0) {
         return Err(cx.err(cs, "camera.fov", format!("fov must be in (0, 180) degrees, got {}", c.fov)));
     }
@@ -189,10 +197,10 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
     if fwd.length() < 1e-9 {
         return Err(cx.err(cs, "camera.look_at", "look_at equals position"));
     }
-    if fwd.normalize().cross(v3(c.up)).length() < 1e-6 {
+    if fwd.normalize().cross(up.normalize()).length() < 1e-6 {
         return Err(cx.err(cs, "camera.up", "up is parallel to the view direction"));
     }
-    let camera = Camera::new(v3(c.position), v3(c.look_at), v3(c.up), c.fov, c.resolution[0], c.resolution[1]);
+    let camera = Camera::new(v3(c.position), v3(c.look_at), up, c.fov, c.resolution[0], c.resolution[1]);
 
     // render defaults
     let mut render = RenderDefaults { method: "pt".into(), spp: None, time: None, seed: 0, max_depth: 64 };
@@ -235,7 +243,8 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
             }
             Ok(v3(a))
         };
-        let mat = match m.get_ref() {
+        let def = m.get_ref().resolve().map_err(|(k, msg)| bad(&k, &msg))?;
+        let mat = match &def {
             MaterialDef::Diffuse { albedo } => Material::Diffuse { albedo: refl("albedo", *albedo)? },
             MaterialDef::Glossy { albedo, specular, exponent } => {
                 let (a, s) = (refl("albedo", *albedo)?, refl("specular", *specular)?);
@@ -262,8 +271,9 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
     // shapes
     let mut triangles: Vec<Triangle> = Vec::new();
     let mut spheres: Vec<Sphere> = Vec::new();
-    let mut tri_emission: Vec<Option<Vec3>> = Vec::new();
-    let mut sph_emission: Vec<Option<Vec3>> = Vec::new();
+    // (emission, shape index) per primitive
+    let mut tri_emission: Vec<Option<(Vec3, usize)>> = Vec::new();
+    let mut sph_emission: Vec<Option<(Vec3, usize)>> = Vec::new();
     for (idx, s) in doc.shape.iter().enumerate() {
         let ss = s.span();
         let key = |k: &str| format!("shape[{idx}].{k}");
@@ -277,8 +287,9 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
                 }
                 None => None,
             };
-            if e.is_some() {
-                return Ok((0, e)); // emitters reflect nothing
+            if e.is_some() || (emission.is_some() && mat.is_none()) {
+                // emitters reflect nothing; a zero emission without a material is a black absorber
+                return Ok((0, e));
             }
             match mat {
                 Some(m) => names
@@ -288,21 +299,32 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
                 None => Err(cx.err(ss.clone(), &key("material"), "a shape needs `material` (or `emission`)")),
             }
         };
-        match s.get_ref() {
+        let def = s.get_ref().resolve().map_err(|(k, m)| cx.err(ss.clone(), &key(&k), m))?;
+        match &def {
             ShapeDef::Quad { corner, u, v, material, emission } => {
-                if !finite3(*corner) || !finite3(*u) || !finite3(*v) {
-                    return Err(cx.err(ss, &key("corner"), "quad vectors must be finite"));
+                for (k, a) in [("corner", corner), ("u", u), ("v", v)] {
+                    if !finite3(*a) {
+                        return Err(cx.err(ss, &key(k), format!("quad `{k}` must be finite, got {a:?}")));
+                    }
                 }
                 let (mat, e) = resolve(material, emission)?;
                 let (c, u, v) = (v3(*corner), v3(*u), v3(*v));
+                // the vertex that leaves the extent names the vector that took it there
+                let blame = if u.abs().max_element() >= v.abs().max_element() { "u" } else { "v" };
+                for (k, p) in [("corner", c), ("u", c + u), ("v", c + v), (blame, c + u + v)] {
+                    if !within_extent(p) {
+                        return Err(cx.err(ss, &key(k), extent_message("quad vertex", p)));
+                    }
+                }
                 if u.cross(v).length() < 1e-12 {
                     return Err(cx.err(ss, &key("v"), "zero-area quad (u × v = 0)"));
                 }
                 for p in [[c, c + u, c + u + v], [c, c + u + v, c + v]] {
-                    if let Some(t) = make_triangle(p, None, mat) {
-                        triangles.push(t);
-                        tri_emission.push(e);
-                    }
+                    let t = make_triangle(p, None, mat).ok_or_else(|| {
+                        cx.err(ss.clone(), &key("v"), "degenerate quad: |u × v| is zero or not finite")
+                    })?;
+                    triangles.push(t);
+                    tri_emission.push(e.map(|e| (e, idx)));
                 }
             }
             ShapeDef::Sphere { center, radius, material, emission, inward } => {
@@ -316,6 +338,13 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
                         format!("radius must be positive and finite, got {radius}"),
                     ));
                 }
+                let (c, r) = (v3(*center), Vec3::splat(*radius));
+                if !within_extent(c) {
+                    return Err(cx.err(ss, &key("center"), extent_message("sphere center", c)));
+                }
+                if !within_extent(c - r) || !within_extent(c + r) {
+                    return Err(cx.err(ss, &key("radius"), extent_message("sphere bounds corner", c + r.copysign(c))));
+                }
                 let (mat, e) = resolve(material, emission)?;
                 spheres.push(Sphere {
                     center: v3(*center),
@@ -324,7 +353,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
                     material: mat,
                     emitter: NO_EMITTER,
                 });
-                sph_emission.push(e);
+                sph_emission.push(e.map(|e| (e, idx)));
             }
             ShapeDef::Mesh { file: f, normals, material, emission, translate, scale, rotate_y } => {
                 let smooth = match normals.as_str() {
@@ -342,9 +371,14 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
                 let t = translate.unwrap_or([0.0; 3]);
                 let sc = scale.unwrap_or(1.0);
                 let ry = rotate_y.unwrap_or(0.0);
-                let scale_ok = sc.is_finite() && sc > 0.0;
-                if !finite3(t) || !scale_ok || !ry.is_finite() {
-                    return Err(cx.err(ss, &key("scale"), "transform values must be finite and scale positive"));
+                if !within_extent(v3(t)) {
+                    return Err(cx.err(ss, &key("translate"), extent_message("translate", v3(t))));
+                }
+                if !(sc.is_finite() && sc > 0.0) {
+                    return Err(cx.err(ss, &key("scale"), format!("scale must be positive and finite, got {sc}")));
+                }
+                if !ry.is_finite() {
+                    return Err(cx.err(ss, &key("rotate_y"), format!("rotate_y must be finite, got {ry}")));
                 }
                 let path = dir.join(f);
                 let mesh = obj::load_mesh(&path, smooth).map_err(|m| cx.err(ss.clone(), &key("file"), m))?;
@@ -360,11 +394,26 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
                 for (k, tri) in mesh.triangles.iter().enumerate() {
                     let p = [xf(tri[0]), xf(tri[1]), xf(tri[2])];
                     let n = mesh.normals.as_ref().map(|ns| [xn(ns[k][0]), xn(ns[k][1]), xn(ns[k][2])]);
+                    // non-finite OBJ vertices make a degenerate face (skipped below); finite ones
+                    // must stay inside the extent after the transform
+                    let far = p.iter().find(|&&q| !within_extent(q));
+                    if let (Some(&q), true) = (far, tri.iter().all(|r| r.is_finite())) {
+                        let blame = if tri.iter().any(|&r| !within_extent(r)) {
+                            "file"
+                        } else if scale.is_some() {
+                            "scale"
+                        } else {
+                            "translate"
+                        };
+                        let at = format!("(face {} of {}, after the transform)", k + 1, path.display());
+                        let msg = format!("{} {at}", extent_message("mesh vertex", q));
+                        return Err(cx.err(ss, &key(blame), msg));
+                    }
                     match make_triangle(p, n, mat) {
                         Some(t) => {
                             flat_fallback += (n.is_some() && t.n.is_none()) as usize;
                             triangles.push(t);
-                            tri_emission.push(e);
+                            tri_emission.push(e.map(|e| (e, idx)));
                         }
                         None => skipped += 1,
                     }
@@ -401,26 +450,30 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
 
     // emitters
     let mut emitters = Vec::new();
+    let mut emitter_shape = Vec::new(); // shape index of each emitter (messages)
     for (i, e) in tri_emission.iter().enumerate() {
-        if let Some(le) = e {
+        if let Some((le, shape)) = e {
             triangles[i].emitter = emitters.len() as u32;
             emitters.push(Emitter { prim: i as u32, radiance: *le, area: triangles[i].area });
+            emitter_shape.push(*shape);
         }
     }
     let ntri = triangles.len() as u32;
     for (i, e) in sph_emission.iter().enumerate() {
-        if let Some(le) = e {
+        if let Some((le, shape)) = e {
             spheres[i].emitter = emitters.len() as u32;
             let r = spheres[i].radius;
             emitters.push(Emitter { prim: ntri + i as u32, radiance: *le, area: 4.0 * PI * r * r });
+            emitter_shape.push(*shape);
         }
     }
     let mut point_lights = Vec::new();
     for (idx, l) in doc.light.iter().enumerate() {
         let ls = l.span();
-        let LightDef::Point { position, intensity } = l.get_ref();
-        if !finite3(*position) {
-            return Err(cx.err(ls, &format!("light[{idx}].position"), "position must be finite"));
+        let def = l.get_ref().resolve().map_err(|(k, m)| cx.err(ls.clone(), &format!("light[{idx}].{k}"), m))?;
+        let LightDef::Point { position, intensity } = &def;
+        if !within_extent(v3(*position)) {
+            return Err(cx.err(ls, &format!("light[{idx}].position"), extent_message("position", v3(*position))));
         }
         if !finite3(*intensity) || intensity.iter().any(|&x| x < 0.0) {
             return Err(cx.err(ls, &format!("light[{idx}].intensity"), "intensity must be finite and non-negative"));
@@ -430,6 +483,16 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
     let mut lights: Vec<LightRef> = (0..emitters.len() as u32).map(LightRef::Area).collect();
     lights.extend((0..point_lights.len() as u32).map(LightRef::Point));
     let powers: Vec<f32> = lights.iter().map(|&l| light_power(&emitters, &point_lights, l)).collect();
+    if let Some(i) = powers.iter().position(|p| !p.is_finite()) {
+        let (span, k) = match lights[i] {
+            LightRef::Area(e) => {
+                let s = emitter_shape[e as usize];
+                (doc.shape[s].span(), format!("shape[{s}].emission"))
+            }
+            LightRef::Point(p) => (doc.light[p as usize].span(), format!("light[{p}].intensity")),
+        };
+        return Err(cx.err(span, &k, "the light's power (radiance × area × π, or 4π × intensity) overflows f32"));
+    }
     let light_pick = Distribution1D::new(&powers).ok_or_else(|| SceneError {
         file: cx.file.clone(),
         line: 1,
@@ -442,7 +505,8 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
     for (i, r) in doc.roi.iter().enumerate() {
         let rd = r.get_ref();
         let [x, y, w, h] = rd.rect;
-        if w == 0 || h == 0 || x + w > camera.width || y + h > camera.height {
+        let inside = |o: u32, len: u32, size: u32| o.checked_add(len).is_some_and(|e| e <= size);
+        if w == 0 || h == 0 || !inside(x, w, camera.width) || !inside(y, h, camera.height) {
             return Err(cx.err(
                 r.span(),
                 &format!("roi[{i}].rect"),
@@ -504,23 +568,12 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
     })
 }
 
-/// 1-based line of the first `key = …` at or after byte `from`.
-fn key_line_after(src: &str, from: usize, key: &str) -> Option<usize> {
-    let mut off = 0usize;
-    for (i, line) in src.split_inclusive('\n').enumerate() {
-        let t = line.trim_start();
-        if off + line.len() > from && t.starts_with(key) && t[key.len()..].trim_start().starts_with('=') {
-            return Some(i + 1);
-        }
-        off += line.len();
-    }
-    None
-}
-
 /// Builds a triangle, or `None` when degenerate (zero area or non-finite).
 fn make_triangle(p: [Vec3; 3], n: Option<[Vec3; 3]>, material: u32) -> Option<Triangle> {
     let c = (p[1] - p[0]).cross(p[2] - p[0]);
-    let len = c.length();
+    // scaled by the largest component first, so that |c|² cannot overflow (|c| up to 1e25)
+    let m = c.abs().max_element();
+    let len = if m > 0.0 { m * (c / m).length() } else { 0.0 };
     if !(len.is_finite() && len > 1e-12) {
         return None;
     }

@@ -9,12 +9,15 @@
 
 mod camera;
 mod file;
+mod limits;
+mod locate;
 mod material;
 mod obj;
 mod schema;
 
 pub use camera::Camera;
 pub use file::{load, load_str, parse_duration, SceneError};
+pub use limits::{within_extent, MAX_EXTENT};
 pub use material::Material;
 
 use crate::math::{luminance, Rgb, Vec3, PI};

@@ -18,6 +18,7 @@ pub struct Mesh {
 
 /// Loads an OBJ file; errors are messages that name the file.
 pub fn load_mesh(path: &Path, smooth: bool) -> Result<Mesh, String> {
+    super::limits::check_regular_file(path, "OBJ")?;
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read OBJ `{}`: {e}", path.display()))?;
     let bytes_hash = crate::math::fnv1a(0xcbf2_9ce4_8422_2325, &bytes);
     let opts = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };

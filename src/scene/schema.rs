@@ -12,11 +12,11 @@ pub(super) struct Doc {
     pub(super) camera: Spanned<CameraDef>,
     pub(super) render: Option<Spanned<RenderDef>>,
     #[serde(default)]
-    pub(super) materials: BTreeMap<String, Spanned<MaterialDef>>,
+    pub(super) materials: BTreeMap<String, Spanned<MaterialRaw>>,
     #[serde(default)]
-    pub(super) shape: Vec<Spanned<ShapeDef>>,
+    pub(super) shape: Vec<Spanned<ShapeRaw>>,
     #[serde(default)]
-    pub(super) light: Vec<Spanned<LightDef>>,
+    pub(super) light: Vec<Spanned<LightRaw>>,
     #[serde(default)]
     pub(super) roi: Vec<Spanned<RoiDef>>,
     pub(super) forecast: Option<Spanned<ForecastDef>>,
@@ -47,8 +47,22 @@ pub(super) struct RenderDef {
     pub(super) max_depth: Option<u32>,
 }
 
+/// A `[materials.NAME]` table as written: `type` plus the union of every type's keys. Kept flat
+/// (not a serde-tagged enum, which buffers the table and loses the spans of its values) so that a
+/// value of the wrong type is reported at its own line; `resolve` checks the keys per type.
 #[derive(Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
+pub(super) struct MaterialRaw {
+    #[serde(rename = "type")]
+    kind: String,
+    albedo: Option<[f32; 3]>,
+    specular: Option<[f32; 3]>,
+    exponent: Option<f32>,
+    reflectance: Option<[f32; 3]>,
+    ior: Option<f32>,
+}
+
+/// A material by type (after `MaterialRaw::resolve`).
 pub(super) enum MaterialDef {
     Diffuse { albedo: [f32; 3] },
     Glossy { albedo: [f32; 3], specular: [f32; 3], exponent: f32 },
@@ -56,8 +70,85 @@ pub(super) enum MaterialDef {
     Glass { ior: f32 },
 }
 
+/// A key problem found by `resolve`: (the key's leaf name, message).
+pub(super) type Bad = (String, String);
+
+fn need<T: Clone>(v: &Option<T>, key: &str, kind: &str) -> Result<T, Bad> {
+    v.clone().ok_or_else(|| (key.to_string(), format!("missing key `{key}` (required for type `{kind}`)")))
+}
+
+/// Rejects keys present in the table that the type does not take.
+fn only(kind: &str, allowed: &[&str], present: &[(&str, bool)]) -> Result<(), Bad> {
+    match present.iter().find(|(k, p)| *p && !allowed.contains(k)) {
+        Some((k, _)) => {
+            Err((k.to_string(), format!("key `{k}` does not apply to type `{kind}` (it takes {})", allowed.join(", "))))
+        }
+        None => Ok(()),
+    }
+}
+
+fn unknown_type(what: &str, kind: &str, types: &str) -> Bad {
+    ("type".into(), format!("unknown {what} type `{kind}` (one of {types})"))
+}
+
+impl MaterialRaw {
+    pub(super) fn resolve(&self) -> Result<MaterialDef, Bad> {
+        let k = self.kind.as_str();
+        let present = [
+            ("albedo", self.albedo.is_some()),
+            ("specular", self.specular.is_some()),
+            ("exponent", self.exponent.is_some()),
+            ("reflectance", self.reflectance.is_some()),
+            ("ior", self.ior.is_some()),
+        ];
+        Ok(match k {
+            "diffuse" => {
+                only(k, &["albedo"], &present)?;
+                MaterialDef::Diffuse { albedo: need(&self.albedo, "albedo", k)? }
+            }
+            "glossy" => {
+                only(k, &["albedo", "specular", "exponent"], &present)?;
+                MaterialDef::Glossy {
+                    albedo: need(&self.albedo, "albedo", k)?,
+                    specular: need(&self.specular, "specular", k)?,
+                    exponent: need(&self.exponent, "exponent", k)?,
+                }
+            }
+            "mirror" => {
+                only(k, &["reflectance"], &present)?;
+                MaterialDef::Mirror { reflectance: need(&self.reflectance, "reflectance", k)? }
+            }
+            "glass" => {
+                only(k, &["ior"], &present)?;
+                MaterialDef::Glass { ior: need(&self.ior, "ior", k)? }
+            }
+            _ => return Err(unknown_type("material", k, "diffuse, glossy, mirror, glass")),
+        })
+    }
+}
+
+/// A `[[shape]]` table as written (flat, see `MaterialRaw`).
 #[derive(Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
+pub(super) struct ShapeRaw {
+    #[serde(rename = "type")]
+    kind: String,
+    corner: Option<[f32; 3]>,
+    u: Option<[f32; 3]>,
+    v: Option<[f32; 3]>,
+    center: Option<[f32; 3]>,
+    radius: Option<f32>,
+    inward: Option<bool>,
+    file: Option<String>,
+    normals: Option<String>,
+    translate: Option<[f32; 3]>,
+    scale: Option<f32>,
+    rotate_y: Option<f32>,
+    material: Option<String>,
+    emission: Option<[f32; 3]>,
+}
+
+/// A shape by type (after `ShapeRaw::resolve`).
 pub(super) enum ShapeDef {
     Quad {
         corner: [f32; 3],
@@ -71,12 +162,10 @@ pub(super) enum ShapeDef {
         radius: f32,
         material: Option<String>,
         emission: Option<[f32; 3]>,
-        #[serde(default)]
         inward: bool,
     },
     Mesh {
         file: String,
-        #[serde(default = "default_normals")]
         normals: String,
         material: Option<String>,
         emission: Option<[f32; 3]>,
@@ -86,14 +175,88 @@ pub(super) enum ShapeDef {
     },
 }
 
-fn default_normals() -> String {
-    "flat".into()
+impl ShapeRaw {
+    pub(super) fn resolve(&self) -> Result<ShapeDef, Bad> {
+        let k = self.kind.as_str();
+        let present = [
+            ("corner", self.corner.is_some()),
+            ("u", self.u.is_some()),
+            ("v", self.v.is_some()),
+            ("center", self.center.is_some()),
+            ("radius", self.radius.is_some()),
+            ("inward", self.inward.is_some()),
+            ("file", self.file.is_some()),
+            ("normals", self.normals.is_some()),
+            ("translate", self.translate.is_some()),
+            ("scale", self.scale.is_some()),
+            ("rotate_y", self.rotate_y.is_some()),
+        ];
+        let (material, emission) = (self.material.clone(), self.emission);
+        Ok(match k {
+            "quad" => {
+                only(k, &["corner", "u", "v", "material", "emission"], &present)?;
+                ShapeDef::Quad {
+                    corner: need(&self.corner, "corner", k)?,
+                    u: need(&self.u, "u", k)?,
+                    v: need(&self.v, "v", k)?,
+                    material,
+                    emission,
+                }
+            }
+            "sphere" => {
+                only(k, &["center", "radius", "inward", "material", "emission"], &present)?;
+                ShapeDef::Sphere {
+                    center: need(&self.center, "center", k)?,
+                    radius: need(&self.radius, "radius", k)?,
+                    inward: self.inward.unwrap_or(false),
+                    material,
+                    emission,
+                }
+            }
+            "mesh" => {
+                let keys = ["file", "normals", "translate", "scale", "rotate_y", "material", "emission"];
+                only(k, &keys, &present)?;
+                ShapeDef::Mesh {
+                    file: need(&self.file, "file", k)?,
+                    normals: self.normals.clone().unwrap_or_else(|| "flat".into()),
+                    material,
+                    emission,
+                    translate: self.translate,
+                    scale: self.scale,
+                    rotate_y: self.rotate_y,
+                }
+            }
+            _ => return Err(unknown_type("shape", k, "quad, sphere, mesh")),
+        })
+    }
 }
 
+/// A `[[light]]` table as written (flat, see `MaterialRaw`).
 #[derive(Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
+pub(super) struct LightRaw {
+    #[serde(rename = "type")]
+    kind: String,
+    position: Option<[f32; 3]>,
+    intensity: Option<[f32; 3]>,
+}
+
+/// A light by type (after `LightRaw::resolve`).
 pub(super) enum LightDef {
     Point { position: [f32; 3], intensity: [f32; 3] },
+}
+
+impl LightRaw {
+    pub(super) fn resolve(&self) -> Result<LightDef, Bad> {
+        let k = self.kind.as_str();
+        match k {
+            "point" => Ok(LightDef::Point {
+                position: need(&self.position, "position", k)?,
+                intensity: need(&self.intensity, "intensity", k)?,
+            }),
+            _ => Err(unknown_type("light", k, "point")),
+        }
+    }
 }
 
 #[derive(Deserialize)]

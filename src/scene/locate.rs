@@ -1,0 +1,79 @@
+//! Locating TOML errors in the scene text: the line and dotted key path (`shape[2].radius`,
+//! `camera.fov`) of the value a deserialization error points at, found from the source text.
+//!
+//! The scene format is written one `key = value` per line under `[table]` / `[[array]]` headers
+//! (scenes/README.md); a value spanning several lines (an array) belongs to the nearest `key =`
+//! above it. Invariant: the returned line is at or before the error's own line.
+
+/// `(is_array, name)` of a table header line (`[camera]`, `[[shape]]`, `[materials.white]`).
+fn header(line: &str) -> Option<(bool, &str)> {
+    let t = line.trim_start().strip_prefix('[')?;
+    let arr = t.starts_with('[');
+    let rest = t.trim_start_matches('[').trim_start();
+    if !rest.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_' || c == '"') {
+        return None; // an array value such as `[0.0, 1.0],`
+    }
+    Some((arr, rest.split(']').next()?.trim()))
+}
+
+/// The key of a `key = value` line.
+fn leading_key(line: &str) -> Option<&str> {
+    let t = line.trim_start();
+    let end = t.find(|c: char| !(c.is_ascii_alphanumeric() || "_-.\"".contains(c))).unwrap_or(t.len());
+    (end > 0 && t[end..].trim_start().starts_with('=')).then(|| &t[..end])
+}
+
+/// 1-based line and dotted key path of the `key = value` that byte `offset` lies in.
+pub(super) fn key_path_at(src: &str, offset: usize) -> Option<(usize, String)> {
+    let lines: Vec<&str> = src.split_inclusive('\n').collect();
+    let mut off = 0;
+    let mut at = lines.len().checked_sub(1)?;
+    for (i, l) in lines.iter().enumerate() {
+        if off + l.len() > offset {
+            at = i;
+            break;
+        }
+        off += l.len();
+    }
+    let (ki, leaf) = (0..=at).rev().map_while(|i| header(lines[i]).is_none().then_some(i)).find_map(|i| {
+        let k = leading_key(lines[i])?;
+        Some((i, k))
+    })?;
+    let table = (0..ki).rev().find_map(|i| header(lines[i])).map(|(arr, name)| {
+        if arr {
+            let n = lines[..ki].iter().filter(|l| header(l) == Some((true, name))).count();
+            format!("{name}[{}].", n - 1)
+        } else {
+            format!("{name}.")
+        }
+    });
+    Some((ki + 1, format!("{}{leaf}", table.unwrap_or_default())))
+}
+
+/// 1-based line of the first `key = …` at or after byte `from`.
+pub(super) fn key_line_after(src: &str, from: usize, key: &str) -> Option<usize> {
+    let mut off = 0usize;
+    for (i, line) in src.split_inclusive('\n').enumerate() {
+        let t = line.trim_start();
+        if off + line.len() > from && t.starts_with(key) && t[key.len()..].trim_start().starts_with('=') {
+            return Some(i + 1);
+        }
+        off += line.len();
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn finds_key_paths() {
+        let src = "[camera]\nfov = \"wide\"\n[[shape]]\ntype = \"quad\"\n[[shape]]\nradius = \"big\"\nu = [\n  1.0,\n  \"x\"]\n[materials.white]\nalbedo = 1\n";
+        let at = |pat: &str| key_path_at(src, src.find(pat).unwrap());
+        assert_eq!(at("\"wide\""), Some((2, "camera.fov".into())));
+        assert_eq!(at("\"big\""), Some((6, "shape[1].radius".into())));
+        assert_eq!(at("\"x\""), Some((7, "shape[1].u".into())));
+        assert_eq!(at("1\n"), Some((11, "materials.white.albedo".into())));
+    }
+}
