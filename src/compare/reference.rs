@@ -13,7 +13,6 @@
 
 use crate::cli::RenderArgs;
 use crate::distributed::Cluster;
-use crate::image_io;
 use crate::integrators::Method;
 use crate::pipeline::{self, with_ext};
 use serde_json::json;
@@ -48,6 +47,7 @@ pub fn run_reference(
         return Err("reference: only `--method pt` (the unbiased reference) is supported".into());
     }
     let base = args.job();
+    crate::atomic_io::check_output_prefix(&base.out)?;
     let scene = crate::scene::load(&base.scene).map_err(|e| e.to_string())?;
     let seed = base.seed.unwrap_or(scene.render.seed);
     let time = base.time.or(if base.spp.is_some() { None } else { scene.render.time });
@@ -84,7 +84,8 @@ pub fn run_reference(
         return Err(format!("{}: the two halves have different sizes", prefix.display()));
     }
     film.merge(&h1.film);
-    let mean = pipeline::write_images(&prefix, &film)?;
+    let mut outputs = crate::atomic_io::FileSet::new(); // mean EXR, PNG and JSON as one set
+    let mean = pipeline::image_files(&prefix, &film, &mut outputs)?;
     let spp_total = h0.report["spp"].as_u64().unwrap_or(0) + h1.report["spp"].as_u64().unwrap_or(0);
     let nonfinite_pixels = mean.pixels.iter().filter(|p| p.iter().any(|v| !v.is_finite())).count();
     let report = json!({
@@ -111,6 +112,7 @@ pub fn run_reference(
         "halves": [h0.report, h1.report],
     });
     let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
-    image_io::atomic_write(&with_ext(&prefix, "json"), text.as_bytes())?;
+    outputs.add(with_ext(&prefix, "json"), text.into_bytes());
+    outputs.commit()?;
     Ok(Some(report))
 }
