@@ -209,10 +209,8 @@ fn remove_all(fs: &mut dyn FileOps, paths: &[PathBuf]) {
 
 /// Persists the renames (best effort: not every platform can fsync a directory).
 fn sync_dirs(files: &[(PathBuf, Vec<u8>)]) {
-    let mut dirs: Vec<&Path> = files
-        .iter()
-        .map(|(p, _)| p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new(".")))
-        .collect();
+    let mut dirs: Vec<&Path> =
+        files.iter().map(|(p, _)| p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."))).collect();
     dirs.dedup();
     for d in dirs {
         if let Ok(f) = std::fs::File::open(d) {

@@ -204,7 +204,8 @@ fn tick(v: f64) -> String {
     } else if !(1e-2..1e4).contains(&a) {
         let s = format!("{v:.2e}");
         let (mantissa, exp) = s.split_once('e').unwrap_or((&s, "0"));
-        let mantissa = if mantissa.contains('.') { mantissa.trim_end_matches('0').trim_end_matches('.') } else { mantissa };
+        let mantissa =
+            if mantissa.contains('.') { mantissa.trim_end_matches('0').trim_end_matches('.') } else { mantissa };
         format!("{mantissa}e{exp}")
     } else {
         let s = format!("{v:.3}");
@@ -497,7 +498,9 @@ mod tests {
             assert!(t.len() >= MIN_TICKS, "{lo}..{hi}: {t:?}");
             assert!(t.windows(2).all(|w| w[0] < w[1]) && t.iter().all(|&v| v >= lo && v <= hi), "{lo}..{hi}: {t:?}");
         }
-        assert!(log_ticks(0.0, 1.0).is_empty() && log_ticks(2.0, 1.0).is_empty() && log_ticks(1.0, f64::NAN).is_empty());
+        assert!(
+            log_ticks(0.0, 1.0).is_empty() && log_ticks(2.0, 1.0).is_empty() && log_ticks(1.0, f64::NAN).is_empty()
+        );
     }
 
     #[test]

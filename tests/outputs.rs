@@ -156,7 +156,11 @@ fn a_render_that_cannot_write_its_json_keeps_the_old_images() {
     std::fs::remove_file(dir.join("r.json")).unwrap();
     std::fs::create_dir(dir.join("r.json")).unwrap();
     job.seed = Some(4);
-    let err = match forecast::pipeline::render(&job, &forecast::distributed::local::Local::new(), std::time::Instant::now()) {
+    let err = match forecast::pipeline::render(
+        &job,
+        &forecast::distributed::local::Local::new(),
+        std::time::Instant::now(),
+    ) {
         Ok(_) => panic!("the render replaced its outputs although r.json is a directory"),
         Err(e) => e,
     };
