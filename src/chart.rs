@@ -2,7 +2,8 @@
 //!
 //! * Each chart is written twice: an SVG (vector, text as `<text>` elements) and a PNG of the same
 //!   pixel size (rendered into an RGB buffer with `BitMapBackend::with_buffer`, encoded by
-//!   [`crate::image_io::write_png_rgb8`]). Both files are written atomically.
+//!   [`crate::image_io::encode_png_rgb8`]). The two files are replaced as a set
+//!   ([`crate::atomic_io::FileSet`]: both or neither).
 //! * Text uses the DejaVu Sans font shipped in `assets/DejaVuSans.ttf` (compiled in with
 //!   `include_bytes!`), registered once as `"sans-serif"`; no system fonts are needed.
 //! * Axes may be logarithmic; on a log axis points with non-positive coordinates are dropped.
@@ -15,7 +16,8 @@
 //!
 //! This is the only module that uses `plotters`.
 
-use crate::image_io::{atomic_write, write_png_rgb8};
+use crate::atomic_io::FileSet;
+use crate::image_io::encode_png_rgb8;
 use plotters::coord::ranged1d::{AsRangedCoord, DefaultFormatting, KeyPointHint, Ranged, ValueFormatter};
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
@@ -120,14 +122,16 @@ pub fn line_chart(path_svg: &Path, path_png: &Path, spec: &ChartSpec, series: &[
         let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
         render(root, spec, series, bounds).map_err(|e| format!("{}: {e}", path_svg.display()))?;
     }
-    atomic_write(path_svg, svg.as_bytes())?;
-
     let mut rgb = vec![255u8; w as usize * h as usize * 3];
     {
         let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
         render(root, spec, series, bounds).map_err(|e| format!("{}: {e}", path_png.display()))?;
     }
-    write_png_rgb8(path_png, w as usize, h as usize, &rgb)
+    let png = encode_png_rgb8(w as usize, h as usize, &rgb).map_err(|e| format!("{}: {e}", path_png.display()))?;
+    let mut files = FileSet::new(); // the SVG and the PNG are replaced together or not at all
+    files.add(path_svg.to_path_buf(), svg.into_bytes());
+    files.add(path_png.to_path_buf(), png);
+    files.commit()
 }
 
 /// Axis ranges `((x0, x1), (y0, y1))` covering all usable points and bands, padded.
