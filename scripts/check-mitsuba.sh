@@ -2,7 +2,8 @@
 # Mitsuba agreement check for the path tracer (`pt`) on the cornell-box scene.
 #
 # Renders scenes/cornell-box.toml with `pt` at 256x256 and compares it with the independent
-# Mitsuba 3 reference in ../shared/reference (65,984 spp, plus two independent halves):
+# Mitsuba 3 reference committed in tests/reference (65,984 spp, plus two independent halves;
+# provenance in tests/reference/README.md):
 #   forecast diff TEST.exr REF.exr --half0 H0.exr --half1 H1.exr --png DIFF.png
 # `forecast diff` applies metrics::mitsuba_agreement and exits non-zero on failure:
 #   * every per-channel image mean within 0.5 % of the reference;
@@ -16,10 +17,9 @@
 # --release and use target/release/forecast), OUT (default out/mitsuba-check).
 set -euo pipefail
 
-root="$(git -C "$(dirname "$0")" rev-parse --show-toplevel)"
+root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
-shared="$root/../shared"
-ref_dir="$shared/reference"
+ref_dir="$root/tests/reference"
 ref="$ref_dir/cornell-box-mitsuba-256.exr"
 half0="$ref_dir/cornell-box-mitsuba-256.half0.exr"
 half1="$ref_dir/cornell-box-mitsuba-256.half1.exr"

@@ -14,7 +14,7 @@ use crate::sampling::warp::sample_cosine_hemisphere;
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// Median of a non-empty slice.
+/// Median of a slice (0 for an empty one).
 pub fn median(v: &mut [f64]) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     let n = v.len();
@@ -42,8 +42,11 @@ pub struct BenchReport {
     pub threads: usize,
 }
 
-/// Runs the benchmark on the current rayon pool.
+/// Runs the benchmark on the current rayon pool; `repeats` must be at least 1.
 pub fn run(world: &World, resolution: (u32, u32), repeats: usize) -> Result<BenchReport, String> {
+    if repeats == 0 {
+        return Err("--repeats 0: the medians need at least one repeat".into());
+    }
     let cam = world.scene.camera.with_resolution(256, 256);
     // Build the ray set: origins and normals of first hits.
     let mut pts: Vec<(Vec3, Vec3)> = Vec::new();
@@ -88,7 +91,7 @@ pub fn run(world: &World, resolution: (u32, u32), repeats: usize) -> Result<Benc
     args.pt.max_depth = Some(world.scene.render.max_depth);
     let integ = Method::Pt.build(world, &args, &Method::Pt.preprocess(world, &args, 7)?)?;
     let mut rays_per_sample = (0.0, 0.0);
-    for r in 0..repeats.max(1) {
+    for r in 0..repeats {
         let t = Instant::now();
         let hits: usize = rays
             .par_chunks(1024)

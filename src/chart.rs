@@ -2,18 +2,23 @@
 //!
 //! * Each chart is written twice: an SVG (vector, text as `<text>` elements) and a PNG of the same
 //!   pixel size (rendered into an RGB buffer with `BitMapBackend::with_buffer`, encoded by
-//!   [`crate::image_io::write_png_rgb8`]). Both files are written atomically.
+//!   [`crate::image_io::encode_png_rgb8`]). The two files are replaced as a set
+//!   ([`crate::atomic_io::FileSet`]: both or neither).
 //! * Text uses the DejaVu Sans font shipped in `assets/DejaVuSans.ttf` (compiled in with
 //!   `include_bytes!`), registered once as `"sans-serif"`; no system fonts are needed.
 //! * Axes may be logarithmic; on a log axis points with non-positive coordinates are dropped.
+//!   Log axes are labelled by [`log_ticks`]: whole decades when at least three fit, else
+//!   1-2-5 × 10^k, else 1…9 × 10^k, else evenly spaced round values, so a range inside one decade
+//!   (a `relmse-time` chart over 1–4 minutes) still gets labels; light grid lines at 1…9 × 10^k.
 //!   Optional min–max bands are shaded under their series. On log–log charts an optional
 //!   power-law guide `y ∝ x^slope` (e.g. slope −1 for error ∝ 1/spp) is drawn dashed.
 //! * No panics on bad input: empty or non-finite data gives an `Err` naming the output file.
 //!
 //! This is the only module that uses `plotters`.
 
-use crate::image_io::{atomic_write, write_png_rgb8};
-use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
+use crate::atomic_io::FileSet;
+use crate::image_io::encode_png_rgb8;
+use plotters::coord::ranged1d::{AsRangedCoord, DefaultFormatting, KeyPointHint, Ranged, ValueFormatter};
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -117,14 +122,16 @@ pub fn line_chart(path_svg: &Path, path_png: &Path, spec: &ChartSpec, series: &[
         let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
         render(root, spec, series, bounds).map_err(|e| format!("{}: {e}", path_svg.display()))?;
     }
-    atomic_write(path_svg, svg.as_bytes())?;
-
     let mut rgb = vec![255u8; w as usize * h as usize * 3];
     {
         let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
         render(root, spec, series, bounds).map_err(|e| format!("{}: {e}", path_png.display()))?;
     }
-    write_png_rgb8(path_png, w as usize, h as usize, &rgb)
+    let png = encode_png_rgb8(w as usize, h as usize, &rgb).map_err(|e| format!("{}: {e}", path_png.display()))?;
+    let mut files = FileSet::new(); // the SVG and the PNG are replaced together or not at all
+    files.add(path_svg.to_path_buf(), svg.into_bytes());
+    files.add(path_png.to_path_buf(), png);
+    files.commit()
 }
 
 /// Axis ranges `((x0, x1), (y0, y1))` covering all usable points and bands, padded.
@@ -182,7 +189,7 @@ fn render<DB: DrawingBackend>(
 ) -> Result<(), String> {
     root.fill(&WHITE).map_err(err_str)?;
     let lin = |a: f64, b: f64| RangedCoordf64::from(a..b);
-    let log = |a: f64, b: f64| (a..b).log_scale();
+    let log = |a: f64, b: f64| LogAxis { lo: a, hi: b };
     match (spec.log_x, spec.log_y) {
         (false, false) => plot(&root, spec, series, lin(x0, x1), lin(y0, y1)),
         (true, false) => plot(&root, spec, series, log(x0, x1), lin(y0, y1)),
@@ -192,17 +199,109 @@ fn render<DB: DrawingBackend>(
     root.present().map_err(err_str)
 }
 
-/// A short tick label: 3 significant digits, scientific outside [1e-2, 1e4).
+/// A short tick label: 3 significant digits without trailing zeros, scientific outside
+/// [1e-2, 1e4) (`2e-3`, `2.5e-3`, `60`, `0.25`).
 fn tick(v: f64) -> String {
     let a = v.abs();
     if v == 0.0 {
         "0".into()
     } else if !(1e-2..1e4).contains(&a) {
-        format!("{v:.1e}")
+        let s = format!("{v:.2e}");
+        let (mantissa, exp) = s.split_once('e').unwrap_or((&s, "0"));
+        let mantissa =
+            if mantissa.contains('.') { mantissa.trim_end_matches('0').trim_end_matches('.') } else { mantissa };
+        format!("{mantissa}e{exp}")
     } else {
         let s = format!("{v:.3}");
         let s = s.trim_end_matches('0').trim_end_matches('.');
         s.to_string()
+    }
+}
+
+/// Fewest labels a log axis gets before [`log_ticks`] tries a denser set.
+const MIN_TICKS: usize = 3;
+/// Most labels on a log axis (decades are thinned to every n-th beyond this).
+const MAX_TICKS: usize = 12;
+
+/// The values `m × 10^k` (for each mantissa `m`) inside `[lo, hi]`, ascending.
+fn mantissa_ticks(lo: f64, hi: f64, mantissas: &[f64]) -> Vec<f64> {
+    let (k0, k1) = (lo.log10().floor() as i32 - 1, hi.log10().ceil() as i32 + 1);
+    let mut v = Vec::new();
+    for k in k0..=k1 {
+        for &m in mantissas {
+            // m·10^k via a decimal string, so 0.2 is the f64 nearest 0.2 (not 2 × 0.1)
+            let x: f64 = format!("{m}e{k}").parse().unwrap_or(f64::NAN);
+            if x >= lo * (1.0 - 1e-12) && x <= hi * (1.0 + 1e-12) {
+                v.push(x);
+            }
+        }
+    }
+    v
+}
+
+/// Evenly spaced round values (step 1, 2 or 5 × 10^k) inside `[lo, hi]`, at least [`MIN_TICKS`].
+fn linear_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let raw = (hi - lo) / MIN_TICKS as f64;
+    let e = 10f64.powf(raw.log10().floor());
+    let step = [5.0, 2.0, 1.0].iter().map(|m| m * e).find(|&s| s <= raw).unwrap_or(e);
+    let first = (lo / step).ceil() as i64;
+    let last = (hi / step).floor() as i64;
+    (first..=last).map(|i| i as f64 * step).collect()
+}
+
+/// Tick values for a logarithmic axis over `[lo, hi]` (`0 < lo < hi`, both finite): whole
+/// decades if at least [`MIN_TICKS`] fit (every n-th decade if more than [`MAX_TICKS`]), else
+/// 1-2-5 × 10^k, else 1…9 × 10^k, else evenly spaced round values. Empty for an invalid range.
+pub fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    if !(lo > 0.0 && hi > lo && hi.is_finite()) {
+        return Vec::new();
+    }
+    let decades = mantissa_ticks(lo, hi, &[1.0]);
+    if decades.len() >= MIN_TICKS {
+        let every = decades.len().div_ceil(MAX_TICKS);
+        return decades.into_iter().step_by(every).collect();
+    }
+    for set in [&[1.0, 2.0, 5.0][..], &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]] {
+        let t = mantissa_ticks(lo, hi, set);
+        if t.len() >= MIN_TICKS {
+            return t;
+        }
+    }
+    linear_ticks(lo, hi)
+}
+
+/// A logarithmic axis labelled by [`log_ticks`] (plotters' own log axis labels whole decades
+/// only, so a range inside one decade had no labels at all).
+#[derive(Clone, Debug)]
+struct LogAxis {
+    lo: f64,
+    hi: f64,
+}
+
+impl Ranged for LogAxis {
+    type FormatOption = DefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, v: &f64, limit: (i32, i32)) -> i32 {
+        let t = (v.ln() - self.lo.ln()) / (self.hi.ln() - self.lo.ln());
+        let p = limit.0 as f64 + t * (limit.1 - limit.0) as f64;
+        // far outside the box is clipped by the drawing area; NaN maps to 0 (`as` saturates)
+        p.round().clamp(-1e6, 1e6) as i32
+    }
+
+    fn key_points<H: KeyPointHint>(&self, hint: H) -> Vec<f64> {
+        let major = log_ticks(self.lo, self.hi);
+        if hint.weight().allow_light_points() {
+            let minor = mantissa_ticks(self.lo, self.hi, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]);
+            if minor.len() <= hint.max_num_points() && minor.len() > major.len() {
+                return minor;
+            }
+        }
+        major
+    }
+
+    fn range(&self) -> std::ops::Range<f64> {
+        self.lo..self.hi
     }
 }
 
@@ -234,8 +333,8 @@ where
         .label_style(("sans-serif", 13))
         .axis_desc_style(("sans-serif", 15))
         .light_line_style(RGBColor(235, 235, 235))
-        .x_labels(8)
-        .y_labels(8)
+        .x_labels(MAX_TICKS)
+        .y_labels(MAX_TICKS)
         .x_label_formatter(&|v| tick(*v))
         .y_label_formatter(&|v| tick(*v))
         .draw()
@@ -380,6 +479,41 @@ mod tests {
         assert!(e.contains("forecast-chart-bad.svg"), "{e}");
         assert!(line_chart_loglog(&svg, &png, "t", "x", "y", &[], None).is_err());
         assert!(!svg.exists());
+    }
+
+    #[test]
+    fn log_ticks_label_every_range() {
+        // several decades: decades only
+        assert_eq!(log_ticks(0.5, 2000.0), vec![1.0, 10.0, 100.0, 1000.0]);
+        // 1.5 decades: only 2 decades fit, so 1-2-5
+        assert_eq!(log_ticks(0.03, 1.0), vec![0.05, 0.1, 0.2, 0.5, 1.0]);
+        // inside one decade (a 1-4 min budget axis): 1..9 x 10^k
+        assert_eq!(log_ticks(57.0, 252.0), vec![60.0, 70.0, 80.0, 90.0, 100.0, 200.0]);
+        assert_eq!(log_ticks(1.9e-3, 8.4e-3), vec![2e-3, 3e-3, 4e-3, 5e-3, 6e-3, 7e-3, 8e-3]);
+        // narrower than the 1..9 grid: round linear steps
+        assert_eq!(log_ticks(1.02, 1.09), vec![1.02, 1.04, 1.06, 1.08]);
+        // twenty decades are thinned to at most MAX_TICKS
+        let t = log_ticks(1e-10, 1e10);
+        assert!(t.len() >= MIN_TICKS && t.len() <= MAX_TICKS, "{t:?}");
+        assert_eq!((t[0], t[1]), (1e-10, 1e-8));
+        // never fewer than MIN_TICKS inside the range, always ascending, always inside
+        for &(lo, hi) in &[(0.7, 1.3), (3.1, 9.7), (0.011, 0.099), (45.0, 460.0), (2.0, 2.5), (1e-300, 1e300)] {
+            let t = log_ticks(lo, hi);
+            assert!(t.len() >= MIN_TICKS, "{lo}..{hi}: {t:?}");
+            assert!(t.windows(2).all(|w| w[0] < w[1]) && t.iter().all(|&v| v >= lo && v <= hi), "{lo}..{hi}: {t:?}");
+        }
+        assert!(
+            log_ticks(0.0, 1.0).is_empty() && log_ticks(2.0, 1.0).is_empty() && log_ticks(1.0, f64::NAN).is_empty()
+        );
+    }
+
+    #[test]
+    fn tick_labels_are_short() {
+        assert_eq!(tick(2e-3), "2e-3");
+        assert_eq!(tick(2.5e-3), "2.5e-3");
+        assert_eq!(tick(60.0), "60");
+        assert_eq!(tick(0.25), "0.25");
+        assert_eq!(tick(1e5), "1e5");
     }
 
     #[test]

@@ -8,11 +8,14 @@
 //!   (`var.R`, `var.G`, `var.B`) in the same layer. Readers take the first layer that has `R`, `G`,
 //!   `B` (alpha and other channels are ignored; a lone `Y` channel is read as grey).
 //! * Every writer is atomic: bytes go to [`atomic_path`]`(path)` (`PATH.tmp`, same directory)
-//!   and are then renamed over `path`, so a reader never sees a half-written file.
+//!   and are then renamed over `path`, so a reader never sees a half-written file
+//!   ([`crate::atomic_io`]). The `encode_*` functions return the file's bytes instead, for a
+//!   set of files written as a whole ([`crate::atomic_io::FileSet`]).
 //! * Nothing here panics on bad input; errors are `String`s that name the file.
 //!
 //! This is the only module that uses the `exr` and `png` crates.
 
+pub use crate::atomic_io::{atomic_path, atomic_write};
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
@@ -128,22 +131,21 @@ pub fn with_ext(prefix: &Path, ext: &str) -> PathBuf {
     PathBuf::from(s)
 }
 
-/// The temporary path a writer uses before renaming onto `path`: `path` with `.tmp` appended to
-/// its file name, in the same directory (so the rename is atomic on one file system).
-pub fn atomic_path(path: &Path) -> PathBuf {
-    let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
-    name.push(".tmp");
-    path.with_file_name(name)
-}
-
-/// Writes `bytes` to [`atomic_path`]`(path)`, then renames it to `path`. Creates no directories.
-pub fn atomic_write(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    let tmp = atomic_path(path);
-    std::fs::write(&tmp, bytes).map_err(|e| format!("cannot write {}: {e}", tmp.display()))?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        format!("cannot rename {} to {}: {e}", tmp.display(), path.display())
-    })
+/// Checks that every image has the size of the first; the error names both files and sizes.
+pub fn check_same_size(named: &[(&Path, &Image)]) -> Result<(), String> {
+    let Some(&(p0, i0)) = named.first() else { return Ok(()) };
+    match named.iter().find(|(_, i)| !i.same_size(i0)) {
+        None => Ok(()),
+        Some((p, i)) => Err(format!(
+            "{} is {}x{} but {} is {}x{}: the images must have the same size",
+            p0.display(),
+            i0.width,
+            i0.height,
+            p.display(),
+            i.width,
+            i.height
+        )),
+    }
 }
 
 fn check_len(path: &Path, img: &Image) -> Result<(), String> {
@@ -167,6 +169,11 @@ pub fn write_exr(path: &Path, img: &Image) -> Result<(), String> {
 /// Writes an RGB float32 EXR; with `variance` also the channels [`VARIANCE_CHANNELS`]
 /// (`var.R`, `var.G`, `var.B`, the per-pixel variance of the mean) in the same layer.
 pub fn write_exr_layers(path: &Path, img: &Image, variance: Option<&Image>) -> Result<(), String> {
+    atomic_write(path, &encode_exr_layers(path, img, variance)?)
+}
+
+/// The bytes [`write_exr_layers`] would write to `path` (named in errors only).
+pub fn encode_exr_layers(path: &Path, img: &Image, variance: Option<&Image>) -> Result<Vec<u8>, String> {
     use exr::image::write::WritableImage;
     use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Layer};
     use exr::meta::header::LayerAttributes;
@@ -195,7 +202,7 @@ pub fn write_exr_layers(path: &Path, img: &Image, variance: Option<&Image>) -> R
     let image = exr::image::Image::from_layer(layer);
     let mut buf = Cursor::new(Vec::new());
     image.write().to_buffered(&mut buf).map_err(|e| format!("cannot encode EXR {}: {e}", path.display()))?;
-    atomic_write(path, buf.get_ref())
+    Ok(buf.into_inner())
 }
 
 type FlatLayer = exr::image::Layer<exr::image::AnyChannels<exr::image::FlatSamples>>;
@@ -284,10 +291,15 @@ pub fn to_srgb8(v: f32, scale: f32) -> u8 {
 /// Writes an 8-bit sRGB PNG of a linear image. `exposure` is in stops: values are multiplied
 /// by `2^exposure` (0 = unchanged), clamped to `[0, 1]`, then encoded with the sRGB OETF.
 pub fn write_png_srgb(path: &Path, img: &Image, exposure: f32) -> Result<(), String> {
+    atomic_write(path, &encode_png_srgb(path, img, exposure)?)
+}
+
+/// The bytes [`write_png_srgb`] would write to `path` (named in errors only).
+pub fn encode_png_srgb(path: &Path, img: &Image, exposure: f32) -> Result<Vec<u8>, String> {
     check_len(path, img)?;
     let scale = exposure.exp2();
     let bytes: Vec<u8> = img.pixels.iter().flat_map(|p| p.map(|v| to_srgb8(v, scale))).collect();
-    write_png_rgb8(path, img.width, img.height, &bytes)
+    encode_png_rgb8(img.width, img.height, &bytes).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// Writes raw 8-bit RGB bytes (`3 * w * h`, row-major, top row first) as a PNG.
@@ -342,6 +354,7 @@ pub fn read_png_rgb8(path: &Path) -> Result<(usize, usize, Vec<u8>), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::PathBuf;
 
     fn tmpdir(name: &str) -> PathBuf {
         let d = std::env::temp_dir().join(format!("forecast-image-io-{name}-{}", std::process::id()));
@@ -432,12 +445,9 @@ mod tests {
     }
 
     #[test]
-    fn reads_mitsuba_reference_if_present() {
-        let p = Path::new("/work/shared/reference/cornell-box-mitsuba-256.exr");
-        if !p.exists() {
-            return;
-        }
-        let img = read_exr(p).unwrap();
+    fn reads_committed_mitsuba_reference() {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/reference/cornell-box-mitsuba-256.exr");
+        let img = read_exr(&p).unwrap();
         assert_eq!((img.width, img.height), (256, 256));
         let m = img.mean();
         let avg = (m[0] + m[1] + m[2]) / 3.0;

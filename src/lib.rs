@@ -11,6 +11,7 @@
 #![warn(missing_docs)]
 
 pub mod accel;
+pub mod atomic_io;
 pub mod bench;
 pub mod bsdf;
 pub mod chart;
@@ -23,6 +24,7 @@ pub mod image_io;
 pub mod integrators;
 pub mod math;
 pub mod metrics;
+pub mod output;
 pub mod pipeline;
 pub mod profile;
 pub mod progress;

@@ -2,7 +2,7 @@
 
 use clap::Parser;
 use forecast::cli::{Cli, Command};
-use forecast::{accel, bench, compare, distributed, image_io, metrics, pipeline, scenegen};
+use forecast::{accel, bench, compare, distributed, errln, image_io, metrics, outln, pipeline, scenegen};
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -15,7 +15,7 @@ fn run() -> Result<(), String> {
         Command::Bench(a) => bench_cmd(&a),
         Command::GenerateScenes { dir } => {
             for p in scenegen::write_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))? {
-                println!("wrote {}", p.display());
+                outln!("wrote {}", p.display())?;
             }
             Ok(())
         }
@@ -23,7 +23,7 @@ fn run() -> Result<(), String> {
         Command::Reference(a) => {
             let cluster = distributed::try_init()?;
             if let Some(r) = compare::reference::run_reference(&a, cluster.as_ref(), started)? {
-                eprintln!("reference: {} spp -> {}.{{exr,json}} + .half0/.half1", r.spp, a.out.display());
+                errln!("reference: {} spp -> {}.{{exr,json}} + .half0/.half1", r.spp, a.out.display());
             }
             Ok(())
         }
@@ -31,7 +31,7 @@ fn run() -> Result<(), String> {
             let cluster = distributed::try_init()?;
             let cfg = a.config();
             if compare::run_compare(&cfg, cluster.as_ref())?.is_some() {
-                eprintln!("compare: report in {}", cfg.out.join("report.html").display());
+                errln!("compare: report in {}", cfg.out.join("report.html").display());
             }
             Ok(())
         }
@@ -41,8 +41,8 @@ fn run() -> Result<(), String> {
             let r = distributed::self_test(c.as_ref());
             if c.rank() == 0 {
                 match &r {
-                    Ok(()) => println!("mpi self-test passed on {} rank(s)", c.size()),
-                    Err(e) => eprintln!("mpi self-test FAILED: {e}"),
+                    Ok(()) => outln!("mpi self-test passed on {} rank(s)", c.size())?,
+                    Err(e) => errln!("mpi self-test FAILED: {e}"),
                 }
             }
             r
@@ -57,7 +57,7 @@ fn render(a: &forecast::cli::RenderArgs, started: Instant) -> Result<(), String>
     if let Some(r) = res {
         if !a.quiet {
             let rep = &r.report;
-            eprintln!(
+            errln!(
                 "{}: {} spp in {:.2} s ({:.2} Msamples/s, {:.1} Mrays/s) -> {}.{{exr,png,json}}",
                 rep.method.name(),
                 rep.spp,
@@ -74,32 +74,34 @@ fn render(a: &forecast::cli::RenderArgs, started: Instant) -> Result<(), String>
 fn diff(a: &forecast::cli::DiffArgs) -> Result<(), String> {
     let ia = image_io::read_exr(&a.a)?;
     let ib = image_io::read_exr(&a.b)?;
+    image_io::check_same_size(&[(&a.a, &ia), (&a.b, &ib)])?;
     let m = metrics::compare(&ia, &ib, a.crop)?;
-    println!("RMSE      {:.6e}", m.rmse);
-    println!("relMSE    {:.6e}  (eps = 0.01)", m.rel_mse);
-    println!("mean A    {:.6} {:.6} {:.6}", m.mean_a[0], m.mean_a[1], m.mean_a[2]);
-    println!("mean B    {:.6} {:.6} {:.6}", m.mean_b[0], m.mean_b[1], m.mean_b[2]);
-    println!(
+    outln!("RMSE      {:.6e}", m.rmse)?;
+    outln!("relMSE    {:.6e}  (eps = 0.01)", m.rel_mse)?;
+    outln!("mean A    {:.6} {:.6} {:.6}", m.mean_a[0], m.mean_a[1], m.mean_a[2])?;
+    outln!("mean B    {:.6} {:.6} {:.6}", m.mean_b[0], m.mean_b[1], m.mean_b[2])?;
+    outln!(
         "mean diff {:+.4}% {:+.4}% {:+.4}%",
         100.0 * m.mean_rel_diff[0],
         100.0 * m.mean_rel_diff[1],
         100.0 * m.mean_rel_diff[2]
-    );
+    )?;
     if let Some(p) = &a.png {
         let crop_a = metrics::apply_crop(&ia, a.crop)?;
         let crop_b = metrics::apply_crop(&ib, a.crop)?;
         let scale = metrics::write_diff_png(p, &crop_a, &crop_b)?;
-        println!("diff PNG  {} (saturates at |diff| = {scale:.4e})", p.display());
+        outln!("diff PNG  {} (saturates at |diff| = {scale:.4e})", p.display())?;
     }
-    if let (Some(h0), Some(h1)) = (&a.half0, &a.half1) {
-        let (h0, h1) = (image_io::read_exr(h0)?, image_io::read_exr(h1)?);
+    if let (Some(p0), Some(p1)) = (&a.half0, &a.half1) {
+        let (h0, h1) = (image_io::read_exr(p0)?, image_io::read_exr(p1)?);
+        image_io::check_same_size(&[(&a.b, &ib), (p0, &h0), (p1, &h1)])?;
         let var = image_io::read_exr_variance(&a.a)?;
         let rep = metrics::mitsuba_agreement(&ia, var.as_ref(), &ib, &h0, &h1)?;
-        println!("{rep}");
+        outln!("{rep}")?;
         if !rep.passed {
             return Err(format!("agreement check FAILED: {}", rep.failures.join("; ")));
         }
-        println!("agreement check PASSED");
+        outln!("agreement check PASSED")?;
     }
     Ok(())
 }
@@ -109,22 +111,22 @@ fn bench_cmd(a: &forecast::cli::BenchArgs) -> Result<(), String> {
     let t = Instant::now();
     let ntri = scene.triangles.len();
     let world = accel::World::build(scene).map_err(|e| format!("{}: {e}", a.scene.display()))?;
-    println!(
+    outln!(
         "scene {}: {} triangles, {} spheres, BVH {:.3} s",
         a.scene.display(),
         ntri,
         world.scene.spheres.len(),
         t.elapsed().as_secs_f64()
-    );
+    )?;
     let pool = pipeline::thread_pool(a.threads)?;
     let r = pool.install(|| bench::run(&world, a.resolution, a.repeats))?;
-    println!("threads               {}", r.threads);
-    println!("closest-hit Mrays/s   {:.2}  (median of {})", r.closest_mrays, a.repeats);
-    println!("shadow Mrays/s        {:.2}", r.shadow_mrays);
-    println!(
+    outln!("threads               {}", r.threads)?;
+    outln!("closest-hit Mrays/s   {:.2}  (median of {})", r.closest_mrays, a.repeats)?;
+    outln!("shadow Mrays/s        {:.2}", r.shadow_mrays)?;
+    outln!(
         "pt samples/s          {:.0}  ({}x{}, {:.2} closest + {:.2} shadow rays/sample)",
         r.pt_samples_per_s, a.resolution.0, a.resolution.1, r.rays_per_sample.0, r.rays_per_sample.1
-    );
+    )?;
     Ok(())
 }
 
@@ -137,7 +139,7 @@ fn stability(a: &forecast::cli::StabilityArgs) -> Result<(), String> {
     let recs = compare::stability::run_suite(&cfg)?;
     compare::stability::write_stability_report(&cfg.out, &cfg, &recs)?;
     let bad = recs.iter().filter(|r| !r.ok()).count();
-    eprintln!(
+    errln!(
         "stability: {} of {} runs ok; report in {}",
         recs.len() - bad,
         recs.len(),
@@ -153,6 +155,7 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs) -> Result<(), String> {
     use forecast::integrators::iws_forecast::{self, build_forecast};
     use forecast::transport::particle::Emission;
     let r = &a.render;
+    forecast::atomic_io::check_output_prefix(&r.out)?;
     let scene = forecast::scene::load(&r.scene).map_err(|e| e.to_string())?;
     let world = accel::World::build(scene).map_err(|e| format!("{}: {e}", r.scene.display()))?;
     let cf_args = &r.method_args.cf;
@@ -195,7 +198,7 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs) -> Result<(), String> {
     });
     let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
     image_io::atomic_write(&image_io::with_ext(&r.out, "json"), text.as_bytes())?;
-    println!("{text}");
+    outln!("{text}")?;
     Ok(())
 }
 
@@ -221,7 +224,7 @@ fn main() -> ExitCode {
     match run() {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
+            errln!("error: {e}");
             ExitCode::FAILURE
         }
     }

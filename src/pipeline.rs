@@ -9,6 +9,7 @@
 //! with the pass bookkeeping; `--resume` continues with the next pass and repeats none.
 
 use crate::accel::World;
+use crate::atomic_io::FileSet;
 use crate::checkpoint::Checkpoint;
 use crate::distributed::schedule::{Deadline, PassTimer};
 use crate::distributed::{self, Cluster};
@@ -211,6 +212,7 @@ fn secs(t: Instant) -> f64 {
 
 /// Runs a render on every rank of `cluster`; returns `Some` on rank 0.
 pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Result<Option<RenderResult>, String> {
+    crate::atomic_io::check_output_prefix(&job.out)?;
     let pool = thread_pool(job.threads)?;
     let (world, plan, mut timings) = load(job, cluster.rank())?;
     let deadline = distributed::shared_deadline(cluster, started, plan.time);
@@ -227,12 +229,14 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
         // the final state too, so a finished run can be extended with --resume
         run.checkpoint(passes.passes_done, &reduced.film).save(&run.ckpt_path()).map_err(|e| e.to_string())?;
     }
-    let image = write_images(&job.out, &reduced.film)?;
+    let mut outputs = FileSet::new(); // EXR, PNG and JSON replace the old set as a whole
+    let image = image_files(&job.out, &reduced.film, &mut outputs)?;
     timings.write_s = secs(t_write);
     timings.total_s = secs(started);
     let report = run.report(&passes, reduced.parts, timings, pre.integrator.stats(&passes.counters.profile), &image);
     let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
-    image_io::atomic_write(&with_ext(&job.out, "json"), text.as_bytes())?;
+    outputs.add(with_ext(&job.out, "json"), text.into_bytes());
+    outputs.commit()?;
     Ok(Some(RenderResult { film: reduced.film, report }))
 }
 
@@ -245,7 +249,7 @@ fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), String> 
     let load_s = secs(t_load);
     if rank == 0 {
         for w in &scene.warnings {
-            eprintln!("warning: {w}");
+            crate::errln!("warning: {w}");
         }
     }
     let plan = job.resolve(&scene)?;
@@ -519,8 +523,15 @@ pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, String> 
         let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
         (cores / local.max(1)).max(1)
     });
-    rayon::ThreadPoolBuilder::new().num_threads(n).build().map_err(|e| e.to_string())
+    if n == 0 || n > MAX_THREADS {
+        return Err(format!("--threads {n}: must be between 1 and {MAX_THREADS}"));
+    }
+    rayon::ThreadPoolBuilder::new().num_threads(n).build().map_err(|e| format!("cannot start {n} threads: {e}"))
 }
+
+/// The most worker threads a process may ask for (more fail late, after minutes of thread
+/// creation, with "Resource temporarily unavailable").
+pub const MAX_THREADS: usize = 4096;
 
 /// Rank 0's `result` if every rank got `Ok`; an error on every rank otherwise (collective).
 fn agree_or_fail<T>(cluster: &dyn Cluster, result: Result<T, String>, what: &str) -> Result<T, String> {
@@ -537,14 +548,24 @@ pub fn image_from_film(f: &Film) -> Image {
     Image { width: f.width, height: f.height, pixels: f.mean() }
 }
 
-/// Writes PREFIX.exr (mean + variance-of-mean layer) and PREFIX.png, atomically; returns the mean.
+/// Writes PREFIX.exr (mean + variance-of-mean layer) and PREFIX.png as one set; returns the mean.
 pub fn write_images(prefix: &Path, film: &Film) -> Result<Image, String> {
+    let mut set = FileSet::new();
+    let img = image_files(prefix, film, &mut set)?;
+    set.commit()?;
+    Ok(img)
+}
+
+/// Adds PREFIX.exr (mean + variance-of-mean layer) and PREFIX.png to `set` (creating PREFIX's
+/// directory); returns the mean.
+pub fn image_files(prefix: &Path, film: &Film, set: &mut FileSet) -> Result<Image, String> {
     if let Some(dir) = prefix.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     }
     let img = image_from_film(film);
     let var = Image { width: film.width, height: film.height, pixels: film.variance_of_mean() };
-    image_io::write_exr_layers(&with_ext(prefix, "exr"), &img, Some(&var))?;
-    image_io::write_png_srgb(&with_ext(prefix, "png"), &img, 0.0)?; // exposure in stops: 0 = as rendered
+    let (exr, png) = (with_ext(prefix, "exr"), with_ext(prefix, "png"));
+    set.add(exr.clone(), image_io::encode_exr_layers(&exr, &img, Some(&var))?);
+    set.add(png.clone(), image_io::encode_png_srgb(&png, &img, 0.0)?); // exposure in stops: 0 = as rendered
     Ok(img)
 }

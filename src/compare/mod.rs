@@ -277,9 +277,9 @@ pub fn run_compare(cfg: &CompareConfig, cluster: &dyn Cluster) -> Result<Option<
                     Err(e) => rec.error = Some(e),
                 }
                 if let Some(e) = &rec.error {
-                    eprintln!("compare: {} {} seed {k}: FAILED: {e}", method.name(), budget_label(budget));
+                    crate::errln!("compare: {} {} seed {k}: FAILED: {e}", method.name(), budget_label(budget));
                 } else {
-                    eprintln!(
+                    crate::errln!(
                         "compare: {} {} seed {k}: {} spp in {:.2} s, relMSE {:.4e}",
                         method.name(),
                         budget_label(budget),

@@ -13,7 +13,6 @@
 
 use crate::cli::RenderArgs;
 use crate::distributed::Cluster;
-use crate::image_io;
 use crate::image_io::with_ext;
 use crate::integrators::Method;
 use crate::pipeline::{self, RenderReport};
@@ -96,6 +95,7 @@ pub fn run_reference(
         return Err("reference: only `--method pt` (the unbiased reference) is supported".into());
     }
     let base = args.job();
+    crate::atomic_io::check_output_prefix(&base.out)?;
     let scene = crate::scene::load(&base.scene).map_err(|e| e.to_string())?;
     let plan = pipeline::RenderJob { method: Some(Method::Pt), ..base.clone() }.resolve(&scene)?;
     let (seed, time, spp) = (plan.seed, plan.time, plan.spp);
@@ -131,7 +131,8 @@ pub fn run_reference(
         return Err(format!("{}: the two halves have different sizes", prefix.display()));
     }
     film.merge(&h1.film);
-    let mean = pipeline::write_images(&prefix, &film)?;
+    let mut outputs = crate::atomic_io::FileSet::new(); // mean EXR, PNG and JSON as one set
+    let mean = pipeline::image_files(&prefix, &film, &mut outputs)?;
     let nonfinite_pixels = mean.pixels.iter().filter(|p| p.iter().any(|v| !v.is_finite())).count();
     let half = |k: u64, ext: &str| with_ext(&half_prefix(&prefix, k), ext);
     let report = ReferenceReport {
@@ -157,6 +158,7 @@ pub fn run_reference(
         halves: [h0.report, h1.report],
     };
     let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
-    image_io::atomic_write(&with_ext(&prefix, "json"), text.as_bytes())?;
+    outputs.add(with_ext(&prefix, "json"), text.into_bytes());
+    outputs.commit()?;
     Ok(Some(report))
 }

@@ -218,6 +218,10 @@ fn job(scene: &Path, run: RunSpec, cfg: &StabilityConfig, out: PathBuf) -> Rende
 
 /// Runs the suite; never stops at a failing run. Errors only for an unwritable output directory.
 pub fn run_suite(cfg: &StabilityConfig) -> Result<Vec<StabilityRecord>, String> {
+    if let Some(bad) = cfg.only.iter().find(|o| !CASES.iter().any(|c| c.name == o.as_str())) {
+        let names: Vec<&str> = CASES.iter().map(|c| c.name).collect();
+        return Err(format!("--only: no stability case `{bad}`; the cases are {}", names.join(", ")));
+    }
     let runs_dir = cfg.out.join("runs");
     std::fs::create_dir_all(&runs_dir).map_err(|e| format!("cannot create {}: {e}", runs_dir.display()))?;
     let mut base = MethodArgs::default();
@@ -234,7 +238,7 @@ pub fn run_suite(cfg: &StabilityConfig) -> Result<Vec<StabilityRecord>, String> 
             let img = match guarded_render(&j) {
                 Ok(r) => Some(pipeline::image_from_film(&r.film)),
                 Err((e, _)) => {
-                    eprintln!("stability: reference of {} failed: {e}", case.file);
+                    crate::errln!("stability: reference of {} failed: {e}", case.file);
                     None
                 }
             };
@@ -249,9 +253,9 @@ pub fn run_suite(cfg: &StabilityConfig) -> Result<Vec<StabilityRecord>, String> 
                         let b = crate::integrators::iws::default_bound(&world, opts.iws.vpl_paths) as f64 * f;
                         opts.iws.bound = Some(b as f32);
                     }
-                    Err(e) => eprintln!("stability: {}: {e}", case.name),
+                    Err(e) => crate::errln!("stability: {}: {e}", case.name),
                 },
-                Err(e) => eprintln!("stability: {}: {e}", case.name),
+                Err(e) => crate::errln!("stability: {}: {e}", case.name),
             }
         }
         for &m in &cfg.methods {
@@ -311,7 +315,7 @@ pub fn run_suite(cfg: &StabilityConfig) -> Result<Vec<StabilityRecord>, String> 
                     mean_rel_diff: None,
                 },
             };
-            eprintln!(
+            crate::errln!(
                 "stability: {:<15} {:<7} {} ({} spp, {:.2} s)",
                 rec.case,
                 rec.method,

@@ -47,7 +47,7 @@ impl MpiCluster {
             "MPI is already initialised in this process; call distributed::init() only once".to_string()
         })?;
         if provided < Threading::Funneled {
-            eprintln!("warning: MPI provides thread level {provided:?}, asked for Funneled");
+            crate::errln!("warning: MPI provides thread level {provided:?}, asked for Funneled");
         }
         let world = universe.world();
         let rank = usize::try_from(world.rank()).map_err(|_| format!("negative MPI rank {}", world.rank()))?;

@@ -1,0 +1,173 @@
+//! A render's outputs `PREFIX.{exr,png,json}` are replaced as a whole or not at all
+//! (`forecast::atomic_io`), and a failed write leaves no temporaries.
+//!
+//! * Injected failures (deterministic): a successful set write performs a fixed sequence of
+//!   file-system operations; for every position `k` in it, a run that fails at operation `k`
+//!   (a write on a full disk, a refused backup, a rename failing midway) must return an error
+//!   naming a file, leave the old set byte for byte, and leave no `.tmp` or `.old` file.
+//! * The same for a first write (no old set): nothing at all remains.
+//! * End to end: a render whose `PREFIX.json` cannot be replaced (it is a directory) fails and
+//!   leaves the old `PREFIX.exr` and `PREFIX.png` untouched, with no temporaries.
+
+mod common;
+
+use common::{root, tmp_dir};
+use forecast::atomic_io::{FileOps, FileSet, RealFs};
+use std::collections::BTreeMap;
+use std::io;
+use std::path::Path;
+
+/// The real file system, failing the `fail_at`-th operation that can fail a write (write,
+/// backup, rename), counting from 0. Removals always succeed (cleanup).
+struct FailAt {
+    fail_at: Option<usize>,
+    ops: usize,
+    log: Vec<String>,
+}
+
+impl FailAt {
+    fn new(fail_at: Option<usize>) -> FailAt {
+        FailAt { fail_at, ops: 0, log: Vec::new() }
+    }
+    fn step(&mut self, what: &str, p: &Path) -> io::Result<()> {
+        let k = self.ops;
+        self.ops += 1;
+        self.log.push(format!("{what} {}", p.display()));
+        if self.fail_at == Some(k) {
+            return Err(io::Error::other(format!("injected failure at operation {k}")));
+        }
+        Ok(())
+    }
+}
+
+impl FileOps for FailAt {
+    fn write(&mut self, path: &Path, bytes: &[u8]) -> io::Result<()> {
+        self.step("write", path)?;
+        RealFs.write(path, bytes)
+    }
+    fn rename(&mut self, from: &Path, to: &Path) -> io::Result<()> {
+        self.step("rename", from)?;
+        RealFs.rename(from, to)
+    }
+    fn backup(&mut self, path: &Path, backup: &Path) -> io::Result<()> {
+        self.step("backup", path)?;
+        RealFs.backup(path, backup)
+    }
+    fn remove(&mut self, path: &Path) -> io::Result<()> {
+        RealFs.remove(path)
+    }
+    fn exists(&mut self, path: &Path) -> bool {
+        RealFs.exists(path)
+    }
+    fn is_dir(&mut self, path: &Path) -> bool {
+        RealFs.is_dir(path)
+    }
+}
+
+/// Every file in `dir`, name → bytes.
+fn snapshot(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap())
+        .map(|e| (e.file_name().to_string_lossy().to_string(), std::fs::read(e.path()).unwrap_or_default()))
+        .collect()
+}
+
+fn set(dir: &Path, tag: &str) -> FileSet {
+    let mut s = FileSet::new();
+    for ext in ["exr", "png", "json"] {
+        s.add(dir.join(format!("out.{ext}")), format!("{tag} {ext}").into_bytes());
+    }
+    s
+}
+
+/// Runs the set write failing at every operation in turn; returns how many operations a
+/// successful write takes.
+fn every_failure_keeps(dir: &Path, before: &BTreeMap<String, Vec<u8>>) -> usize {
+    let mut clean = FailAt::new(None);
+    // dry count on a copy of the directory, so `dir` keeps the old set
+    let count_dir = dir.with_extension("count");
+    let _ = std::fs::remove_dir_all(&count_dir);
+    std::fs::create_dir_all(&count_dir).unwrap();
+    for (name, bytes) in before {
+        std::fs::write(count_dir.join(name), bytes).unwrap();
+    }
+    set(&count_dir, "new").commit_with(&mut clean).unwrap();
+    let n = clean.ops;
+    assert!(n >= 6, "expected at least 3 writes and 3 renames, got {:?}", clean.log);
+    for k in 0..n {
+        let mut fs = FailAt::new(Some(k));
+        let err = set(dir, "new").commit_with(&mut fs).unwrap_err();
+        assert!(err.contains("out."), "failure at {k} ({}): error names no file: {err}", fs.log[k]);
+        assert_eq!(&snapshot(dir), before, "failure at operation {k} ({}) changed the directory: {err}", fs.log[k]);
+    }
+    let _ = std::fs::remove_dir_all(&count_dir);
+    n
+}
+
+#[test]
+fn a_failed_set_write_keeps_the_old_set_and_leaves_no_temporaries() {
+    let dir = tmp_dir("outputs-replace");
+    set(&dir, "old").commit().unwrap();
+    let before = snapshot(&dir);
+    assert_eq!(before.len(), 3);
+    let n = every_failure_keeps(&dir, &before);
+    // 3 writes, 3 backups of the existing files, 3 renames
+    assert_eq!(n, 9);
+    set(&dir, "new").commit().unwrap();
+    let after = snapshot(&dir);
+    assert_eq!(after.keys().collect::<Vec<_>>(), ["out.exr", "out.json", "out.png"]);
+    assert_eq!(after["out.json"], b"new json");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn a_failed_first_write_leaves_nothing() {
+    let dir = tmp_dir("outputs-first");
+    let n = every_failure_keeps(&dir, &BTreeMap::new());
+    assert_eq!(n, 6, "no backups when nothing exists yet");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn a_single_atomic_write_removes_its_temporary_on_failure() {
+    let dir = tmp_dir("outputs-single");
+    let p = dir.join("a.json");
+    std::fs::write(&p, b"old").unwrap();
+    for k in 0..2 {
+        let mut s = FileSet::new();
+        s.add(p.clone(), b"new".to_vec());
+        assert!(s.commit_with(&mut FailAt::new(Some(k))).is_err());
+        assert_eq!(snapshot(&dir), BTreeMap::from([("a.json".to_string(), b"old".to_vec())]));
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn a_render_that_cannot_write_its_json_keeps_the_old_images() {
+    let dir = tmp_dir("outputs-render");
+    let prefix = dir.join("r");
+    let scene = root().join("scenes/cornell-box.toml");
+    let mut job = common::job(&scene, forecast::integrators::Method::Pt, 1, 3, (8, 8), 1, &prefix);
+    common::render_film(&job);
+    let old = snapshot(&dir);
+    assert_eq!(old.keys().collect::<Vec<_>>(), ["r.exr", "r.json", "r.png"]);
+    // PREFIX.json becomes a directory: the JSON cannot be replaced, so neither may the images.
+    std::fs::remove_file(dir.join("r.json")).unwrap();
+    std::fs::create_dir(dir.join("r.json")).unwrap();
+    job.seed = Some(4);
+    let err = match forecast::pipeline::render(
+        &job,
+        &forecast::distributed::local::Local::new(),
+        std::time::Instant::now(),
+    ) {
+        Ok(_) => panic!("the render replaced its outputs although r.json is a directory"),
+        Err(e) => e,
+    };
+    assert!(err.contains("r.json"), "{err}");
+    let after = snapshot(&dir);
+    assert_eq!(after.keys().collect::<Vec<_>>(), ["r.exr", "r.json", "r.png"], "leftovers: {after:?}");
+    assert_eq!(after["r.exr"], old["r.exr"]);
+    assert_eq!(after["r.png"], old["r.png"]);
+    let _ = std::fs::remove_dir_all(dir);
+}
