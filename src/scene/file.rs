@@ -7,7 +7,7 @@
 
 use super::schema::{Doc, LightDef, MaterialDef, ShapeDef};
 use super::{
-    light_power, obj, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere, Triangle,
+    light_power, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere, Triangle,
     NO_EMITTER,
 };
 use crate::math::{Vec3, PI};
@@ -347,7 +347,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
                     return Err(cx.err(ss, &key("scale"), "transform values must be finite and scale positive"));
                 }
                 let path = dir.join(f);
-                let mesh = obj::load_mesh(&path, smooth).map_err(|m| cx.err(ss.clone(), &key("file"), m))?;
+                let mesh = super::load_mesh_file(&path, smooth).map_err(|m| cx.err(ss.clone(), &key("file"), m))?;
                 hash = fnv1a(hash, &mesh.bytes_hash.to_le_bytes());
                 let (sin, cos) = ry.to_radians().sin_cos();
                 let xf = |p: Vec3| {
