@@ -9,7 +9,14 @@ use std::time::Instant;
 fn run() -> Result<(), String> {
     let started = Instant::now();
     let cli = Cli::parse();
+    forecast::scene::mitsuba::set_cli_defines(&cli.define)?;
     match cli.command {
+        Command::ExportMitsuba { scene, out } => {
+            let rep = forecast::scene::export::export_mitsuba(&scene, &out)?;
+            rep.warnings.iter().for_each(|w| eprintln!("warning: {w}"));
+            println!("wrote {} and {} PLY mesh(es)", rep.xml.display(), rep.meshes.len());
+            Ok(())
+        }
         Command::Render(a) => {
             let cluster = distributed::try_init()?;
             let job = a.job();
