@@ -255,7 +255,8 @@ fn triangles(cx: &mut Cx, line: usize, m: &IndexedMesh, xf: Option<&Xform>, flip
     out
 }
 
-/// `file::make_triangle`'s rule, except that normals already of unit length are kept bit-exact.
+/// `file::make_triangle`'s rule, except that normals of unit length to 5e-6 are kept as they are
+/// (bit-exact round trip of exported normals; hits renormalise the interpolated normal).
 fn make_triangle(p: [Vec3; 3], n: Option<[Vec3; 3]>, material: u32) -> Option<Triangle> {
     let c = (p[1] - p[0]).cross(p[2] - p[0]);
     let len = c.length();
@@ -267,7 +268,7 @@ fn make_triangle(p: [Vec3; 3], n: Option<[Vec3; 3]>, material: u32) -> Option<Tr
         let ok = ns.iter().all(|v| v.is_finite() && v.length() > 1e-6);
         ok.then(|| {
             ns.map(|v| {
-                let v = if (v.length_squared() - 1.0).abs() <= 2.0 * f32::EPSILON { v } else { v.normalize() };
+                let v = if (v.length_squared() - 1.0).abs() <= 1e-5 { v } else { v.normalize() };
                 if v.dot(ng) < 0.0 {
                     -v
                 } else {
