@@ -104,7 +104,13 @@ fn sms_ring_loads_with_its_ignored_parameters_listed() {
 #[test]
 fn sms_ring_renders_with_every_method() {
     let w = World::build(mitsuba::load(&ring_dir().join("ring.xml"), &[]).unwrap());
-    let o = MethodOptions { max_depth: 64, vpl_paths: 32, photons: 2000, forecast_photons: Some(2000), ..Default::default() };
+    let o = MethodOptions {
+        max_depth: 64,
+        vpl_paths: 32,
+        photons: 2000,
+        forecast_photons: Some(2000),
+        ..Default::default()
+    };
     for m in [Method::Pt, Method::Iws, Method::IwsPm, Method::IwsCf] {
         let bytes = integrators::preprocess(m, &w, &o, 3).unwrap();
         let mut integ = integrators::build(m, &w, &o, &bytes).unwrap();
@@ -207,13 +213,17 @@ fn every_fov_axis_and_the_transform_order() {
     // the lookat matrix gives the same frame as the lookat camera
     let m = r#"<lookat origin="1, 2, 3" target="0, 0, 0" up="0, 1, 0"/><scale value="1"/>"#;
     let l = r#"<lookat origin="1, 2, 3" target="0, 0, 0" up="0, 1, 0"/>"#;
-    let (cm, cl) = (xml(&camera_xml("y", 40.0, w, h, m), Path::new(".")).unwrap().camera, xml(&camera_xml("y", 40.0, w, h, l), Path::new(".")).unwrap().camera);
+    let (cm, cl) = (
+        xml(&camera_xml("y", 40.0, w, h, m), Path::new(".")).unwrap().camera,
+        xml(&camera_xml("y", 40.0, w, h, l), Path::new(".")).unwrap().camera,
+    );
     for (p, q) in [(cm.forward, cl.forward), (cm.right, cl.right), (cm.up, cl.up), (cm.position, cl.position)] {
         assert!((p - q).length() < 1e-6, "{p} vs {q}");
     }
 }
 
-const PLY_ASCII: &str = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+const PLY_ASCII: &str =
+    "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
 element face 2\nproperty list uchar int vertex_indices\nend_header\n-1 0 -1\n1 0 -1\n1 0 1\n-1 0 1\n3 0 2 1\n3 0 3 2\n";
 
 fn ply_scene(shape: &str) -> String {
@@ -278,8 +288,12 @@ fn malformed_inputs_are_clear_errors_with_file_and_line() {
     let mut bin = forecast::scene::ply::write_binary(&forecast::scene::ply::parse(PLY_ASCII.as_bytes()).unwrap());
     bin.truncate(bin.len() - 5);
     std::fs::write(dir.join("short.ply"), bin).unwrap();
-    let ply = |f: &str| format!(r#"<shape type="ply">
-<string name="filename" value="{f}"/></shape>"#);
+    let ply = |f: &str| {
+        format!(
+            r#"<shape type="ply">
+<string name="filename" value="{f}"/></shape>"#
+        )
+    };
     let cases: Vec<(String, usize, Vec<&str>)> = vec![
         (ply_scene("<shape type=\"ply\">\n<string name=\"filename\" value=\"quad.ply\"/>"), 5, vec!["malformed XML"]),
         (ply_scene("<shape type=\"ply\">\n<string name=\"filename\" value=\"quad.ply\"/>\n<ref id=\"gold\"/></shape>"), 5, vec!["gold", "no BSDF"]),

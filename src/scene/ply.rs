@@ -256,7 +256,9 @@ pub fn parse(bytes: &[u8]) -> Result<IndexedMesh, String> {
                     None => vals[k] = body.read(p.ty)?,
                 }
             }
-            let v = |c: [Option<usize>; 3]| Vec3::new(vals[c[0].unwrap()] as f32, vals[c[1].unwrap()] as f32, vals[c[2].unwrap()] as f32);
+            let v = |c: [Option<usize>; 3]| {
+                Vec3::new(vals[c[0].unwrap()] as f32, vals[c[1].unwrap()] as f32, vals[c[2].unwrap()] as f32)
+            };
             match el.name.as_str() {
                 "vertex" => {
                     positions.push(v(xyz));

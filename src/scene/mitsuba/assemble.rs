@@ -27,9 +27,7 @@ pub(super) fn forecast_defaults(
     render: &mut RenderDefaults,
     camera: &Camera,
 ) -> Result<Extras, SceneError> {
-    let line = |k: &str| {
-        root.children.iter().find(|c| c.tag == "default" && c.name() == k).map_or(0, |c| c.line)
-    };
+    let line = |k: &str| root.children.iter().find(|c| c.tag == "default" && c.name() == k).map_or(0, |c| c.line);
     let bad = |k: &str, m: String| cx.err(line(k), k, m);
     let mut ex = Extras { rois: Vec::new(), target: None, photons: None };
     for (k, v) in vars.iter().filter(|(k, _)| k.starts_with("forecast_")) {
@@ -119,8 +117,9 @@ pub(super) fn assemble(
     let mut lights: Vec<LightRef> = (0..emitters.len() as u32).map(LightRef::Area).collect();
     lights.extend((0..point_lights.len() as u32).map(LightRef::Point));
     let powers: Vec<f32> = lights.iter().map(|&l| light_power(&emitters, &point_lights, l)).collect();
-    let light_pick = Distribution1D::new(&powers)
-        .ok_or_else(|| cx.err(1, "emitter", "the scene has no light with positive power (an `area` or `point` emitter)"))?;
+    let light_pick = Distribution1D::new(&powers).ok_or_else(|| {
+        cx.err(1, "emitter", "the scene has no light with positive power (an `area` or `point` emitter)")
+    })?;
     let mut lo = Vec3::splat(f32::INFINITY);
     let mut hi = Vec3::splat(f32::NEG_INFINITY);
     for t in &triangles {

@@ -108,7 +108,7 @@ fn conductor(cx: &mut Cx, p: &mut Plugin) -> Result<Material, SceneError> {
     let eta = p.color(cx, "eta")?.unwrap_or(Rgb::from_array(e));
     let k = p.color(cx, "k")?.unwrap_or(Rgb::from_array(k));
     let ext = p.float(cx, "ext_eta")?.unwrap_or(1.0);
-    if eta.min_element() < 0.0 || k.min_element() < 0.0 || !(ext > 0.0) {
+    if eta.min_element() < 0.0 || k.min_element() < 0.0 || ext.is_nan() || ext <= 0.0 {
         return Err(p.err(cx, line, "eta", "eta, k must be non-negative and ext_eta positive"));
     }
     if eta == Rgb::ZERO && k == Rgb::ONE {

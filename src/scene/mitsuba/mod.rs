@@ -198,13 +198,15 @@ fn sensor(cx: &mut Cx, n: &Node) -> Result<(Camera, Option<u64>), SceneError> {
     for s in p.objects(&["sampler"]) {
         let mut sp = Plugin::new(s);
         let c = sp.int(cx, "sample_count")?.unwrap_or(4);
-        spp = Some(u64::try_from(c).ok().filter(|&c| c > 0).ok_or_else(|| {
-            sp.err(cx, s.line, "sample_count", format!("sample_count must be positive, got {c}"))
-        })?);
+        spp =
+            Some(u64::try_from(c).ok().filter(|&c| c > 0).ok_or_else(|| {
+                sp.err(cx, s.line, "sample_count", format!("sample_count must be positive, got {c}"))
+            })?);
         sp.finish(cx);
     }
-    let fovy = fov_y(fov, &axis, w, h)
-        .ok_or_else(|| p.err(cx, al, "fov_axis", format!("unknown fov_axis `{axis}` (x, y, smaller, larger, diagonal)")))?;
+    let fovy = fov_y(fov, &axis, w, h).ok_or_else(|| {
+        p.err(cx, al, "fov_axis", format!("unknown fov_axis `{axis}` (x, y, smaller, larger, diagonal)"))
+    })?;
     if !(fovy > 0.0 && fovy < 180.0) {
         return Err(p.err(cx, n.line, "fov", format!("fov must give a vertical fov in (0, 180), got {fovy}")));
     }
@@ -221,7 +223,15 @@ fn sensor(cx: &mut Cx, n: &Node) -> Result<(Camera, Option<u64>), SceneError> {
                 return Err(p.err(cx, n.line, "to_world", "the camera transform must be rigid (no shear)"));
             }
             let pos = m.w_axis.truncate().as_vec3();
-            Camera { position: pos, forward: f.as_vec3(), right: r.as_vec3(), up: u.as_vec3(), fov_deg: fovy, width: w, height: h }
+            Camera {
+                position: pos,
+                forward: f.as_vec3(),
+                right: r.as_vec3(),
+                up: u.as_vec3(),
+                fov_deg: fovy,
+                width: w,
+                height: h,
+            }
         }
     };
     p.finish(cx);

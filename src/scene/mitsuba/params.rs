@@ -184,9 +184,7 @@ impl<'a> Plugin<'a> {
                     }
                 }
                 "lookat" => {
-                    let p = |k: &str| {
-                        op.attr(k).and_then(numbers).filter(|v| v.len() == 3).map(|v| [v[0], v[1], v[2]])
-                    };
+                    let p = |k: &str| op.attr(k).and_then(numbers).filter(|v| v.len() == 3).map(|v| [v[0], v[1], v[2]]);
                     let (Some(o), Some(t)) = (p("origin"), p("target")) else {
                         return Err(e("`lookat` needs `origin` and `target` (three numbers each)".into()));
                     };

@@ -34,6 +34,7 @@ pub(super) fn dielectric_ior(name: &str) -> Option<f32> {
 }
 
 /// Conductor (η, k) as RGB by Mitsuba's preset name; `none` is (0, 1), a perfect mirror.
+#[allow(clippy::excessive_precision)] // measured data, kept as tabulated
 pub(super) fn conductor(name: &str) -> Option<([f32; 3], [f32; 3])> {
     const T: &[(&str, [f32; 3], [f32; 3])] = &[
         ("a-C", [2.9440999, 2.2271503, 1.9681669], [0.8874329, 0.7993216, 0.8152863]),

@@ -92,7 +92,13 @@ fn shape_material(cx: &mut Cx, p: &mut Plugin, emits: bool) -> Result<u32, Scene
         };
         if !black {
             let line = bs.first().map_or(p.node.line, |b| b.line);
-            cx.warn(line, format!("{}: emitters reflect nothing here; its BSDF (or Mitsuba's default diffuse) is dropped", p.what()));
+            cx.warn(
+                line,
+                format!(
+                    "{}: emitters reflect nothing here; its BSDF (or Mitsuba's default diffuse) is dropped",
+                    p.what()
+                ),
+            );
         }
         return Ok(0);
     }
@@ -132,7 +138,7 @@ fn angle_weighted_normals(m: &IndexedMesh) -> Vec<Vec3> {
     for f in &m.faces {
         let v = f.map(|i| m.positions[i as usize]);
         let n = (v[1] - v[0]).cross(v[2] - v[0]);
-        if !(n.length() > 1e-12) {
+        if n.length().is_nan() || n.length() <= 1e-12 {
             continue;
         }
         let n = n.normalize();
@@ -189,7 +195,7 @@ fn cylinder(cx: &Cx, p: &mut Plugin) -> Result<IndexedMesh, SceneError> {
     let p1 = p.point(cx, "p1")?.map_or(DVec3::Z, |a| DVec3::from_array(a.map(f64::from)));
     let r = p.float(cx, "radius")?.unwrap_or(1.0) as f64;
     let d = p1 - p0;
-    if !(r > 0.0) || d.length() <= 0.0 {
+    if r.is_nan() || r <= 0.0 || d.length() <= 0.0 {
         return Err(p.err(cx, p.node.line, "radius", "radius must be positive and p0 != p1"));
     }
     let (s, t) = d.normalize().any_orthonormal_pair();
@@ -213,7 +219,7 @@ fn cylinder(cx: &Cx, p: &mut Plugin) -> Result<IndexedMesh, SceneError> {
 fn sphere(cx: &Cx, p: &mut Plugin, xf: Option<Xform>, flip: bool, material: u32) -> Result<Sphere, SceneError> {
     let c = p.point(cx, "center")?.unwrap_or([0.0; 3]);
     let r = p.float(cx, "radius")?.unwrap_or(1.0);
-    if !(r > 0.0) {
+    if r.is_nan() || r <= 0.0 {
         return Err(p.err(cx, p.node.line, "radius", "radius must be positive"));
     }
     let (center, radius) = match xf {
@@ -221,9 +227,11 @@ fn sphere(cx: &Cx, p: &mut Plugin, xf: Option<Xform>, flip: bool, material: u32)
         Some(x) => {
             let m3 = DMat3::from_mat4(x.m);
             let s = [m3.x_axis.length(), m3.y_axis.length(), m3.z_axis.length()];
-            let ortho = m3.x_axis.dot(m3.y_axis).abs() + m3.y_axis.dot(m3.z_axis).abs() + m3.x_axis.dot(m3.z_axis).abs();
+            let ortho =
+                m3.x_axis.dot(m3.y_axis).abs() + m3.y_axis.dot(m3.z_axis).abs() + m3.x_axis.dot(m3.z_axis).abs();
             if (s[0] - s[1]).abs() > 1e-6 * s[0] || (s[0] - s[2]).abs() > 1e-6 * s[0] || ortho > 1e-6 * s[0] * s[0] {
-                let msg = "`to_world` must be a similarity (rotation, uniform scale, translation): spheres are analytic";
+                let msg =
+                    "`to_world` must be a similarity (rotation, uniform scale, translation): spheres are analytic";
                 return Err(p.err(cx, p.node.line, "to_world", msg));
             }
             let cc = x.m.transform_point3(DVec3::from_array(c.map(f64::from)));
