@@ -59,26 +59,7 @@ pub fn export_mitsuba(scene_path: &Path, out: &Path) -> Result<ExportReport, Str
     for (i, m) in scene.materials.iter().enumerate().skip(1) {
         let _ = writeln!(x, "{}", bsdf(m, Some(&names[i - 1]), &mut rep.warnings));
     }
-    // triangle runs
-    let tris = &scene.triangles;
-    let mut start = 0;
-    let mut k = 0;
-    while start < tris.len() {
-        let key = |t: &Triangle| (t.material, radiance(&scene, t), t.n.is_some());
-        let end = (start..tris.len()).find(|&j| key(&tris[j]) != key(&tris[start])).unwrap_or(tris.len());
-        let run = &tris[start..end];
-        let file = format!("{mesh_dir_name}/shape_{k:03}.ply");
-        std::fs::create_dir_all(&mesh_dir).map_err(|e| format!("{}: {e}", mesh_dir.display()))?;
-        let path = mesh_dir.join(format!("shape_{k:03}.ply"));
-        std::fs::write(&path, write_binary(&run_mesh(run))).map_err(|e| format!("{}: {e}", path.display()))?;
-        rep.meshes.push(path);
-        let _ = writeln!(x, "    <shape type=\"ply\">\n        <string name=\"filename\" value=\"{}\"/>", esc(&file));
-        let _ = writeln!(x, "        <boolean name=\"face_normals\" value=\"{}\"/>", run[0].n.is_none());
-        surface(&mut x, run[0].material, radiance(&scene, &run[0]), &names);
-        let _ = writeln!(x, "    </shape>");
-        start = end;
-        k += 1;
-    }
+    rep.meshes = triangle_runs(&mut x, &scene, &names, &mesh_dir, &mesh_dir_name)?;
     for s in &scene.spheres {
         let le = (s.emitter != super::NO_EMITTER).then(|| scene.emitters[s.emitter as usize].radiance);
         let _ = writeln!(x, "    <shape type=\"sphere\">");
@@ -103,6 +84,36 @@ pub fn export_mitsuba(scene_path: &Path, out: &Path) -> Result<ExportReport, Str
     let _ = writeln!(x, "</scene>");
     std::fs::write(out, x).map_err(|e| format!("{}: {e}", out.display()))?;
     Ok(rep)
+}
+
+/// Writes runs of triangles with equal material, emission and smoothness as PLY shapes.
+fn triangle_runs(
+    x: &mut String,
+    scene: &Scene,
+    names: &[String],
+    dir: &Path,
+    dir_name: &str,
+) -> Result<Vec<PathBuf>, String> {
+    let tris = &scene.triangles;
+    let key = |t: &Triangle| (t.material, radiance(scene, t), t.n.is_some());
+    let mut meshes = Vec::new();
+    let mut start = 0;
+    while start < tris.len() {
+        let end = (start..tris.len()).find(|&j| key(&tris[j]) != key(&tris[start])).unwrap_or(tris.len());
+        let run = &tris[start..end];
+        let k = meshes.len();
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let path = dir.join(format!("shape_{k:03}.ply"));
+        std::fs::write(&path, write_binary(&run_mesh(run))).map_err(|e| format!("{}: {e}", path.display()))?;
+        meshes.push(path);
+        let file = format!("{dir_name}/shape_{k:03}.ply");
+        let _ = writeln!(x, "    <shape type=\"ply\">\n        <string name=\"filename\" value=\"{}\"/>", esc(&file));
+        let _ = writeln!(x, "        <boolean name=\"face_normals\" value=\"{}\"/>", run[0].n.is_none());
+        surface(x, run[0].material, radiance(scene, &run[0]), names);
+        let _ = writeln!(x, "    </shape>");
+        start = end;
+    }
+    Ok(meshes)
 }
 
 fn radiance(scene: &Scene, t: &Triangle) -> Option<Rgb> {

@@ -271,9 +271,17 @@ pub fn parse(bytes: &[u8]) -> Result<IndexedMesh, String> {
             }
         }
     }
-    let nv = positions.len();
+    let faces = triangulate(&polys, positions.len())?;
+    if faces.is_empty() {
+        return Err("no faces".into());
+    }
+    Ok(IndexedMesh { positions, normals: has_normals.then_some(normals), faces, bytes_hash })
+}
+
+/// Polygons (vertex index lists with their location) → triangle fans, indices checked.
+fn triangulate(polys: &[(Vec<f64>, String)], nv: usize) -> Result<Vec<[u32; 3]>, String> {
     let mut faces = Vec::new();
-    for (poly, at) in &polys {
+    for (poly, at) in polys {
         if poly.len() < 3 {
             return Err(format!("{at}: face with {} vertices", poly.len()));
         }
@@ -288,10 +296,7 @@ pub fn parse(bytes: &[u8]) -> Result<IndexedMesh, String> {
             faces.push([idx[0], idx[k], idx[k + 1]]);
         }
     }
-    if faces.is_empty() {
-        return Err("no faces".into());
-    }
-    Ok(IndexedMesh { positions, normals: has_normals.then_some(normals), faces, bytes_hash })
+    Ok(faces)
 }
 
 /// Writes a binary little-endian PLY (float positions, optional float normals, uchar/uint faces).

@@ -8,7 +8,7 @@ use super::Cx;
 use crate::math::{Vec3, PI};
 use crate::sampling::distribution::Distribution1D;
 use crate::scene::{
-    light_power, Camera, Emitter, LightRef, PointLight, RenderDefaults, Roi, Scene, SceneError, NO_EMITTER,
+    light_power, Camera, Emitter, LightRef, PointLight, RenderDefaults, Roi, Scene, SceneError, Sphere, Triangle,
 };
 use std::collections::BTreeMap;
 
@@ -120,19 +120,7 @@ pub(super) fn assemble(
     let light_pick = Distribution1D::new(&powers).ok_or_else(|| {
         cx.err(1, "emitter", "the scene has no light with positive power (an `area` or `point` emitter)")
     })?;
-    let mut lo = Vec3::splat(f32::INFINITY);
-    let mut hi = Vec3::splat(f32::NEG_INFINITY);
-    for t in &triangles {
-        debug_assert!(t.emitter == NO_EMITTER || t.material == 0);
-        for p in t.p {
-            lo = lo.min(p);
-            hi = hi.max(p);
-        }
-    }
-    for s in &spheres {
-        lo = lo.min(s.center - Vec3::splat(s.radius));
-        hi = hi.max(s.center + Vec3::splat(s.radius));
-    }
+    let bounds = bounds(&triangles, &spheres);
     Ok(Scene {
         path: cx.file,
         hash: cx.hash,
@@ -148,7 +136,24 @@ pub(super) fn assemble(
         rois: ex.rois,
         forecast_target: ex.target,
         forecast_photons: ex.photons,
-        bounds: (lo, hi),
+        bounds,
         warnings: cx.warnings,
     })
+}
+
+/// Scene bounds (min, max) over triangles and spheres.
+fn bounds(triangles: &[Triangle], spheres: &[Sphere]) -> (Vec3, Vec3) {
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for t in triangles {
+        for p in t.p {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+    }
+    for s in spheres {
+        lo = lo.min(s.center - Vec3::splat(s.radius));
+        hi = hi.max(s.center + Vec3::splat(s.radius));
+    }
+    (lo, hi)
 }

@@ -178,7 +178,21 @@ fn sensor(cx: &mut Cx, n: &Node) -> Result<(Camera, Option<u64>), SceneError> {
     let Some(fov) = p.float(cx, "fov")? else { return Err(p.err(cx, n.line, "fov", "missing `fov`")) };
     let (axis, al) = p.string(cx, "fov_axis")?.unwrap_or(("x".into(), n.line));
     let xf = p.transform(cx, "to_world")?;
-    let (mut w, mut h, mut spp) = (768u32, 576u32, None);
+    let ((w, h), spp) = (film(cx, &mut p)?, sampler(cx, &mut p)?);
+    let fovy = fov_y(fov, &axis, w, h).ok_or_else(|| {
+        p.err(cx, al, "fov_axis", format!("unknown fov_axis `{axis}` (x, y, smaller, larger, diagonal)"))
+    })?;
+    if !(fovy > 0.0 && fovy < 180.0) {
+        return Err(p.err(cx, n.line, "fov", format!("fov must give a vertical fov in (0, 180), got {fovy}")));
+    }
+    let camera = camera_from(cx, &p, xf, fovy, (w, h))?;
+    p.finish(cx);
+    Ok((camera, spp))
+}
+
+/// The film's `width`, `height` (Mitsuba's defaults 768 × 576).
+fn film(cx: &mut Cx, p: &mut Plugin) -> Result<(u32, u32), SceneError> {
+    let (mut w, mut h) = (768u32, 576u32);
     for f in p.objects(&["film"]) {
         let mut fp = Plugin::new(f);
         fp.reject(cx, &["crop_offset_x", "crop_offset_y", "crop_width", "crop_height"], "crop the output instead")?;
@@ -195,6 +209,12 @@ fn sensor(cx: &mut Cx, n: &Node) -> Result<(Camera, Option<u64>), SceneError> {
         }
         fp.finish(cx);
     }
+    Ok((w, h))
+}
+
+/// The sampler's `sample_count` (Mitsuba's default 4), if there is a sampler.
+fn sampler(cx: &mut Cx, p: &mut Plugin) -> Result<Option<u64>, SceneError> {
+    let mut spp = None;
     for s in p.objects(&["sampler"]) {
         let mut sp = Plugin::new(s);
         let c = sp.int(cx, "sample_count")?.unwrap_or(4);
@@ -204,38 +224,30 @@ fn sensor(cx: &mut Cx, n: &Node) -> Result<(Camera, Option<u64>), SceneError> {
             })?);
         sp.finish(cx);
     }
-    let fovy = fov_y(fov, &axis, w, h).ok_or_else(|| {
-        p.err(cx, al, "fov_axis", format!("unknown fov_axis `{axis}` (x, y, smaller, larger, diagonal)"))
-    })?;
-    if !(fovy > 0.0 && fovy < 180.0) {
-        return Err(p.err(cx, n.line, "fov", format!("fov must give a vertical fov in (0, 180), got {fovy}")));
+    Ok(spp)
+}
+
+/// The camera of `to_world`: a lone `lookat` exactly as the TOML camera, else the matrix's
+/// frame (position, forward = +z, up = +y, right = −x, Mitsuba's camera space).
+fn camera_from(
+    cx: &Cx,
+    p: &Plugin,
+    xf: Option<params::Xform>,
+    fovy: f32,
+    (w, h): (u32, u32),
+) -> Result<Camera, SceneError> {
+    if let Some([o, t, u]) = xf.as_ref().and_then(|x| x.lookat) {
+        return Ok(Camera::new(Vec3::from_array(o), Vec3::from_array(t), Vec3::from_array(u), fovy, w, h));
     }
-    let camera = match xf {
-        Some(x) if x.lookat.is_some() => {
-            let [o, t, u] = x.lookat.unwrap().map(Vec3::from_array);
-            Camera::new(o, t, u, fovy, w, h)
-        }
-        x => {
-            let m = x.map_or(glam::DMat4::IDENTITY, |x| x.m);
-            let (f, u, l) = (m.z_axis.truncate(), m.y_axis.truncate(), m.x_axis.truncate());
-            let (f, u, r) = (f.normalize(), u.normalize(), -l.normalize());
-            if f.dot(u).abs() > 1e-4 || f.dot(r).abs() > 1e-4 || u.dot(r).abs() > 1e-4 || !f.is_finite() {
-                return Err(p.err(cx, n.line, "to_world", "the camera transform must be rigid (no shear)"));
-            }
-            let pos = m.w_axis.truncate().as_vec3();
-            Camera {
-                position: pos,
-                forward: f.as_vec3(),
-                right: r.as_vec3(),
-                up: u.as_vec3(),
-                fov_deg: fovy,
-                width: w,
-                height: h,
-            }
-        }
-    };
-    p.finish(cx);
-    Ok((camera, spp))
+    let m = xf.map_or(glam::DMat4::IDENTITY, |x| x.m);
+    let (f, u, l) = (m.z_axis.truncate(), m.y_axis.truncate(), m.x_axis.truncate());
+    let (f, u, r) = (f.normalize(), u.normalize(), -l.normalize());
+    if f.dot(u).abs() > 1e-4 || f.dot(r).abs() > 1e-4 || u.dot(r).abs() > 1e-4 || !f.is_finite() {
+        return Err(p.err(cx, p.node.line, "to_world", "the camera transform must be rigid (no shear)"));
+    }
+    let position = m.w_axis.truncate().as_vec3();
+    let (forward, right, up) = (f.as_vec3(), r.as_vec3(), u.as_vec3());
+    Ok(Camera { position, forward, right, up, fov_deg: fovy, width: w, height: h })
 }
 
 /// A top-level `point` emitter.

@@ -12,13 +12,16 @@ use crate::math::Rgb;
 use crate::scene::SceneError;
 use glam::{DMat4, DVec3, DVec4};
 
+/// The (origin, target, up) of a `lookat`.
+pub(super) type LookAt = [[f32; 3]; 3];
+
 /// A `to_world` transform: the matrix, and the `lookat` operands when it is exactly one `lookat`
 /// (the camera uses them directly, bit-exact with the TOML camera).
 pub(super) struct Xform {
     /// Composed matrix.
     pub m: DMat4,
     /// (origin, target, up) of a lone `lookat`, as f32.
-    pub lookat: Option<[[f32; 3]; 3]>,
+    pub lookat: Option<LookAt>,
 }
 
 /// One plugin element and which of its children have been read.
@@ -154,54 +157,9 @@ impl<'a> Plugin<'a> {
         let mut m = DMat4::IDENTITY;
         let mut lookat = None;
         for op in &n.children {
-            let e = |msg: String| self.err(cx, op.line, &format!("{name}.{}", op.tag), msg);
-            let step = match op.tag.as_str() {
-                "translate" => DMat4::from_translation(d3(xyz(op, 0.0).map_err(e)?)),
-                "scale" => {
-                    let s = match op.attr("value").and_then(numbers).as_deref() {
-                        Some([s]) => [*s; 3],
-                        _ => xyz(op, 1.0).map_err(e)?,
-                    };
-                    DMat4::from_scale(d3(s))
-                }
-                "rotate" => {
-                    let axis = d3(xyz(op, 0.0).map_err(e)?);
-                    let angle = op.attr("angle").and_then(|a| a.trim().parse::<f64>().ok());
-                    match angle {
-                        Some(a) if axis.length() > 0.0 => DMat4::from_axis_angle(axis.normalize(), a.to_radians()),
-                        _ => return Err(e("`rotate` needs a non-zero axis and a numeric `angle`".into())),
-                    }
-                }
-                "matrix" => {
-                    let v = op.attr("value").and_then(numbers).unwrap_or_default();
-                    match v.len() {
-                        16 => DMat4::from_cols_array(&std::array::from_fn(|i| v[(i % 4) * 4 + i / 4] as f64)),
-                        9 => {
-                            let c = |j: usize| DVec4::new(v[j] as f64, v[3 + j] as f64, v[6 + j] as f64, 0.0);
-                            DMat4::from_cols(c(0), c(1), c(2), DVec4::W)
-                        }
-                        k => return Err(e(format!("`matrix` needs 16 (or 9) numbers, got {k}"))),
-                    }
-                }
-                "lookat" => {
-                    let p = |k: &str| op.attr(k).and_then(numbers).filter(|v| v.len() == 3).map(|v| [v[0], v[1], v[2]]);
-                    let (Some(o), Some(t)) = (p("origin"), p("target")) else {
-                        return Err(e("`lookat` needs `origin` and `target` (three numbers each)".into()));
-                    };
-                    let up = p("up").unwrap_or([0.0, 1.0, 0.0]);
-                    let dir = (d3(t) - d3(o)).normalize();
-                    let left = d3(up).cross(dir).normalize();
-                    if !left.is_finite() || !dir.is_finite() {
-                        return Err(e("`lookat`: target equals origin or up is parallel to the view".into()));
-                    }
-                    if n.children.len() == 1 {
-                        lookat = Some([o, t, up]);
-                    }
-                    let nu = dir.cross(left);
-                    DMat4::from_cols(left.extend(0.0), nu.extend(0.0), dir.extend(0.0), d3(o).extend(1.0))
-                }
-                t => return Err(e(format!("unknown transform operation `<{t}>`"))),
-            };
+            let (step, l) = op_matrix(op, n.children.len() == 1)
+                .map_err(|msg| self.err(cx, op.line, &format!("{name}.{}", op.tag), msg))?;
+            lookat = lookat.or(l);
             m = step * m;
         }
         if !m.is_finite() {
@@ -229,6 +187,58 @@ impl<'a> Plugin<'a> {
             }
         }
     }
+}
+
+/// One `to_world` operation as a matrix (and the `lookat` operands when `lone`).
+fn op_matrix(op: &Node, lone: bool) -> Result<(DMat4, Option<LookAt>), String> {
+    let m = match op.tag.as_str() {
+        "translate" => DMat4::from_translation(d3(xyz(op, 0.0)?)),
+        "scale" => {
+            let s = match op.attr("value").and_then(numbers).as_deref() {
+                Some([s]) => [*s; 3],
+                _ => xyz(op, 1.0)?,
+            };
+            DMat4::from_scale(d3(s))
+        }
+        "rotate" => {
+            let axis = d3(xyz(op, 0.0)?);
+            match op.attr("angle").and_then(|a| a.trim().parse::<f64>().ok()) {
+                Some(a) if axis.length() > 0.0 => DMat4::from_axis_angle(axis.normalize(), a.to_radians()),
+                _ => return Err("`rotate` needs a non-zero axis and a numeric `angle`".into()),
+            }
+        }
+        "matrix" => {
+            let v = op.attr("value").and_then(numbers).unwrap_or_default();
+            match v.len() {
+                16 => DMat4::from_cols_array(&std::array::from_fn(|i| v[(i % 4) * 4 + i / 4] as f64)),
+                9 => {
+                    let c = |j: usize| DVec4::new(v[j] as f64, v[3 + j] as f64, v[6 + j] as f64, 0.0);
+                    DMat4::from_cols(c(0), c(1), c(2), DVec4::W)
+                }
+                k => return Err(format!("`matrix` needs 16 (or 9) numbers, got {k}")),
+            }
+        }
+        "lookat" => return lookat(op, lone),
+        t => return Err(format!("unknown transform operation `<{t}>`")),
+    };
+    Ok((m, None))
+}
+
+/// Mitsuba's look-at matrix: columns left = normalize(up × dir), up' = dir × left, dir, origin.
+fn lookat(op: &Node, lone: bool) -> Result<(DMat4, Option<LookAt>), String> {
+    let p = |k: &str| op.attr(k).and_then(numbers).filter(|v| v.len() == 3).map(|v| [v[0], v[1], v[2]]);
+    let (Some(o), Some(t)) = (p("origin"), p("target")) else {
+        return Err("`lookat` needs `origin` and `target` (three numbers each)".into());
+    };
+    let up = p("up").unwrap_or([0.0, 1.0, 0.0]);
+    let dir = (d3(t) - d3(o)).normalize();
+    let left = d3(up).cross(dir).normalize();
+    if !left.is_finite() || !dir.is_finite() {
+        return Err("`lookat`: target equals origin or up is parallel to the view".into());
+    }
+    let nu = dir.cross(left);
+    let m = DMat4::from_cols(left.extend(0.0), nu.extend(0.0), dir.extend(0.0), d3(o).extend(1.0));
+    Ok((m, lone.then_some([o, t, up])))
 }
 
 fn d3(a: [f32; 3]) -> DVec3 {
