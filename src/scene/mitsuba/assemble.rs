@@ -30,6 +30,7 @@ pub(super) fn forecast_defaults(
     let line = |k: &str| root.children.iter().find(|c| c.tag == "default" && c.name() == k).map_or(0, |c| c.line);
     let bad = |k: &str, m: String| cx.err(line(k), k, m);
     let mut ex = Extras { rois: Vec::new(), target: None, photons: None };
+    let mut rois: Vec<(u64, Roi)> = Vec::new();
     for (k, v) in vars.iter().filter(|(k, _)| k.starts_with("forecast_")) {
         let num = |v: &str| v.trim().parse::<u64>().map_err(|_| bad(k, format!("`{v}` is not a non-negative integer")));
         match k.as_str() {
@@ -48,13 +49,19 @@ pub(super) fn forecast_defaults(
                 }
                 _ => return Err(bad(k, format!("`{v}`: expected six numbers, min then max"))),
             },
-            _ if k.starts_with("forecast_roi_") => {
+            _ if k.strip_prefix("forecast_roi_").is_some_and(|i| i.parse::<u64>().is_ok()) => {
                 let mut it = v.split_whitespace();
                 let r: Vec<u32> = it.by_ref().take(4).filter_map(|t| t.parse().ok()).collect();
                 let name = it.collect::<Vec<_>>().join(" ");
                 match r[..] {
-                    [x, y, w, h] if w > 0 && h > 0 && x + w <= camera.width && y + h <= camera.height => {
-                        ex.rois.push(Roi { name, rect: [x, y, w, h] })
+                    [x, y, w, h]
+                        if w > 0
+                            && h > 0
+                            && x.checked_add(w).is_some_and(|e| e <= camera.width)
+                            && y.checked_add(h).is_some_and(|e| e <= camera.height) =>
+                    {
+                        let i: u64 = k["forecast_roi_".len()..].parse().unwrap_or(0);
+                        rois.push((i, Roi { name, rect: [x, y, w, h] }))
                     }
                     _ => return Err(bad(k, format!("`{v}`: expected `x y w h name` inside the image"))),
                 }
@@ -63,15 +70,8 @@ pub(super) fn forecast_defaults(
         }
     }
     // ROIs in their index order (forecast_roi_0, _1, ...; the map orders `_10` before `_2`)
-    let mut idx: Vec<(u64, usize)> = vars
-        .keys()
-        .filter_map(|k| k.strip_prefix("forecast_roi_").and_then(|i| i.parse().ok()))
-        .enumerate()
-        .map(|(j, i)| (i, j))
-        .collect();
-    idx.sort();
-    let rois = std::mem::take(&mut ex.rois);
-    ex.rois = idx.iter().map(|&(_, j)| rois[j].clone()).collect();
+    rois.sort_by_key(|r| r.0);
+    ex.rois = rois.into_iter().map(|r| r.1).collect();
     Ok(ex)
 }
 
