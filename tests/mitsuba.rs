@@ -324,3 +324,26 @@ fn malformed_inputs_are_clear_errors_with_file_and_line() {
         }
     }
 }
+
+#[test]
+fn truncated_inputs_never_panic() {
+    let src = ring_src();
+    for cut in (0..src.len()).step_by(7) {
+        if !src.is_char_boundary(cut) {
+            continue;
+        }
+        let r = std::panic::catch_unwind(|| mitsuba::load_str(&src[..cut], "cut.xml", &ring_dir(), &[]));
+        assert!(r.is_ok(), "panic on ring.xml cut at byte {cut}");
+    }
+    let m = forecast::scene::ply::parse(PLY_ASCII.as_bytes()).unwrap();
+    let m = forecast::scene::ply::IndexedMesh { normals: Some(vec![Vec3::Y; 4]), ..m };
+    let bin = forecast::scene::ply::write_binary(&m);
+    for cut in 0..bin.len() {
+        let r = std::panic::catch_unwind(|| forecast::scene::ply::parse(&bin[..cut]));
+        assert!(matches!(r, Ok(Err(_))), "PLY cut at byte {cut}: not a clean error");
+    }
+    for cut in 0..PLY_ASCII.len() - 1 {
+        let r = std::panic::catch_unwind(|| forecast::scene::ply::parse(&PLY_ASCII.as_bytes()[..cut]));
+        assert!(r.is_ok(), "ASCII PLY cut at byte {cut}: panic");
+    }
+}
