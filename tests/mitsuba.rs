@@ -8,11 +8,28 @@
 mod common;
 use common::{global_z, max_z, render_passes, root, scaled, tmp_dir};
 use forecast::accel::World;
-use forecast::integrators::{self, Method, MethodOptions};
+use forecast::integrators::{self, Integrator, Method, MethodOptions};
 use forecast::math::Vec3;
 use forecast::scene::{mitsuba, Material, Scene};
 use forecast::stats::z_test_threshold;
 use std::path::Path;
+
+// ---- the only lines that depend on the World / integrator API ----
+fn world(s: Scene) -> World {
+    World::build(s)
+}
+
+/// Method options: cap 64, `vpl` IWS paths per pass, `photons` for iws-pm and iws-cf.
+fn opts(vpl: u32, photons: u64) -> MethodOptions {
+    MethodOptions { max_depth: 64, vpl_paths: vpl, photons, forecast_photons: Some(photons), ..Default::default() }
+}
+
+/// Preprocess (seeded) and build a method's integrator, as a rank would.
+fn integrator(m: Method, w: &World, o: &MethodOptions, seed: u64) -> Box<dyn Integrator> {
+    let bytes = integrators::preprocess(m, w, o, seed).unwrap();
+    integrators::build(m, w, o, &bytes).unwrap()
+}
+// ----
 
 fn xml(src: &str, dir: &Path) -> Result<Scene, forecast::scene::SceneError> {
     mitsuba::load_str(src, "t.xml", dir, &[])
@@ -53,10 +70,10 @@ fn exported_toml_scenes_load_back_identical_and_render_bit_identically() {
         let b = forecast::scene::load(&out).unwrap_or_else(|e| panic!("{e}"));
         assert!(fingerprint(&a) == fingerprint(&b), "{}: the exported scene differs", p.display());
         assert!(b.warnings.is_empty(), "{}: {:?}", p.display(), b.warnings);
-        let (wa, wb) = (World::build(a), World::build(b));
-        let o = MethodOptions { max_depth: 64, ..Default::default() };
-        let mut pa = integrators::build(Method::Pt, &wa, &o, &[]).unwrap();
-        let mut pb = integrators::build(Method::Pt, &wb, &o, &[]).unwrap();
+        let (wa, wb) = (world(a), world(b));
+        let o = opts(32, 1000);
+        let mut pa = integrator(Method::Pt, &wa, &o, 1);
+        let mut pb = integrator(Method::Pt, &wb, &o, 1);
         let (fa, fb) = (render_passes(&wa, pa.as_mut(), 20, 20, 2, 9), render_passes(&wb, pb.as_mut(), 20, 20, 2, 9));
         assert!(fa.data.iter().zip(&fb.data).all(|(x, y)| x.to_bits() == y.to_bits()), "{}", p.display());
         assert!(fa.data.iter().any(|&x| x > 0.0));
@@ -103,17 +120,10 @@ fn sms_ring_loads_with_its_ignored_parameters_listed() {
 
 #[test]
 fn sms_ring_renders_with_every_method() {
-    let w = World::build(mitsuba::load(&ring_dir().join("ring.xml"), &[]).unwrap());
-    let o = MethodOptions {
-        max_depth: 64,
-        vpl_paths: 32,
-        photons: 2000,
-        forecast_photons: Some(2000),
-        ..Default::default()
-    };
+    let w = world(mitsuba::load(&ring_dir().join("ring.xml"), &[]).unwrap());
+    let o = opts(32, 2000);
     for m in [Method::Pt, Method::Iws, Method::IwsPm, Method::IwsCf] {
-        let bytes = integrators::preprocess(m, &w, &o, 3).unwrap();
-        let mut integ = integrators::build(m, &w, &o, &bytes).unwrap();
+        let mut integ = integrator(m, &w, &o, 3);
         let f = render_passes(&w, integ.as_mut(), 12, 9, 2, 1);
         let mean = f.mean();
         assert!(mean.iter().flatten().all(|x| x.is_finite() && *x >= 0.0), "{m:?}");
@@ -128,14 +138,13 @@ fn sms_ring_pt_and_iws_cf_agree() {
     // and 1/900 the radiance (the same power) keeps every other parameter of the file.
     let src = ring_src().replace("<scale x=\"0.1\" y=\"0.1\" z=\"0.1\"/>", "<scale x=\"3\" y=\"3\" z=\"3\"/>");
     let src = src.replace("value=\"70000\"", "value=\"77.777778\"");
-    let w = World::build(mitsuba::load_str(&src, "ring-big-light.xml", &ring_dir(), &[]).unwrap());
+    let w = world(mitsuba::load_str(&src, "ring-big-light.xml", &ring_dir(), &[]).unwrap());
     assert!((w.scene.emitters[0].area - 18.0).abs() < 1e-4);
-    let o = MethodOptions { max_depth: 64, vpl_paths: 64, forecast_photons: Some(20_000), ..Default::default() };
+    let o = opts(64, 20_000);
     let (rw, rh) = (8, 6);
-    let mut pt = integrators::build(Method::Pt, &w, &o, &[]).unwrap();
+    let mut pt = integrator(Method::Pt, &w, &o, 17);
     let reference = render_passes(&w, pt.as_mut(), rw, rh, 16384, 11);
-    let bytes = integrators::preprocess(Method::IwsCf, &w, &o, 17).unwrap();
-    let mut cf = integrators::build(Method::IwsCf, &w, &o, &bytes).unwrap();
+    let mut cf = integrator(Method::IwsCf, &w, &o, 17);
     let img = render_passes(&w, cf.as_mut(), rw, rh, 2048, 3);
     let (z, n) = max_z(&img, &reference, None);
     let thr = z_test_threshold(1e-3, n);

@@ -217,7 +217,7 @@ pub fn load_indexed(path: &Path) -> Result<IndexedMesh, String> {
 
 /// Parses PLY bytes.
 pub fn parse(bytes: &[u8]) -> Result<IndexedMesh, String> {
-    let bytes_hash = super::file::fnv1a(0xcbf2_9ce4_8422_2325, bytes);
+    let bytes_hash = fnv1a(0xcbf2_9ce4_8422_2325, bytes);
     let (format, elements, start, header_lines) = parse_header(bytes)?;
     let mut body = Body { bytes, pos: start, format, line: header_lines + 1 };
     let mut positions = Vec::new();
@@ -297,6 +297,16 @@ fn triangulate(polys: &[(Vec<f64>, String)], nv: usize) -> Result<Vec<[u32; 3]>,
         }
     }
     Ok(faces)
+}
+
+/// FNV-1a over bytes, continuing from `h` (the scene hash's function, kept here so that the
+/// Mitsuba and PLY code need nothing private from the TOML loader).
+pub(crate) fn fnv1a(mut h: u64, bytes: &[u8]) -> u64 {
+    for &b in bytes {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    h
 }
 
 /// Writes a binary little-endian PLY (float positions, optional float normals, uchar/uint faces).

@@ -92,7 +92,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path, defines: &[(String, String)])
         file: file.to_string(),
         dir: dir.to_path_buf(),
         warnings: Vec::new(),
-        hash: crate::scene::file::fnv1a(0xcbf2_9ce4_8422_2325, src.as_bytes()),
+        hash: crate::scene::ply::fnv1a(0xcbf2_9ce4_8422_2325, src.as_bytes()),
         materials: vec![Material::Black],
         ids: BTreeMap::new(),
         default_diffuse: None,

@@ -120,7 +120,7 @@ fn file_mesh(cx: &mut Cx, p: &mut Plugin) -> Result<IndexedMesh, SceneError> {
         crate::scene::obj::load_indexed(&path)
     };
     let mut m = m.map_err(|e| p.err(cx, fl, "filename", e))?;
-    cx.hash = crate::scene::file::fnv1a(cx.hash, &m.bytes_hash.to_le_bytes());
+    cx.hash = crate::scene::ply::fnv1a(cx.hash, &m.bytes_hash.to_le_bytes());
     p.reject(cx, &["max_smooth_angle"], "normals are per-vertex or per-face")?;
     let face_normals = p.boolean(cx, "face_normals")?.unwrap_or(false);
     if face_normals {
