@@ -518,7 +518,7 @@ fn key_line_after(src: &str, from: usize, key: &str) -> Option<usize> {
 }
 
 /// Builds a triangle, or `None` when degenerate (zero area or non-finite).
-fn make_triangle(p: [Vec3; 3], n: Option<[Vec3; 3]>, material: u32) -> Option<Triangle> {
+pub(super) fn make_triangle(p: [Vec3; 3], n: Option<[Vec3; 3]>, material: u32) -> Option<Triangle> {
     let c = (p[1] - p[0]).cross(p[2] - p[0]);
     let len = c.length();
     if !(len.is_finite() && len > 1e-12) {

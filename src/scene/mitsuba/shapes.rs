@@ -263,16 +263,13 @@ fn triangles(cx: &mut Cx, line: usize, m: &IndexedMesh, xf: Option<&Xform>, flip
     out
 }
 
-/// `file::make_triangle`'s rule, except that normals of unit length to 5e-6 are kept as they are
-/// (bit-exact round trip of exported normals; hits renormalise the interpolated normal).
+/// The TOML loader's triangle (the same `ng` and area, degenerate ones `None`), except that
+/// shading normals of unit length to 5e-6 are kept as they are (a bit-exact round trip of
+/// exported normals; hits renormalise the interpolated normal).
 fn make_triangle(p: [Vec3; 3], n: Option<[Vec3; 3]>, material: u32) -> Option<Triangle> {
-    let c = (p[1] - p[0]).cross(p[2] - p[0]);
-    let len = c.length();
-    if !(len.is_finite() && len > 1e-12) {
-        return None;
-    }
-    let ng = c / len;
-    let n = n.and_then(|ns| {
+    let mut t = crate::scene::file::make_triangle(p, None, material)?;
+    let ng = t.ng;
+    t.n = n.and_then(|ns| {
         let ok = ns.iter().all(|v| v.is_finite() && v.length() > 1e-6);
         ok.then(|| {
             ns.map(|v| {
@@ -285,7 +282,7 @@ fn make_triangle(p: [Vec3; 3], n: Option<[Vec3; 3]>, material: u32) -> Option<Tr
             })
         })
     });
-    Some(Triangle { p, n, ng, area: 0.5 * len, material, emitter: NO_EMITTER })
+    Some(t)
 }
 
 trait BlackDiffuse {
