@@ -117,6 +117,13 @@ pub(super) fn assemble(
     let mut lights: Vec<LightRef> = (0..emitters.len() as u32).map(LightRef::Area).collect();
     lights.extend((0..point_lights.len() as u32).map(LightRef::Point));
     let powers: Vec<f32> = lights.iter().map(|&l| light_power(&emitters, &point_lights, l)).collect();
+    if let Some(i) = powers.iter().position(|p| !p.is_finite()) {
+        return Err(cx.err(
+            0,
+            "emitter",
+            format!("light {i}'s power overflows f32 (radiance × area or intensity too large)"),
+        ));
+    }
     let light_pick = Distribution1D::new(&powers).ok_or_else(|| {
         cx.err(1, "emitter", "the scene has no light with positive power (an `area` or `point` emitter)")
     })?;
