@@ -19,6 +19,9 @@ pub struct Cli {
     /// What to do.
     #[command(subcommand)]
     pub command: Command,
+    /// Mitsuba XML scenes: set `<default>` parameter NAME (`$NAME`), as Mitsuba's `-D`.
+    #[arg(short = 'D', value_name = "NAME=VALUE", global = true)]
+    pub define: Vec<String>,
 }
 
 /// Subcommands.
@@ -48,12 +51,20 @@ pub enum Command {
     Compare(CompareArgs),
     /// Edge-case suite (scenes/stability): finishes, finite output, warnings; stability.md/html.
     Stability(StabilityArgs),
+    /// Write a TOML scene as Mitsuba 3 XML (PLY meshes in OUT_STEM_meshes/ beside it).
+    ExportMitsuba {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Output XML file.
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 /// `render` options.
 #[derive(Args, Debug, Clone)]
 pub struct RenderArgs {
-    /// Scene file (TOML).
+    /// Scene file (TOML, or Mitsuba XML by the `.xml` extension).
     pub scene: PathBuf,
     /// Rendering method (default: the scene's `render.method`).
     #[arg(long, value_enum)]

@@ -9,10 +9,17 @@ use std::time::Instant;
 fn run() -> Result<(), String> {
     let started = Instant::now();
     let cli = Cli::parse();
+    forecast::scene::mitsuba::set_cli_defines(&cli.define)?;
     match cli.command {
         Command::Render(a) => render(&a, started),
         Command::Diff(a) => diff(&a),
         Command::Bench(a) => bench_cmd(&a),
+        Command::ExportMitsuba { scene, out } => {
+            let rep = forecast::scene::export::export_mitsuba(&scene, &out)?;
+            rep.warnings.iter().for_each(|w| errln!("warning: {w}"));
+            outln!("wrote {} and {} PLY mesh(es)", rep.xml.display(), rep.meshes.len())?;
+            Ok(())
+        }
         Command::GenerateScenes { dir } => {
             for p in scenegen::write_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))? {
                 outln!("wrote {}", p.display())?;

@@ -75,11 +75,11 @@ fn budgets_and_methods_parse() {
         let args = [&["compare", "s.toml", "--reference", "r.exr"], extra].concat();
         Cli::try_parse_from(std::iter::once("forecast").chain(args.iter().copied()))
     };
-    let Ok(Cli { command: Command::Compare(ca) }) = parse(&[]) else { panic!("compare parses") };
+    let Ok(Cli { command: Command::Compare(ca), .. }) = parse(&[]) else { panic!("compare parses") };
     let cfg = ca.config();
     assert_eq!(cfg.budgets, vec![30.0, 60.0, 120.0, 240.0]);
     assert_eq!(cfg.methods, vec![Method::Pt, Method::IwsPm, Method::IwsCf]);
-    let Ok(Cli { command: Command::Compare(ca) }) = parse(&["--budgets", "500ms,2m", "--methods", "iws,pt"]) else {
+    let Ok(Cli { command: Command::Compare(ca), .. }) = parse(&["--budgets", "500ms,2m", "--methods", "iws,pt"]) else {
         panic!("compare parses")
     };
     assert_eq!((ca.config().budgets, ca.methods), (vec![0.5, 120.0], vec![Method::Iws, Method::Pt]));

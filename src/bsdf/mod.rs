@@ -9,9 +9,11 @@
 //! **geometric** normal (no light leaks through walls); Dirac samples have `is_delta` and their
 //! pdf_w is the discrete choice probability.
 
+mod conductor;
 mod dielectric;
 mod phong;
 
+pub use conductor::fresnel_conductor;
 pub use dielectric::fresnel_dielectric;
 
 use crate::math::{Frame, Rgb, Vec3, INV_PI};
@@ -133,6 +135,14 @@ pub fn sample(m: &Material, sp: &ShadingPoint, wo: Vec3, u: [f32; 3], mode: Mode
                 return None;
             }
             BsdfSample { wi, weight: reflectance, pdf_w: 1.0, is_delta: true }
+        }
+        Material::Conductor { reflectance, eta, k } => {
+            let wi = crate::math::reflect(wo, ns);
+            if wi.dot(ng) <= 0.0 {
+                return None;
+            }
+            let f = fresnel_conductor(wo.dot(ns), eta, k);
+            BsdfSample { wi, weight: reflectance * f, pdf_w: 1.0, is_delta: true }
         }
         Material::Glass { ior } => dielectric::sample(ior, sp, wo, u[0], mode)?,
         Material::Black => return None,

@@ -8,7 +8,7 @@
 use super::limits::{extent_message, within_extent};
 use super::schema::{Doc, LightDef, MaterialDef, ShapeDef};
 use super::{
-    light_power, limits, locate, obj, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene,
+    light_power, limits, locate, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene,
     Sphere, Triangle, NO_EMITTER,
 };
 use crate::math::{fnv1a, Vec3, PI};
@@ -381,7 +381,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
                     return Err(cx.err(ss, &key("rotate_y"), format!("rotate_y must be finite, got {ry}")));
                 }
                 let path = dir.join(f);
-                let mesh = obj::load_mesh(&path, smooth).map_err(|m| cx.err(ss.clone(), &key("file"), m))?;
+                let mesh = super::load_mesh_file(&path, smooth).map_err(|m| cx.err(ss.clone(), &key("file"), m))?;
                 hash = fnv1a(hash, &mesh.bytes_hash.to_le_bytes());
                 let (sin, cos) = ry.to_radians().sin_cos();
                 let xf = |p: Vec3| {
@@ -569,7 +569,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
 }
 
 /// Builds a triangle, or `None` when degenerate (zero area or non-finite).
-fn make_triangle(p: [Vec3; 3], n: Option<[Vec3; 3]>, material: u32) -> Option<Triangle> {
+pub(super) fn make_triangle(p: [Vec3; 3], n: Option<[Vec3; 3]>, material: u32) -> Option<Triangle> {
     let c = (p[1] - p[0]).cross(p[2] - p[0]);
     // scaled by the largest component first, so that |c|² cannot overflow (|c| up to 1e25)
     let m = c.abs().max_element();

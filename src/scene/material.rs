@@ -25,6 +25,16 @@ pub enum Material {
         /// Reflectance.
         reflectance: Rgb,
     },
+    /// Perfect specular reflector weighted by the conductor Fresnel term of the complex index
+    /// η + ik (per RGB channel): reflectance·F(cos θ, η, k) (Dirac; Mitsuba's smooth `conductor`).
+    Conductor {
+        /// Specular reflectance (a multiplier on the Fresnel term).
+        reflectance: Rgb,
+        /// Real part of the relative index of refraction.
+        eta: Rgb,
+        /// Imaginary part (absorption).
+        k: Rgb,
+    },
     /// Smooth dielectric with Fresnel reflection and refraction (Dirac).
     Glass {
         /// Index of refraction inside (outside is 1).
@@ -38,7 +48,7 @@ impl Material {
     /// True for Dirac (delta) BSDFs: the S side of the L_d / L_c split.
     #[inline]
     pub fn is_dirac(&self) -> bool {
-        matches!(self, Material::Mirror { .. } | Material::Glass { .. })
+        matches!(self, Material::Mirror { .. } | Material::Conductor { .. } | Material::Glass { .. })
     }
     /// True when the BSDF is identically zero.
     #[inline]

@@ -8,16 +8,36 @@
 //! normals lie on the geometric normal's side; emitters have the black material.
 
 mod camera;
+pub mod export;
 mod file;
 mod limits;
 mod locate;
 mod material;
+pub mod mitsuba;
 mod obj;
+pub mod ply;
 mod schema;
 
 pub use camera::Camera;
-pub use file::{load, load_str, parse_duration, SceneError};
 pub use limits::{within_extent, MAX_EXTENT};
+pub use file::{load_str, parse_duration, SceneError};
+
+/// Loads a scene file by extension: `.xml` is Mitsuba XML (with the command line's `-D`
+/// values, `mitsuba::set_cli_defines`), anything else the TOML format.
+pub fn load(path: &std::path::Path) -> Result<Scene, SceneError> {
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml")) {
+        return mitsuba::load(path, mitsuba::cli_defines());
+    }
+    file::load(path)
+}
+
+/// A TOML `type = "mesh"` file by extension: `.ply` (PLY reader) or OBJ.
+fn load_mesh_file(path: &std::path::Path, smooth: bool) -> Result<obj::Mesh, String> {
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply")) {
+        return ply::load_mesh(path, smooth);
+    }
+    obj::load_mesh(path, smooth)
+}
 pub use material::Material;
 
 use crate::math::{luminance, Rgb, Vec3, PI};

@@ -66,3 +66,35 @@ pub fn load_mesh(path: &Path, smooth: bool) -> Result<Mesh, String> {
     }
     Ok(Mesh { triangles, normals: smooth.then_some(normals), bytes_hash })
 }
+
+/// Loads an OBJ file as one indexed mesh (all objects merged; a vertex per distinct
+/// position/normal/uv index triple, as Mitsuba's OBJ loader keys them).
+pub fn load_indexed(path: &Path) -> Result<super::ply::IndexedMesh, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read OBJ `{}`: {e}", path.display()))?;
+    let bytes_hash = super::ply::fnv1a(0xcbf2_9ce4_8422_2325, &bytes);
+    let opts = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
+    let mut reader = std::io::BufReader::new(&bytes[..]);
+    let (models, _) = tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed))
+        .map_err(|e| format!("cannot parse OBJ `{}`: {e}", path.display()))?;
+    let (mut positions, mut normals, mut faces) = (Vec::new(), Vec::new(), Vec::new());
+    let mut all_normals = true;
+    for m in &models {
+        let mesh = &m.mesh;
+        let base = positions.len() as u32;
+        let nv = mesh.positions.len() / 3;
+        positions.extend(mesh.positions.chunks_exact(3).map(|s| Vec3::new(s[0], s[1], s[2])));
+        all_normals &= mesh.normals.len() == mesh.positions.len() && !mesh.normals.is_empty();
+        normals.extend(mesh.normals.chunks_exact(3).map(|s| Vec3::new(s[0], s[1], s[2])));
+        for f in mesh.indices.chunks_exact(3) {
+            if f.iter().any(|&i| i as usize >= nv) {
+                return Err(format!("OBJ `{}`: face index out of range", path.display()));
+            }
+            faces.push([base + f[0], base + f[1], base + f[2]]);
+        }
+    }
+    if faces.is_empty() {
+        return Err(format!("OBJ `{}` has no faces", path.display()));
+    }
+    let normals = (all_normals && normals.len() == positions.len()).then_some(normals);
+    Ok(super::ply::IndexedMesh { positions, normals, faces, bytes_hash })
+}

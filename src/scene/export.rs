@@ -1,0 +1,234 @@
+//! `forecast export-mitsuba SCENE.toml --out SCENE.xml`: a TOML scene as Mitsuba 3 XML, so that
+//! Mitsuba can render a reference of the same scene, and forecast loads it back identically.
+//!
+//! Exactness: triangles are written as binary PLY files (world-space f32 vertices, three per
+//! triangle, with the shading normals of smooth ones) in `SCENE_meshes/` beside the XML, grouped
+//! into runs of equal material, emission and smoothness, in scene order; spheres stay analytic;
+//! the camera is the TOML `lookat` with `fov_axis="y"`; numbers are printed in Rust's shortest
+//! round-trip form. forecast's own options (method, seed, time, photons, target box, ROIs) go
+//! into `<default name="forecast_*">` values that Mitsuba ignores. So the scene loaded back is
+//! the same `Scene` (apart from `path`, `hash`, `warnings`) and renders bit-identically.
+//!
+//! Mapping: diffuse → `twosided` `diffuse`; mirror → `twosided` `conductor` (`material` none,
+//! `specular_reflectance`); glass → `dielectric` (`int_ior` = ior, `ext_ior` = 1); glossy →
+//! Mitsuba 0.6's `phong` (the same modified Phong; Mitsuba 3 has none: a warning); emitters carry
+//! a black `diffuse` (they reflect nothing).
+
+use super::ply::{write_binary, IndexedMesh};
+use super::schema::Doc;
+use super::{Material, Scene, Triangle};
+use crate::math::{Rgb, Vec3};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// What `export` wrote.
+#[derive(Clone, Debug, Serialize)]
+pub struct ExportReport {
+    /// The XML file.
+    pub xml: PathBuf,
+    /// The PLY files.
+    pub meshes: Vec<PathBuf>,
+    /// Things Mitsuba 3 cannot render as forecast does.
+    pub warnings: Vec<String>,
+}
+
+fn v3(v: Vec3) -> String {
+    format!("{}, {}, {}", v.x, v.y, v.z)
+}
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;").replace('"', "&quot;").replace('<', "&lt;").replace('>', "&gt;")
+}
+
+/// Exports a TOML scene file to Mitsuba XML at `out` (meshes in `OUT_STEM_meshes/`).
+pub fn export_mitsuba(scene_path: &Path, out: &Path) -> Result<ExportReport, String> {
+    let scene = super::file::load(scene_path).map_err(|e| e.to_string())?;
+    let src = std::fs::read_to_string(scene_path).map_err(|e| format!("{}: {e}", scene_path.display()))?;
+    let doc: Doc = toml::from_str(&src).map_err(|e| format!("{}: {e}", scene_path.display()))?;
+    let names: Vec<String> = doc.materials.keys().cloned().collect();
+    let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("scene").to_string();
+    let mesh_dir_name = format!("{stem}_meshes");
+    let mesh_dir = out.parent().unwrap_or(Path::new(".")).join(&mesh_dir_name);
+    let mut rep = ExportReport { xml: out.to_path_buf(), meshes: Vec::new(), warnings: Vec::new() };
+    let mut x = String::new();
+    let _ = writeln!(x, "<?xml version=\"1.0\" encoding=\"utf-8\"?>");
+    let _ = writeln!(x, "<!-- exported by `forecast export-mitsuba {}` -->", esc(&scene_path.display().to_string()));
+    let _ = writeln!(x, "<scene version=\"3.0.0\">");
+    header(&mut x, &scene, &doc);
+    for (i, m) in scene.materials.iter().enumerate().skip(1) {
+        let _ = writeln!(x, "{}", bsdf(m, Some(&names[i - 1]), &mut rep.warnings));
+    }
+    rep.meshes = triangle_runs(&mut x, &scene, &names, &mesh_dir, &mesh_dir_name)?;
+    for s in &scene.spheres {
+        let le = (s.emitter != super::NO_EMITTER).then(|| scene.emitters[s.emitter as usize].radiance);
+        let _ = writeln!(x, "    <shape type=\"sphere\">");
+        let c = s.center;
+        let _ = writeln!(x, "        <point name=\"center\" x=\"{}\" y=\"{}\" z=\"{}\"/>", c.x, c.y, c.z);
+        let _ = writeln!(x, "        <float name=\"radius\" value=\"{}\"/>", s.radius);
+        if s.inward {
+            let _ = writeln!(x, "        <boolean name=\"flip_normals\" value=\"true\"/>");
+        }
+        surface(&mut x, s.material, le, &names);
+        let _ = writeln!(x, "    </shape>");
+    }
+    for l in &scene.point_lights {
+        let _ = writeln!(
+            x,
+            "    <emitter type=\"point\">\n        <point name=\"position\" value=\"{}\"/>\n        \
+             <rgb name=\"intensity\" value=\"{}\"/>\n    </emitter>",
+            v3(l.position),
+            v3(l.intensity)
+        );
+    }
+    let _ = writeln!(x, "</scene>");
+    std::fs::write(out, x).map_err(|e| format!("{}: {e}", out.display()))?;
+    Ok(rep)
+}
+
+/// Writes runs of triangles with equal material, emission and smoothness as PLY shapes.
+fn triangle_runs(
+    x: &mut String,
+    scene: &Scene,
+    names: &[String],
+    dir: &Path,
+    dir_name: &str,
+) -> Result<Vec<PathBuf>, String> {
+    let tris = &scene.triangles;
+    let key = |t: &Triangle| (t.material, radiance(scene, t), t.n.is_some());
+    let mut meshes = Vec::new();
+    let mut start = 0;
+    while start < tris.len() {
+        let end = (start..tris.len()).find(|&j| key(&tris[j]) != key(&tris[start])).unwrap_or(tris.len());
+        let run = &tris[start..end];
+        let k = meshes.len();
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let path = dir.join(format!("shape_{k:03}.ply"));
+        std::fs::write(&path, write_binary(&run_mesh(run))).map_err(|e| format!("{}: {e}", path.display()))?;
+        meshes.push(path);
+        let file = format!("{dir_name}/shape_{k:03}.ply");
+        let _ = writeln!(x, "    <shape type=\"ply\">\n        <string name=\"filename\" value=\"{}\"/>", esc(&file));
+        let _ = writeln!(x, "        <boolean name=\"face_normals\" value=\"{}\"/>", run[0].n.is_none());
+        surface(x, run[0].material, radiance(scene, &run[0]), names);
+        let _ = writeln!(x, "    </shape>");
+        start = end;
+    }
+    Ok(meshes)
+}
+
+fn radiance(scene: &Scene, t: &Triangle) -> Option<Rgb> {
+    (t.emitter != super::NO_EMITTER).then(|| scene.emitters[t.emitter as usize].radiance)
+}
+
+/// Defaults, integrator and sensor.
+fn header(x: &mut String, scene: &Scene, doc: &Doc) {
+    let r = &scene.render;
+    let d = |x: &mut String, k: &str, v: String| {
+        let _ = writeln!(x, "    <default name=\"{k}\" value=\"{}\"/>", esc(&v));
+    };
+    if let Some(spp) = r.spp {
+        d(x, "spp", spp.to_string());
+    }
+    d(x, "forecast_method", r.method.clone());
+    d(x, "forecast_seed", r.seed.to_string());
+    if let Some(t) = r.time {
+        d(x, "forecast_time", format!("{t}s"));
+    }
+    if let Some(p) = scene.forecast_photons {
+        d(x, "forecast_photons", p.to_string());
+    }
+    if let Some((lo, hi)) = scene.forecast_target {
+        d(x, "forecast_target_box", format!("{} {} {} {} {} {}", lo.x, lo.y, lo.z, hi.x, hi.y, hi.z));
+    }
+    for (i, roi) in scene.rois.iter().enumerate() {
+        let [a, b, c, e] = roi.rect;
+        d(x, &format!("forecast_roi_{i}"), format!("{a} {b} {c} {e} {}", roi.name));
+    }
+    let _ = writeln!(
+        x,
+        "    <integrator type=\"path\">\n        <integer name=\"max_depth\" value=\"{}\"/>\n    </integrator>",
+        r.max_depth
+    );
+    let c = doc.camera.get_ref();
+    let f = |a: [f32; 3]| format!("{}, {}, {}", a[0], a[1], a[2]);
+    let _ = writeln!(x, "    <sensor type=\"perspective\">");
+    let _ = writeln!(x, "        <float name=\"fov\" value=\"{}\"/>", c.fov);
+    let _ = writeln!(x, "        <string name=\"fov_axis\" value=\"y\"/>");
+    let _ = writeln!(
+        x,
+        "        <transform name=\"to_world\">\n            <lookat origin=\"{}\" target=\"{}\" up=\"{}\"/>\n        </transform>",
+        f(c.position),
+        f(c.look_at),
+        f(c.up)
+    );
+    if r.spp.is_some() {
+        let _ = writeln!(
+            x,
+            "        <sampler type=\"independent\">\n            <integer name=\"sample_count\" value=\"$spp\"/>\n        </sampler>"
+        );
+    }
+    let _ = writeln!(
+        x,
+        "        <film type=\"hdrfilm\">\n            <integer name=\"width\" value=\"{}\"/>\n            \
+         <integer name=\"height\" value=\"{}\"/>\n            <rfilter type=\"box\"/>\n        </film>\n    </sensor>",
+        c.resolution[0], c.resolution[1]
+    );
+}
+
+/// A `<bsdf>` for a material (with `id` when named).
+fn bsdf(m: &Material, id: Option<&str>, warnings: &mut Vec<String>) -> String {
+    let id = id.map_or(String::new(), |i| format!(" id=\"{}\"", esc(i)));
+    let rgb = |n: &str, c: Rgb| format!("<rgb name=\"{n}\" value=\"{}\"/>", v3(c));
+    let two = |inner: String| format!("    <bsdf type=\"twosided\"{id}>\n        {inner}\n    </bsdf>");
+    match *m {
+        Material::Diffuse { albedo } => two(format!("<bsdf type=\"diffuse\">{}</bsdf>", rgb("reflectance", albedo))),
+        Material::Glossy { albedo, specular, exponent } => {
+            warnings.push(format!("a glossy material{id} is written as Mitsuba 0.6's `phong` (Mitsuba 3 has none)"));
+            two(format!(
+                "<bsdf type=\"phong\">{}{}<float name=\"exponent\" value=\"{exponent}\"/></bsdf>",
+                rgb("diffuse_reflectance", albedo),
+                rgb("specular_reflectance", specular)
+            ))
+        }
+        Material::Mirror { reflectance } => two(format!(
+            "<bsdf type=\"conductor\"><string name=\"material\" value=\"none\"/>{}</bsdf>",
+            rgb("specular_reflectance", reflectance)
+        )),
+        Material::Conductor { reflectance, eta, k } => two(format!(
+            "<bsdf type=\"conductor\">{}{}{}</bsdf>",
+            rgb("specular_reflectance", reflectance),
+            rgb("eta", eta),
+            rgb("k", k)
+        )),
+        Material::Glass { ior } => format!(
+            "    <bsdf type=\"dielectric\"{id}>\n        <float name=\"int_ior\" value=\"{ior}\"/>\n        \
+             <float name=\"ext_ior\" value=\"1\"/>\n    </bsdf>"
+        ),
+        Material::Black => format!("    <bsdf type=\"diffuse\"{id}>{}</bsdf>", rgb("reflectance", Rgb::ZERO)),
+    }
+}
+
+/// The BSDF reference or the emitter (with its black BSDF) of a shape.
+fn surface(x: &mut String, material: u32, le: Option<Rgb>, names: &[String]) {
+    match le {
+        Some(l) => {
+            let _ = writeln!(
+                x,
+                "        <bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0\"/></bsdf>\n        \
+                 <emitter type=\"area\"><rgb name=\"radiance\" value=\"{}\"/></emitter>",
+                v3(l)
+            );
+        }
+        None => {
+            let _ = writeln!(x, "        <ref id=\"{}\"/>", esc(&names[material as usize - 1]));
+        }
+    }
+}
+
+/// Unshared vertices of a run of triangles (with shading normals when smooth).
+fn run_mesh(run: &[Triangle]) -> IndexedMesh {
+    let positions = run.iter().flat_map(|t| t.p).collect();
+    let normals = run[0].n.map(|_| run.iter().flat_map(|t| t.n.unwrap_or([t.ng; 3])).collect());
+    let faces = (0..run.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+    IndexedMesh { positions, normals, faces, bytes_hash: 0 }
+}

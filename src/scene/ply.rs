@@ -1,0 +1,386 @@
+//! PLY meshes (Stanford polygon files): ASCII, binary little and big endian, with or without
+//! per-vertex normals (`nx ny nz`). Faces with more than three vertices are split into a fan,
+//! as Mitsuba does; elements other than `vertex` and `face` are read and skipped.
+//!
+//! Hand-written rather than `ply-rs` (last release 2019, no line numbers in its errors): every
+//! error names the file and the header line, the body line (ASCII) or the byte offset (binary).
+//! Invariants: face indices are checked against the vertex count; a body cut short is an error,
+//! never a panic; a mesh without faces is an error.
+
+use crate::math::Vec3;
+use std::path::Path;
+
+/// An indexed triangle mesh as stored in a file (OBJ or PLY).
+#[derive(Clone, Debug)]
+pub struct IndexedMesh {
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Per-vertex normals, when the file has them.
+    pub normals: Option<Vec<Vec3>>,
+    /// Triangles (indices into `positions`).
+    pub faces: Vec<[u32; 3]>,
+    /// Hash of the file bytes (scene hashing).
+    pub bytes_hash: u64,
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Format {
+    Ascii,
+    BinaryLe,
+    BinaryBe,
+}
+
+#[derive(Clone, Copy)]
+enum Scalar {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
+}
+
+impl Scalar {
+    fn parse(s: &str) -> Option<Scalar> {
+        Some(match s {
+            "char" | "int8" => Scalar::I8,
+            "uchar" | "uint8" => Scalar::U8,
+            "short" | "int16" => Scalar::I16,
+            "ushort" | "uint16" => Scalar::U16,
+            "int" | "int32" => Scalar::I32,
+            "uint" | "uint32" => Scalar::U32,
+            "float" | "float32" => Scalar::F32,
+            "double" | "float64" => Scalar::F64,
+            _ => return None,
+        })
+    }
+    fn size(self) -> usize {
+        match self {
+            Scalar::I8 | Scalar::U8 => 1,
+            Scalar::I16 | Scalar::U16 => 2,
+            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
+            Scalar::F64 => 8,
+        }
+    }
+}
+
+struct Property {
+    name: String,
+    /// `Some(count type)` for list properties.
+    list: Option<Scalar>,
+    ty: Scalar,
+}
+
+struct Element {
+    name: String,
+    count: usize,
+    props: Vec<Property>,
+}
+
+/// Reads the body of a PLY file value by value.
+struct Body<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+    format: Format,
+    line: usize,
+}
+
+impl Body<'_> {
+    fn read(&mut self, ty: Scalar) -> Result<f64, String> {
+        if self.format == Format::Ascii {
+            return self.read_ascii();
+        }
+        let n = ty.size();
+        let Some(b) = self.bytes.get(self.pos..self.pos + n) else {
+            return Err(format!("binary body cut short at byte {} (needs {n} more byte(s))", self.pos));
+        };
+        self.pos += n;
+        let mut a = [0u8; 8];
+        a[..n].copy_from_slice(b);
+        if self.format == Format::BinaryBe {
+            a[..n].reverse();
+        }
+        Ok(match ty {
+            Scalar::I8 => a[0] as i8 as f64,
+            Scalar::U8 => a[0] as f64,
+            Scalar::I16 => i16::from_le_bytes([a[0], a[1]]) as f64,
+            Scalar::U16 => u16::from_le_bytes([a[0], a[1]]) as f64,
+            Scalar::I32 => i32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
+            Scalar::U32 => u32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
+            Scalar::F32 => f32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
+            Scalar::F64 => f64::from_le_bytes(a),
+        })
+    }
+
+    fn skip_ws(&mut self) {
+        while let Some(&c) = self.bytes.get(self.pos) {
+            if c == b'\n' {
+                self.line += 1;
+            }
+            if !c.is_ascii_whitespace() {
+                break;
+            }
+            self.pos += 1;
+        }
+    }
+
+    fn read_ascii(&mut self) -> Result<f64, String> {
+        self.skip_ws();
+        let start = self.pos;
+        while self.bytes.get(self.pos).is_some_and(|c| !c.is_ascii_whitespace()) {
+            self.pos += 1;
+        }
+        if start == self.pos {
+            return Err(format!("line {}: file ends before the last element", self.line));
+        }
+        let tok = String::from_utf8_lossy(&self.bytes[start..self.pos]);
+        tok.parse::<f64>().map_err(|_| format!("line {}: `{tok}` is not a number", self.line))
+    }
+
+    fn at(&mut self) -> String {
+        match self.format {
+            Format::Ascii => {
+                self.skip_ws();
+                format!("line {}", self.line)
+            }
+            _ => format!("byte {}", self.pos),
+        }
+    }
+}
+
+/// Parses the header: (format, elements, body offset, header line count).
+fn parse_header(bytes: &[u8]) -> Result<(Format, Vec<Element>, usize, usize), String> {
+    let mut pos = 0usize;
+    let mut line_no = 0usize;
+    let mut format = None;
+    let mut elements: Vec<Element> = Vec::new();
+    loop {
+        let Some(len) = bytes[pos..].iter().position(|&b| b == b'\n') else {
+            return Err(format!("line {}: header has no `end_header`", line_no + 1));
+        };
+        line_no += 1;
+        let line = String::from_utf8_lossy(&bytes[pos..pos + len]).trim().to_string();
+        pos += len + 1;
+        let w: Vec<&str> = line.split_whitespace().collect();
+        let bad = |m: &str| Err(format!("line {line_no}: {m}: `{line}`"));
+        match w.first().copied() {
+            _ if line_no == 1 => {
+                if line != "ply" {
+                    return bad("not a PLY file (the first line must be `ply`)");
+                }
+            }
+            Some("format") => {
+                format = Some(match w.get(1).copied() {
+                    Some("ascii") => Format::Ascii,
+                    Some("binary_little_endian") => Format::BinaryLe,
+                    Some("binary_big_endian") => Format::BinaryBe,
+                    _ => return bad("unknown format"),
+                })
+            }
+            Some("comment") | Some("obj_info") | None => {}
+            Some("element") => {
+                let (Some(name), Some(Ok(count))) = (w.get(1), w.get(2).map(|c| c.parse::<usize>())) else {
+                    return bad("expected `element NAME COUNT`");
+                };
+                elements.push(Element { name: name.to_string(), count, props: Vec::new() });
+            }
+            Some("property") => {
+                let Some(el) = elements.last_mut() else { return bad("property before any element") };
+                let prop = if w.get(1) == Some(&"list") {
+                    match (w.get(2).and_then(|t| Scalar::parse(t)), w.get(3).and_then(|t| Scalar::parse(t)), w.get(4)) {
+                        (Some(c), Some(t), Some(n)) => Property { name: n.to_string(), list: Some(c), ty: t },
+                        _ => return bad("expected `property list COUNT_TYPE TYPE NAME`"),
+                    }
+                } else {
+                    match (w.get(1).and_then(|t| Scalar::parse(t)), w.get(2)) {
+                        (Some(t), Some(n)) => Property { name: n.to_string(), list: None, ty: t },
+                        _ => return bad("expected `property TYPE NAME`"),
+                    }
+                };
+                el.props.push(prop);
+            }
+            Some("end_header") => break,
+            Some(_) => return bad("unknown header line"),
+        }
+    }
+    let format = format.ok_or_else(|| "header has no `format` line".to_string())?;
+    Ok((format, elements, pos, line_no))
+}
+
+/// Loads a PLY file; errors name the file and the line or byte offset.
+pub fn load_indexed(path: &Path) -> Result<IndexedMesh, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read PLY `{}`: {e}", path.display()))?;
+    parse(&bytes).map_err(|m| format!("PLY `{}`: {m}", path.display()))
+}
+
+/// Parses PLY bytes.
+pub fn parse(bytes: &[u8]) -> Result<IndexedMesh, String> {
+    let bytes_hash = crate::math::fnv1a(0xcbf2_9ce4_8422_2325, bytes);
+    let (format, elements, start, header_lines) = parse_header(bytes)?;
+    let mut body = Body { bytes, pos: start, format, line: header_lines + 1 };
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    let mut has_normals = false;
+    let mut polys: Vec<(Vec<f64>, String)> = Vec::new();
+    for el in &elements {
+        let col = |n: &str| el.props.iter().position(|p| p.name == n && p.list.is_none());
+        let (xyz, nxyz) = ([col("x"), col("y"), col("z")], [col("nx"), col("ny"), col("nz")]);
+        if el.name == "vertex" {
+            if xyz.iter().any(|c| c.is_none()) {
+                return Err("element `vertex` needs float properties x, y, z".into());
+            }
+            has_normals = nxyz.iter().all(|c| c.is_some());
+        }
+        let face_list = el.props.iter().position(|p| p.list.is_some() && p.name.starts_with("vertex_ind"));
+        if el.name == "face" && face_list.is_none() {
+            return Err("element `face` needs a list property `vertex_indices`".into());
+        }
+        for _ in 0..el.count {
+            let mut vals = vec![0.0f64; el.props.len()];
+            let mut list = Vec::new();
+            let at = body.at();
+            for (k, p) in el.props.iter().enumerate() {
+                match p.list {
+                    Some(ct) => {
+                        let n = body.read(ct)?;
+                        if !(0.0..=1e6).contains(&n) {
+                            return Err(format!("{}: bad list length {n}", body.at()));
+                        }
+                        let items = (0..n as usize).map(|_| body.read(p.ty)).collect::<Result<Vec<_>, _>>()?;
+                        if Some(k) == face_list {
+                            list = items;
+                        }
+                    }
+                    None => vals[k] = body.read(p.ty)?,
+                }
+            }
+            let v = |c: [Option<usize>; 3]| {
+                Vec3::new(vals[c[0].unwrap()] as f32, vals[c[1].unwrap()] as f32, vals[c[2].unwrap()] as f32)
+            };
+            match el.name.as_str() {
+                "vertex" => {
+                    positions.push(v(xyz));
+                    if has_normals {
+                        normals.push(v(nxyz));
+                    }
+                }
+                "face" => polys.push((list, at)),
+                _ => {}
+            }
+        }
+    }
+    let faces = triangulate(&polys, positions.len())?;
+    if faces.is_empty() {
+        return Err("no faces".into());
+    }
+    Ok(IndexedMesh { positions, normals: has_normals.then_some(normals), faces, bytes_hash })
+}
+
+/// Polygons (vertex index lists with their location) → triangle fans, indices checked.
+fn triangulate(polys: &[(Vec<f64>, String)], nv: usize) -> Result<Vec<[u32; 3]>, String> {
+    let mut faces = Vec::new();
+    for (poly, at) in polys {
+        if poly.len() < 3 {
+            return Err(format!("{at}: face with {} vertices", poly.len()));
+        }
+        let mut idx = Vec::with_capacity(poly.len());
+        for &i in poly {
+            if i < 0.0 || i.fract() != 0.0 || i as usize >= nv {
+                return Err(format!("{at}: face index {i} out of range (the file has {nv} vertices)"));
+            }
+            idx.push(i as u32);
+        }
+        for k in 1..idx.len() - 1 {
+            faces.push([idx[0], idx[k], idx[k + 1]]);
+        }
+    }
+    Ok(faces)
+}
+
+/// Writes a binary little-endian PLY (float positions, optional float normals, uchar/uint faces).
+pub fn write_binary(mesh: &IndexedMesh) -> Vec<u8> {
+    let mut h = format!("ply\nformat binary_little_endian 1.0\nelement vertex {}\n", mesh.positions.len());
+    h.push_str("property float x\nproperty float y\nproperty float z\n");
+    if mesh.normals.is_some() {
+        h.push_str("property float nx\nproperty float ny\nproperty float nz\n");
+    }
+    h.push_str(&format!("element face {}\nproperty list uchar uint vertex_indices\nend_header\n", mesh.faces.len()));
+    let mut out = h.into_bytes();
+    for (i, p) in mesh.positions.iter().enumerate() {
+        let mut put = |v: Vec3| v.to_array().iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+        put(*p);
+        if let Some(n) = &mesh.normals {
+            put(n[i]);
+        }
+    }
+    for f in &mesh.faces {
+        out.push(3);
+        f.iter().for_each(|i| out.extend_from_slice(&i.to_le_bytes()));
+    }
+    out
+}
+
+/// A PLY mesh as the TOML loader's `obj::Mesh`: triangles and, for smooth shading, the file's
+/// normals or area-weighted vertex normals (the same rule as OBJ).
+pub fn load_mesh(path: &Path, smooth: bool) -> Result<super::obj::Mesh, String> {
+    let m = load_indexed(path)?;
+    let p = |f: &[u32; 3]| f.map(|i| m.positions[i as usize]);
+    let vn = if smooth { Some(m.normals.clone().unwrap_or_else(|| area_weighted_normals(&m))) } else { None };
+    Ok(super::obj::Mesh {
+        triangles: m.faces.iter().map(p).collect(),
+        normals: vn.map(|vn| m.faces.iter().map(|f| f.map(|i| vn[i as usize])).collect()),
+        bytes_hash: m.bytes_hash,
+    })
+}
+
+/// Area-weighted vertex normals (unnormalised sums of face cross products).
+pub fn area_weighted_normals(m: &IndexedMesh) -> Vec<Vec3> {
+    let mut vn = vec![Vec3::ZERO; m.positions.len()];
+    for f in &m.faces {
+        let [a, b, c] = f.map(|i| m.positions[i as usize]);
+        let n = (b - a).cross(c - a);
+        f.iter().for_each(|&i| vn[i as usize] += n);
+    }
+    vn
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ASCII: &str = "ply\nformat ascii 1.0\ncomment x\nelement vertex 4\nproperty float x\nproperty float y\n\
+property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
+
+    #[test]
+    fn ascii_quad_is_a_fan_and_binary_round_trips() {
+        let m = parse(ASCII.as_bytes()).unwrap();
+        assert_eq!(m.faces, vec![[0, 1, 2], [0, 2, 3]]);
+        assert!(m.normals.is_none());
+        let m2 = IndexedMesh { normals: Some(vec![Vec3::Z; 4]), ..m.clone() };
+        let back = parse(&write_binary(&m2)).unwrap();
+        assert_eq!(back.positions, m2.positions);
+        assert_eq!(back.normals, m2.normals);
+        assert_eq!(back.faces, m2.faces);
+    }
+
+    #[test]
+    fn big_endian_and_errors() {
+        let mut b = b"ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty double x\nproperty double y\n\
+property double z\nelement face 1\nproperty list uchar ushort vertex_indices\nend_header\n"
+            .to_vec();
+        for v in [[0.0f64, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 3.0, 0.5]] {
+            v.iter().for_each(|x| b.extend_from_slice(&x.to_be_bytes()));
+        }
+        b.push(3);
+        [0u16, 1, 2].iter().for_each(|i| b.extend_from_slice(&i.to_be_bytes()));
+        let m = parse(&b).unwrap();
+        assert_eq!(m.positions[2], Vec3::new(0.0, 3.0, 0.5));
+        let e = parse(&b[..b.len() - 1]).err().unwrap();
+        assert!(e.contains("cut short at byte"), "{e}");
+        let e = parse(ASCII.replace("4 0 1 2 3", "3 0 1 7").as_bytes()).err().unwrap();
+        assert!(e.contains("line 15") && e.contains("index 7 out of range"), "{e}");
+    }
+}
