@@ -71,7 +71,7 @@ pub fn load_mesh(path: &Path, smooth: bool) -> Result<Mesh, String> {
 /// position/normal/uv index triple, as Mitsuba's OBJ loader keys them).
 pub fn load_indexed(path: &Path) -> Result<super::ply::IndexedMesh, String> {
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read OBJ `{}`: {e}", path.display()))?;
-    let bytes_hash = super::ply::fnv1a(0xcbf2_9ce4_8422_2325, &bytes);
+    let bytes_hash = crate::math::fnv1a(0xcbf2_9ce4_8422_2325, &bytes);
     let opts = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
     let mut reader = std::io::BufReader::new(&bytes[..]);
     let (models, _) = tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed))
