@@ -292,7 +292,7 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
     passes.warnings.splice(0..0, over_budget);
     timings.render_s = passes.render_s;
     let outcome = reduce(&run, &passes, &pre.stats, &mut timings).and_then(|reduced| match reduced {
-        Some(r) => finish(&run, &passes, r, timings, pre.integrator.as_ref()).map(Some),
+        Some(r) => finish(&run, &mut passes, r, timings, pre.integrator.as_ref()).map(Some),
         None => Ok(None),
     });
     // rank 0's write failing must end every rank with the error too
@@ -300,19 +300,23 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
 }
 
 /// Stage 6 (rank 0): the final checkpoint (with `--checkpoint-every`, so that a finished run can
-/// be extended with `--resume`), images and report, replacing the previous set as a whole.
+/// be extended with `--resume`; a failure is a warning), then images and report, replacing the
+/// previous set as a whole.
 fn finish(
     run: &Run,
-    passes: &Passes,
+    passes: &mut Passes,
     reduced: Reduced,
     mut timings: Timings,
     integrator: &dyn Integrator,
 ) -> Result<RenderResult, String> {
     let t_write = Instant::now();
-    let mut outputs = FileSet::new();
-    if run.job.checkpoint_every.is_some() {
-        outputs.add(run.ckpt_path(), run.checkpoint(passes.passes_done, &reduced.film).to_bytes());
+    if let Some(every) = run.job.checkpoint_every {
+        let saved = run.checkpoint(passes.passes_done, &reduced.film).save(&run.ckpt_path());
+        if let Err(e) = saved {
+            passes.warn(format!("final checkpoint not written ({e}); the previous checkpoint is kept"), every);
+        }
     }
+    let mut outputs = FileSet::new();
     let image = image_files(&run.job.out, &reduced.film, &mut outputs)?;
     timings.write_s = secs(t_write);
     timings.total_s = secs(run.started);
@@ -490,6 +494,15 @@ fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) ->
     Ok(p)
 }
 
+impl Passes {
+    /// A failed checkpoint: printed (rank 0 only ever writes) and kept for the report.
+    fn warn(&mut self, what: String, every: f64) {
+        let w = format!("{what}; next try in {every} s");
+        crate::errln!("warning: {w}");
+        self.warnings.push(w);
+    }
+}
+
 /// The summed film (rank 0) and the run-wide figures.
 struct Reduced {
     film: Film,
@@ -564,21 +577,18 @@ impl Run<'_> {
         let Some(sums) = self.cluster.reduce_sum(&p.film.data) else { return Ok(()) };
         let total = self.total_film(sums)?;
         let mut set = FileSet::new();
-        set.add(self.ckpt_path(), self.checkpoint(p.passes_done, &total).to_bytes());
         let written = image_files(&self.job.out, &total, &mut set).and_then(|image| {
             let timings = Timings { render_s: p.render_s, total_s: secs(self.started), ..Timings::default() };
             let parts = Totals::new(&t, &total, 0, Vec::new());
             let report = self.report(p, parts, timings, integrator.stats(&p.counters.profile), &image, false);
             set.add(with_ext(&self.job.out, "json"), serde_json::to_vec_pretty(&report).map_err(|e| e.to_string())?);
+            // last, so that once the new checkpoint is visible its images and JSON are too
+            set.add(self.ckpt_path(), self.checkpoint(p.passes_done, &total).to_bytes());
             set.commit()
         });
         if let Err(e) = written {
-            let w = format!(
-                "checkpoint after {} passes not written ({e}); the previous checkpoint is kept, next try in {every} s",
-                p.passes_done
-            );
-            crate::errln!("warning: {w}");
-            p.warnings.push(w);
+            let what = format!("checkpoint after {} passes not written ({e}); the previous one is kept", p.passes_done);
+            p.warn(what, every);
         }
         Ok(())
     }
