@@ -310,10 +310,10 @@ fn finish(
     integrator: &dyn Integrator,
 ) -> Result<RenderResult, String> {
     let t_write = Instant::now();
-    if let Some(every) = run.job.checkpoint_every {
+    if run.job.checkpoint_every.is_some() {
         let saved = run.checkpoint(passes.passes_done, &reduced.film).save(&run.ckpt_path());
         if let Err(e) = saved {
-            passes.warn(format!("final checkpoint not written ({e}); the previous checkpoint is kept"), every);
+            passes.warn(format!("final checkpoint not written ({e}); the previous one is kept"), None);
         }
     }
     let mut outputs = FileSet::new();
@@ -496,8 +496,8 @@ fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) ->
 
 impl Passes {
     /// A failed checkpoint: printed (rank 0 only ever writes) and kept for the report.
-    fn warn(&mut self, what: String, every: f64) {
-        let w = format!("{what}; next try in {every} s");
+    fn warn(&mut self, what: String, retry_in: Option<f64>) {
+        let w = retry_in.map_or_else(|| what.clone(), |s| format!("{what}; next try in {s} s"));
         crate::errln!("warning: {w}");
         self.warnings.push(w);
     }
@@ -588,7 +588,7 @@ impl Run<'_> {
         });
         if let Err(e) = written {
             let what = format!("checkpoint after {} passes not written ({e}); the previous one is kept", p.passes_done);
-            p.warn(what, every);
+            p.warn(what, Some(every));
         }
         Ok(())
     }
