@@ -96,6 +96,9 @@ pub struct RenderArgs {
     /// Continue from a checkpoint, adding new passes.
     #[arg(long)]
     pub resume: Option<PathBuf>,
+    /// Where checkpoints go (default PREFIX.ckpt).
+    #[arg(long, requires = "checkpoint_every")]
+    pub checkpoint_path: Option<PathBuf>,
     /// Stop after this many rounds of passes (testing kill/resume).
     #[arg(long, hide = true)]
     pub max_rounds: Option<u64>,
@@ -119,7 +122,7 @@ impl RenderArgs {
             progress: !self.quiet,
             checkpoint_every: self.checkpoint_every,
             resume: self.resume.clone(),
-            checkpoint_path: None,
+            checkpoint_path: self.checkpoint_path.clone(),
             max_rounds: self.max_rounds,
             threads: self.threads,
         }

@@ -25,6 +25,7 @@ pub mod integrators;
 pub mod math;
 pub mod metrics;
 pub mod output;
+pub mod param_limits;
 pub mod pipeline;
 pub mod profile;
 pub mod progress;

@@ -2,18 +2,61 @@
 
 use clap::Parser;
 use forecast::cli::{Cli, Command};
-use forecast::{accel, bench, compare, distributed, errln, image_io, metrics, outln, pipeline, scenegen};
+use forecast::{accel, bench, compare, distributed, errln, image_io, metrics, outln, output, pipeline, scenegen};
 use std::process::ExitCode;
 use std::time::Instant;
 
-fn run() -> Result<(), String> {
+/// Why the command failed: the message, and whether this process prints it (under `mpirun` the
+/// ranks agree on every error and only rank 0 prints it, once).
+struct Failure {
+    message: String,
+    print: bool,
+}
+
+impl From<String> for Failure {
+    fn from(message: String) -> Failure {
+        Failure { message, print: true }
+    }
+}
+
+/// Runs `f` on the cluster; an error is printed by rank 0 only (the pipeline agrees errors
+/// across ranks, so rank 0's message names every failing rank).
+fn on_cluster(f: impl FnOnce(&dyn distributed::Cluster) -> Result<(), String>) -> Result<(), Failure> {
+    let cluster = distributed::try_init()?;
+    let print = cluster.rank() == 0;
+    f(cluster.as_ref()).map_err(|message| Failure { message, print })
+}
+
+/// Parses the command line with `try_parse`, so that `--help`/`--version` text that cannot be
+/// written (a full stdout) is an error (exit 1), and a usage error exits 2 (`output::EXIT_USAGE`).
+fn parse() -> Result<Cli, ExitCode> {
+    use std::io::Write;
+    let e = match Cli::try_parse() {
+        Ok(cli) => return Ok(cli),
+        Err(e) => e,
+    };
+    let text = e.render().to_string();
+    if e.use_stderr() {
+        let _ = std::io::stderr().lock().write_all(text.as_bytes());
+        return Err(ExitCode::from(e.exit_code().clamp(0, 255) as u8));
+    }
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Ok(()) => Err(ExitCode::from(output::EXIT_OK)),
+        Err(err) => {
+            errln!("error: cannot write to stdout: {err}");
+            Err(ExitCode::from(output::EXIT_ERROR))
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<(), Failure> {
     let started = Instant::now();
-    let cli = Cli::parse();
     forecast::scene::mitsuba::set_cli_defines(&cli.define)?;
     match cli.command {
-        Command::Render(a) => render(&a, started),
-        Command::Diff(a) => diff(&a),
-        Command::Bench(a) => bench_cmd(&a),
+        Command::Render(a) => on_cluster(|c| render(&a, c, started)),
+        Command::Diff(a) => Ok(diff(&a)?),
+        Command::Bench(a) => Ok(bench_cmd(&a)?),
         Command::ExportMitsuba { scene, out } => {
             let rep = forecast::scene::export::export_mitsuba(&scene, &out)?;
             rep.warnings.iter().for_each(|w| errln!("warning: {w}"));
@@ -26,26 +69,23 @@ fn run() -> Result<(), String> {
             }
             Ok(())
         }
-        Command::ForecastMap(a) => forecast_map(&a),
-        Command::Reference(a) => {
-            let cluster = distributed::try_init()?;
-            if let Some(r) = compare::reference::run_reference(&a, cluster.as_ref(), started)? {
+        Command::ForecastMap(a) => Ok(forecast_map(&a)?),
+        Command::Reference(a) => on_cluster(|c| {
+            if let Some(r) = compare::reference::run_reference(&a, c, started)? {
                 errln!("reference: {} spp -> {}.{{exr,json}} + .half0/.half1", r.spp, a.out.display());
             }
             Ok(())
-        }
-        Command::Compare(a) => {
-            let cluster = distributed::try_init()?;
+        }),
+        Command::Compare(a) => on_cluster(|c| {
             let cfg = a.config();
-            if compare::run_compare(&cfg, cluster.as_ref())?.is_some() {
+            if compare::run_compare(&cfg, c)?.is_some() {
                 errln!("compare: report in {}", cfg.out.join("report.html").display());
             }
             Ok(())
-        }
-        Command::Stability(a) => stability(&a),
-        Command::MpiSelftest => {
-            let c = distributed::try_init()?;
-            let r = distributed::self_test(c.as_ref());
+        }),
+        Command::Stability(a) => Ok(stability(&a)?),
+        Command::MpiSelftest => on_cluster(|c| {
+            let r = distributed::self_test(c);
             if c.rank() == 0 {
                 match &r {
                     Ok(()) => outln!("mpi self-test passed on {} rank(s)", c.size())?,
@@ -53,14 +93,13 @@ fn run() -> Result<(), String> {
                 }
             }
             r
-        }
+        }),
     }
 }
 
-fn render(a: &forecast::cli::RenderArgs, started: Instant) -> Result<(), String> {
-    let cluster = distributed::try_init()?;
+fn render(a: &forecast::cli::RenderArgs, cluster: &dyn distributed::Cluster, started: Instant) -> Result<(), String> {
     let job = a.job();
-    let res = pipeline::render(&job, cluster.as_ref(), started)?;
+    let res = pipeline::render(&job, cluster, started)?;
     if let Some(r) = res {
         if !a.quiet {
             let rep = &r.report;
@@ -132,7 +171,11 @@ fn bench_cmd(a: &forecast::cli::BenchArgs) -> Result<(), String> {
     outln!("shadow Mrays/s        {:.2}", r.shadow_mrays)?;
     outln!(
         "pt samples/s          {:.0}  ({}x{}, {:.2} closest + {:.2} shadow rays/sample)",
-        r.pt_samples_per_s, a.resolution.0, a.resolution.1, r.rays_per_sample.0, r.rays_per_sample.1
+        r.pt_samples_per_s,
+        a.resolution.0,
+        a.resolution.1,
+        r.rays_per_sample.0,
+        r.rays_per_sample.1
     )?;
     Ok(())
 }
@@ -228,11 +271,17 @@ fn default_sigpipe() {
 
 fn main() -> ExitCode {
     default_sigpipe();
-    match run() {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            errln!("error: {e}");
-            ExitCode::FAILURE
+    let cli = match parse() {
+        Ok(cli) => cli,
+        Err(code) => return code,
+    };
+    match run(cli) {
+        Ok(()) => ExitCode::from(output::EXIT_OK),
+        Err(f) => {
+            if f.print {
+                errln!("error: {}", f.message);
+            }
+            ExitCode::from(output::EXIT_ERROR)
         }
     }
 }

@@ -5,8 +5,16 @@
 //! Ranks: rank r renders passes r, r+N, … in rounds of N passes; all ranks agree once per round
 //! whether to start another (time boxes), so finished passes are always a contiguous range
 //! (`distributed::schedule`). The image is the mean over exactly the samples that were summed.
-//! Checkpoints are taken at round boundaries: rank 0 gathers the sums and writes them atomically
-//! with the pass bookkeeping; `--resume` continues with the next pass and repeats none.
+//! Checkpoints are taken at round boundaries: rank 0 gathers the sums and writes the checkpoint
+//! and the current `PREFIX.{exr,png,json}` as one set (`atomic_io::FileSet`); a failed checkpoint
+//! is a warning (the previous set stays, the next interval retries). `--resume` continues with the
+//! next pass and repeats none.
+//!
+//! Failure: every parameter is validated and the memory estimated in [`RenderJob::resolve`],
+//! before any work. An error on any rank — during setup, the preprocess, resuming, inside the
+//! pass loop (at the next round's agreement) or writing the outputs — is agreed across ranks
+//! (`distributed::agree`), so every rank leaves together with the error and rank 0 reports it;
+//! no rank is left waiting in a collective.
 
 use crate::accel::World;
 use crate::atomic_io::FileSet;
@@ -15,6 +23,7 @@ use crate::distributed::schedule::{Deadline, PassTimer};
 use crate::distributed::{self, Cluster};
 use crate::image_io::{self, with_ext, Image};
 use crate::integrators::{Integrator, Method, MethodArgs};
+use crate::param_limits as params;
 use crate::progress::Progress;
 use crate::render::film::Film;
 use crate::render::{render_pass, PassCounters};
@@ -83,15 +92,66 @@ impl RenderJob {
             None => Method::from_name(&r.method)
                 .ok_or_else(|| format!("{}: method `{}` is not available", scene.path, r.method))?,
         };
-        let mut args = self.args.clone();
-        if args.pt.max_depth.is_none_or(|d| d == 0) {
-            args.pt.max_depth = Some(r.max_depth);
+        // the command line's own values first, with the limits the scene format applies too
+        self.args.validate()?;
+        if let Some(n) = self.threads {
+            params::THREADS.check_flag("--threads", n as u64)?;
         }
+        let mut args = self.args.clone();
+        args.pt.max_depth = args.pt.max_depth.or(Some(r.max_depth));
         let time = self.time.or(if self.spp.is_some() { None } else { r.time });
         let spp = if time.is_some() { None } else { Some(self.spp.or(r.spp).unwrap_or(16)) };
         let resolution = self.resolution.unwrap_or((scene.camera.width, scene.camera.height));
-        Ok(Plan { method, seed: self.seed.unwrap_or(r.seed), args, time, spp, resolution })
+        let plan = Plan { method, seed: self.seed.unwrap_or(r.seed), args, time, spp, resolution };
+        plan.validate()?;
+        let (need, what) = plan.memory_estimate(scene, self.checkpoint_every.is_some() || self.resume.is_some());
+        params::check_memory(need, params::available_memory(), &what)?;
+        Ok(plan)
     }
+}
+
+impl Plan {
+    /// The plan's values against `crate::param_limits` (the same limits as the scene format's).
+    pub fn validate(&self) -> Result<(), String> {
+        if let Some(s) = self.spp {
+            params::SPP.check_flag("--spp", s)?;
+        }
+        if let Some(t) = self.time {
+            params::check_time(t).map_err(|m| format!("--time: {m}"))?;
+        }
+        self.args.validate()
+    }
+
+    /// Bytes this render needs on this node, at least, and of what (refused up front when they
+    /// exceed the available memory). Film: 7 f64 per pixel (`render::film::STRIDE`), held by every
+    /// rank, plus on rank 0 the reduced sums and the final copy (and with checkpoints or a resume
+    /// the checkpoint's film, its clone and its encoding), plus the images (mean, variance, EXR,
+    /// PNG: ≈ 64 bytes per pixel). Preprocess product: stored photons (`iws-pm`, ≈ 64 bytes each)
+    /// or forecast photons (`iws-cf`, ≈ 128 bytes with their clusters and maps), three copies on
+    /// rank 0 (built, encoded, decoded) and one on every other rank of the node.
+    pub fn memory_estimate(&self, scene: &Scene, checkpoints: bool) -> (u64, String) {
+        let pixels = self.resolution.0 as u64 * self.resolution.1 as u64;
+        let film = pixels.saturating_mul((crate::render::film::STRIDE * 8) as u64);
+        let local = local_ranks() as u64;
+        let copies = if checkpoints { 6 } else { 3 };
+        let product = match self.method {
+            Method::IwsPm => self.args.pm.photons.saturating_mul(64),
+            Method::IwsCf => {
+                self.args.cf.forecast_photons.or(scene.forecast_photons).unwrap_or(200_000).saturating_mul(128)
+            }
+            _ => 0,
+        };
+        let film_total = film.saturating_mul(copies + local - 1).saturating_add(pixels.saturating_mul(64));
+        let need = film_total.saturating_add(product.saturating_mul(2 + local));
+        let (w, h) = self.resolution;
+        let what =
+            format!("a {w}x{h} film of {:.1} GiB per copy; preprocess product {:.1} GiB", gib(film), gib(product));
+        (need, what)
+    }
+}
+
+fn gib(bytes: u64) -> f64 {
+    bytes as f64 / (1u64 << 30) as f64
 }
 
 /// Wall-clock seconds of each stage (rank 0's).
@@ -192,8 +252,12 @@ pub struct RenderReport {
     pub options: MethodArgs,
     /// Every rank's figures (`None` if one could not be read).
     pub per_rank: Vec<Option<RankStats>>,
-    /// Scene warnings.
+    /// Scene warnings, then the run's (the preprocess over the time budget, failed checkpoints).
     pub warnings: Vec<String>,
+    /// Whether loading and the preprocess alone took longer than the `--time` budget.
+    pub preprocess_over_budget: bool,
+    /// `false` in the JSON written with a checkpoint (a render still running), `true` at the end.
+    pub complete: bool,
     /// Mean of the image, per channel.
     pub image_mean: [f64; 3],
 }
@@ -210,37 +274,81 @@ fn secs(t: Instant) -> f64 {
     t.elapsed().as_secs_f64()
 }
 
-/// Runs a render on every rank of `cluster`; returns `Some` on rank 0.
+/// Runs a render on every rank of `cluster`; returns `Some` on rank 0. Every error is agreed
+/// across ranks (see the module docs): all ranks return it, rank 0's names the failing ranks.
 pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Result<Option<RenderResult>, String> {
-    crate::atomic_io::check_output_prefix(&job.out)?;
-    let pool = thread_pool(job.threads)?;
-    let (world, plan, mut timings) = load(job, cluster.rank())?;
+    let setup = crate::atomic_io::check_output_prefix(&job.out)
+        .and_then(|()| Ok((thread_pool(job.threads)?, load(job, cluster.rank())?)));
+    let (pool, (world, plan, mut timings)) = distributed::agree(cluster, setup)?;
     let deadline = distributed::shared_deadline(cluster, started, plan.time);
     let mut pre = preprocess(&world, &plan, cluster)?;
     timings.preprocess_s = pre.stats.preprocess_s;
     timings.broadcast_s = pre.stats.broadcast_s;
+    let over_budget = preprocess_over_budget(&plan, &timings, started, cluster.rank());
     let resumed = agree_resume(job, &world, &plan, cluster)?;
     let run = Run { job, world: &world, plan: &plan, cluster, pool: &pool, started, resumed: &resumed };
-    let passes = run_passes(&run, pre.integrator.as_mut(), deadline)?;
+    let mut passes = run_passes(&run, pre.integrator.as_mut(), deadline)?;
+    passes.preprocess_over_budget = over_budget.is_some();
+    passes.warnings.splice(0..0, over_budget);
     timings.render_s = passes.render_s;
-    let Some(reduced) = reduce(&run, &passes, &pre.stats, &mut timings)? else { return Ok(None) };
-    let t_write = Instant::now();
-    if job.checkpoint_every.is_some() {
-        // the final state too, so a finished run can be extended with --resume
-        run.checkpoint(passes.passes_done, &reduced.film).save(&run.ckpt_path()).map_err(|e| e.to_string())?;
-    }
-    let mut outputs = FileSet::new(); // EXR, PNG and JSON replace the old set as a whole
-    let image = image_files(&job.out, &reduced.film, &mut outputs)?;
-    timings.write_s = secs(t_write);
-    timings.total_s = secs(started);
-    let report = run.report(&passes, reduced.parts, timings, pre.integrator.stats(&passes.counters.profile), &image);
-    let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
-    outputs.add(with_ext(&job.out, "json"), text.into_bytes());
-    outputs.commit()?;
-    Ok(Some(RenderResult { film: reduced.film, report }))
+    let outcome = reduce(&run, &passes, &pre.stats, &mut timings).and_then(|reduced| match reduced {
+        Some(r) => finish(&run, &mut passes, r, timings, pre.integrator.as_ref()).map(Some),
+        None => Ok(None),
+    });
+    // rank 0's write failing must end every rank with the error too
+    distributed::agree(cluster, outcome)
 }
 
-/// Stage 1: load the scene (warnings printed on rank 0), resolve the job, build the BVH.
+/// Stage 6 (rank 0): the final checkpoint (with `--checkpoint-every`, so that a finished run can
+/// be extended with `--resume`; a failure is a warning), then images and report, replacing the
+/// previous set as a whole.
+fn finish(
+    run: &Run,
+    passes: &mut Passes,
+    reduced: Reduced,
+    mut timings: Timings,
+    integrator: &dyn Integrator,
+) -> Result<RenderResult, String> {
+    let t_write = Instant::now();
+    if run.job.checkpoint_every.is_some() {
+        let saved = run.checkpoint(passes.passes_done, &reduced.film).save(&run.ckpt_path());
+        if let Err(e) = saved {
+            passes.warn(format!("final checkpoint not written ({e}); the previous one is kept"), None);
+        }
+    }
+    let mut outputs = FileSet::new();
+    let image = image_files(&run.job.out, &reduced.film, &mut outputs)?;
+    timings.write_s = secs(t_write);
+    timings.total_s = secs(run.started);
+    let stats = integrator.stats(&passes.counters.profile);
+    let report = run.report(passes, reduced.parts, timings, stats, &image, true);
+    let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+    outputs.add(with_ext(&run.job.out, "json"), text.into_bytes());
+    outputs.commit()?;
+    Ok(RenderResult { film: reduced.film, report })
+}
+
+/// The warning (printed by rank 0, recorded in the report) when loading and the preprocess alone
+/// used up the `--time` budget: the render then gets only its first round of passes.
+fn preprocess_over_budget(plan: &Plan, timings: &Timings, started: Instant, rank: usize) -> Option<String> {
+    let budget = plan.time?;
+    let spent = secs(started);
+    if spent <= budget {
+        return None;
+    }
+    let w = format!(
+        "the preprocess took {:.2} s ({spent:.2} s since start, loading included), over the --time budget \
+         of {budget} s: only one round of passes is rendered (lower the photon counts or raise --time)",
+        timings.preprocess_s
+    );
+    if rank == 0 {
+        crate::errln!("warning: {w}");
+    }
+    Some(w)
+}
+
+/// Stage 1: load the scene (warnings printed on rank 0), resolve the job (validation and the
+/// memory estimate), build the BVH.
 fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), String> {
     let t_load = Instant::now();
     let mut scene = crate::scene::load(&job.scene).map_err(|e| e.to_string())?;
@@ -271,7 +379,7 @@ fn preprocess(world: &World, plan: &Plan, cluster: &dyn Cluster) -> Result<Prepa
     let pre = if cluster.rank() == 0 { plan.method.preprocess(world, &plan.args, plan.seed) } else { Ok(Vec::new()) };
     let preprocess_s = secs(t_pre);
     // every rank must leave together when rank 0 fails, or the others wait in the broadcast
-    let mut product = agree_or_fail(cluster, pre, "the caustic preprocess")?;
+    let mut product = distributed::agree(cluster, pre)?;
     let t_bc = Instant::now();
     cluster.broadcast_bytes(&mut product);
     let stats = RankStats {
@@ -303,7 +411,7 @@ fn agree_resume(job: &RenderJob, world: &World, plan: &Plan, cluster: &dyn Clust
         }),
         _ => Ok(None),
     };
-    let checkpoint: Option<Checkpoint> = agree_or_fail(cluster, loaded, "resuming")?;
+    let checkpoint: Option<Checkpoint> = distributed::agree(cluster, loaded)?;
     let mut first = checkpoint.as_ref().map_or(0u64, |c| c.next_pass).to_le_bytes().to_vec();
     cluster.broadcast_bytes(&mut first);
     let first_pass = u64::from_le_bytes(first.as_slice().try_into().map_err(|_| "bad resume broadcast")?);
@@ -328,6 +436,9 @@ struct Passes {
     my_passes: u64,
     passes_done: u64,
     render_s: f64,
+    /// The run's warnings (rank 0): failed checkpoints, the preprocess over budget.
+    warnings: Vec<String>,
+    preprocess_over_budget: bool,
 }
 
 /// Stage 4: rounds of interleaved passes until the spp or the time box is reached, with
@@ -344,17 +455,21 @@ fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) ->
         my_passes: 0,
         passes_done: first_pass,
         render_s: 0.0,
+        warnings: Vec::new(),
+        preprocess_over_budget: false,
     };
     let (t_render, mut last_ckpt, mut timer) = (Instant::now(), Instant::now(), PassTimer::new());
+    let mut failure: Option<String> = None;
     for round in 0u64.. {
         let round_start = first_pass + round * size;
         let more = match total {
             Some(t) => round_start < t,
             // the first round always runs, so a time-boxed image is never empty
-            None if round == 0 => true,
-            None => distributed::all_agree(run.cluster, deadline.should_start_next(Instant::now(), timer.mean_secs())),
+            None => round == 0 || deadline.should_start_next(Instant::now(), timer.mean_secs()),
         };
-        if !more || run.job.max_rounds.is_some_and(|m| round >= m) {
+        let go = more && run.job.max_rounds.is_none_or(|m| round < m);
+        // one agreement per round: a stop (time box) or an error on any rank ends every rank's loop
+        if !distributed::agree_round(run.cluster, go, failure.take())? {
             break;
         }
         let pass = round_start + rank;
@@ -371,11 +486,21 @@ fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) ->
         p.passes_done = total.map_or(round_start + size, |t| (round_start + size).min(t));
         let rays = p.counters.closest_rays + p.counters.shadow_rays;
         progress.update(p.passes_done - first_pass, p.passes_done, secs(t_render), secs(run.started), rays * size);
-        run.maybe_checkpoint(&p, &mut last_ckpt)?;
+        p.render_s = secs(t_render);
+        failure = run.maybe_checkpoint(&mut p, &*integrator, &mut last_ckpt).err();
     }
     p.render_s = secs(t_render);
     progress.finish();
     Ok(p)
+}
+
+impl Passes {
+    /// A failed checkpoint: printed (rank 0 only ever writes) and kept for the report.
+    fn warn(&mut self, what: String, retry_in: Option<f64>) {
+        let w = retry_in.map_or_else(|| what.clone(), |s| format!("{what}; next try in {s} s"));
+        crate::errln!("warning: {w}");
+        self.warnings.push(w);
+    }
 }
 
 /// The summed film (rank 0) and the run-wide figures.
@@ -399,12 +524,7 @@ fn reduce(run: &Run, p: &Passes, pre: &RankStats, timings: &mut Timings) -> Resu
     let t_red = Instant::now();
     let sums = run.cluster.reduce_sum(&p.film.data);
     let c = &p.counters;
-    let t = run.cluster.all_reduce_sum(&[
-        c.closest_rays as f64,
-        c.shadow_rays as f64,
-        c.nonfinite as f64,
-        c.samples as f64,
-    ]);
+    let t = counter_sums(run.cluster, c);
     timings.reduce_s = secs(t_red);
     let mine = RankStats {
         passes: p.my_passes,
@@ -420,10 +540,21 @@ fn reduce(run: &Run, p: &Passes, pre: &RankStats, timings: &mut Timings) -> Resu
     let Some(sums) = sums else { return Ok(None) };
     let film = run.total_film(sums)?;
     let per_rank = gathered.unwrap_or_default().iter().map(|b| serde_json::from_slice(b).ok()).collect();
-    let rays = Rays { closest: t[0] as u64, shadow: t[1] as u64 };
-    let (film_samples, bytes_broadcast) = (film.total_samples(), pre.bytes_broadcast);
-    let parts = Totals { rays, nonfinite: t[2] as u64, samples: t[3], film_samples, bytes_broadcast, per_rank };
+    let parts = Totals::new(&t, &film, pre.bytes_broadcast, per_rank);
     Ok(Some(Reduced { film, parts }))
+}
+
+/// Rays, non-finite samples and samples summed over ranks (collective).
+fn counter_sums(cluster: &dyn Cluster, c: &PassCounters) -> Vec<f64> {
+    cluster.all_reduce_sum(&[c.closest_rays as f64, c.shadow_rays as f64, c.nonfinite as f64, c.samples as f64])
+}
+
+impl Totals {
+    fn new(t: &[f64], film: &Film, bytes_broadcast: usize, per_rank: Vec<Option<RankStats>>) -> Totals {
+        let rays = Rays { closest: t[0] as u64, shadow: t[1] as u64 };
+        let film_samples = film.total_samples();
+        Totals { rays, nonfinite: t[2] as u64, samples: t[3], film_samples, bytes_broadcast, per_rank }
+    }
 }
 
 impl Run<'_> {
@@ -431,17 +562,33 @@ impl Run<'_> {
         self.job.checkpoint_path.clone().unwrap_or_else(|| with_ext(&self.job.out, "ckpt"))
     }
 
-    /// A checkpoint at this round boundary if rank 0's interval has passed (collective).
-    fn maybe_checkpoint(&self, p: &Passes, last: &mut Instant) -> Result<(), String> {
+    /// A checkpoint at this round boundary if rank 0's interval has passed (collective): the
+    /// checkpoint and `PREFIX.{exr,png,json}` replace the previous ones as one set. A write that
+    /// fails is a warning (printed by rank 0, kept for the report): the previous set stays and
+    /// the next interval tries again. Other errors end the render at the next round's agreement.
+    fn maybe_checkpoint(&self, p: &mut Passes, integrator: &dyn Integrator, last: &mut Instant) -> Result<(), String> {
         let Some(every) = self.job.checkpoint_every else { return Ok(()) };
         let want = if self.cluster.rank() == 0 && last.elapsed().as_secs_f64() >= every { 1.0 } else { 0.0 };
-        if self.cluster.all_reduce_max(want) > 0.0 {
-            if let Some(sums) = self.cluster.reduce_sum(&p.film.data) {
-                let total = self.total_film(sums)?;
-                self.checkpoint(p.passes_done, &total).save(&self.ckpt_path()).map_err(|e| e.to_string())?;
-                write_images(&self.job.out, &total)?;
-            }
-            *last = Instant::now();
+        if self.cluster.all_reduce_max(want) == 0.0 {
+            return Ok(());
+        }
+        *last = Instant::now();
+        let t = counter_sums(self.cluster, &p.counters);
+        let Some(sums) = self.cluster.reduce_sum(&p.film.data) else { return Ok(()) };
+        let total = self.total_film(sums)?;
+        let mut set = FileSet::new();
+        let written = image_files(&self.job.out, &total, &mut set).and_then(|image| {
+            let timings = Timings { render_s: p.render_s, total_s: secs(self.started), ..Timings::default() };
+            let parts = Totals::new(&t, &total, 0, Vec::new());
+            let report = self.report(p, parts, timings, integrator.stats(&p.counters.profile), &image, false);
+            set.add(with_ext(&self.job.out, "json"), serde_json::to_vec_pretty(&report).map_err(|e| e.to_string())?);
+            // last, so that once the new checkpoint is visible its images and JSON are too
+            set.add(self.ckpt_path(), self.checkpoint(p.passes_done, &total).to_bytes());
+            set.commit()
+        });
+        if let Err(e) = written {
+            let what = format!("checkpoint after {} passes not written ({e}); the previous one is kept", p.passes_done);
+            p.warn(what, Some(every));
         }
         Ok(())
     }
@@ -483,6 +630,7 @@ impl Run<'_> {
         timings: Timings,
         method_stats: serde_json::Value,
         image: &Image,
+        complete: bool,
     ) -> RenderReport {
         let (w, h) = self.plan.resolution;
         let render_s = timings.render_s.max(1e-9);
@@ -506,42 +654,38 @@ impl Run<'_> {
             method_stats,
             options: self.plan.args.clone(),
             per_rank: t.per_rank,
-            warnings: self.world.scene.warnings.clone(),
+            warnings: self.world.scene.warnings.iter().chain(&p.warnings).cloned().collect(),
+            preprocess_over_budget: p.preprocess_over_budget,
+            complete,
             image_mean: image.mean(),
         }
     }
 }
 
+/// Ranks on this node (MPICH's `MPI_LOCALNRANKS`, Open MPI's `OMPI_COMM_WORLD_LOCAL_SIZE`; 1).
+fn local_ranks() -> usize {
+    ["MPI_LOCALNRANKS", "OMPI_COMM_WORLD_LOCAL_SIZE"]
+        .iter()
+        .find_map(|v| std::env::var(v).ok()?.parse::<usize>().ok())
+        .unwrap_or(1)
+        .max(1)
+}
+
 /// A rayon pool of `threads` workers (default: cores ÷ ranks on this node, from MPICH's
 /// `MPI_LOCALNRANKS` or Open MPI's `OMPI_COMM_WORLD_LOCAL_SIZE`).
 pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, String> {
-    let local = ["MPI_LOCALNRANKS", "OMPI_COMM_WORLD_LOCAL_SIZE"]
-        .iter()
-        .find_map(|v| std::env::var(v).ok()?.parse::<usize>().ok())
-        .unwrap_or(1);
+    let local = local_ranks();
     let n = threads.unwrap_or_else(|| {
         let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
         (cores / local.max(1)).max(1)
     });
-    if n == 0 || n > MAX_THREADS {
-        return Err(format!("--threads {n}: must be between 1 and {MAX_THREADS}"));
-    }
+    params::THREADS.check_flag("--threads", n as u64)?;
     rayon::ThreadPoolBuilder::new().num_threads(n).build().map_err(|e| format!("cannot start {n} threads: {e}"))
 }
 
 /// The most worker threads a process may ask for (more fail late, after minutes of thread
 /// creation, with "Resource temporarily unavailable").
-pub const MAX_THREADS: usize = 4096;
-
-/// Rank 0's `result` if every rank got `Ok`; an error on every rank otherwise (collective).
-fn agree_or_fail<T>(cluster: &dyn Cluster, result: Result<T, String>, what: &str) -> Result<T, String> {
-    let ok = distributed::all_agree(cluster, result.is_ok());
-    match result {
-        Ok(v) if ok => Ok(v),
-        Err(e) => Err(e),
-        Ok(_) => Err(format!("{what} failed on rank 0")),
-    }
-}
+pub const MAX_THREADS: usize = params::MAX_THREADS;
 
 /// The film's mean as an image.
 pub fn image_from_film(f: &Film) -> Image {

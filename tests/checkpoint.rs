@@ -51,6 +51,12 @@ fn killed_render_resumes_to_the_uninterrupted_image() {
     let c = forecast::checkpoint::Checkpoint::load(&ckpt).unwrap();
     assert!(finished_early || c.passes_done < 600, "the run was not interrupted");
     assert!(c.passes_done > 0);
+    // the checkpoint came with its images and JSON (renamed before it): a consistent set
+    let part_json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(format!("{}.json", part.display())).unwrap()).unwrap();
+    assert!(part_json["passes"].as_u64().unwrap() > 0);
+    assert!(finished_early || part_json["complete"] == false, "{part_json}");
+    assert!(Path::new(&format!("{}.exr", part.display())).exists());
 
     let st = Command::new(bin())
         .args(["render", scene().to_str().unwrap(), "--spp", spp, "--resolution", "48x48", "--seed", "3", "--quiet"])
@@ -90,4 +96,62 @@ fn resume_with_another_seed_is_refused() {
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("cannot resume") && err.contains("seed"), "{err}");
+}
+
+fn render_json(name: &str, args: &[&str]) -> (std::process::Output, serde_json::Value, PathBuf) {
+    let d = tmp_dir(name);
+    let out = d.join("r");
+    let o = Command::new(bin())
+        .args(["render", scene().to_str().unwrap(), "--resolution", "16x16", "--seed", "2", "--quiet"])
+        .args(args)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let json = std::fs::read(format!("{}.json", out.display())).ok();
+    let v = json.map_or(serde_json::Value::Null, |j| serde_json::from_slice(&j).unwrap());
+    (o, v, d)
+}
+
+/// A checkpoint that cannot be written (its directory is a regular file, so even root cannot
+/// create it) is a warning: the render goes on, retries at every interval and completes with its
+/// image and JSON, which records the warnings.
+#[test]
+fn a_failed_checkpoint_write_warns_and_the_render_completes() {
+    let d = tmp_dir("ckpt-fail");
+    let blocker = d.join("not-a-dir");
+    std::fs::write(&blocker, b"x").unwrap();
+    let ckpt = blocker.join("r.ckpt");
+    let (o, json, _) = render_json(
+        "ckpt-fail-run",
+        &["--spp", "6", "--checkpoint-every", "1ms", "--checkpoint-path", ckpt.to_str().unwrap()],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(json["spp"], 6, "{json}");
+    assert_eq!(json["complete"], true);
+    let warnings: Vec<String> =
+        json["warnings"].as_array().unwrap().iter().map(|w| w.as_str().unwrap().to_string()).collect();
+    // one warning per checkpoint interval (one per pass here) plus the final checkpoint
+    let failed = warnings.iter().filter(|w| w.contains("checkpoint") && w.contains("not written")).count();
+    assert!(failed >= 2, "{warnings:?}");
+    assert!(warnings.iter().all(|w| !w.contains("checkpoint") || w.contains("not-a-dir")), "{warnings:?}");
+    assert_eq!(err.matches("warning: ").count(), failed, "{err}");
+}
+
+/// `--time` cannot bound the preprocess; when loading and the preprocess alone use up the
+/// budget, the run warns and records it in the JSON.
+#[test]
+fn a_preprocess_over_the_time_budget_is_recorded() {
+    let (o, json, _) = render_json("over-budget", &["--method", "iws-pm", "--photons", "20000", "--time", "1ms"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(json["preprocess_over_budget"], true, "{json}");
+    let w = json["warnings"].to_string();
+    assert!(w.contains("over the --time budget"), "{w}");
+    assert!(err.contains("warning: the preprocess took"), "{err}");
+    // and not without a time budget
+    let (o, json, _) = render_json("in-budget", &["--method", "iws-pm", "--photons", "20000", "--spp", "1"]);
+    assert!(o.status.success());
+    assert_eq!(json["preprocess_over_budget"], false, "{json}");
 }

@@ -144,3 +144,110 @@ fn usage_errors_exit_2_and_other_errors_exit_1() {
     assert_eq!(code, 1, "{err}");
     assert!(err.starts_with("error: ") && err.contains("missing.toml"), "{err}");
 }
+
+/// Every option the scene format would refuse is refused on the command line too, by the one
+/// validation (`forecast::param_limits`), before any work: no file is written, in well under the
+/// time of a render.
+#[test]
+fn invalid_render_options_are_refused_before_any_work() {
+    let d = tmp_dir("cli-invalid");
+    let prefix = d.join("x").display().to_string();
+    let cases: &[(&[&str], &str)] = &[
+        (&["--spp", "0"], "--spp 0: spp must be at least 1"),
+        (&["--method", "iws-pm", "--photons", "0"], "--photons 0: photons must be at least 1"),
+        (
+            &["--method", "iws-cf", "--forecast-photons", "0"],
+            "--forecast-photons 0: forecast photons must be at least 1",
+        ),
+        (&["--threads", "0"], "--threads 0: threads must be between 1 and 4096"),
+        (&["--max-depth", "1"], "--max-depth 1: max_depth must be at least 2"),
+        (&["--max-depth", "0"], "--max-depth 0: max_depth must be at least 2"),
+        (&["--method", "iws-cf", "--split", "4294967295"], "--split 4294967295: split must be between 1 and 1024"),
+        (&["--vpl-paths", "4294967295"], "--vpl-paths 4294967295: vpl paths must be between 1 and 65536"),
+    ];
+    let sc = scene();
+    for (opts, want) in cases {
+        let t = Instant::now();
+        let args = [&["render", sc.as_str(), "--resolution", "8x8", "--quiet", "--out", &prefix][..], opts].concat();
+        let (code, _, err) = run(&args);
+        assert_eq!(code, 1, "{opts:?}: {err}");
+        assert!(err.starts_with("error: ") && err.contains(want), "{opts:?}: expected `{want}` in: {err}");
+        assert!(t.elapsed() < Duration::from_secs(10), "{opts:?} refused only after {:?}", t.elapsed());
+        assert_eq!(std::fs::read_dir(&d).unwrap().count(), 0, "{opts:?} wrote files into {}", d.display());
+    }
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// The scene format applies the same limits with the same words (`render.spp = 0`).
+#[test]
+fn the_scene_format_refuses_the_same_values_with_the_same_words() {
+    let d = tmp_dir("cli-scene-spp");
+    let text = std::fs::read_to_string(root().join("scenes/cornell-box.toml")).unwrap();
+    let text: String =
+        text.lines().map(|l| if l.starts_with("spp") { "spp = 0\n".to_string() } else { format!("{l}\n") }).collect();
+    assert!(text.contains("spp = 0"), "the scene sets no spp");
+    let path = d.join("zero.toml");
+    std::fs::write(&path, text).unwrap();
+    let (code, _, err) = run(&["render", &path.display().to_string(), "--resolution", "8x8", "--quiet"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("render.spp") && err.contains("spp must be at least 1 (got 0)"), "{err}");
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// `--spp 0` used to exit 0 and replace an existing `PREFIX.{exr,png,json}` with a black image.
+#[test]
+fn spp_zero_leaves_an_existing_set_untouched() {
+    let d = tmp_dir("cli-spp0");
+    let prefix = d.join("keep").display().to_string();
+    let (code, _, err) = run(&["render", &scene(), "--spp", "2", "--resolution", "8x8", "--quiet", "--out", &prefix]);
+    assert_eq!(code, 0, "{err}");
+    let read = |ext: &str| std::fs::read(format!("{prefix}.{ext}")).unwrap();
+    let before: Vec<Vec<u8>> = ["exr", "png", "json"].iter().map(|e| read(e)).collect();
+    let (code, _, err) = run(&["render", &scene(), "--spp", "0", "--resolution", "8x8", "--quiet", "--out", &prefix]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("--spp 0"), "{err}");
+    let after: Vec<Vec<u8>> = ["exr", "png", "json"].iter().map(|e| read(e)).collect();
+    assert!(before == after, "--spp 0 changed the existing set");
+    assert_eq!(std::fs::read_dir(&d).unwrap().count(), 3, "temporaries left behind");
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// A film that cannot be allocated (65536² pixels × 56 bytes = 224 GiB per copy) is refused with
+/// the estimate, at once, instead of a SIGABRT after the preprocess.
+#[test]
+fn an_impossible_film_is_refused_up_front() {
+    let avail = forecast::param_limits::available_memory();
+    if avail.is_none_or(|a| a > 900 << 30) {
+        eprintln!("skipped: available memory unknown or above the estimate ({avail:?})");
+        return;
+    }
+    let d = tmp_dir("cli-huge");
+    let prefix = d.join("huge").display().to_string();
+    let t = Instant::now();
+    let args = ["render", &scene(), "--method", "iws-pm", "--resolution", "65536x65536", "--quiet", "--out", &prefix];
+    let (code, _, err) = run(&args);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("65536x65536") && err.contains("GiB") && err.contains("available"), "{err}");
+    assert!(t.elapsed() < Duration::from_secs(10), "refused only after {:?}", t.elapsed());
+    assert_eq!(std::fs::read_dir(&d).unwrap().count(), 0);
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// clap's own `--help` into a full stdout is an error (exit 1), not a silent success.
+#[test]
+fn help_into_a_full_stdout_is_an_error() {
+    let Some(full) = dev_full() else {
+        eprintln!("skipped: no /dev/full on this system");
+        return;
+    };
+    let out = forecast().arg("--help").stdout(full).output().unwrap();
+    let (code, _, err) = check(&["--help"], out);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("cannot write to stdout"), "{err}");
+    let (code, out, _) = run(&["--help"]);
+    assert_eq!(code, 0);
+    assert!(out.contains("render"), "{out}");
+    let (code, out, _) = run(&["--version"]);
+    assert_eq!(code, 0);
+    assert!(out.starts_with("forecast "), "{out}");
+}

@@ -121,3 +121,70 @@ fn checkpoint_and_resume_across_ranks() {
     assert_eq!(json(&res)["spp"], 12);
     assert_same_image(&res.with_extension("exr"), &full.with_extension("exr"));
 }
+
+/// Issue #9 §3: an error on one rank inside the pass loop used to leave rank 0 in `MPI_Finalize`
+/// and rank 1 spinning in the round's all-reduce. Here every checkpoint write fails (the output
+/// "directory" is a regular file, which stops root too), which is a warning printed once per
+/// interval by rank 0, and the final image write fails on rank 0, which every rank learns at
+/// the agreement after it: the job ends non-zero, well before a hang could be mistaken for
+/// work, with the error printed exactly once.
+#[test]
+fn an_error_on_rank_0_ends_every_rank_and_is_printed_once() {
+    let d = tmp_dir("mpi-error");
+    let blocker = d.join("not-a-dir");
+    std::fs::write(&blocker, b"x").unwrap();
+    let out = blocker.join("x");
+    let mut child = Command::new("mpirun")
+        .args(["-n", "2"])
+        .env("RAYON_NUM_THREADS", "1")
+        .arg(bin())
+        .args(["render", &scene(), "--time", "4s", "--checkpoint-every", "1s", "--resolution", "32x32", "--quiet"])
+        .arg("--out")
+        .arg(&out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("mpirun not found: install MPICH (.ci/install-mpi.sh)");
+    let t = Instant::now();
+    let limit = std::time::Duration::from_secs(60);
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break Some(s);
+        }
+        if t.elapsed() > limit {
+            child.kill().ok();
+            break None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    let mut err = String::new();
+    std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut err).unwrap();
+    let status = status.unwrap_or_else(|| panic!("the job hung for {limit:?}; stderr: {err}"));
+    assert!(!status.success(), "the job succeeded although nothing could be written: {err}");
+    assert_eq!(err.matches("error: ").count(), 1, "the error must be printed once: {err}");
+    assert!(err.contains("not-a-dir"), "the error must name the path: {err}");
+    let warnings = err.matches("warning: checkpoint").count();
+    assert!(warnings >= 1, "failed checkpoints must warn: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+/// A failed checkpoint under two ranks is a warning: the render completes and its JSON says so.
+#[test]
+fn a_failed_checkpoint_under_two_ranks_warns_and_completes() {
+    let d = tmp_dir("mpi-ckpt-warn");
+    let blocker = d.join("not-a-dir");
+    std::fs::write(&blocker, b"x").unwrap();
+    let ckpt = blocker.join("x.ckpt");
+    let out = d.join("ok");
+    let args = ["render", &scene(), "--spp", "8", "--resolution", "16x16", "--quiet", "--checkpoint-every", "1ms"];
+    let o = mpirun(
+        2,
+        &[&args[..], &["--checkpoint-path", ckpt.to_str().unwrap(), "--out", out.to_str().unwrap()]].concat(),
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    let j = json(&out);
+    assert_eq!(j["spp"], 8);
+    let failed = j["warnings"].as_array().unwrap().iter().filter(|w| w.to_string().contains("not written")).count();
+    assert!(failed >= 2, "{j}");
+    assert_eq!(err.matches("warning: ").count(), failed, "each warning printed once: {err}");
+}

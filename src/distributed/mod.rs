@@ -119,6 +119,63 @@ pub fn all_agree(c: &dyn Cluster, local_ok: bool) -> bool {
     c.all_reduce_max(veto) == 0.0
 }
 
+/// `result` if it is `Ok` on every rank; an error on every rank otherwise (collective).
+///
+/// The failing ranks' messages are gathered to rank 0, whose error names them all (one message
+/// when they agree, else `rank r: …` each); the other ranks' error is a stand-in, which the
+/// binary does not print (rank 0 prints the job's error once). Costs one 8-byte all-reduce when
+/// every rank succeeded. Any error that could end one rank early goes through here, so no rank
+/// is left waiting in a collective for a rank that has left.
+pub fn agree<T>(c: &dyn Cluster, result: Result<T, String>) -> Result<T, String> {
+    let failed = c.all_reduce_max(if result.is_err() { 1.0 } else { 0.0 }) > 0.0;
+    if !failed {
+        return result;
+    }
+    let mine = result.as_ref().err().map_or(Vec::new(), |e| e.as_bytes().to_vec());
+    Err(match c.gather_bytes(&mine) {
+        Some(blobs) => combine_errors(&blobs),
+        None => "the job failed on another rank (rank 0 reports it)".to_string(),
+    })
+}
+
+/// One message per distinct error, naming the ranks when there is more than one rank.
+fn combine_errors(blobs: &[Vec<u8>]) -> String {
+    let mut distinct: Vec<(String, Vec<usize>)> = Vec::new();
+    for (rank, b) in blobs.iter().enumerate().filter(|(_, b)| !b.is_empty()) {
+        let msg = String::from_utf8_lossy(b).into_owned();
+        match distinct.iter_mut().find(|(m, _)| *m == msg) {
+            Some((_, ranks)) => ranks.push(rank),
+            None => distinct.push((msg, vec![rank])),
+        }
+    }
+    match distinct.as_slice() {
+        [(msg, ranks)] if ranks.len() == blobs.len() || ranks == &[0] => msg.clone(),
+        _ => distinct
+            .iter()
+            .map(|(m, r)| format!("rank {}: {m}", r.iter().map(|r| r.to_string()).collect::<Vec<_>>().join(",")))
+            .collect::<Vec<_>>()
+            .join("; "),
+    }
+}
+
+/// The once-per-round agreement of the pass loop (collective): `Ok(true)` when every rank wants
+/// another round, `Ok(false)` when one wants to stop (time box), and the [`agree`]d error on every
+/// rank when one has a `failure` (a failed write inside the loop, say).
+pub fn agree_round(c: &dyn Cluster, go: bool, failure: Option<String>) -> Result<bool, String> {
+    let status = if failure.is_some() {
+        2.0
+    } else if go {
+        0.0
+    } else {
+        1.0
+    };
+    let all = c.all_reduce_max(status);
+    if all >= 2.0 {
+        return agree(c, failure.map_or(Ok(false), Err));
+    }
+    Ok(all == 0.0)
+}
+
 /// Builds a [`Deadline`] shared by all ranks for a time box of `budget_secs` seconds
 /// counted from rank 0's `local_start` (e.g. the instant rank 0's process started).
 ///
@@ -260,6 +317,21 @@ mod tests {
         let c = local::Local::new();
         assert!(all_agree(&c, true));
         assert!(!all_agree(&c, false));
+    }
+
+    #[test]
+    fn agreed_errors_name_each_failing_rank() {
+        let c = local::Local::new();
+        assert_eq!(agree(&c, Ok::<u8, String>(3)), Ok(3));
+        assert_eq!(agree(&c, Err::<u8, String>("disk full".into())), Err("disk full".into()));
+        assert_eq!(agree_round(&c, true, None), Ok(true));
+        assert_eq!(agree_round(&c, false, None), Ok(false));
+        assert_eq!(agree_round(&c, true, Some("x".into())), Err("x".into()));
+        let blobs = |v: &[&str]| v.iter().map(|s| s.as_bytes().to_vec()).collect::<Vec<_>>();
+        assert_eq!(combine_errors(&blobs(&["a", "a"])), "a");
+        assert_eq!(combine_errors(&blobs(&["a", ""])), "a");
+        assert_eq!(combine_errors(&blobs(&["", "b"])), "rank 1: b");
+        assert_eq!(combine_errors(&blobs(&["a", "b", "a"])), "rank 0,2: a; rank 1: b");
     }
 
     #[test]

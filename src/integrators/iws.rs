@@ -48,6 +48,13 @@ pub struct IwsArgs {
     pub vpl_subset: u32,
 }
 
+impl IwsArgs {
+    /// The limits of `crate::param_limits`.
+    pub fn validate(&self) -> Result<(), String> {
+        crate::param_limits::VPL_PATHS.check_flag("--vpl-paths", self.vpl_paths.into())
+    }
+}
+
 fn parse_bound(s: &str) -> Result<f32, String> {
     let t = s.trim();
     let b = if t.eq_ignore_ascii_case("inf") {

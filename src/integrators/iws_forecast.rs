@@ -94,6 +94,14 @@ impl CfArgs {
         }
     }
 
+    /// The limits of `crate::param_limits` (the scene's `forecast.photons` has the same).
+    pub fn validate(&self) -> Result<(), String> {
+        let photons = self.forecast_photons.map_or(Ok(()), |n| {
+            crate::param_limits::FORECAST_PHOTONS.check_flag("--forecast-photons", n)
+        });
+        photons.and_then(|()| crate::param_limits::SPLIT.check_flag("--split", self.split.into()))
+    }
+
     /// Forecast photons to store: the CLI's, else the scene's, else [`DEFAULT_FORECAST_PHOTONS`].
     pub fn target_photons(&self, world: &World) -> u64 {
         self.forecast_photons.or(world.scene.forecast_photons).unwrap_or(DEFAULT_FORECAST_PHOTONS)

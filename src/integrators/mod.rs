@@ -123,6 +123,16 @@ impl Method {
     }
 }
 
+impl MethodArgs {
+    /// Every group's own `validate` (each method file owns its limits), before any work.
+    pub fn validate(&self) -> Result<(), String> {
+        self.pt.validate()?;
+        self.iws.validate()?;
+        self.pm.validate()?;
+        self.cf.validate()
+    }
+}
+
 impl Default for MethodArgs {
     /// The command-line defaults (one source: the `#[arg]` attributes).
     fn default() -> Self {

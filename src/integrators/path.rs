@@ -34,6 +34,11 @@ impl PtArgs {
     pub fn cap(&self) -> u32 {
         self.max_depth.unwrap_or(MAX_VERTICES)
     }
+
+    /// The limits of `crate::param_limits` (the scene's `render.max_depth` has the same).
+    pub fn validate(&self) -> Result<(), String> {
+        self.max_depth.map_or(Ok(()), |d| crate::param_limits::MAX_DEPTH.check_flag("--max-depth", d.into()))
+    }
 }
 
 impl MethodSpec for PathTracer {

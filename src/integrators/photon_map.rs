@@ -50,6 +50,13 @@ pub struct PmArgs {
     pub max_radius: Option<f32>,
 }
 
+impl PmArgs {
+    /// The limits of `crate::param_limits`.
+    pub fn validate(&self) -> Result<(), String> {
+        crate::param_limits::PHOTONS.check_flag("--photons", self.photons)
+    }
+}
+
 fn parse_positive(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
         Ok(v) if v.is_finite() && v > 0.0 => Ok(v),

@@ -12,6 +12,7 @@ use super::{
     Sphere, Triangle, NO_EMITTER,
 };
 use crate::math::{fnv1a, Vec3, PI};
+use crate::param_limits as params;
 use crate::sampling::distribution::Distribution1D;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -213,20 +214,18 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
             }
             render.method = m.clone();
         }
+        // the limits shared with the command line (crate::param_limits)
         if let Some(s) = r.spp {
-            if s == 0 {
-                return Err(cx.err(rs, "render.spp", "spp must be positive"));
-            }
+            params::SPP.check(s).map_err(|m| cx.err(rs.clone(), "render.spp", m))?;
             render.spp = Some(s);
         }
         if let Some(t) = &r.time {
-            render.time = Some(parse_duration(t).map_err(|m| cx.err(rs.clone(), "render.time", m))?);
+            let secs = parse_duration(t).and_then(|v| params::check_time(v).map(|()| v));
+            render.time = Some(secs.map_err(|m| cx.err(rs.clone(), "render.time", m))?);
         }
         render.seed = r.seed.unwrap_or(0);
         if let Some(d) = r.max_depth {
-            if d < 2 {
-                return Err(cx.err(rs, "render.max_depth", "max_depth must be at least 2"));
-            }
+            params::MAX_DEPTH.check(d.into()).map_err(|m| cx.err(rs, "render.max_depth", m))?;
             render.max_depth = d;
         }
     }
@@ -519,9 +518,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
     let mut forecast_photons = None;
     if let Some(f) = &doc.forecast {
         if let Some(n) = f.get_ref().photons {
-            if n == 0 {
-                return Err(cx.err(f.span(), "forecast.photons", "photons must be positive"));
-            }
+            params::FORECAST_PHOTONS.check(n).map_err(|m| cx.err(f.span(), "forecast.photons", m))?;
             forecast_photons = Some(n);
         }
         if let Some([lo, hi]) = f.get_ref().target_box {
