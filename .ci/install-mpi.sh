@@ -20,18 +20,18 @@ have_mpi() {
     incdir="$(pkg-config --variable=includedir mpich 2>/dev/null || true)"
     [ -n "$incdir" ] && [ -f "$incdir/mpi.h" ] || return 1
     # Make sure mpirun belongs to MPICH, not OpenMPI (the two fight over the alternatives).
-    mpirun --version 2>&1 | grep -qi 'HYDRA' || return 1
+    mpirun --version 2>&1 | grep -i 'HYDRA' >/dev/null || return 1
     return 0
 }
 
 have_libclang() {
     # libclang-dev ships the unversioned libclang.so symlink and clang's builtin headers.
-    dpkg-query -W -f='${Status}' libclang-dev 2>/dev/null | grep -q 'install ok installed'
+    dpkg-query -W -f='${Status}' libclang-dev 2>/dev/null | grep 'install ok installed' >/dev/null
 }
 
 if have_mpi && have_libclang; then
     echo "install-mpi: MPICH and libclang already installed, nothing to do"
-    mpirun --version 2>&1 | head -n 2
+    mpirun --version 2>&1 | sed -n 1,2p  # sed reads it all: no SIGPIPE under pipefail
     exit 0
 fi
 
@@ -59,4 +59,4 @@ if ! have_libclang; then
     exit 1
 fi
 echo "install-mpi: done"
-mpirun --version 2>&1 | head -n 2
+mpirun --version 2>&1 | sed -n 1,2p  # sed reads it all: no SIGPIPE under pipefail
