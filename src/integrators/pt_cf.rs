@@ -186,8 +186,12 @@ impl GuidedPathTracer {
             for _ in 0..g.n {
                 let Some(ms) = mix.sample(&mut ctx.rng) else { continue };
                 let mut b = st;
-                if continue_path(&mut b, (depth, hit.p, hit.ng), (ms.wi, ms.weight * (1.0 / n), n * ms.pdf_w, false), ctx)
-                {
+                if continue_path(
+                    &mut b,
+                    (depth, hit.p, hit.ng),
+                    (ms.wi, ms.weight * (1.0 / n), n * ms.pdf_w, false),
+                    ctx,
+                ) {
                     l += self.trace(world, b, ctx);
                 }
             }
@@ -219,15 +223,8 @@ fn continue_path(
 
 impl Integrator for GuidedPathTracer {
     fn radiance(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> Rgb {
-        let st = PathState {
-            o: origin,
-            d: dir,
-            beta: Rgb::ONE,
-            vertex: 0,
-            diffuse: 0,
-            prev_delta: true,
-            prev_pdf_w: 0.0,
-        };
+        let st =
+            PathState { o: origin, d: dir, beta: Rgb::ONE, vertex: 0, diffuse: 0, prev_delta: true, prev_pdf_w: 0.0 };
         self.trace(world, st, ctx)
     }
 
