@@ -18,7 +18,7 @@
 //! kept clusters every vertex is a `pt` vertex. The preprocess product is `iws-cf`'s
 //! (`IwsCf::preprocess`: same photons, clusters, maps, broadcast).
 //!
-//! CLI: `forecast render scenes/cornell-box.toml --method pt-cf --guide-fraction 0.5 --time 1m`.
+//! CLI: `forecast render scenes/cornell-box.toml --method pt-cf --time 1m`.
 
 use super::iws_forecast::IwsCf;
 use super::path::{emitter_hit, RR_DEPTH};
@@ -42,7 +42,7 @@ use std::sync::Arc;
 #[derive(clap::Args, Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PtCfArgs {
     /// pt-cf: BSDF share c of q = c·p_BSDF + (1−c)·p_CF at guided vertices, 0 < c ≤ 1 (1 = pt).
-    #[arg(long, default_value_t = 0.5, value_parser = parse_guide_fraction)]
+    #[arg(long, default_value_t = 0.3, value_parser = parse_guide_fraction)]
     pub guide_fraction: f32,
     /// pt-cf: the tables guide vertices at diffuse depths below this (0 = pt).
     #[arg(long, default_value_t = 1)]
