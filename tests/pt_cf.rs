@@ -44,13 +44,12 @@ fn guide_stats(i: &dyn Integrator) -> (u64, f64) {
     (s["guide"]["lookups"].as_u64().unwrap(), s["guide"]["fraction_inside_clusters"].as_f64().unwrap())
 }
 
-/// `pt-cf` with `o` agrees with `pt` on `scene` at `res`² (per pixel and whole image), and the
+/// `pt-cf` with `o` agrees with `pt` on `w` at `res`² (per pixel and whole image), and the
 /// same statistics reject the image scaled by 0.97.
 fn agrees_with_pt(w: &World, o: &MethodArgs, res: u32, (spp_pt, spp): (u64, u64), label: &str) {
-    let w = w;
-    let reference = pt(&w, res, res, spp_pt);
-    let mut g = build(&w, Method::PtCf, o);
-    let img = render(&w, g.as_mut(), res, res, spp, 3);
+    let reference = pt(w, res, res, spp_pt);
+    let mut g = build(w, Method::PtCf, o);
+    let img = render(w, g.as_mut(), res, res, spp, 3);
     let (lookups, inside) = guide_stats(g.as_ref());
     eprintln!("{label}: {lookups} lookups, {:.1}% inside kept clusters", 100.0 * inside);
     assert!(lookups > 0 && inside > 0.01, "{label}: the tables were never used");
