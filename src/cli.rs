@@ -221,7 +221,7 @@ pub struct CompareArgs {
     #[command(flatten)]
     pub render: RenderArgs,
     /// Methods to compare, comma-separated.
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "pt,iws-pm,iws-cf")]
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "pt,iws-pm,iws-cf,pt-cf")]
     pub methods: Vec<Method>,
     /// Time budgets, comma-separated (preprocess included).
     #[arg(long, value_delimiter = ',', value_parser = parse_budget, default_value = "30s,1m,2m,4m")]
@@ -264,7 +264,7 @@ pub struct StabilityArgs {
     #[arg(long, value_parser = parse_secs)]
     pub reference_time: Option<f64>,
     /// Methods, comma-separated.
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "pt,iws,iws-pm,iws-cf")]
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "pt,iws,iws-pm,iws-cf,pt-cf")]
     pub methods: Vec<Method>,
     /// Only these cases, comma-separated (default: all).
     #[arg(long, value_delimiter = ',')]

@@ -78,7 +78,7 @@ fn budgets_and_methods_parse() {
     let Ok(Cli { command: Command::Compare(ca), .. }) = parse(&[]) else { panic!("compare parses") };
     let cfg = ca.config();
     assert_eq!(cfg.budgets, vec![30.0, 60.0, 120.0, 240.0]);
-    assert_eq!(cfg.methods, vec![Method::Pt, Method::IwsPm, Method::IwsCf]);
+    assert_eq!(cfg.methods, vec![Method::Pt, Method::IwsPm, Method::IwsCf, Method::PtCf]);
     let Ok(Cli { command: Command::Compare(ca), .. }) = parse(&["--budgets", "500ms,2m", "--methods", "iws,pt"]) else {
         panic!("compare parses")
     };

@@ -188,3 +188,39 @@ fn a_failed_checkpoint_under_two_ranks_warns_and_completes() {
     assert!(failed >= 2, "{j}");
     assert_eq!(err.matches("warning: ").count(), failed, "each warning printed once: {err}");
 }
+
+/// `pt-cf` (issue #12) on 2 ranks gives the 1-process image, guided (c = 0.3, splitting, two
+/// guided depths) so that the broadcast tables are really used. Self-contained.
+#[test]
+fn pt_cf_two_ranks_equal_one_process() {
+    let d = tmp_dir("pt-cf-equiv");
+    let (one, two) = (d.join("ptcf-1"), d.join("ptcf-2"));
+    let common = [
+        "--spp",
+        "8",
+        "--resolution",
+        "48x48",
+        "--seed",
+        "7",
+        "--quiet",
+        "--method",
+        "pt-cf",
+        "--forecast-photons",
+        "20000",
+        "--guide-fraction",
+        "0.3",
+        "--guide-split",
+        "4",
+        "--guide-depth",
+        "2",
+    ];
+    let st = Command::new(bin()).args(["render", &scene()]).args(common).arg("--out").arg(&one).status().unwrap();
+    assert!(st.success());
+    mpirun(2, &[&["render", &scene()][..], &common[..], &["--out", two.to_str().unwrap()][..]].concat());
+    assert_same_image(&one.with_extension("exr"), &two.with_extension("exr"));
+    let j = json(&two);
+    assert_eq!(j["ranks"], 2);
+    let ranks = j["per_rank"].as_array().unwrap();
+    assert_eq!(ranks[0]["product_hash"], ranks[1]["product_hash"]);
+    assert!(j["method_stats"]["guide"]["fraction_inside_clusters"].as_f64().unwrap() > 0.0);
+}

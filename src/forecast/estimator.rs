@@ -311,6 +311,30 @@ impl CausticForecast {
         })
     }
 
+    /// The kept cluster at `q`, its tables and their frame (z = the normal on `q.wo`'s side), or
+    /// `None` outside every kept cluster. `cache` serves Lambertian, flat-shaded points; the result
+    /// is a pure function of the point (never of random numbers), so any caller stays unbiased.
+    pub fn tables_at(
+        &self,
+        q: &ShadingQuery,
+        ctx: &mut Context,
+        counters: &ForecastCounters,
+        cache: Option<&TableCache>,
+    ) -> Option<(usize, Arc<ForecastTables>, Frame)> {
+        let (sp, m, wo) = (q.x, q.m, q.wo);
+        let (ng, ns) = if wo.dot(sp.ng) >= 0.0 { (sp.ng, sp.ns) } else { (-sp.ng, -sp.ns) };
+        let cacheable = self.opts.cache_cell > 0.0 && matches!(m, Material::Diffuse { .. }) && sp.ns == sp.ng;
+        let cache = cache.filter(|_| cacheable);
+        // cached tables live in the frame of the geometric normal (equal to ns there)
+        let frame = if cache.is_some() { Frame::from_normal(ng) } else { Frame::from_normal(ns) };
+        let found: CacheEntry = match cache {
+            _ if self.radius <= 0.0 => None,
+            Some(cache) => self.cached_tables(cache, (sp.p, ng), ctx, counters),
+            None => self.point_tables(q, ng, &frame, ctx, counters),
+        };
+        found.map(|(c, t)| (c, t, frame))
+    }
+
     /// Ĺ_c at `q`. `g(ωi, ctx)` returns the integrand f·|cos|·1[first hit Dirac]·L̂ (world ωi).
     /// `cache` enables the table cache for Lambertian, flat-shaded points.
     pub fn estimate(
@@ -323,17 +347,8 @@ impl CausticForecast {
     ) -> Rgb {
         counters.queries.fetch_add(1, Relaxed);
         let (sp, m, wo) = (q.x, q.m, q.wo);
-        let (ng, ns) = if wo.dot(sp.ng) >= 0.0 { (sp.ng, sp.ns) } else { (-sp.ng, -sp.ns) };
-        let cacheable = self.opts.cache_cell > 0.0 && matches!(m, Material::Diffuse { .. }) && sp.ns == sp.ng;
-        let cache = cache.filter(|_| cacheable);
-        // cached tables live in the frame of the geometric normal (equal to ns there)
-        let frame = if cache.is_some() { Frame::from_normal(ng) } else { Frame::from_normal(ns) };
-        let found: CacheEntry = match cache {
-            _ if self.radius <= 0.0 || q.depth >= self.opts.table_depth => None,
-            Some(cache) => self.cached_tables(cache, (sp.p, ng), ctx, counters),
-            None => self.point_tables(q, ng, &frame, ctx, counters),
-        };
-        let Some((c, tables)) = found else {
+        let found = if q.depth >= self.opts.table_depth { None } else { self.tables_at(q, ctx, counters, cache) };
+        let Some((c, tables, frame)) = found else {
             // outside valid clusters: one BSDF (cosine for Lambert) sample
             counters.samples.fetch_add(1, Relaxed);
             let u = [ctx.rng.next_f32(), ctx.rng.next_f32(), ctx.rng.next_f32()];

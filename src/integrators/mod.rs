@@ -114,6 +114,8 @@ methods! {
     IwsPm = "iws-pm", pm: photon_map::PmArgs => photon_map::IwsPm;
     /// IWS with Caustic Forecasting for L_c (BAJ08): unbiased.
     IwsCf = "iws-cf", cf: iws_forecast::CfArgs => iws_forecast::IwsCf;
+    /// Path tracing whose continuation is drawn from a defensive mixture of the BSDF and the CF tables: unbiased.
+    PtCf = "pt-cf", ptcf: pt_cf::PtCfArgs => pt_cf::PtCf;
 }
 
 impl Method {

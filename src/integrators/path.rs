@@ -9,7 +9,7 @@
 //! CLI: `forecast render scenes/cornell-box.toml --method pt --spp 64`.
 
 use super::{Context, Integrator, MethodArgs, MethodSpec};
-use crate::accel::{offset_origin, World};
+use crate::accel::{offset_origin, Hit, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::math::{Rgb, Vec3};
 use crate::sampling::power_heuristic;
@@ -57,6 +57,27 @@ pub struct PathTracer {
     pub max_depth: u32,
 }
 
+/// A hit on an emitter's front reached along `d`: `(Le, MIS weight)`, the weight of the
+/// direction sampler (pdf `prev_pdf_w`, or a Dirac lobe when `prev_delta`) against NEE by the
+/// power heuristic. `None` when `hit` is not on an emitter or sees its back (no light).
+#[inline]
+pub fn emitter_hit(world: &World, hit: &Hit, d: Vec3, prev_delta: bool, prev_pdf_w: f32) -> Option<(Rgb, f32)> {
+    let em = world.scene.emitter_of(hit.prim);
+    let cos_l = hit.ng.dot(-d);
+    if em == NO_EMITTER {
+        return None;
+    }
+    (cos_l > 0.0).then(|| {
+        let le = world.scene.emitters[em as usize].radiance;
+        let w = if prev_delta {
+            1.0
+        } else {
+            power_heuristic(prev_pdf_w, direct::emitter_pdf_w(world, em, hit.t * hit.t, cos_l))
+        };
+        (le, w)
+    })
+}
+
 impl Integrator for PathTracer {
     fn radiance(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> Rgb {
         let s = &world.scene;
@@ -68,16 +89,8 @@ impl Integrator for PathTracer {
         let mut prev_pdf_w = 0.0f32;
         for depth in 0..self.max_depth {
             let Some(hit) = world.intersect(o, d, f32::INFINITY) else { break };
-            let em = s.emitter_of(hit.prim);
-            if em != NO_EMITTER {
-                let cos_l = hit.ng.dot(-d);
-                if cos_l > 0.0 {
-                    let le = s.emitters[em as usize].radiance;
-                    let w = if prev_delta {
-                        1.0
-                    } else {
-                        power_heuristic(prev_pdf_w, direct::emitter_pdf_w(world, em, hit.t * hit.t, cos_l))
-                    };
+            if s.emitter_of(hit.prim) != NO_EMITTER {
+                if let Some((le, w)) = emitter_hit(world, &hit, d, prev_delta, prev_pdf_w) {
                     l += beta * le * w;
                 }
                 break; // emitters reflect nothing

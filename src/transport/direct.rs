@@ -24,7 +24,22 @@ pub fn emitter_pdf_w(world: &World, emitter: u32, dist2: f32, cos_l: f32) -> f32
 }
 
 /// One NEE sample at a non-Dirac point: Le·f·cos/pdf with MIS (area lights) or exact (point lights).
+#[inline]
 pub fn sample_light(world: &World, sp: &ShadingPoint, m: &Material, wo: Vec3, rng: &mut Rng) -> Rgb {
+    sample_light_mis(world, sp, m, wo, rng, |wi| bsdf::pdf_w(m, sp, wo, wi))
+}
+
+/// [`sample_light`] with the MIS weight taken against `pdf_other(wi)`, the solid-angle pdf with
+/// which the caller's own direction sampler would draw `wi` (`bsdf::pdf_w` for `pt`; a guided
+/// mixture's `q` for `pt-cf`). The BSDF-sampled emitter hit must use the same pair of pdfs.
+pub fn sample_light_mis(
+    world: &World,
+    sp: &ShadingPoint,
+    m: &Material,
+    wo: Vec3,
+    rng: &mut Rng,
+    pdf_other: impl Fn(Vec3) -> f32,
+) -> Rgb {
     let s = &world.scene;
     let (li, pmf, _) = s.light_pick.sample(rng.next_f32());
     let u = rng.next_2d();
@@ -46,7 +61,7 @@ pub fn sample_light(world: &World, sp: &ShadingPoint, m: &Material, wo: Vec3, rn
                 return Rgb::ZERO;
             }
             let pdf_light = pmf * pdf_a * dist2 / cos_l;
-            let pdf_bsdf = bsdf::pdf_w(m, sp, wo, wi);
+            let pdf_bsdf = pdf_other(wi);
             if !world.visible(sp.p, sp.ng, y, ny) {
                 return Rgb::ZERO;
             }

@@ -1,0 +1,249 @@
+//! `pt-cf`: the `pt` path tracer guided by the Caustic Forecasting tables (issue #12; beyond
+//! BAJ08, which combines CF with IWS only).
+//!
+//! Estimator. Exactly `pt` (NEE + power-heuristic MIS for area lights, Dirac chains followed by
+//! BSDF sampling, Russian roulette from the 5th vertex, `path::RR_DEPTH`) except at the guided
+//! vertices: non-Dirac hits at diffuse depth `d < --guide-depth` that lie inside a kept cluster
+//! (`CausticForecast::tables_at`, the cluster map → forecast map → dual tables, through the shared
+//! `TableCache`). There the continuation direction is drawn from the defensive mixture
+//! `q(ω) = c·p_BSDF(ω) + (1−c)·p_CF(ω)` (`forecast::mixture`, `p_CF` = ½T1 + ½T2), weighted by
+//! `f·|cos|/q`, so no sample is worth more than `1/c` BSDF samples. MIS against NEE uses the pdf
+//! really used: NEE's weight is `h(p_light, n·q(ω_l))` and a mixture-sampled emitter hit's is
+//! `h(n·q, p_light)` (power heuristic `h`, `n` the split count), which sum to 1 per direction.
+//! Splitting: at `d = 0` inside a cluster of rank `r`, `n = max(1, S0 >> r)` continuations are
+//! drawn and averaged (`--guide-split S0`); `n` depends only on the vertex, so it stays unbiased.
+//!
+//! Invariants: the tables are a pdf only (any photons give an unbiased image); `c = 1` never
+//! looks a table up and draws exactly `pt`'s random numbers, so it is `pt` bit for bit; outside
+//! kept clusters every vertex is a `pt` vertex. The preprocess product is `iws-cf`'s
+//! (`IwsCf::preprocess`: same photons, clusters, maps, broadcast).
+//!
+//! CLI: `forecast render scenes/cornell-box.toml --method pt-cf --time 1m`.
+
+use super::iws_forecast::IwsCf;
+use super::path::{emitter_hit, RR_DEPTH};
+use super::{Context, Integrator, MethodArgs, MethodSpec};
+use crate::accel::{offset_origin, World};
+use crate::bsdf::{self, Mode, ShadingPoint};
+use crate::forecast::direction_table::ForecastTables;
+use crate::forecast::estimator::{CausticForecast, ForecastCounters, TableCache};
+use crate::forecast::mixture::{DefensiveMixture, MixtureWeights};
+use crate::math::{Frame, Rgb, Vec3};
+use crate::profile::Profile;
+use crate::scene::NO_EMITTER;
+use crate::transport::context::ShadingQuery;
+use crate::transport::direct;
+use crate::transport::roulette::{q_max, roulette};
+use std::sync::atomic::Ordering::Relaxed;
+use std::sync::Arc;
+
+/// `pt-cf` parameters (the CF preprocess options are `iws-cf`'s: `--forecast-photons`,
+/// `--clusters`, `--max-rank`, `--forecasters`, `--table`, `--table-cache`, …).
+#[derive(clap::Args, Clone, Debug, PartialEq, serde::Serialize)]
+pub struct PtCfArgs {
+    /// pt-cf: BSDF share c of q = c·p_BSDF + (1−c)·p_CF at guided vertices, 0 < c ≤ 1 (1 = pt).
+    #[arg(long, default_value_t = 0.3, value_parser = parse_guide_fraction)]
+    pub guide_fraction: f32,
+    /// pt-cf: the tables guide vertices at diffuse depths below this (0 = pt).
+    #[arg(long, default_value_t = 1)]
+    pub guide_depth: u32,
+    /// pt-cf: continuations S0 at a guided vertex of diffuse depth 0 in a rank-0 cluster
+    /// (S = max(1, S0 >> rank); 1 deeper).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub guide_split: u32,
+}
+
+fn parse_guide_fraction(s: &str) -> Result<f32, String> {
+    let c: f32 = s.trim().parse().map_err(|e| format!("`{s}` is not a number: {e}"))?;
+    MixtureWeights::guide_fraction(c).map(|_| c)
+}
+
+/// The `pt-cf` method.
+pub struct PtCf;
+
+impl MethodSpec for PtCf {
+    type Product = CausticForecast;
+    fn preprocess(world: &World, args: &MethodArgs, seed: u64) -> Result<CausticForecast, String> {
+        <IwsCf as MethodSpec>::preprocess(world, args, seed)
+    }
+    fn build(_: &World, args: &MethodArgs, cf: CausticForecast) -> Result<Box<dyn Integrator>, String> {
+        let p = &args.ptcf;
+        let weights = MixtureWeights::guide_fraction(p.guide_fraction).map_err(|e| format!("--guide-fraction: {e}"))?;
+        Ok(Box::new(GuidedPathTracer {
+            max_depth: args.pt.cap(),
+            weights,
+            guide_depth: if p.guide_fraction >= 1.0 { 0 } else { p.guide_depth },
+            split: p.guide_split.max(1),
+            cf,
+            counters: ForecastCounters::default(),
+            cache: TableCache::default(),
+        }))
+    }
+}
+
+/// The guided path tracer; owns the product, its counters and the table cache shared by all
+/// worker threads.
+pub struct GuidedPathTracer {
+    max_depth: u32,
+    weights: MixtureWeights,
+    /// Guided diffuse depths `d < guide_depth` (0 when `c = 1`: no lookups at all).
+    guide_depth: u32,
+    /// Splitting S0 at diffuse depth 0.
+    split: u32,
+    cf: CausticForecast,
+    counters: ForecastCounters,
+    cache: TableCache,
+}
+
+/// One path (or branch) in flight: the ray, its throughput and how the last vertex sampled it.
+#[derive(Clone, Copy, Debug)]
+struct PathState {
+    o: Vec3,
+    d: Vec3,
+    beta: Rgb,
+    /// Vertices traced so far.
+    vertex: u32,
+    /// Non-Dirac vertices traced so far (diffuse depth of the next one).
+    diffuse: u32,
+    /// The last vertex was Dirac (or the camera).
+    prev_delta: bool,
+    /// Effective solid-angle pdf of the last direction for MIS (`n·q` at a guided vertex).
+    prev_pdf_w: f32,
+}
+
+/// The guide at one vertex: tables, their frame and the split count.
+struct Guide {
+    tables: Arc<ForecastTables>,
+    frame: Frame,
+    n: usize,
+}
+
+impl GuidedPathTracer {
+    /// The guide at a non-Dirac vertex, or `None` for a `pt` vertex (a pure function of it).
+    fn guide_at(&self, q: &ShadingQuery, ctx: &mut Context) -> Option<Guide> {
+        if q.depth >= self.guide_depth {
+            return None;
+        }
+        self.counters.queries.fetch_add(1, Relaxed);
+        let (c, tables, frame) = self.cf.tables_at(q, ctx, &self.counters, Some(&self.cache))?;
+        if tables.t1.is_none() && tables.t2.is_none() {
+            return None;
+        }
+        self.counters.inside.fetch_add(1, Relaxed);
+        let rank = self.cf.clustering.clusters[c].rank;
+        let n = if q.depth == 0 { (self.split >> rank.min(31)).max(1) as usize } else { 1 };
+        self.counters.samples.fetch_add(n as u64, Relaxed);
+        Some(Guide { tables, frame, n })
+    }
+
+    /// Radiance along `st` (a whole path, or one branch of a split).
+    fn trace(&self, world: &World, mut st: PathState, ctx: &mut Context) -> Rgb {
+        let s = &world.scene;
+        let mut l = Rgb::ZERO;
+        while st.vertex < self.max_depth {
+            let Some(hit) = world.intersect(st.o, st.d, f32::INFINITY) else { break };
+            if s.emitter_of(hit.prim) != NO_EMITTER {
+                if let Some((le, w)) = emitter_hit(world, &hit, st.d, st.prev_delta, st.prev_pdf_w) {
+                    l += st.beta * le * w;
+                }
+                break; // emitters reflect nothing
+            }
+            let m = s.material_of(hit.prim);
+            let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
+            let wo = -st.d;
+            let depth = st.vertex;
+            st.vertex += 1;
+            let guide = if m.is_dirac() {
+                None
+            } else {
+                self.guide_at(&ShadingQuery { x: &sp, m, wo, depth: st.diffuse }, ctx)
+            };
+            let Some(g) = guide else {
+                // a `pt` vertex, operation for operation
+                if !m.is_dirac() {
+                    l += st.beta * direct::sample_light(world, &sp, m, wo, &mut ctx.rng);
+                    st.diffuse += 1;
+                }
+                let u = [ctx.rng.next_f32(), ctx.rng.next_f32(), ctx.rng.next_f32()];
+                let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { break };
+                if !continue_path(&mut st, (depth, hit.p, hit.ng), (bs.wi, bs.weight, bs.pdf_w, bs.is_delta), ctx) {
+                    break;
+                }
+                continue;
+            };
+            st.diffuse += 1;
+            let mix = DefensiveMixture::new(m, &sp, wo, &g.tables, g.frame, self.weights);
+            let n = g.n as f32;
+            l += st.beta * direct::sample_light_mis(world, &sp, m, wo, &mut ctx.rng, |wi| n * mix.pdf_w(wi));
+            if g.n == 1 {
+                let Some(ms) = mix.sample(&mut ctx.rng) else { break };
+                if !continue_path(&mut st, (depth, hit.p, hit.ng), (ms.wi, ms.weight, ms.pdf_w, false), ctx) {
+                    break;
+                }
+                continue;
+            }
+            // splitting: n independent continuations, each with weight 1/n
+            for _ in 0..g.n {
+                let Some(ms) = mix.sample(&mut ctx.rng) else { continue };
+                let mut b = st;
+                if continue_path(
+                    &mut b,
+                    (depth, hit.p, hit.ng),
+                    (ms.wi, ms.weight * (1.0 / n), n * ms.pdf_w, false),
+                    ctx,
+                ) {
+                    l += self.trace(world, b, ctx);
+                }
+            }
+            break;
+        }
+        l
+    }
+}
+
+/// Applies a sampled continuation `(wi, weight, pdf_w, is_delta)` at vertex `(index, p, ng)`:
+/// throughput, `pt`'s roulette from [`RR_DEPTH`], the next ray. False when the path ends.
+fn continue_path(
+    st: &mut PathState,
+    (index, p, ng): (u32, Vec3, Vec3),
+    (wi, weight, pdf_w, is_delta): (Vec3, Rgb, f32, bool),
+    ctx: &mut Context,
+) -> bool {
+    st.beta *= weight;
+    if index + 1 >= RR_DEPTH {
+        let Some(b) = roulette(st.beta, q_max(st.beta), &mut ctx.rng) else { return false };
+        st.beta = b;
+    }
+    st.prev_delta = is_delta;
+    st.prev_pdf_w = pdf_w;
+    st.o = offset_origin(p, ng, wi);
+    st.d = wi;
+    true
+}
+
+impl Integrator for GuidedPathTracer {
+    fn radiance(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> Rgb {
+        let st =
+            PathState { o: origin, d: dir, beta: Rgb::ONE, vertex: 0, diffuse: 0, prev_delta: true, prev_pdf_w: 0.0 };
+        self.trace(world, st, ctx)
+    }
+
+    fn stats(&self, _: &Profile) -> serde_json::Value {
+        let q = self.counters.queries.load(Relaxed).max(1) as f64;
+        serde_json::json!({
+            "guide": {
+                "fraction_bsdf": self.weights.bsdf,
+                "depth": self.guide_depth,
+                "split_s0": self.split,
+                "lookups": self.counters.queries.load(Relaxed),
+                "fraction_inside_clusters": self.counters.inside.load(Relaxed) as f64 / q,
+                "mean_continuations_per_lookup": self.counters.samples.load(Relaxed) as f64 / q,
+                "creating_cdfs_s": self.counters.cdf_ns.load(Relaxed) as f64 * 1e-9,
+                "tables_built": self.counters.tables_built.load(Relaxed),
+                "table_cache_hits": self.counters.cache_hits.load(Relaxed),
+            },
+            "preprocess": self.cf.stats,
+            "options": self.cf.opts,
+        })
+    }
+}
