@@ -125,7 +125,11 @@ fn bench_cmd(a: &forecast::cli::BenchArgs) -> Result<(), String> {
     outln!("shadow Mrays/s        {:.2}", r.shadow_mrays)?;
     outln!(
         "pt samples/s          {:.0}  ({}x{}, {:.2} closest + {:.2} shadow rays/sample)",
-        r.pt_samples_per_s, a.resolution.0, a.resolution.1, r.rays_per_sample.0, r.rays_per_sample.1
+        r.pt_samples_per_s,
+        a.resolution.0,
+        a.resolution.1,
+        r.rays_per_sample.0,
+        r.rays_per_sample.1
     )?;
     Ok(())
 }

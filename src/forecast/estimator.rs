@@ -19,6 +19,7 @@ use super::direction_table::{ForecastTables, TableMode};
 use super::forecast_map::{search_radius, ForecastMaps};
 use crate::bsdf::{self, Mode};
 use crate::math::{luminance, Frame, Rgb, Vec3};
+use crate::profile::{Phase, Stopwatch};
 use crate::scene::Material;
 use crate::transport::context::{Context, ShadingQuery};
 use std::collections::HashMap;
@@ -328,11 +329,13 @@ impl CausticForecast {
         let cache = cache.filter(|_| cacheable);
         // cached tables live in the frame of the geometric normal (equal to ns there)
         let frame = if cache.is_some() { Frame::from_normal(ng) } else { Frame::from_normal(ns) };
+        let t_table = Stopwatch::start();
         let found: CacheEntry = match cache {
             _ if self.radius <= 0.0 || q.depth >= self.opts.table_depth => None,
             Some(cache) => self.cached_tables(cache, (sp.p, ng), ctx, counters),
             None => self.point_tables(q, ng, &frame, ctx, counters),
         };
+        ctx.profile.record(Phase::CfTable, t_table);
         let Some((c, tables)) = found else {
             // outside valid clusters: one BSDF (cosine for Lambert) sample
             counters.samples.fetch_add(1, Relaxed);
