@@ -78,6 +78,20 @@ fn dual_defensive_table_agrees_with_pt() {
 }
 
 #[test]
+fn full_gather_agrees_with_pt() {
+    let mut o = opts();
+    o.iws.vpl_select = forecast::integrators::iws::VplSelect::All;
+    agrees_with_pt(&o, "iws-cf --vpl-select all");
+}
+
+#[test]
+fn ris_one_survivor_many_candidates_agrees_with_pt() {
+    let mut o = opts();
+    (o.iws.ris_candidates, o.iws.ris_survivors) = (64, 1);
+    agrees_with_pt(&o, "iws-cf RIS M=64 K=1");
+}
+
+#[test]
 fn kmeans_agrees_with_pt() {
     let mut o = opts();
     o.cf.clustering = ClusteringMethod::KMeans;
