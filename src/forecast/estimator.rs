@@ -115,6 +115,13 @@ pub struct PreprocessStats {
     pub radius: f32,
     /// Fraction of light paths launched by targeted shooting that left a caustic point.
     pub yield_per_path: f64,
+    /// Forecast photons asked for (see `photon_rule`).
+    pub photons_requested: u64,
+    /// Why that count: `cli`, `scene` / `default` (no budget), or `budget` (5% of `--time`
+    /// from a pilot run, capped by the scene's count).
+    pub photon_rule: String,
+    /// Pilot run: preprocess seconds per stored photon (0 without a pilot).
+    pub pilot_s_per_photon: f64,
 }
 
 /// The CF product broadcast from rank 0.
