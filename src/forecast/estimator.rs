@@ -86,7 +86,7 @@ impl Default for ForecastOptions {
             table: TableKind::Dual,
             photon_weight: PhotonWeight::Paper,
             s0: 4,
-            cache_cell: 0.5,
+            cache_cell: 1.0,
             table_depth: 1,
         }
     }

@@ -63,7 +63,7 @@ pub struct CfArgs {
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
     pub split: u32,
     /// iws-cf: table-cache cell edge as a fraction of the search radius (0 = build per point).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 1.0)]
     pub table_cache: f32,
     /// iws-cf: use the photon tables at diffuse depths below this (deeper: one BSDF sample).
     #[arg(long, default_value_t = 1)]
