@@ -166,7 +166,7 @@ pub fn preprocess_forecast(world: &World, args: &MethodArgs, seed: u64) -> Caust
         (Some(n), _) => (n, "cli", 0.0),
         (None, Some(t)) if t.is_finite() && t > 0.0 && cap > PILOT_PHOTONS => {
             let t0 = Instant::now();
-            let pilot = build_forecast(world, PILOT_PHOTONS, args.cf.options(), seed ^ 0x5049_4c4f_54);
+            let pilot = build_forecast(world, PILOT_PHOTONS, args.cf.options(), seed ^ 0x0050_494c_4f54);
             let cost = t0.elapsed().as_secs_f64() / pilot.stats.stored.max(1) as f64;
             let want = (PREPROCESS_SHARE * t / cost.max(1e-12)).max(MIN_BUDGET_PHOTONS as f64);
             ((want as u64).min(cap), "budget", cost)
