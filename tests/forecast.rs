@@ -92,6 +92,13 @@ fn ris_one_survivor_many_candidates_agrees_with_pt() {
 }
 
 #[test]
+fn mixture_table_agrees_with_pt() {
+    let mut o = opts();
+    o.cf.table = TableKind::Mixture;
+    agrees_with_pt(&o, "iws-cf mixture");
+}
+
+#[test]
 fn kmeans_agrees_with_pt() {
     let mut o = opts();
     o.cf.clustering = ClusteringMethod::KMeans;

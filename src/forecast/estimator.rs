@@ -16,6 +16,7 @@ use super::caustic_point::CausticPoint;
 use super::cluster::{cluster_points, Clustering, ClusteringMethod};
 use super::cluster_map::{ClusterMap, DEFAULT_REPRESENTATIVES};
 use super::direction_table::{ForecastTables, TableMode};
+use super::mixture::{DefensiveMixture, MixtureWeights};
 use super::forecast_map::{search_radius, ForecastMaps};
 use crate::bsdf::{self, Mode};
 use crate::math::{luminance, Frame, Rgb, Vec3};
@@ -47,7 +48,14 @@ pub enum TableKind {
     DualDefensive,
     /// One defensive table (α = 0.1), for the ablation.
     Single,
+    /// The dual table's T1 and T2 inside a defensive mixture with the BSDF
+    /// (`forecast::mixture`, one-sample MIS with the mixture pdf, weights [`MIXTURE_WEIGHTS`]):
+    /// no sample is worth more than `1/c_B` BSDF samples.
+    Mixture,
 }
+
+/// `(c_B, c_1, c_2)` of `--table mixture`.
+pub const MIXTURE_WEIGHTS: (f32, f32, f32) = (0.2, 0.4, 0.4);
 
 /// CF parameters (defaults: spec §5).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
@@ -253,7 +261,7 @@ impl CausticForecast {
             (local.z > 0.0).then(|| (local, weight(cp, local)))
         });
         let mode = match self.opts.table {
-            TableKind::Dual => TableMode::Dual,
+            TableKind::Dual | TableKind::Mixture => TableMode::Dual,
             TableKind::DualDefensive => TableMode::DualDefensive { alpha: 0.25 },
             TableKind::Single => TableMode::Single { alpha: 0.1 },
         };
@@ -355,6 +363,21 @@ impl CausticForecast {
         };
         counters.inside.fetch_add(1, Relaxed);
         let s = self.split_count(self.clustering.clusters[c].rank, q.depth);
+        if self.opts.table == TableKind::Mixture {
+            // as many samples as the dual table would draw, each from the mixture, averaged
+            let (cb, c1, c2) = MIXTURE_WEIGHTS;
+            let w = MixtureWeights::new(cb, c1, c2).expect("constant weights are valid");
+            let mix = DefensiveMixture::new(m, sp, wo, &tables, frame, w);
+            let n = tables.n_samples(s).max(1);
+            counters.samples.fetch_add(n as u64, Relaxed);
+            let mut sum = Rgb::ZERO;
+            for _ in 0..n {
+                if let Some(ms) = mix.sample(&mut ctx.rng).filter(|ms| ms.pdf_w > 0.0) {
+                    sum += g(ms.wi, ctx) / ms.pdf_w;
+                }
+            }
+            return sum / n as f32;
+        }
         let mut samples = Vec::with_capacity(2 * s);
         tables.for_each_sample(s, &mut ctx.rng, |ts| samples.push(ts));
         counters.samples.fetch_add(samples.len() as u64, Relaxed);

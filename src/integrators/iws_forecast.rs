@@ -54,6 +54,7 @@ pub struct CfArgs {
     /// iws-cf: dual table (BAJ08) or one defensive table (ablation).
     #[arg(long, default_value = "dual", value_parser = choice(&[
         ("dual", TableKind::Dual), ("dual-defensive", TableKind::DualDefensive), ("single", TableKind::Single),
+        ("mixture", TableKind::Mixture),
     ]))]
     pub table: TableKind,
     /// iws-cf: photon weight in the table: lum(Φ)·f·cos (paper) or lum(Φ)·f (flux).
