@@ -11,6 +11,7 @@ use common::{global_z, max_z, render_passes as render, scaled};
 use forecast::accel::World;
 use forecast::forecast::cluster::ClusteringMethod;
 use forecast::forecast::estimator::{CausticForecast, TableKind};
+use forecast::integrators::iws::VplSelect;
 use forecast::integrators::{Integrator, Method, MethodArgs};
 use forecast::render::film::Film;
 use forecast::stats::z_test_threshold;
@@ -119,8 +120,17 @@ fn single_cluster_and_max_rank_zero_agree_with_pt() {
 
 #[test]
 fn glass_furnace_is_exactly_one() {
+    let mut o = opts();
+    for (select, table) in [(VplSelect::Ris, TableKind::Dual), (VplSelect::All, TableKind::Mixture)] {
+        (o.iws.vpl_select, o.cf.table) = (select, table);
+        glass_furnace(&o);
+    }
+}
+
+/// The white ball in the glass furnace renders 1 everywhere (per-pixel z-test) with options `o`.
+fn glass_furnace(o: &MethodArgs) {
     let w = world("tests/scenes/glass-furnace-white.toml");
-    let (mut cf, product) = iws_cf(&w, &opts());
+    let (mut cf, product) = iws_cf(&w, o);
     assert!(product.stats.stored > 1000, "the white ball must receive caustic light");
     let img = render(&w, cf.as_mut(), 16, 16, 512, 5);
     let (m, v) = (img.mean(), img.variance_of_mean());
@@ -136,7 +146,7 @@ fn glass_furnace_is_exactly_one() {
             }
         }
     }
-    eprintln!("glass furnace: max|z| = {zmax:.2}, threshold {thr:.2}");
+    eprintln!("glass furnace {:?}/{:?}: max|z| = {zmax:.2}, threshold {thr:.2}", o.iws.vpl_select, o.cf.table);
     assert!(zmax < thr, "glass furnace: max|z| {zmax} ≥ {thr}");
     let mean: f64 = m.iter().map(|p| p[0] as f64).sum::<f64>() / m.len() as f64;
     assert!((mean - 1.0).abs() < 0.01, "furnace mean {mean}");
