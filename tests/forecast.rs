@@ -100,6 +100,13 @@ fn mixture_table_agrees_with_pt() {
 }
 
 #[test]
+fn energy_split_rule_agrees_with_pt() {
+    let mut o = opts();
+    o.cf.split_rule = forecast::forecast::estimator::SplitRule::Energy;
+    agrees_with_pt(&o, "iws-cf split-rule energy");
+}
+
+#[test]
 fn kmeans_agrees_with_pt() {
     let mut o = opts();
     o.cf.clustering = ClusteringMethod::KMeans;

@@ -38,6 +38,17 @@ pub enum PhotonWeight {
     Flux,
 }
 
+/// Splitting rule at diffuse depth 0 (`--split-rule`); 1 sample per table deeper. Both are
+/// functions of the point's cluster and the depth only, so the estimator stays unbiased.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
+pub enum SplitRule {
+    /// The paper's rank rule `S = max(1, S0 >> rank)`.
+    #[default]
+    Rank,
+    /// From the cluster's measured energy density: `S = clamp(⌈S0·ρ_c/ρ_max⌉, 1, S0)`.
+    Energy,
+}
+
 /// Table layout (`--table`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
 pub enum TableKind {
@@ -74,6 +85,8 @@ pub struct ForecastOptions {
     pub photon_weight: PhotonWeight,
     /// Splitting at diffuse depth 0 for rank 0 (S = max(1, S0 >> rank)).
     pub s0: u32,
+    /// Splitting rule.
+    pub split_rule: SplitRule,
     /// Table cache cell edge as a fraction of the search radius r (0 disables the cache).
     /// Lambertian, flat shading points reuse the tables of their cell: a deterministic function
     /// of x, so still unbiased (spec §9 "caching tables per cluster cell").
@@ -94,6 +107,7 @@ impl Default for ForecastOptions {
             table: TableKind::Dual,
             photon_weight: PhotonWeight::Paper,
             s0: 4,
+            split_rule: SplitRule::Rank,
             cache_cell: 1.0,
             table_depth: 1,
         }
@@ -244,6 +258,21 @@ impl CausticForecast {
         }
     }
 
+    /// Splitting factor of cluster `c` at depth `depth` under `opts.split_rule`.
+    pub fn split_for(&self, c: usize, depth: u32) -> usize {
+        let cl = &self.clustering.clusters[c];
+        match self.opts.split_rule {
+            SplitRule::Rank => self.split_count(cl.rank, depth),
+            SplitRule::Energy if depth == 0 => {
+                let max = self.clustering.clusters.iter().map(|k| k.density).fold(0.0f32, f32::max);
+                let s0 = self.opts.s0.max(1) as f32;
+                let s = if max > 0.0 && cl.density.is_finite() { (s0 * cl.density / max).ceil() } else { 1.0 };
+                s.clamp(1.0, s0) as usize
+            }
+            SplitRule::Energy => 1,
+        }
+    }
+
     /// Gathers forecasters around `at` in cluster `c` (scratch `buf`) and builds the tables in
     /// `frame`.
     fn build_tables(
@@ -362,7 +391,7 @@ impl CausticForecast {
             return g(bs.wi, ctx) / bs.pdf_w;
         };
         counters.inside.fetch_add(1, Relaxed);
-        let s = self.split_count(self.clustering.clusters[c].rank, q.depth);
+        let s = self.split_for(c, q.depth);
         if self.opts.table == TableKind::Mixture {
             // as many samples as the dual table would draw, each from the mixture, averaged
             let (cb, c1, c2) = MIXTURE_WEIGHTS;

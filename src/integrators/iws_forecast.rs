@@ -19,7 +19,8 @@ use crate::bsdf;
 use crate::forecast::caustic_point::CausticPoint;
 use crate::forecast::cluster::ClusteringMethod;
 use crate::forecast::estimator::{
-    CausticForecast, ForecastCounters, ForecastOptions, PhotonWeight, PreprocessStats, TableCache, TableKind,
+    CausticForecast, ForecastCounters, ForecastOptions, PhotonWeight, PreprocessStats, SplitRule, TableCache,
+    TableKind,
 };
 use crate::math::{Rgb, Vec3};
 use crate::sampling::rng::stream;
@@ -63,6 +64,9 @@ pub struct CfArgs {
     /// iws-cf: splitting factor S0 at diffuse depth 0 for rank 0 (S = max(1, S0 >> rank); 1 at depth >= 1).
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
     pub split: u32,
+    /// iws-cf: splitting rule at depth 0: the paper's rank rule or the cluster's energy density.
+    #[arg(long, default_value = "rank", value_parser = choice(&[("rank", SplitRule::Rank), ("energy", SplitRule::Energy)]))]
+    pub split_rule: SplitRule,
     /// iws-cf: table-cache cell edge as a fraction of the search radius (0 = build per point).
     #[arg(long, default_value_t = 1.0)]
     pub table_cache: f32,
@@ -101,6 +105,7 @@ impl CfArgs {
             table: self.table,
             photon_weight: self.photon_weight,
             s0: self.split,
+            split_rule: self.split_rule,
             cache_cell: self.table_cache.max(0.0),
             table_depth: self.table_depth,
         }
