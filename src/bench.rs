@@ -117,3 +117,25 @@ pub fn run(world: &World, resolution: (u32, u32), repeats: usize) -> Result<Benc
         threads: rayon::current_num_threads(),
     })
 }
+
+/// The per-phase profile of `method` (default flags, the scene's caps) over `spp` passes at
+/// `resolution` on the current rayon pool, preprocess excluded (`forecast bench --method M`).
+pub fn profile_method(
+    world: &World,
+    method: Method,
+    (w, h): (u32, u32),
+    spp: u64,
+) -> Result<crate::profile::PhaseProfile, String> {
+    let mut args = MethodArgs::default();
+    args.pt.max_depth = Some(world.scene.render.max_depth);
+    let product = method.preprocess(world, &args, 7)?;
+    let mut integ = method.build(world, &args, &product)?;
+    let camera = world.scene.camera.with_resolution(w, h);
+    let mut profile = crate::profile::Profile::default();
+    for pass in 0..spp.max(1) {
+        integ.begin_pass(world, 7, pass);
+        let mut film = Film::new(w as usize, h as usize);
+        profile.add(&render_pass(world, integ.as_ref(), &camera, 7, pass, &mut film).profile);
+    }
+    Ok(profile.per_sample())
+}

@@ -176,6 +176,12 @@ pub struct BenchArgs {
     /// Worker threads.
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Also profile this method per phase (`--spp` passes at `--resolution`, default flags).
+    #[arg(long, value_enum)]
+    pub method: Option<Method>,
+    /// Passes for the `--method` profile.
+    #[arg(long, default_value_t = 2)]
+    pub spp: u64,
 }
 
 fn parse_secs(s: &str) -> Result<f64, String> {

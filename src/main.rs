@@ -177,6 +177,11 @@ fn bench_cmd(a: &forecast::cli::BenchArgs) -> Result<(), String> {
         r.rays_per_sample.0,
         r.rays_per_sample.1
     )?;
+    if let Some(m) = a.method {
+        let p = pool.install(|| bench::profile_method(&world, m, a.resolution, a.spp))?;
+        outln!("{} per-phase profile (CPU µs per sample, {} samples):", m.name(), p.samples)?;
+        outln!("{}", serde_json::to_string_pretty(&p).map_err(|e| e.to_string())?)?;
+    }
     Ok(())
 }
 

@@ -100,6 +100,7 @@ impl RenderJob {
         let mut args = self.args.clone();
         args.pt.max_depth = args.pt.max_depth.or(Some(r.max_depth));
         let time = self.time.or(if self.spp.is_some() { None } else { r.time });
+        args.cf.time_budget_s = time; // the CF preprocess scales its photon count to the budget
         let spp = if time.is_some() { None } else { Some(self.spp.or(r.spp).unwrap_or(16)) };
         let resolution = self.resolution.unwrap_or((scene.camera.width, scene.camera.height));
         let plan = Plan { method, seed: self.seed.unwrap_or(r.seed), args, time, spp, resolution };

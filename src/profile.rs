@@ -17,6 +17,15 @@ pub enum Phase {
     Gather,
     /// The caustic term `Ĺ_c` (nested recursion included).
     Caustics,
+    /// The bias-compensation ray (BSDF sample and intersection; the recursion at its end is
+    /// counted in its own phases).
+    Compensation,
+    /// CF direction-table lookup and build (cache included).
+    CfTable,
+    /// CF / BSDF caustic chains: the Dirac chain and the `L̂` at its end (nested, inclusive).
+    CfChain,
+    /// Photon-map density queries (`iws-pm`).
+    PhotonQuery,
 }
 
 /// Counters and phase times of one worker (or their sum).
@@ -32,6 +41,20 @@ pub struct Profile {
     pub gather_ns: u64,
     /// Nanoseconds in [`Phase::Caustics`].
     pub caustics_ns: u64,
+    /// Nanoseconds in [`Phase::Compensation`].
+    pub compensation_ns: u64,
+    /// Nanoseconds in [`Phase::CfTable`].
+    pub cf_table_ns: u64,
+    /// Nanoseconds in [`Phase::CfChain`].
+    pub cf_chain_ns: u64,
+    /// Nanoseconds in [`Phase::PhotonQuery`].
+    pub photon_query_ns: u64,
+    /// Non-specular vertices at which point lights were gathered.
+    pub gather_vertices: u64,
+    /// Point-light shadow rays traced by the gather.
+    pub gather_shadow_rays: u64,
+    /// CF chains followed (directions that reached a Dirac surface).
+    pub cf_chains: u64,
 }
 
 /// The start of a timed phase.
@@ -51,10 +74,18 @@ impl Profile {
     #[inline]
     pub fn record(&mut self, phase: Phase, since: Stopwatch) {
         let ns = since.0.elapsed().as_nanos() as u64;
+        *self.slot(phase) += ns;
+    }
+
+    fn slot(&mut self, phase: Phase) -> &mut u64 {
         match phase {
-            Phase::Radiance => self.radiance_ns += ns,
-            Phase::Gather => self.gather_ns += ns,
-            Phase::Caustics => self.caustics_ns += ns,
+            Phase::Radiance => &mut self.radiance_ns,
+            Phase::Gather => &mut self.gather_ns,
+            Phase::Caustics => &mut self.caustics_ns,
+            Phase::Compensation => &mut self.compensation_ns,
+            Phase::CfTable => &mut self.cf_table_ns,
+            Phase::CfChain => &mut self.cf_chain_ns,
+            Phase::PhotonQuery => &mut self.photon_query_ns,
         }
     }
 
@@ -65,15 +96,75 @@ impl Profile {
         self.radiance_ns += o.radiance_ns;
         self.gather_ns += o.gather_ns;
         self.caustics_ns += o.caustics_ns;
+        self.compensation_ns += o.compensation_ns;
+        self.cf_table_ns += o.cf_table_ns;
+        self.cf_chain_ns += o.cf_chain_ns;
+        self.photon_query_ns += o.photon_query_ns;
+        self.gather_vertices += o.gather_vertices;
+        self.gather_shadow_rays += o.gather_shadow_rays;
+        self.cf_chains += o.cf_chains;
     }
 
     /// Seconds in `phase`.
     pub fn secs(&self, phase: Phase) -> f64 {
-        let ns = match phase {
-            Phase::Radiance => self.radiance_ns,
-            Phase::Gather => self.gather_ns,
-            Phase::Caustics => self.caustics_ns,
-        };
-        ns as f64 * 1e-9
+        let mut c = *self;
+        *c.slot(phase) as f64 * 1e-9
     }
+
+    /// The per-phase profile per camera sample, for the report and `forecast bench`.
+    pub fn per_sample(&self) -> PhaseProfile {
+        let n = self.samples.max(1) as f64;
+        let us = |ns: u64| ns as f64 * 1e-3 / n;
+        let exclusive = self.gather_ns + self.compensation_ns + self.cf_table_ns + self.photon_query_ns;
+        PhaseProfile {
+            samples: self.samples,
+            total_us: us(self.radiance_ns),
+            gather_us: us(self.gather_ns),
+            compensation_ray_us: us(self.compensation_ns),
+            cf_table_us: us(self.cf_table_ns),
+            photon_query_us: us(self.photon_query_ns),
+            caustics_inclusive_us: us(self.caustics_ns),
+            cf_chain_inclusive_us: us(self.cf_chain_ns),
+            camera_and_rest_us: us(self.radiance_ns.saturating_sub(exclusive)),
+            gather_vertices_per_sample: self.gather_vertices as f64 / n,
+            shadow_rays_per_gather_vertex: self.gather_shadow_rays as f64 / self.gather_vertices.max(1) as f64,
+            compensation_rays_per_sample: self.compensation_rays as f64 / n,
+            cf_chains_per_sample: self.cf_chains as f64 / n,
+        }
+    }
+}
+
+/// CPU microseconds per camera sample in each phase (summed over threads, divided by samples).
+/// `gather`, `compensation_ray`, `cf_table` and `photon_query` are exclusive leaf phases (at every
+/// depth); `caustics_inclusive` and `cf_chain_inclusive` contain the nested `L̂` work (their own
+/// gathers and tables too); `camera_and_rest` = total − the exclusive phases (camera rays, Dirac
+/// chains, BSDF sampling, roulette, recursion overhead).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct PhaseProfile {
+    /// Camera samples.
+    pub samples: u64,
+    /// Whole `radiance` call.
+    pub total_us: f64,
+    /// Point-light gather (target evaluation, selection and shadow rays).
+    pub gather_us: f64,
+    /// Compensation rays (sample + intersect).
+    pub compensation_ray_us: f64,
+    /// CF table lookup and build.
+    pub cf_table_us: f64,
+    /// Photon-map queries.
+    pub photon_query_us: f64,
+    /// `Ĺ_c` including its nested `L̂`.
+    pub caustics_inclusive_us: f64,
+    /// CF / BSDF chains and their `L̂`.
+    pub cf_chain_inclusive_us: f64,
+    /// Total minus the exclusive phases.
+    pub camera_and_rest_us: f64,
+    /// Gather vertices per sample.
+    pub gather_vertices_per_sample: f64,
+    /// Shadow rays per gather vertex.
+    pub shadow_rays_per_gather_vertex: f64,
+    /// Compensation rays per sample.
+    pub compensation_rays_per_sample: f64,
+    /// CF chains per sample.
+    pub cf_chains_per_sample: f64,
 }

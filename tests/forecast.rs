@@ -11,6 +11,7 @@ use common::{global_z, max_z, render_passes as render, scaled};
 use forecast::accel::World;
 use forecast::forecast::cluster::ClusteringMethod;
 use forecast::forecast::estimator::{CausticForecast, TableKind};
+use forecast::integrators::iws::VplSelect;
 use forecast::integrators::{Integrator, Method, MethodArgs};
 use forecast::render::film::Film;
 use forecast::stats::z_test_threshold;
@@ -78,6 +79,34 @@ fn dual_defensive_table_agrees_with_pt() {
 }
 
 #[test]
+fn full_gather_agrees_with_pt() {
+    let mut o = opts();
+    o.iws.vpl_select = forecast::integrators::iws::VplSelect::All;
+    agrees_with_pt(&o, "iws-cf --vpl-select all");
+}
+
+#[test]
+fn ris_one_survivor_many_candidates_agrees_with_pt() {
+    let mut o = opts();
+    (o.iws.ris_candidates, o.iws.ris_survivors) = (64, 1);
+    agrees_with_pt(&o, "iws-cf RIS M=64 K=1");
+}
+
+#[test]
+fn mixture_table_agrees_with_pt() {
+    let mut o = opts();
+    o.cf.table = TableKind::Mixture;
+    agrees_with_pt(&o, "iws-cf mixture");
+}
+
+#[test]
+fn energy_split_rule_agrees_with_pt() {
+    let mut o = opts();
+    o.cf.split_rule = forecast::forecast::estimator::SplitRule::Energy;
+    agrees_with_pt(&o, "iws-cf split-rule energy");
+}
+
+#[test]
 fn kmeans_agrees_with_pt() {
     let mut o = opts();
     o.cf.clustering = ClusteringMethod::KMeans;
@@ -98,8 +127,17 @@ fn single_cluster_and_max_rank_zero_agree_with_pt() {
 
 #[test]
 fn glass_furnace_is_exactly_one() {
+    let mut o = opts();
+    for (select, table) in [(VplSelect::Ris, TableKind::Dual), (VplSelect::All, TableKind::Mixture)] {
+        (o.iws.vpl_select, o.cf.table) = (select, table);
+        glass_furnace(&o);
+    }
+}
+
+/// The white ball in the glass furnace renders 1 everywhere (per-pixel z-test) with options `o`.
+fn glass_furnace(o: &MethodArgs) {
     let w = world("tests/scenes/glass-furnace-white.toml");
-    let (mut cf, product) = iws_cf(&w, &opts());
+    let (mut cf, product) = iws_cf(&w, o);
     assert!(product.stats.stored > 1000, "the white ball must receive caustic light");
     let img = render(&w, cf.as_mut(), 16, 16, 512, 5);
     let (m, v) = (img.mean(), img.variance_of_mean());
@@ -115,7 +153,7 @@ fn glass_furnace_is_exactly_one() {
             }
         }
     }
-    eprintln!("glass furnace: max|z| = {zmax:.2}, threshold {thr:.2}");
+    eprintln!("glass furnace {:?}/{:?}: max|z| = {zmax:.2}, threshold {thr:.2}", o.iws.vpl_select, o.cf.table);
     assert!(zmax < thr, "glass furnace: max|z| {zmax} ≥ {thr}");
     let mean: f64 = m.iter().map(|p| p[0] as f64).sum::<f64>() / m.len() as f64;
     assert!((mean - 1.0).abs() < 0.01, "furnace mean {mean}");

@@ -54,7 +54,8 @@ fn pooled(passes: &[Film], (x0, y0, w, h): (usize, usize, usize, usize), ch: usi
 /// Renders `spp` passes of `method` at 32×32, each into its own film, as the pipeline would
 /// (preprocess, encode, build from the bytes; passes keyed by (seed, pass)).
 fn render(scene: &str, method: Method, spp: u64, seed: u64) -> Vec<Film> {
-    let world = World::build(forecast::scene::load(&root().join("tests/scenes").join(scene)).unwrap()).expect("BVH builds");
+    let world =
+        World::build(forecast::scene::load(&root().join("tests/scenes").join(scene)).unwrap()).expect("BVH builds");
     let mut args = MethodArgs::default();
     args.pt.max_depth = Some(world.scene.render.max_depth);
     // no caustic paths exist here: keep the photon searches (PATH_FACTOR × target paths) short

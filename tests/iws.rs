@@ -9,7 +9,10 @@
 mod common;
 use common::{max_z, render_passes as render, scaled};
 use forecast::accel::World;
+use forecast::bsdf::ShadingPoint;
 use forecast::integrators::iws::Iws;
+use forecast::integrators::iws::VplSelect;
+use forecast::integrators::ShadingQuery;
 use forecast::integrators::{BsdfCaustics, Context, Integrator, Method, MethodArgs, NoCaustics};
 use forecast::math::{Rgb, Vec3};
 use forecast::profile::Profile;
@@ -109,16 +112,21 @@ fn pt(world: &World, w: u32, h: u32, spp: u64) -> Film {
 #[test]
 fn iws_agrees_with_pt_without_dirac_surfaces() {
     let w = world("tests/scenes/cornell-nodirac.toml");
-    let reference = pt(&w, 24, 24, 2048);
-    let mut iws = Iws::new(&w, &params(64, None), Box::new(NoCaustics));
-    let img = render(&w, &mut iws, 24, 24, 256, 3);
-    let (z, n) = max_z(&img, &reference, None);
-    let thr = z_test_threshold(1e-3, n);
-    eprintln!("iws vs pt (no Dirac): max|z| = {z:.2}, threshold {thr:.2} over {n} tests");
-    assert!(z < thr, "iws disagrees with pt: max|z| {z} ≥ {thr}");
-    // negative control: a 3% darker image is rejected by the same test
-    let (z3, _) = max_z(&scaled(&img, 0.97), &reference, None);
-    assert!(z3 > thr, "the agreement test cannot detect a 3% error (max|z| {z3})");
+    let reference = pt(&w, 24, 24, 8192);
+    // RIS (a few shadow rays) has more variance per sample than the full gather: more passes
+    for (select, spp) in [(VplSelect::All, 256), (VplSelect::Ris, 4096)] {
+        let mut a = params(64, None);
+        a.iws.vpl_select = select;
+        let mut iws = Iws::new(&w, &a, Box::new(NoCaustics));
+        let img = render(&w, &mut iws, 24, 24, spp, 3);
+        let (z, n) = max_z(&img, &reference, None);
+        let thr = z_test_threshold(1e-3, n);
+        eprintln!("iws {select:?} vs pt (no Dirac): max|z| = {z:.2}, threshold {thr:.2} over {n} tests");
+        assert!(z < thr, "iws {select:?} disagrees with pt: max|z| {z} ≥ {thr}");
+        // negative control: a 3% darker image is rejected by the same test
+        let (z3, _) = max_z(&scaled(&img, 0.97), &reference, None);
+        assert!(z3 > thr, "{select:?}: the agreement test cannot detect a 3% error (max|z| {z3})");
+    }
 }
 
 #[test]
@@ -208,5 +216,94 @@ fn pm_converges_with_photon_count_and_bias_stays_visible() {
             assert!(se > excess * noise, "bias not visible above the noise at 200k photons: {se} ≤ {excess}·{noise}");
         }
         last = rmse;
+    }
+}
+
+/// Per shading point: (full gather, mean and standard error of `n` gather estimates of `iws`).
+fn gather_stats(w: &World, full: &mut Iws, est: &mut Iws, n: u64) -> Vec<(f64, f64, f64)> {
+    full.begin_pass(w, 5, 0);
+    est.begin_pass(w, 5, 0); // the same seed and pass: the same point lights
+    let cam = w.scene.camera.with_resolution(8, 8);
+    let mut out = Vec::new();
+    for (i, (px, py)) in (0..8).flat_map(|y| (0..8).map(move |x| (x, y))).enumerate() {
+        let dir = cam.direction(px as f32 + 0.5, py as f32 + 0.5);
+        let Some(hit) = w.intersect(cam.position, dir, f32::INFINITY) else { continue };
+        let m = w.scene.material_of(hit.prim);
+        if m.is_dirac() || m.is_black() || w.scene.emitter_of(hit.prim) != forecast::scene::NO_EMITTER {
+            continue;
+        }
+        let x = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
+        let q = ShadingQuery { x: &x, m, wo: -dir, depth: 0 };
+        let mut ctx = Context::new(Rng::keyed(3, stream::MISC, 0, i as u64));
+        let exact = full.gather(w, &q, &mut ctx).y as f64; // depth 0: every VPL, deterministic
+        let (mut s1, mut s2) = (0.0f64, 0.0f64);
+        for _ in 0..n {
+            let v = est.gather(w, &q, &mut ctx).y as f64;
+            (s1, s2) = (s1 + v, s2 + v * v);
+        }
+        let mean = s1 / n as f64;
+        let var = (s2 / n as f64 - mean * mean).max(0.0) * n as f64 / (n - 1) as f64;
+        out.push((exact, mean, (var / n as f64).sqrt()));
+    }
+    out
+}
+
+/// RIS selection of the IWS gather equals the full gather in expectation at every shading point
+/// (z-test per point, Šidák α = 1e-3): all VPLs as candidates with K = 1 (the exact `p̂/Σp̂`
+/// selection) and the finite-M, shared-candidate default. Negative control: the same test
+/// rejects the full gather scaled by 0.97.
+#[test]
+fn ris_gather_equals_full_gather_in_expectation() {
+    let w = world("scenes/cornell-box.toml");
+    let mut a = params(64, None);
+    a.iws.vpl_select = VplSelect::All;
+    let mut full = Iws::new(&w, &a, Box::new(NoCaustics));
+    // M = 1 is a plain power-proportional pick: noisier, so more draws to resolve 3%
+    for (m, k, n) in [(0, 1, 4000), (8, 2, 4000), (1, 1, 40_000)] {
+        let mut r = params(64, None);
+        (r.iws.vpl_select, r.iws.ris_candidates, r.iws.ris_survivors) = (VplSelect::Ris, m, k);
+        let mut ris = Iws::new(&w, &r, Box::new(NoCaustics));
+        let st = gather_stats(&w, &mut full, &mut ris, n);
+        assert!(st.len() >= 20, "too few shading points ({})", st.len());
+        let thr = z_test_threshold(1e-3, st.len());
+        let z = |scale: f64| {
+            st.iter().filter(|s| s.2 > 0.0).map(|&(e, mu, se)| ((mu - scale * e) / se).abs()).fold(0.0, f64::max)
+        };
+        let (z1, z97) = (z(1.0), z(0.97));
+        eprintln!("RIS M={m} K={k}: max|z| = {z1:.2} (threshold {thr:.2}); vs 0.97×full {z97:.2}");
+        assert!(z1 < thr, "RIS M={m} K={k} differs from the full gather: max|z| {z1}");
+        assert!(z97 > thr, "RIS M={m} K={k}: the test cannot detect a 3% error (max|z| {z97})");
+        // points with zero variance must match exactly (e.g. unlit points)
+        for &(e, mu, se) in &st {
+            assert!(se > 0.0 || (mu - e).abs() <= 1e-4 * e.abs().max(1e-6), "zero-variance point: {mu} vs {e}");
+        }
+    }
+}
+
+#[test]
+fn furnaces_with_the_full_gather() {
+    // the default is RIS; the furnace tests above cover it. The full gather, one b each:
+    for (scene, o, expected) in [("tests/scenes/furnace-point.toml", Vec3::new(0.2, -0.1, 0.3), 1.0f32)] {
+        let w = world(scene);
+        let mut a = params(64, Some(SWEEP[1]));
+        a.iws.vpl_select = VplSelect::All;
+        let mut iws = Iws::new(&w, &a, Box::new(NoCaustics));
+        let (passes, per_pass) = (100u64, 300u64);
+        let mut means = Vec::new();
+        for pass in 0..passes {
+            iws.begin_pass(&w, 7, pass);
+            let mut sum = 0.0f64;
+            for i in 0..per_pass {
+                let mut ctx = Context::new(Rng::keyed(7, stream::MISC, pass, i));
+                let d = sample_uniform_sphere(ctx.rng.next_2d());
+                sum += (iws.radiance(&w, o, d, &mut ctx).y - expected) as f64;
+            }
+            means.push(sum / per_pass as f64);
+        }
+        let m = means.iter().sum::<f64>() / passes as f64;
+        let var = means.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (passes - 1) as f64;
+        let se = (var / passes as f64).sqrt();
+        eprintln!("{scene} full gather: mean error {m:.5} ± {se:.5}");
+        assert!(m.abs() < 5.0 * se + TRUNC_TOL, "{scene} full gather: error {m} > 5σ");
     }
 }

@@ -17,8 +17,10 @@ use super::cluster::{cluster_points, Clustering, ClusteringMethod};
 use super::cluster_map::{ClusterMap, DEFAULT_REPRESENTATIVES};
 use super::direction_table::{ForecastTables, TableMode};
 use super::forecast_map::{search_radius, ForecastMaps};
+use super::mixture::{DefensiveMixture, MixtureWeights};
 use crate::bsdf::{self, Mode};
 use crate::math::{luminance, Frame, Rgb, Vec3};
+use crate::profile::{Phase, Stopwatch};
 use crate::scene::Material;
 use crate::transport::context::{Context, ShadingQuery};
 use std::collections::HashMap;
@@ -36,6 +38,17 @@ pub enum PhotonWeight {
     Flux,
 }
 
+/// Splitting rule at diffuse depth 0 (`--split-rule`); 1 sample per table deeper. Both are
+/// functions of the point's cluster and the depth only, so the estimator stays unbiased.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
+pub enum SplitRule {
+    /// The paper's rank rule `S = max(1, S0 >> rank)`.
+    #[default]
+    Rank,
+    /// From the cluster's measured energy density: `S = clamp(⌈S0·ρ_c/ρ_max⌉, 1, S0)`.
+    Energy,
+}
+
 /// Table layout (`--table`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
 pub enum TableKind {
@@ -46,7 +59,14 @@ pub enum TableKind {
     DualDefensive,
     /// One defensive table (α = 0.1), for the ablation.
     Single,
+    /// The dual table's T1 and T2 inside a defensive mixture with the BSDF
+    /// (`forecast::mixture`, one-sample MIS with the mixture pdf, weights [`MIXTURE_WEIGHTS`]):
+    /// no sample is worth more than `1/c_B` BSDF samples.
+    Mixture,
 }
+
+/// `(c_B, c_1, c_2)` of `--table mixture`.
+pub const MIXTURE_WEIGHTS: (f32, f32, f32) = (0.2, 0.4, 0.4);
 
 /// CF parameters (defaults: spec §5).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
@@ -65,6 +85,8 @@ pub struct ForecastOptions {
     pub photon_weight: PhotonWeight,
     /// Splitting at diffuse depth 0 for rank 0 (S = max(1, S0 >> rank)).
     pub s0: u32,
+    /// Splitting rule.
+    pub split_rule: SplitRule,
     /// Table cache cell edge as a fraction of the search radius r (0 disables the cache).
     /// Lambertian, flat shading points reuse the tables of their cell: a deterministic function
     /// of x, so still unbiased (spec §9 "caching tables per cluster cell").
@@ -85,7 +107,8 @@ impl Default for ForecastOptions {
             table: TableKind::Dual,
             photon_weight: PhotonWeight::Paper,
             s0: 4,
-            cache_cell: 0.5,
+            split_rule: SplitRule::Rank,
+            cache_cell: 1.0,
             table_depth: 1,
         }
     }
@@ -114,6 +137,13 @@ pub struct PreprocessStats {
     pub radius: f32,
     /// Fraction of light paths launched by targeted shooting that left a caustic point.
     pub yield_per_path: f64,
+    /// Forecast photons asked for (see `photon_rule`).
+    pub photons_requested: u64,
+    /// Why that count: `cli`, `scene` / `default` (no budget), or `budget` (5% of `--time`
+    /// from a pilot run, capped by the scene's count).
+    pub photon_rule: String,
+    /// Pilot run: preprocess seconds per stored photon (0 without a pilot).
+    pub pilot_s_per_photon: f64,
 }
 
 /// The CF product broadcast from rank 0.
@@ -228,6 +258,21 @@ impl CausticForecast {
         }
     }
 
+    /// Splitting factor of cluster `c` at depth `depth` under `opts.split_rule`.
+    pub fn split_for(&self, c: usize, depth: u32) -> usize {
+        let cl = &self.clustering.clusters[c];
+        match self.opts.split_rule {
+            SplitRule::Rank => self.split_count(cl.rank, depth),
+            SplitRule::Energy if depth == 0 => {
+                let max = self.clustering.clusters.iter().map(|k| k.density).fold(0.0f32, f32::max);
+                let s0 = self.opts.s0.max(1) as f32;
+                let s = if max > 0.0 && cl.density.is_finite() { (s0 * cl.density / max).ceil() } else { 1.0 };
+                s.clamp(1.0, s0) as usize
+            }
+            SplitRule::Energy => 1,
+        }
+    }
+
     /// Gathers forecasters around `at` in cluster `c` (scratch `buf`) and builds the tables in
     /// `frame`.
     fn build_tables(
@@ -245,7 +290,7 @@ impl CausticForecast {
             (local.z > 0.0).then(|| (local, weight(cp, local)))
         });
         let mode = match self.opts.table {
-            TableKind::Dual => TableMode::Dual,
+            TableKind::Dual | TableKind::Mixture => TableMode::Dual,
             TableKind::DualDefensive => TableMode::DualDefensive { alpha: 0.25 },
             TableKind::Single => TableMode::Single { alpha: 0.1 },
         };
@@ -327,11 +372,13 @@ impl CausticForecast {
         let cache = cache.filter(|_| cacheable);
         // cached tables live in the frame of the geometric normal (equal to ns there)
         let frame = if cache.is_some() { Frame::from_normal(ng) } else { Frame::from_normal(ns) };
+        let t_table = Stopwatch::start();
         let found: CacheEntry = match cache {
             _ if self.radius <= 0.0 => None,
             Some(cache) => self.cached_tables(cache, (sp.p, ng), ctx, counters),
             None => self.point_tables(q, ng, &frame, ctx, counters),
         };
+        ctx.profile.record(Phase::CfTable, t_table);
         found.map(|(c, t)| (c, t, frame))
     }
 
@@ -359,7 +406,22 @@ impl CausticForecast {
             return g(bs.wi, ctx) / bs.pdf_w;
         };
         counters.inside.fetch_add(1, Relaxed);
-        let s = self.split_count(self.clustering.clusters[c].rank, q.depth);
+        let s = self.split_for(c, q.depth);
+        if self.opts.table == TableKind::Mixture {
+            // as many samples as the dual table would draw, each from the mixture, averaged
+            let (cb, c1, c2) = MIXTURE_WEIGHTS;
+            let w = MixtureWeights::new(cb, c1, c2).expect("constant weights are valid");
+            let mix = DefensiveMixture::new(m, sp, wo, &tables, frame, w);
+            let n = tables.n_samples(s).max(1);
+            counters.samples.fetch_add(n as u64, Relaxed);
+            let mut sum = Rgb::ZERO;
+            for _ in 0..n {
+                if let Some(ms) = mix.sample(&mut ctx.rng).filter(|ms| ms.pdf_w > 0.0) {
+                    sum += g(ms.wi, ctx) / ms.pdf_w;
+                }
+            }
+            return sum / n as f32;
+        }
         let mut samples = Vec::with_capacity(2 * s);
         tables.for_each_sample(s, &mut ctx.rng, |ts| samples.push(ts));
         counters.samples.fetch_add(samples.len() as u64, Relaxed);

@@ -32,6 +32,7 @@ use crate::scene::{Material, NO_EMITTER};
 use crate::transport::dirac::follow_dirac_chain;
 use crate::transport::particle::MAX_VERTICES;
 use crate::transport::roulette::{q_recursion, roulette};
+use crate::transport::light_select::{LightSelector, RisParams, MAX_CANDIDATES, MAX_SURVIVORS};
 use std::time::Instant;
 
 /// IWS parameters (shared by `iws`, `iws-pm` and `iws-cf`).
@@ -43,9 +44,37 @@ pub struct IwsArgs {
     /// IWS light paths per pass N.
     #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..))]
     pub vpl_paths: u32,
-    /// IWS VPLs evaluated at diffuse depth >= 1 (unbiased uniform subset; 0 = all).
+    /// IWS VPLs evaluated at diffuse depth >= 1 (unbiased uniform subset; 0 = all); `--vpl-select all` only.
     #[arg(long, default_value_t = 16)]
     pub vpl_subset: u32,
+    /// IWS point-light selection at each non-specular vertex: `all` (every VPL at depth 0, the
+    /// uniform subset deeper) or `ris` (resampled importance sampling, a few shadow rays).
+    #[arg(long, value_enum, default_value_t = VplSelect::Ris)]
+    pub vpl_select: VplSelect,
+    /// RIS candidates M per reservoir, drawn ∝ VPL power (0 = every VPL once).
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=(MAX_CANDIDATES as i64)))]
+    pub ris_candidates: u32,
+    /// RIS survivors K (shadow rays per vertex), from one shared candidate set.
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=(MAX_SURVIVORS as i64)))]
+    pub ris_survivors: u32,
+}
+
+/// How the IWS gather chooses its point lights.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum VplSelect {
+    /// Every VPL at depth 0, an unbiased uniform subset (`--vpl-subset`) deeper.
+    All,
+    /// RIS (Talbot 2005) with target `Σ_rgb |f|·min(G,b)·Φ` (no visibility) from candidates ∝ `Σ_rgb Φ`.
+    Ris,
+}
+
+impl IwsArgs {
+    /// The RIS parameters (ranges checked; the error names the option).
+    pub fn ris(&self) -> Result<RisParams, String> {
+        RisParams::new(self.ris_candidates, self.ris_survivors, true)
+            .map_err(|e| format!("--ris-candidates/--ris-survivors: {e}"))
+    }
 }
 
 impl IwsArgs {
@@ -74,6 +103,7 @@ impl MethodSpec for Iws {
         Ok(())
     }
     fn build(world: &World, args: &MethodArgs, _: ()) -> Result<Box<dyn Integrator>, String> {
+        args.iws.ris()?;
         Ok(Box::new(Iws::new(world, args, Box::new(NoCaustics))))
     }
 }
@@ -86,6 +116,9 @@ pub struct Iws {
     /// The clamp bound in use.
     b: f32,
     vpls: Vec<Vpl>,
+    /// The pass's RIS source (∝ VPL power); `None` with `--vpl-select all` or no lights.
+    selector: Option<LightSelector>,
+    ris: RisParams,
     caustics: Box<dyn CausticEstimator>,
     passes: u64,
     vpls_total: u64,
@@ -116,12 +149,36 @@ impl Iws {
             0 => MAX_VERTICES,
             c => c,
         };
-        Iws { params, max_depth, b, vpls: Vec::new(), caustics, passes: 0, vpls_total: 0, vpl_trace_ns: 0 }
+        // out-of-range RIS parameters (API use; the CLI checks them) fall back to the nearest valid
+        let ris = RisParams::new(params.ris_candidates.min(MAX_CANDIDATES), params.ris_survivors.clamp(1, MAX_SURVIVORS), true)
+            .expect("clamped RIS parameters are valid");
+        Iws {
+            params,
+            max_depth,
+            b,
+            vpls: Vec::new(),
+            selector: None,
+            ris,
+            caustics,
+            passes: 0,
+            vpls_total: 0,
+            vpl_trace_ns: 0,
+        }
     }
 
-    /// One VPL's bounded contribution at `x` (spec §2 `VPL_b` term, before the weight).
+    /// One VPL's bounded, shadowed contribution at `x` (spec §2 `VPL_b` term, before the weight).
     #[inline]
     fn vpl_term(&self, world: &World, x: &ShadingPoint, m: &Material, wo: Vec3, v: &Vpl) -> Rgb {
+        let c = self.unshadowed(x, m, wo, v);
+        if c == Rgb::ZERO || !world.visible(x.p, x.ng, v.p, v.ng) {
+            return Rgb::ZERO; // Dirac surfaces are opaque to VPL shadow rays (spec §1)
+        }
+        c
+    }
+
+    /// One VPL's bounded contribution `Φ·f·min(G,b)·f_y` without visibility (the RIS target).
+    #[inline]
+    fn unshadowed(&self, x: &ShadingPoint, m: &Material, wo: Vec3, v: &Vpl) -> Rgb {
         let d = v.p - x.p;
         let r2 = d.length_squared();
         if r2 <= 0.0 {
@@ -162,27 +219,28 @@ impl Iws {
         if g <= 0.0 {
             return Rgb::ZERO;
         }
-        let c = v.power * e * f * (g * shade_x);
-        if c == Rgb::ZERO || !world.visible(x.p, x.ng, v.p, v.ng) {
-            return Rgb::ZERO; // Dirac surfaces are opaque to VPL shadow rays (spec §1)
-        }
-        c
+        v.power * e * f * (g * shade_x)
     }
 
-    /// `VPL_b(x, ω_o)`: all VPLs at depth 0, a uniform subset (weight `N_v/m`) deeper.
-    fn gather(&self, world: &World, q: &ShadingQuery, ctx: &mut Context) -> Rgb {
+    /// One unbiased estimate of `VPL_b(x, ω_o)` (public for the estimator-level tests): RIS
+    /// with `--vpl-select ris`, else all VPLs at depth 0 and a uniform subset (weight `N_v/m`) deeper.
+    pub fn gather(&self, world: &World, q: &ShadingQuery, ctx: &mut Context) -> Rgb {
         let (x, m, wo) = (q.x, q.m, q.wo);
         let n = self.vpls.len();
         if n == 0 {
             return Rgb::ZERO;
         }
         let t0 = Stopwatch::start();
+        ctx.profile.gather_vertices += 1;
         let m_sub = self.params.vpl_subset as usize;
         let mut l = Rgb::ZERO;
-        if q.depth == 0 || m_sub == 0 || m_sub >= n {
+        if let Some(sel) = &self.selector {
+            l = self.gather_ris(world, q, sel, ctx);
+        } else if q.depth == 0 || m_sub == 0 || m_sub >= n {
             for v in &self.vpls {
                 l += self.vpl_term(world, x, m, wo, v);
             }
+            ctx.profile.gather_shadow_rays += n as u64;
         } else {
             // spec §2 "Cost control": unbiased uniform subset with replacement
             for _ in 0..m_sub {
@@ -190,8 +248,31 @@ impl Iws {
                 l += self.vpl_term(world, x, m, wo, v);
             }
             l *= n as f32 / m_sub as f32;
+            ctx.profile.gather_shadow_rays += m_sub as u64;
         }
         ctx.profile.record(Phase::Gather, t0);
+        l
+    }
+
+    /// `VPL_b` by RIS: `K` survivors of `M` power-proportional candidates, target
+    /// `p̂ = Σ_rgb` of the unshadowed bounded contribution (zero exactly where it is), one shadow
+    /// ray per survivor, weight `W/K` (`transport::light_select`).
+    fn gather_ris(&self, world: &World, q: &ShadingQuery, sel: &LightSelector, ctx: &mut Context) -> Rgb {
+        let (x, m, wo) = (q.x, q.m, q.wo);
+        let mut l = Rgb::ZERO;
+        let mut rays = 0u64;
+        let target = |i: usize| {
+            let c = self.unshadowed(x, m, wo, &self.vpls[i]);
+            (c.x.max(0.0) + c.y.max(0.0) + c.z.max(0.0), c)
+        };
+        sel.select(&self.ris, &mut ctx.rng, target, |s| {
+            rays += 1;
+            let v = &self.vpls[s.index];
+            if world.visible(x.p, x.ng, v.p, v.ng) {
+                l += s.value * s.weight;
+            }
+        });
+        ctx.profile.gather_shadow_rays += rays;
         l
     }
 
@@ -202,6 +283,7 @@ impl Iws {
         if self.b.is_infinite() || depth + 1 >= MAX_VERTICES {
             return Rgb::ZERO;
         }
+        let t0 = Stopwatch::start();
         let Some(bs) = bsdf::sample(m, x, wo, u, Mode::Radiance) else {
             return Rgb::ZERO;
         };
@@ -212,7 +294,9 @@ impl Iws {
         // G > b implies r² < cosθ_x/b (pbrt-v2 maxDist); slack for the origin offset
         let t_max = if self.b > 0.0 { (cos_x / self.b).sqrt() + 2.0 * ray_epsilon(x.p) } else { f32::INFINITY };
         ctx.profile.compensation_rays += 1;
-        let Some(hit) = world.intersect(offset_origin(x.p, x.ng, bs.wi), bs.wi, t_max) else {
+        let hit = world.intersect(offset_origin(x.p, x.ng, bs.wi), bs.wi, t_max);
+        ctx.profile.record(Phase::Compensation, t0);
+        let Some(hit) = hit else {
             return Rgb::ZERO;
         };
         let s = &world.scene;
@@ -270,6 +354,13 @@ impl Integrator for Iws {
     fn begin_pass(&mut self, world: &World, seed: u64, pass: u64) {
         let t0 = Instant::now();
         generate_vpls(world, self.params.vpl_paths as u64, seed, pass, &mut self.vpls);
+        self.selector = match self.params.vpl_select {
+            VplSelect::All => None,
+            VplSelect::Ris => {
+                let power: Vec<f32> = self.vpls.iter().map(|v| v.power.x.max(0.0) + v.power.y.max(0.0) + v.power.z.max(0.0)).collect();
+                LightSelector::new(&power)
+            }
+        };
         self.passes += 1;
         self.vpls_total += self.vpls.len() as u64;
         self.vpl_trace_ns += t0.elapsed().as_nanos() as u64;
@@ -299,6 +390,9 @@ impl Integrator for Iws {
             "b_default": self.params.bound.is_none(),
             "vpl_paths_per_pass": self.params.vpl_paths,
             "vpl_subset_deeper": self.params.vpl_subset,
+            "vpl_select": self.params.vpl_select,
+            "ris": self.ris,
+            "profile_per_sample": profile.per_sample(),
             "point_lights_per_pass": self.vpls_total as f64 / passes,
             "compensation_rays_per_sample": profile.compensation_rays as f64 / samples,
             "timing_note": "cpu_s are summed over worker threads; compensation_and_rest = radiance - gather - caustics (caustics includes nested recursion for recursive L_c estimators)",

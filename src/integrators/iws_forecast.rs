@@ -19,7 +19,8 @@ use crate::bsdf;
 use crate::forecast::caustic_point::CausticPoint;
 use crate::forecast::cluster::ClusteringMethod;
 use crate::forecast::estimator::{
-    CausticForecast, ForecastCounters, ForecastOptions, PhotonWeight, PreprocessStats, TableCache, TableKind,
+    CausticForecast, ForecastCounters, ForecastOptions, PhotonWeight, PreprocessStats, SplitRule, TableCache,
+    TableKind,
 };
 use crate::math::{Rgb, Vec3};
 use crate::sampling::rng::stream;
@@ -54,6 +55,7 @@ pub struct CfArgs {
     /// iws-cf: dual table (BAJ08) or one defensive table (ablation).
     #[arg(long, default_value = "dual", value_parser = choice(&[
         ("dual", TableKind::Dual), ("dual-defensive", TableKind::DualDefensive), ("single", TableKind::Single),
+        ("mixture", TableKind::Mixture),
     ]))]
     pub table: TableKind,
     /// iws-cf: photon weight in the table: lum(Φ)·f·cos (paper) or lum(Φ)·f (flux).
@@ -62,13 +64,27 @@ pub struct CfArgs {
     /// iws-cf: splitting factor S0 at diffuse depth 0 for rank 0 (S = max(1, S0 >> rank); 1 at depth >= 1).
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
     pub split: u32,
+    /// iws-cf: splitting rule at depth 0: the paper's rank rule or the cluster's energy density.
+    #[arg(long, default_value = "rank", value_parser = choice(&[("rank", SplitRule::Rank), ("energy", SplitRule::Energy)]))]
+    pub split_rule: SplitRule,
     /// iws-cf: table-cache cell edge as a fraction of the search radius (0 = build per point).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 1.0)]
     pub table_cache: f32,
     /// iws-cf: use the photon tables at diffuse depths below this (deeper: one BSDF sample).
     #[arg(long, default_value_t = 1)]
     pub table_depth: u32,
+    /// The run's time budget (set by the pipeline from `--time`, not a flag): without an explicit
+    /// `--forecast-photons` the preprocess then costs about [`PREPROCESS_SHARE`] of it.
+    #[arg(skip)]
+    pub time_budget_s: Option<f64>,
 }
+
+/// Share of the `--time` budget the CF preprocess aims at (issue #11).
+pub const PREPROCESS_SHARE: f64 = 0.05;
+/// Stored photons of the pilot run that measures the preprocess cost per photon.
+pub const PILOT_PHOTONS: u64 = 5_000;
+/// Fewest photons the budget rule picks (the tables need some forecasters to be useful).
+pub const MIN_BUDGET_PHOTONS: u64 = 10_000;
 
 /// A clap parser for a domain enum from its (name, value) table (the enums stay free of clap).
 fn choice<T: Clone + Send + Sync + 'static>(
@@ -89,6 +105,7 @@ impl CfArgs {
             table: self.table,
             photon_weight: self.photon_weight,
             s0: self.split,
+            split_rule: self.split_rule,
             cache_cell: self.table_cache.max(0.0),
             table_depth: self.table_depth,
         }
@@ -123,7 +140,7 @@ pub struct IwsCf;
 impl MethodSpec for IwsCf {
     type Product = CausticForecast;
     fn preprocess(world: &World, args: &MethodArgs, seed: u64) -> Result<CausticForecast, String> {
-        Ok(build_forecast(world, args.cf.target_photons(world), args.cf.options(), seed))
+        Ok(preprocess_forecast(world, args, seed))
     }
     fn build(world: &World, args: &MethodArgs, cf: CausticForecast) -> Result<Box<dyn Integrator>, String> {
         Ok(Box::new(Iws::new(world, args, Box::new(ForecastCaustics::new(cf)))))
@@ -152,7 +169,33 @@ pub fn trace_forecasters(world: &World, emission: Emission, target: u64, seed: u
     (points, paths, t0.elapsed().as_secs_f64())
 }
 
-/// The CF preprocess (spec §3).
+/// The CF preprocess of a run (used by every CF method): the photon count is `--forecast-photons`
+/// as given; else, with a time budget `T`, `min(cap, 0.05·T / cost)` where `cost` is the seconds
+/// per stored photon of a [`PILOT_PHOTONS`] pilot preprocess and `cap` the scene's (or default)
+/// count; else the scene's count. Any count leaves the image unbiased (the tables are a pdf).
+/// The rule and the pilot's cost go into `stats`.
+pub fn preprocess_forecast(world: &World, args: &MethodArgs, seed: u64) -> CausticForecast {
+    let cap = args.cf.target_photons(world);
+    let (n, rule, cost) = match (args.cf.forecast_photons, args.cf.time_budget_s) {
+        (Some(n), _) => (n, "cli", 0.0),
+        (None, Some(t)) if t.is_finite() && t > 0.0 && cap > PILOT_PHOTONS => {
+            let t0 = Instant::now();
+            let pilot = build_forecast(world, PILOT_PHOTONS, args.cf.options(), seed ^ 0x0050_494c_4f54);
+            let cost = t0.elapsed().as_secs_f64() / pilot.stats.stored.max(1) as f64;
+            let want = (PREPROCESS_SHARE * t / cost.max(1e-12)).max(MIN_BUDGET_PHOTONS as f64);
+            ((want as u64).min(cap), "budget", cost)
+        }
+        (None, _) if world.scene.forecast_photons.is_some() => (cap, "scene", 0.0),
+        (None, _) => (cap, "default", 0.0),
+    };
+    let mut cf = build_forecast(world, n, args.cf.options(), seed);
+    cf.stats.photons_requested = n;
+    cf.stats.photon_rule = rule.to_string();
+    cf.stats.pilot_s_per_photon = cost;
+    cf
+}
+
+/// The CF preprocess (spec §3) for `target` stored photons.
 pub fn build_forecast(world: &World, target: u64, opts: ForecastOptions, seed: u64) -> CausticForecast {
     let emission = targeted_emission(world);
     let (points, paths, tracing_s) = trace_forecasters(world, emission, target, seed);

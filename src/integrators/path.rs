@@ -8,6 +8,7 @@
 //!
 //! CLI: `forecast render scenes/cornell-box.toml --method pt --spp 64`.
 
+use crate::profile::{Phase, Profile, Stopwatch};
 use super::{Context, Integrator, MethodArgs, MethodSpec};
 use crate::accel::{offset_origin, Hit, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
@@ -80,6 +81,20 @@ pub fn emitter_hit(world: &World, hit: &Hit, d: Vec3, prev_delta: bool, prev_pdf
 
 impl Integrator for PathTracer {
     fn radiance(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> Rgb {
+        let t0 = Stopwatch::start();
+        let l = self.trace(world, origin, dir, ctx);
+        ctx.profile.samples += 1;
+        ctx.profile.record(Phase::Radiance, t0);
+        l
+    }
+
+    fn stats(&self, profile: &Profile) -> serde_json::Value {
+        serde_json::json!({ "profile_per_sample": profile.per_sample() })
+    }
+}
+
+impl PathTracer {
+    fn trace(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> Rgb {
         let s = &world.scene;
         let rng = &mut ctx.rng;
         let (mut o, mut d) = (origin, dir);

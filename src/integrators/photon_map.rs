@@ -19,6 +19,7 @@
 //!
 //! The estimate is biased (blur, boundary darkening), consistent as `N → ∞, k/N → 0`.
 
+use crate::profile::{Phase, Stopwatch};
 use super::caustics::{CausticEstimator, Recurse, ShadingQuery};
 use super::iws::Iws;
 use super::{Context, Integrator, MethodArgs, MethodSpec};
@@ -203,7 +204,10 @@ impl CausticEstimator for PhotonMap {
         "photon-map"
     }
     fn estimate(&self, _: &World, q: &ShadingQuery, ctx: &mut Context, _: &dyn Recurse) -> Rgb {
-        self.radiance(q.x, q.m, q.wo, &mut ctx.knn)
+        let t0 = Stopwatch::start();
+        let l = self.radiance(q.x, q.m, q.wo, &mut ctx.knn);
+        ctx.profile.record(Phase::PhotonQuery, t0);
+        l
     }
     fn stats(&self) -> serde_json::Value {
         serde_json::json!({
