@@ -8,8 +8,8 @@
 use super::limits::{extent_message, within_extent};
 use super::schema::{Doc, LightDef, MaterialDef, ShapeDef};
 use super::{
-    light_power, limits, locate, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene,
-    Sphere, Triangle, NO_EMITTER,
+    light_power, limits, locate, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere,
+    Triangle, NO_EMITTER,
 };
 use crate::math::{fnv1a, Vec3, PI};
 use crate::param_limits as params;

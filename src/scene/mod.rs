@@ -19,8 +19,8 @@ pub mod ply;
 mod schema;
 
 pub use camera::Camera;
-pub use limits::{within_extent, MAX_EXTENT};
 pub use file::{load_str, parse_duration, SceneError};
+pub use limits::{within_extent, MAX_EXTENT};
 
 /// Loads a scene file by extension: `.xml` is Mitsuba XML (with the command line's `-D`
 /// values, `mitsuba::set_cli_defines`), anything else the TOML format.
