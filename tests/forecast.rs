@@ -7,7 +7,7 @@
 //! (`src/forecast/direction_table.rs`).
 
 mod common;
-use common::{global_z, max_z, render_passes as render, scaled};
+use common::{assert_agrees, max_z, render_passes as render};
 use forecast::accel::World;
 use forecast::forecast::cluster::ClusteringMethod;
 use forecast::forecast::estimator::{CausticForecast, TableKind};
@@ -45,16 +45,7 @@ fn agrees_with_pt(o: &MethodArgs, label: &str) -> CausticForecast {
     let reference = pt(&w, 16, 16, 4096);
     let (mut cf, product) = iws_cf(&w, o);
     let img = render(&w, cf.as_mut(), 16, 16, 384, 3);
-    let (z, n) = max_z(&img, &reference, None);
-    let thr = z_test_threshold(1e-3, n);
-    eprintln!("{label}: max|z| = {z:.2}, threshold {thr:.2} over {n} tests");
-    assert!(z < thr, "{label} disagrees with pt: max|z| {z} ≥ {thr}");
-    // the whole-image mean: one more test at α = 1e-3 (pixels are independent)
-    let (zg, thr1) = (global_z(&img, &reference), z_test_threshold(1e-3, 1));
-    eprintln!("{label}: global z = {zg:.2}, threshold {thr1:.2}");
-    assert!(zg.abs() < thr1, "{label}: image mean differs from pt, z {zg}");
-    let zg3 = global_z(&scaled(&img, 0.97), &reference);
-    assert!(zg3.abs() > thr1, "{label}: the test cannot detect a 3% error (global z {zg3})");
+    assert_agrees(&img, &reference, label);
     product
 }
 

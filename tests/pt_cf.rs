@@ -8,7 +8,7 @@
 //! `tests/selection.rs`; `tests/furnace.rs` runs `pt-cf` through `Method::ALL`.
 
 mod common;
-use common::{global_z, max_z, render_passes as render, scaled};
+use common::{assert_agrees, max_z, render_passes as render};
 use forecast::accel::World;
 use forecast::integrators::{Integrator, Method, MethodArgs};
 use forecast::profile::Profile;
@@ -53,15 +53,7 @@ fn agrees_with_pt(w: &World, o: &MethodArgs, res: u32, (spp_pt, spp): (u64, u64)
     let (lookups, inside) = guide_stats(g.as_ref());
     eprintln!("{label}: {lookups} lookups, {:.1}% inside kept clusters", 100.0 * inside);
     assert!(lookups > 0 && inside > 0.01, "{label}: the tables were never used");
-    let (z, n) = max_z(&img, &reference, None);
-    let thr = z_test_threshold(1e-3, n);
-    eprintln!("{label}: max|z| = {z:.2}, threshold {thr:.2} over {n} tests");
-    assert!(z < thr, "{label} disagrees with pt: max|z| {z} ≥ {thr}");
-    let (zg, thr1) = (global_z(&img, &reference), z_test_threshold(1e-3, 1));
-    eprintln!("{label}: global z = {zg:.2}, threshold {thr1:.2}");
-    assert!(zg.abs() < thr1, "{label}: image mean differs from pt, z {zg}");
-    let zg3 = global_z(&scaled(&img, 0.97), &reference);
-    assert!(zg3.abs() > thr1, "{label}: the test cannot detect a 3% error (global z {zg3})");
+    assert_agrees(&img, &reference, label);
 }
 
 #[test]

@@ -18,13 +18,7 @@ pub struct Mesh {
 
 /// Loads an OBJ file; errors are messages that name the file.
 pub fn load_mesh(path: &Path, smooth: bool) -> Result<Mesh, String> {
-    super::limits::check_regular_file(path, "OBJ")?;
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read OBJ `{}`: {e}", path.display()))?;
-    let bytes_hash = crate::math::fnv1a(0xcbf2_9ce4_8422_2325, &bytes);
-    let opts = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
-    let mut reader = std::io::BufReader::new(&bytes[..]);
-    let (models, _) = tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed))
-        .map_err(|e| format!("cannot parse OBJ `{}`: {e}", path.display()))?;
+    let (models, bytes_hash) = read_models(path)?;
     let mut triangles = Vec::new();
     let mut normals = Vec::new();
     for m in &models {
@@ -70,12 +64,7 @@ pub fn load_mesh(path: &Path, smooth: bool) -> Result<Mesh, String> {
 /// Loads an OBJ file as one indexed mesh (all objects merged; a vertex per distinct
 /// position/normal/uv index triple, as Mitsuba's OBJ loader keys them).
 pub fn load_indexed(path: &Path) -> Result<super::ply::IndexedMesh, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read OBJ `{}`: {e}", path.display()))?;
-    let bytes_hash = crate::math::fnv1a(0xcbf2_9ce4_8422_2325, &bytes);
-    let opts = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
-    let mut reader = std::io::BufReader::new(&bytes[..]);
-    let (models, _) = tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed))
-        .map_err(|e| format!("cannot parse OBJ `{}`: {e}", path.display()))?;
+    let (models, bytes_hash) = read_models(path)?;
     let (mut positions, mut normals, mut faces) = (Vec::new(), Vec::new(), Vec::new());
     let mut all_normals = true;
     for m in &models {
@@ -97,4 +86,17 @@ pub fn load_indexed(path: &Path) -> Result<super::ply::IndexedMesh, String> {
     }
     let normals = (all_normals && normals.len() == positions.len()).then_some(normals);
     Ok(super::ply::IndexedMesh { positions, normals, faces, bytes_hash })
+}
+
+/// Reads and parses an OBJ file (a regular file only: a FIFO would block), triangulated with one
+/// index per vertex; returns its models and the hash of its bytes.
+fn read_models(path: &Path) -> Result<(Vec<tobj::Model>, u64), String> {
+    super::limits::check_regular_file(path, "OBJ")?;
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read OBJ `{}`: {e}", path.display()))?;
+    let bytes_hash = crate::math::fnv1a(0xcbf2_9ce4_8422_2325, &bytes);
+    let opts = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
+    let mut reader = std::io::BufReader::new(&bytes[..]);
+    let (models, _) = tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed))
+        .map_err(|e| format!("cannot parse OBJ `{}`: {e}", path.display()))?;
+    Ok((models, bytes_hash))
 }

@@ -211,6 +211,7 @@ fn parse_header(bytes: &[u8]) -> Result<(Format, Vec<Element>, usize, usize), St
 
 /// Loads a PLY file; errors name the file and the line or byte offset.
 pub fn load_indexed(path: &Path) -> Result<IndexedMesh, String> {
+    super::limits::check_regular_file(path, "PLY")?; // a FIFO would block
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read PLY `{}`: {e}", path.display()))?;
     parse(&bytes).map_err(|m| format!("PLY `{}`: {m}", path.display()))
 }

@@ -201,3 +201,19 @@ pub fn assert_same_image(a: &Path, b: &Path) {
         }
     }
 }
+
+/// Asserts that `img` agrees with `reference`: every pixel (Šidák-corrected per-pixel z-test at
+/// family-wise α = 1e-3) and the whole-image mean (α = 1e-3), and that the same statistics
+/// reject `img` scaled by 0.97, so the test can fail.
+#[allow(dead_code)]
+pub fn assert_agrees(img: &Film, reference: &Film, label: &str) {
+    let (z, n) = max_z(img, reference, None);
+    let thr = forecast::stats::z_test_threshold(1e-3, n);
+    eprintln!("{label}: max|z| = {z:.2}, threshold {thr:.2} over {n} tests");
+    assert!(z < thr, "{label} disagrees with pt: max|z| {z} ≥ {thr}");
+    let (zg, thr1) = (global_z(img, reference), forecast::stats::z_test_threshold(1e-3, 1));
+    eprintln!("{label}: global z = {zg:.2}, threshold {thr1:.2}");
+    assert!(zg.abs() < thr1, "{label}: image mean differs from pt, z {zg}");
+    let zg3 = global_z(&scaled(img, 0.97), reference);
+    assert!(zg3.abs() > thr1, "{label}: the test cannot detect a 3% error (global z {zg3})");
+}
