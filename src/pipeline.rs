@@ -64,6 +64,8 @@ pub struct RenderJob {
     pub max_rounds: Option<u64>,
     /// Worker threads (`None`: all cores divided among the ranks on this node).
     pub threads: Option<usize>,
+    /// Mitsuba XML `-D NAME=VALUE` substitutions used when loading `scene`.
+    pub defines: Vec<(String, String)>,
 }
 
 /// A job with every default resolved against its scene.
@@ -84,6 +86,11 @@ pub struct Plan {
 }
 
 impl RenderJob {
+    /// How `scene` is loaded (the job's `-D` values).
+    pub fn load_options(&self) -> crate::scene::LoadOptions {
+        crate::scene::LoadOptions { defines: self.defines.clone() }
+    }
+
     /// Fills the job's `None`s from the scene's `[render]` defaults.
     pub fn resolve(&self, scene: &Scene) -> Result<Plan, String> {
         let r = &scene.render;
@@ -352,7 +359,7 @@ fn preprocess_over_budget(plan: &Plan, timings: &Timings, started: Instant, rank
 /// memory estimate), build the BVH.
 fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), String> {
     let t_load = Instant::now();
-    let mut scene = crate::scene::load(&job.scene).map_err(|e| e.to_string())?;
+    let mut scene = crate::scene::load_with(&job.scene, &job.load_options()).map_err(|e| e.to_string())?;
     let limitations = crate::scene::scene_warnings(&scene);
     scene.warnings.extend(limitations);
     let load_s = secs(t_load);
