@@ -20,8 +20,8 @@ pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
     /// Mitsuba XML scenes: set `<default>` parameter NAME (`$NAME`), as Mitsuba's `-D`.
-    #[arg(short = 'D', value_name = "NAME=VALUE", global = true)]
-    pub define: Vec<String>,
+    #[arg(short = 'D', value_name = "NAME=VALUE", global = true, value_parser = crate::scene::parse_define)]
+    pub define: Vec<(String, String)>,
 }
 
 /// Subcommands.
@@ -125,6 +125,7 @@ impl RenderArgs {
             checkpoint_path: self.checkpoint_path.clone(),
             max_rounds: self.max_rounds,
             threads: self.threads,
+            defines: Vec::new(),
         }
     }
 }

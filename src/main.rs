@@ -52,11 +52,11 @@ fn parse() -> Result<Cli, ExitCode> {
 
 fn run(cli: Cli) -> Result<(), Failure> {
     let started = Instant::now();
-    forecast::scene::mitsuba::set_cli_defines(&cli.define)?;
+    let opts = forecast::scene::LoadOptions { defines: cli.define };
     match cli.command {
-        Command::Render(a) => on_cluster(|c| render(&a, c, started)),
+        Command::Render(a) => on_cluster(|c| render(&a, &opts, c, started)),
         Command::Diff(a) => Ok(diff(&a)?),
-        Command::Bench(a) => Ok(bench_cmd(&a)?),
+        Command::Bench(a) => Ok(bench_cmd(&a, &opts)?),
         Command::ExportMitsuba { scene, out } => {
             let rep = forecast::scene::export::export_mitsuba(&scene, &out)?;
             rep.warnings.iter().for_each(|w| errln!("warning: {w}"));
@@ -69,15 +69,16 @@ fn run(cli: Cli) -> Result<(), Failure> {
             }
             Ok(())
         }
-        Command::ForecastMap(a) => Ok(forecast_map(&a)?),
+        Command::ForecastMap(a) => Ok(forecast_map(&a, &opts)?),
         Command::Reference(a) => on_cluster(|c| {
-            if let Some(r) = compare::reference::run_reference(&a, c, started)? {
+            if let Some(r) = compare::reference::run_reference(&a, &opts, c, started)? {
                 errln!("reference: {} spp -> {}.{{exr,json}} + .half0/.half1", r.spp, a.out.display());
             }
             Ok(())
         }),
         Command::Compare(a) => on_cluster(|c| {
-            let cfg = a.config();
+            let mut cfg = a.config();
+            cfg.base.defines = opts.defines.clone();
             if compare::run_compare(&cfg, c)?.is_some() {
                 errln!("compare: report in {}", cfg.out.join("report.html").display());
             }
@@ -97,8 +98,13 @@ fn run(cli: Cli) -> Result<(), Failure> {
     }
 }
 
-fn render(a: &forecast::cli::RenderArgs, cluster: &dyn distributed::Cluster, started: Instant) -> Result<(), String> {
-    let job = a.job();
+fn render(
+    a: &forecast::cli::RenderArgs,
+    opts: &forecast::scene::LoadOptions,
+    cluster: &dyn distributed::Cluster,
+    started: Instant,
+) -> Result<(), String> {
+    let job = pipeline::RenderJob { defines: opts.defines.clone(), ..a.job() };
     let res = pipeline::render(&job, cluster, started)?;
     if let Some(r) = res {
         if !a.quiet {
@@ -152,8 +158,8 @@ fn diff(a: &forecast::cli::DiffArgs) -> Result<(), String> {
     Ok(())
 }
 
-fn bench_cmd(a: &forecast::cli::BenchArgs) -> Result<(), String> {
-    let scene = forecast::scene::load(&a.scene).map_err(|e| e.to_string())?;
+fn bench_cmd(a: &forecast::cli::BenchArgs, opts: &forecast::scene::LoadOptions) -> Result<(), String> {
+    let scene = forecast::scene::load_with(&a.scene, opts).map_err(|e| e.to_string())?;
     let t = Instant::now();
     let ntri = scene.triangles.len();
     let world = accel::World::build(scene).map_err(|e| format!("{}: {e}", a.scene.display()))?;
@@ -206,12 +212,12 @@ fn stability(a: &forecast::cli::StabilityArgs) -> Result<(), String> {
     Ok(())
 }
 
-fn forecast_map(a: &forecast::cli::ForecastMapArgs) -> Result<(), String> {
+fn forecast_map(a: &forecast::cli::ForecastMapArgs, opts: &forecast::scene::LoadOptions) -> Result<(), String> {
     use forecast::integrators::iws_forecast::{self, build_forecast};
     use forecast::transport::particle::Emission;
     let r = &a.render;
     forecast::atomic_io::check_output_prefix(&r.out)?;
-    let scene = forecast::scene::load(&r.scene).map_err(|e| e.to_string())?;
+    let scene = forecast::scene::load_with(&r.scene, opts).map_err(|e| e.to_string())?;
     let world = accel::World::build(scene).map_err(|e| format!("{}: {e}", r.scene.display()))?;
     let cf_args = &r.method_args.cf;
     let seed = r.seed.unwrap_or(world.scene.render.seed);

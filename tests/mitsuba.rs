@@ -118,6 +118,32 @@ fn sms_ring_loads_with_its_ignored_parameters_listed() {
     // -D overrides the default
     let s = mitsuba::load(&ring_dir().join("ring.xml"), &[("spp".into(), "8".into())]).unwrap();
     assert_eq!(s.render.spp, Some(8));
+    let opts = forecast::scene::LoadOptions { defines: vec![("spp".into(), "8".into())] };
+    assert_eq!(forecast::scene::load_with(&ring_dir().join("ring.xml"), &opts).unwrap().render.spp, Some(8));
+    assert_eq!(forecast::scene::load(&ring_dir().join("ring.xml")).unwrap().render.spp, Some(200));
+}
+
+/// `forecast render ring.xml -D spp=3` renders 3 spp (the XML's `$spp` default is 200), and a
+/// malformed `-D` is a clear command-line error.
+#[test]
+fn cli_define_overrides_the_xml_default() {
+    let dir = tmp_dir("mitsuba_cli_define");
+    let out = dir.join("ring");
+    let run = |d: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_forecast"))
+            .args(["render", ring_dir().join("ring.xml").to_str().unwrap(), "--method", "pt"])
+            .args(["--resolution", "8x6", "--threads", "1", "--quiet", "--out", out.to_str().unwrap(), "-D", d])
+            .output()
+            .unwrap()
+    };
+    let o = run("spp=3");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rep: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.with_extension("json")).unwrap()).unwrap();
+    assert_eq!(rep["spp"], 3, "{rep}");
+    let o = run("spp");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("NAME=VALUE") && !err.contains("panicked"), "{err}");
 }
 
 #[test]

@@ -215,7 +215,7 @@ pub fn run_compare(cfg: &CompareConfig, cluster: &dyn Cluster) -> Result<Option<
     if cfg.seeds == 0 {
         return Err("--seeds must be at least 1".into());
     }
-    let scene = crate::scene::load(&cfg.base.scene).map_err(|e| e.to_string())?;
+    let scene = crate::scene::load_with(&cfg.base.scene, &cfg.base.load_options()).map_err(|e| e.to_string())?;
     let (reference, res) = agree_resolution(cfg, cluster)?;
     let regions = regions(&scene, res);
     let base_seed = cfg.base.seed.unwrap_or(scene.render.seed);

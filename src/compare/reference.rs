@@ -88,15 +88,16 @@ pub struct ReferenceReport {
 /// `PREFIX.json`).
 pub fn run_reference(
     args: &RenderArgs,
+    opts: &crate::scene::LoadOptions,
     cluster: &dyn Cluster,
     started: Instant,
 ) -> Result<Option<ReferenceReport>, String> {
     if args.method.is_some_and(|m| m != Method::Pt) {
         return Err("reference: only `--method pt` (the unbiased reference) is supported".into());
     }
-    let base = args.job();
+    let base = pipeline::RenderJob { defines: opts.defines.clone(), ..args.job() };
     crate::atomic_io::check_output_prefix(&base.out)?;
-    let scene = crate::scene::load(&base.scene).map_err(|e| e.to_string())?;
+    let scene = crate::scene::load_with(&base.scene, opts).map_err(|e| e.to_string())?;
     let plan = pipeline::RenderJob { method: Some(Method::Pt), ..base.clone() }.resolve(&scene)?;
     let (seed, time, spp) = (plan.seed, plan.time, plan.spp);
     let prefix = base.out.clone();

@@ -213,6 +213,7 @@ fn job(scene: &Path, run: RunSpec, cfg: &StabilityConfig, out: PathBuf) -> Rende
         checkpoint_path: None,
         max_rounds: None,
         threads: cfg.threads,
+        defines: Vec::new(),
     }
 }
 

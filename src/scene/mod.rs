@@ -22,13 +22,36 @@ pub use camera::Camera;
 pub use file::{load_str, parse_duration, SceneError};
 pub use limits::{within_extent, MAX_EXTENT};
 
-/// Loads a scene file by extension: `.xml` is Mitsuba XML (with the command line's `-D`
-/// values, `mitsuba::set_cli_defines`), anything else the TOML format.
+/// How a scene file is loaded: the `-D NAME=VALUE` substitutions for Mitsuba XML `$NAME`
+/// parameters (ignored by TOML scenes).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// `(NAME, VALUE)` pairs, later ones overriding earlier ones and the XML `<default>`s.
+    pub defines: Vec<(String, String)>,
+}
+
+/// Loads a scene file by extension with no `-D` values (`load_with`).
 pub fn load(path: &std::path::Path) -> Result<Scene, SceneError> {
+    load_with(path, &LoadOptions::default())
+}
+
+/// Loads a scene file by extension: `.xml` is Mitsuba XML (with `opts.defines`), anything else
+/// the TOML format.
+pub fn load_with(path: &std::path::Path, opts: &LoadOptions) -> Result<Scene, SceneError> {
     if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml")) {
-        return mitsuba::load(path, mitsuba::cli_defines());
+        return mitsuba::load(path, &opts.defines);
     }
     file::load(path)
+}
+
+/// Parses one `-D NAME=VALUE` (NAME non-empty, alphanumeric or `_`), as clap's value parser.
+pub fn parse_define(s: &str) -> Result<(String, String), String> {
+    let (k, v) = s.split_once('=').ok_or_else(|| format!("`{s}`: expected NAME=VALUE"))?;
+    let k = k.trim();
+    if k.is_empty() || !k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+        return Err(format!("`{s}`: NAME must be a non-empty identifier (letters, digits, `_`)"));
+    }
+    Ok((k.to_string(), v.to_string()))
 }
 
 /// A TOML `type = "mesh"` file by extension: `.ply` (PLY reader) or OBJ.

@@ -49,6 +49,7 @@ pub fn job(
         checkpoint_path: None,
         max_rounds: None,
         threads: Some(threads),
+        defines: Vec::new(),
     }
 }
 

@@ -26,26 +26,7 @@ use crate::scene::{Camera, Material, PointLight, RenderDefaults, Scene, SceneErr
 use params::Plugin;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
 use xml::Node;
-
-static CLI_DEFINES: OnceLock<Vec<(String, String)>> = OnceLock::new();
-
-/// Records the command line's `-D name=value` list (once, at start-up, like argv).
-pub fn set_cli_defines(defs: &[String]) -> Result<(), String> {
-    let mut out = Vec::new();
-    for d in defs {
-        let (k, v) = d.split_once('=').ok_or_else(|| format!("-D `{d}`: expected NAME=VALUE"))?;
-        out.push((k.trim().to_string(), v.to_string()));
-    }
-    let _ = CLI_DEFINES.set(out);
-    Ok(())
-}
-
-/// The command line's `-D` values (empty unless `set_cli_defines` ran).
-pub fn cli_defines() -> &'static [(String, String)] {
-    CLI_DEFINES.get().map_or(&[], |v| v.as_slice())
-}
 
 /// Loading state.
 pub(super) struct Cx {

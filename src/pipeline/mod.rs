@@ -9,6 +9,7 @@
 //! and the current `PREFIX.{exr,png,json}` as one set (`atomic_io::FileSet`); a failed checkpoint
 //! is a warning (the previous set stays, the next interval retries). `--resume` continues with the
 //! next pass and repeats none.
+//! Submodules: `memory` (the up-front estimate), `checkpoints` (checkpoint and output sets).
 //!
 //! Failure: every parameter is validated and the memory estimated in [`RenderJob::resolve`],
 //! before any work. An error on any rank — during setup, the preprocess, resuming, inside the
@@ -21,7 +22,7 @@ use crate::atomic_io::FileSet;
 use crate::checkpoint::Checkpoint;
 use crate::distributed::schedule::{Deadline, PassTimer};
 use crate::distributed::{self, Cluster};
-use crate::image_io::{self, with_ext, Image};
+use crate::image_io::{with_ext, Image};
 use crate::integrators::{Integrator, Method, MethodArgs};
 use crate::param_limits as params;
 use crate::progress::Progress;
@@ -29,7 +30,14 @@ use crate::render::film::Film;
 use crate::render::{render_pass, PassCounters};
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
+
+mod checkpoints;
+mod memory;
+
+pub use checkpoints::{image_files, image_from_film, write_images};
+
+use memory::local_ranks;
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// Everything a render needs, as requested (the scene's defaults fill the `None`s, see
@@ -64,6 +72,8 @@ pub struct RenderJob {
     pub max_rounds: Option<u64>,
     /// Worker threads (`None`: all cores divided among the ranks on this node).
     pub threads: Option<usize>,
+    /// Mitsuba XML `-D NAME=VALUE` substitutions used when loading `scene`.
+    pub defines: Vec<(String, String)>,
 }
 
 /// A job with every default resolved against its scene.
@@ -84,6 +94,11 @@ pub struct Plan {
 }
 
 impl RenderJob {
+    /// How `scene` is loaded (the job's `-D` values).
+    pub fn load_options(&self) -> crate::scene::LoadOptions {
+        crate::scene::LoadOptions { defines: self.defines.clone() }
+    }
+
     /// Fills the job's `None`s from the scene's `[render]` defaults.
     pub fn resolve(&self, scene: &Scene) -> Result<Plan, String> {
         let r = &scene.render;
@@ -122,37 +137,6 @@ impl Plan {
         }
         self.args.validate()
     }
-
-    /// Bytes this render needs on this node, at least, and of what (refused up front when they
-    /// exceed the available memory). Film: 7 f64 per pixel (`render::film::STRIDE`), held by every
-    /// rank, plus on rank 0 the reduced sums and the final copy (and with checkpoints or a resume
-    /// the checkpoint's film, its clone and its encoding), plus the images (mean, variance, EXR,
-    /// PNG: ≈ 64 bytes per pixel). Preprocess product: stored photons (`iws-pm`, ≈ 64 bytes each)
-    /// or forecast photons (`iws-cf`, ≈ 128 bytes with their clusters and maps), three copies on
-    /// rank 0 (built, encoded, decoded) and one on every other rank of the node.
-    pub fn memory_estimate(&self, scene: &Scene, checkpoints: bool) -> (u64, String) {
-        let pixels = self.resolution.0 as u64 * self.resolution.1 as u64;
-        let film = pixels.saturating_mul((crate::render::film::STRIDE * 8) as u64);
-        let local = local_ranks() as u64;
-        let copies = if checkpoints { 6 } else { 3 };
-        let product = match self.method {
-            Method::IwsPm => self.args.pm.photons.saturating_mul(64),
-            Method::IwsCf => {
-                self.args.cf.forecast_photons.or(scene.forecast_photons).unwrap_or(200_000).saturating_mul(128)
-            }
-            _ => 0,
-        };
-        let film_total = film.saturating_mul(copies + local - 1).saturating_add(pixels.saturating_mul(64));
-        let need = film_total.saturating_add(product.saturating_mul(2 + local));
-        let (w, h) = self.resolution;
-        let what =
-            format!("a {w}x{h} film of {:.1} GiB per copy; preprocess product {:.1} GiB", gib(film), gib(product));
-        (need, what)
-    }
-}
-
-fn gib(bytes: u64) -> f64 {
-    bytes as f64 / (1u64 << 30) as f64
 }
 
 /// Wall-clock seconds of each stage (rank 0's).
@@ -352,7 +336,7 @@ fn preprocess_over_budget(plan: &Plan, timings: &Timings, started: Instant, rank
 /// memory estimate), build the BVH.
 fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), String> {
     let t_load = Instant::now();
-    let mut scene = crate::scene::load(&job.scene).map_err(|e| e.to_string())?;
+    let mut scene = crate::scene::load_with(&job.scene, &job.load_options()).map_err(|e| e.to_string())?;
     let limitations = crate::scene::scene_warnings(&scene);
     scene.warnings.extend(limitations);
     let load_s = secs(t_load);
@@ -559,70 +543,6 @@ impl Totals {
 }
 
 impl Run<'_> {
-    fn ckpt_path(&self) -> PathBuf {
-        self.job.checkpoint_path.clone().unwrap_or_else(|| with_ext(&self.job.out, "ckpt"))
-    }
-
-    /// A checkpoint at this round boundary if rank 0's interval has passed (collective): the
-    /// checkpoint and `PREFIX.{exr,png,json}` replace the previous ones as one set. A write that
-    /// fails is a warning (printed by rank 0, kept for the report): the previous set stays and
-    /// the next interval tries again. Other errors end the render at the next round's agreement.
-    fn maybe_checkpoint(&self, p: &mut Passes, integrator: &dyn Integrator, last: &mut Instant) -> Result<(), String> {
-        let Some(every) = self.job.checkpoint_every else { return Ok(()) };
-        let want = if self.cluster.rank() == 0 && last.elapsed().as_secs_f64() >= every { 1.0 } else { 0.0 };
-        if self.cluster.all_reduce_max(want) == 0.0 {
-            return Ok(());
-        }
-        *last = Instant::now();
-        let t = counter_sums(self.cluster, &p.counters);
-        let Some(sums) = self.cluster.reduce_sum(&p.film.data) else { return Ok(()) };
-        let total = self.total_film(sums)?;
-        let mut set = FileSet::new();
-        let written = image_files(&self.job.out, &total, &mut set).and_then(|image| {
-            let timings = Timings { render_s: p.render_s, total_s: secs(self.started), ..Timings::default() };
-            let parts = Totals::new(&t, &total, 0, Vec::new());
-            let report = self.report(p, parts, timings, integrator.stats(&p.counters.profile), &image, false);
-            set.add(with_ext(&self.job.out, "json"), serde_json::to_vec_pretty(&report).map_err(|e| e.to_string())?);
-            // last, so that once the new checkpoint is visible its images and JSON are too
-            set.add(self.ckpt_path(), self.checkpoint(p.passes_done, &total).to_bytes());
-            set.commit()
-        });
-        if let Err(e) = written {
-            let what = format!("checkpoint after {} passes not written ({e}); the previous one is kept", p.passes_done);
-            p.warn(what, Some(every));
-        }
-        Ok(())
-    }
-
-    /// The checkpoint of `total` after `passes_done` contiguous passes.
-    fn checkpoint(&self, passes_done: u64, total: &Film) -> Checkpoint {
-        let (width, height) = self.plan.resolution;
-        Checkpoint {
-            scene_hash: self.world.scene.hash,
-            seed: self.plan.seed,
-            method: self.plan.method.name().to_string(),
-            width,
-            height,
-            passes_done,
-            next_pass: passes_done,
-            spp: passes_done,
-            elapsed_secs: secs(self.started) + self.resumed.checkpoint.as_ref().map_or(0.0, |r| r.elapsed_secs),
-            film: total.data.clone(),
-        }
-    }
-
-    /// The reduced sums of this run plus the resumed checkpoint's (rank 0).
-    fn total_film(&self, sums: Vec<f64>) -> Result<Film, String> {
-        let (w, h) = self.plan.resolution;
-        let mut total = Film::from_data(w as usize, h as usize, sums).ok_or("film size mismatch")?;
-        if let Some(r) = &self.resumed.checkpoint {
-            let prev =
-                Film::from_data(total.width, total.height, r.film.clone()).ok_or("checkpoint film size mismatch")?;
-            total.merge(&prev);
-        }
-        Ok(total)
-    }
-
     /// Stage 6: the typed report.
     fn report(
         &self,
@@ -663,15 +583,6 @@ impl Run<'_> {
     }
 }
 
-/// Ranks on this node (MPICH's `MPI_LOCALNRANKS`, Open MPI's `OMPI_COMM_WORLD_LOCAL_SIZE`; 1).
-fn local_ranks() -> usize {
-    ["MPI_LOCALNRANKS", "OMPI_COMM_WORLD_LOCAL_SIZE"]
-        .iter()
-        .find_map(|v| std::env::var(v).ok()?.parse::<usize>().ok())
-        .unwrap_or(1)
-        .max(1)
-}
-
 /// A rayon pool of `threads` workers (default: cores ÷ ranks on this node, from MPICH's
 /// `MPI_LOCALNRANKS` or Open MPI's `OMPI_COMM_WORLD_LOCAL_SIZE`).
 pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, String> {
@@ -687,30 +598,3 @@ pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, String> 
 /// The most worker threads a process may ask for (more fail late, after minutes of thread
 /// creation, with "Resource temporarily unavailable").
 pub const MAX_THREADS: usize = params::MAX_THREADS;
-
-/// The film's mean as an image.
-pub fn image_from_film(f: &Film) -> Image {
-    Image { width: f.width, height: f.height, pixels: f.mean() }
-}
-
-/// Writes PREFIX.exr (mean + variance-of-mean layer) and PREFIX.png as one set; returns the mean.
-pub fn write_images(prefix: &Path, film: &Film) -> Result<Image, String> {
-    let mut set = FileSet::new();
-    let img = image_files(prefix, film, &mut set)?;
-    set.commit()?;
-    Ok(img)
-}
-
-/// Adds PREFIX.exr (mean + variance-of-mean layer) and PREFIX.png to `set` (creating PREFIX's
-/// directory); returns the mean.
-pub fn image_files(prefix: &Path, film: &Film, set: &mut FileSet) -> Result<Image, String> {
-    if let Some(dir) = prefix.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-    }
-    let img = image_from_film(film);
-    let var = Image { width: film.width, height: film.height, pixels: film.variance_of_mean() };
-    let (exr, png) = (with_ext(prefix, "exr"), with_ext(prefix, "png"));
-    set.add(exr.clone(), image_io::encode_exr_layers(&exr, &img, Some(&var))?);
-    set.add(png.clone(), image_io::encode_png_srgb(&png, &img, 0.0)?); // exposure in stops: 0 = as rendered
-    Ok(img)
-}

@@ -1,0 +1,113 @@
+//! The pipeline's checkpoint and output sets: at round boundaries (stage 4) rank 0 gathers the
+//! sums and writes the checkpoint and the current `PREFIX.{exr,png,json}` as one
+//! `atomic_io::FileSet`; `image_files` adds `PREFIX.{exr,png}` to such a set.
+//!
+//! Invariants: the checkpoint is added to the set last, so once it is visible its images and
+//! JSON are too; a failed write is a warning (the previous set stays, the next interval retries).
+
+use super::{counter_sums, secs, Passes, Run, Timings, Totals};
+use crate::atomic_io::FileSet;
+use crate::checkpoint::Checkpoint;
+use crate::image_io::{self, with_ext, Image};
+use crate::integrators::Integrator;
+use crate::render::film::Film;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+impl Run<'_> {
+    pub(super) fn ckpt_path(&self) -> PathBuf {
+        self.job.checkpoint_path.clone().unwrap_or_else(|| with_ext(&self.job.out, "ckpt"))
+    }
+
+    /// A checkpoint at this round boundary if rank 0's interval has passed (collective): the
+    /// checkpoint and `PREFIX.{exr,png,json}` replace the previous ones as one set. A write that
+    /// fails is a warning (printed by rank 0, kept for the report): the previous set stays and
+    /// the next interval tries again. Other errors end the render at the next round's agreement.
+    pub(super) fn maybe_checkpoint(
+        &self,
+        p: &mut Passes,
+        integrator: &dyn Integrator,
+        last: &mut Instant,
+    ) -> Result<(), String> {
+        let Some(every) = self.job.checkpoint_every else { return Ok(()) };
+        let want = if self.cluster.rank() == 0 && last.elapsed().as_secs_f64() >= every { 1.0 } else { 0.0 };
+        if self.cluster.all_reduce_max(want) == 0.0 {
+            return Ok(());
+        }
+        *last = Instant::now();
+        let t = counter_sums(self.cluster, &p.counters);
+        let Some(sums) = self.cluster.reduce_sum(&p.film.data) else { return Ok(()) };
+        let total = self.total_film(sums)?;
+        let mut set = FileSet::new();
+        let written = image_files(&self.job.out, &total, &mut set).and_then(|image| {
+            let timings = Timings { render_s: p.render_s, total_s: secs(self.started), ..Timings::default() };
+            let parts = Totals::new(&t, &total, 0, Vec::new());
+            let report = self.report(p, parts, timings, integrator.stats(&p.counters.profile), &image, false);
+            set.add(with_ext(&self.job.out, "json"), serde_json::to_vec_pretty(&report).map_err(|e| e.to_string())?);
+            // last, so that once the new checkpoint is visible its images and JSON are too
+            set.add(self.ckpt_path(), self.checkpoint(p.passes_done, &total).to_bytes());
+            set.commit()
+        });
+        if let Err(e) = written {
+            let what = format!("checkpoint after {} passes not written ({e}); the previous one is kept", p.passes_done);
+            p.warn(what, Some(every));
+        }
+        Ok(())
+    }
+
+    /// The checkpoint of `total` after `passes_done` contiguous passes.
+    pub(super) fn checkpoint(&self, passes_done: u64, total: &Film) -> Checkpoint {
+        let (width, height) = self.plan.resolution;
+        Checkpoint {
+            scene_hash: self.world.scene.hash,
+            seed: self.plan.seed,
+            method: self.plan.method.name().to_string(),
+            width,
+            height,
+            passes_done,
+            next_pass: passes_done,
+            spp: passes_done,
+            elapsed_secs: secs(self.started) + self.resumed.checkpoint.as_ref().map_or(0.0, |r| r.elapsed_secs),
+            film: total.data.clone(),
+        }
+    }
+
+    /// The reduced sums of this run plus the resumed checkpoint's (rank 0).
+    pub(super) fn total_film(&self, sums: Vec<f64>) -> Result<Film, String> {
+        let (w, h) = self.plan.resolution;
+        let mut total = Film::from_data(w as usize, h as usize, sums).ok_or("film size mismatch")?;
+        if let Some(r) = &self.resumed.checkpoint {
+            let prev =
+                Film::from_data(total.width, total.height, r.film.clone()).ok_or("checkpoint film size mismatch")?;
+            total.merge(&prev);
+        }
+        Ok(total)
+    }
+}
+
+/// The film's mean as an image.
+pub fn image_from_film(f: &Film) -> Image {
+    Image { width: f.width, height: f.height, pixels: f.mean() }
+}
+
+/// Writes PREFIX.exr (mean + variance-of-mean layer) and PREFIX.png as one set; returns the mean.
+pub fn write_images(prefix: &Path, film: &Film) -> Result<Image, String> {
+    let mut set = FileSet::new();
+    let img = image_files(prefix, film, &mut set)?;
+    set.commit()?;
+    Ok(img)
+}
+
+/// Adds PREFIX.exr (mean + variance-of-mean layer) and PREFIX.png to `set` (creating PREFIX's
+/// directory); returns the mean.
+pub fn image_files(prefix: &Path, film: &Film, set: &mut FileSet) -> Result<Image, String> {
+    if let Some(dir) = prefix.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    }
+    let img = image_from_film(film);
+    let var = Image { width: film.width, height: film.height, pixels: film.variance_of_mean() };
+    let (exr, png) = (with_ext(prefix, "exr"), with_ext(prefix, "png"));
+    set.add(exr.clone(), image_io::encode_exr_layers(&exr, &img, Some(&var))?);
+    set.add(png.clone(), image_io::encode_png_srgb(&png, &img, 0.0)?); // exposure in stops: 0 = as rendered
+    Ok(img)
+}
