@@ -365,6 +365,17 @@ fn fifo_scene_and_mesh_are_refused() {
     assert!(e.message.contains("not a regular file"), "{e}");
     let e = load(&dir).expect_err("a directory is refused");
     assert!(e.message.contains("directory"), "{e}");
+    // the Mitsuba XML loader and the PLY reader refuse them too
+    for name in ["pipe.xml", "pipe.ply"] {
+        let ok = std::process::Command::new("mkfifo").arg(dir.join(name)).status().is_ok_and(|s| s.success());
+        assert!(ok, "mkfifo failed");
+    }
+    let p = dir.join("pipe.xml");
+    let e = within_10s("XML FIFO", move || load(&p)).expect_err("a FIFO XML scene is refused");
+    assert!(e.message.contains("not a regular file"), "{e}");
+    let (src, d) = (with_mesh("pipe.ply", ""), dir.clone());
+    let e = within_10s("PLY FIFO", move || load_str(&src, "bad.toml", &d)).expect_err("a FIFO PLY is refused");
+    assert!(e.message.contains("not a regular file"), "{e}");
 }
 
 // Issue #9 §5: messages that misled.

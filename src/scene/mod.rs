@@ -39,6 +39,13 @@ pub fn load(path: &std::path::Path) -> Result<Scene, SceneError> {
 /// the TOML format.
 pub fn load_with(path: &std::path::Path, opts: &LoadOptions) -> Result<Scene, SceneError> {
     if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml")) {
+        // refused before opening: reading a FIFO would block forever
+        limits::check_regular_file(path, "scene file").map_err(|message| SceneError {
+            file: path.display().to_string(),
+            line: 0,
+            key: String::new(),
+            message,
+        })?;
         return mitsuba::load(path, &opts.defines);
     }
     file::load(path)
