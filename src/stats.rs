@@ -98,40 +98,36 @@ fn gamma_q_cf(a: f64, x: f64) -> f64 {
     (-x + a * x.ln() - ln_gamma(a)).exp() * h
 }
 
-/// Regularized lower incomplete gamma P(a, x) = γ(a, x)/Γ(a). NaN for a ≤ 0 or NaN input.
-pub fn gamma_p(a: f64, x: f64) -> f64 {
+/// Regularized incomplete gammas (P(a, x), Q(a, x) = 1 − P): the series below a + 1, the
+/// continued fraction above, so each side keeps its precision. NaN for a ≤ 0 or NaN input.
+fn gamma_pq(a: f64, x: f64) -> (f64, f64) {
     if !(a > 0.0) || x.is_nan() {
-        return f64::NAN;
+        return (f64::NAN, f64::NAN);
     }
     if x <= 0.0 {
-        return 0.0;
+        return (0.0, 1.0);
     }
     if x.is_infinite() {
-        return 1.0;
+        return (1.0, 0.0);
     }
-    if x < a + 1.0 {
-        gamma_p_series(a, x).clamp(0.0, 1.0)
+    let (p, q) = if x < a + 1.0 {
+        let p = gamma_p_series(a, x);
+        (p, 1.0 - p)
     } else {
-        (1.0 - gamma_q_cf(a, x)).clamp(0.0, 1.0)
-    }
+        let q = gamma_q_cf(a, x);
+        (1.0 - q, q)
+    };
+    (p.clamp(0.0, 1.0), q.clamp(0.0, 1.0))
+}
+
+/// Regularized lower incomplete gamma P(a, x) = γ(a, x)/Γ(a). NaN for a ≤ 0 or NaN input.
+pub fn gamma_p(a: f64, x: f64) -> f64 {
+    gamma_pq(a, x).0
 }
 
 /// Regularized upper incomplete gamma Q(a, x) = 1 − P(a, x). NaN for a ≤ 0 or NaN input.
 pub fn gamma_q(a: f64, x: f64) -> f64 {
-    if !(a > 0.0) || x.is_nan() {
-        return f64::NAN;
-    }
-    if x <= 0.0 {
-        return 1.0;
-    }
-    if x.is_infinite() {
-        return 0.0;
-    }
-    if x < a + 1.0 {
-        (1.0 - gamma_p_series(a, x)).clamp(0.0, 1.0)
-    } else {
-        gamma_q_cf(a, x).clamp(0.0, 1.0)
-    }
+    gamma_pq(a, x).1
 }
 
 /// Chi-square survival function P(X ≥ chi2) for `dof` degrees of freedom: Q(dof/2, chi2/2).

@@ -7,7 +7,7 @@
 //! (`src/forecast/direction_table.rs`).
 
 mod common;
-use common::{assert_agrees, max_z, render_passes as render};
+use common::{assert_agrees, assert_furnace_is_one, max_z, render_passes as render};
 use forecast::accel::World;
 use forecast::forecast::cluster::ClusteringMethod;
 use forecast::forecast::estimator::{CausticForecast, TableKind};
@@ -131,23 +131,7 @@ fn glass_furnace(o: &MethodArgs) {
     let (mut cf, product) = iws_cf(&w, o);
     assert!(product.stats.stored > 1000, "the white ball must receive caustic light");
     let img = render(&w, cf.as_mut(), 16, 16, 512, 5);
-    let (m, v) = (img.mean(), img.variance_of_mean());
-    let thr = z_test_threshold(1e-3, m.len() * 3);
-    let mut zmax = 0.0f64;
-    for i in 0..m.len() {
-        for c in 0..3 {
-            let d = (m[i][c] - 1.0) as f64;
-            if v[i][c] > 0.0 {
-                zmax = zmax.max(d.abs() / (v[i][c] as f64).sqrt());
-            } else {
-                assert!(d.abs() < 1e-4, "pixel {i}: {} with zero variance", m[i][c]);
-            }
-        }
-    }
-    eprintln!("glass furnace {:?}/{:?}: max|z| = {zmax:.2}, threshold {thr:.2}", o.iws.vpl_select, o.cf.table);
-    assert!(zmax < thr, "glass furnace: max|z| {zmax} ≥ {thr}");
-    let mean: f64 = m.iter().map(|p| p[0] as f64).sum::<f64>() / m.len() as f64;
-    assert!((mean - 1.0).abs() < 0.01, "furnace mean {mean}");
+    assert_furnace_is_one(&img, &format!("glass furnace {:?}/{:?}", o.iws.vpl_select, o.cf.table));
 }
 
 #[test]

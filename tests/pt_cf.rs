@@ -8,7 +8,7 @@
 //! `tests/selection.rs`; `tests/furnace.rs` runs `pt-cf` through `Method::ALL`.
 
 mod common;
-use common::{assert_agrees, max_z, render_passes as render};
+use common::{assert_agrees, assert_furnace_is_one, max_z, render_passes as render};
 use forecast::accel::World;
 use forecast::integrators::{Integrator, Method, MethodArgs};
 use forecast::profile::Profile;
@@ -99,23 +99,7 @@ fn glass_furnace_is_exactly_one() {
     let img = render(&w, g.as_mut(), 16, 16, 512, 5);
     let (lookups, inside) = guide_stats(g.as_ref());
     assert!(lookups > 0 && inside > 0.01, "the tables were never used ({inside})");
-    let (m, v) = (img.mean(), img.variance_of_mean());
-    let thr = z_test_threshold(1e-3, m.len() * 3);
-    let mut zmax = 0.0f64;
-    for i in 0..m.len() {
-        for c in 0..3 {
-            let d = (m[i][c] - 1.0) as f64;
-            if v[i][c] > 0.0 {
-                zmax = zmax.max(d.abs() / (v[i][c] as f64).sqrt());
-            } else {
-                assert!(d.abs() < 1e-4, "pixel {i}: {} with zero variance", m[i][c]);
-            }
-        }
-    }
-    eprintln!("pt-cf glass furnace: max|z| = {zmax:.2}, threshold {thr:.2}");
-    assert!(zmax < thr, "glass furnace: max|z| {zmax} ≥ {thr}");
-    let mean: f64 = m.iter().map(|p| p[0] as f64).sum::<f64>() / m.len() as f64;
-    assert!((mean - 1.0).abs() < 0.01, "furnace mean {mean}");
+    assert_furnace_is_one(&img, "pt-cf glass furnace");
 }
 
 #[test]

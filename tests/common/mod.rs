@@ -218,3 +218,26 @@ pub fn assert_agrees(img: &Film, reference: &Film, label: &str) {
     let zg3 = global_z(&scaled(img, 0.97), reference);
     assert!(zg3.abs() > thr1, "{label}: the test cannot detect a 3% error (global z {zg3})");
 }
+
+/// Largest per-pixel |z| of `img` against the exact furnace value 1 and its Šidák threshold at
+/// family-wise α = 1e-3; a zero-variance pixel must be 1 itself. Also asserts the mean is 1 ± 1%.
+#[allow(dead_code)]
+pub fn assert_furnace_is_one(img: &Film, label: &str) {
+    let (m, v) = (img.mean(), img.variance_of_mean());
+    let thr = forecast::stats::z_test_threshold(1e-3, m.len() * 3);
+    let mut zmax = 0.0f64;
+    for i in 0..m.len() {
+        for c in 0..3 {
+            let d = (m[i][c] - 1.0) as f64;
+            if v[i][c] > 0.0 {
+                zmax = zmax.max(d.abs() / (v[i][c] as f64).sqrt());
+            } else {
+                assert!(d.abs() < 1e-4, "pixel {i}: {} with zero variance", m[i][c]);
+            }
+        }
+    }
+    eprintln!("{label}: max|z| = {zmax:.2}, threshold {thr:.2}");
+    assert!(zmax < thr, "{label}: max|z| {zmax} ≥ {thr}");
+    let mean: f64 = m.iter().map(|p| p[0] as f64).sum::<f64>() / m.len() as f64;
+    assert!((mean - 1.0).abs() < 0.01, "{label}: furnace mean {mean}");
+}
