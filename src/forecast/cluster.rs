@@ -210,7 +210,14 @@ pub fn cluster_points(points: &[CausticPoint], k: usize, method: ClusteringMetho
         ClusteringMethod::KMeans => kmeans(&feats, k, seed),
     };
     let assign: Vec<u32> = feats.par_iter().map(|z| nearest_code(z, &codes)).collect();
-    build_clustering(points, &valid, &feats, &assign, k, origin, diag, wn)
+    build_clustering(points, &valid, &feats, &assign, k, FeatureSpace { origin, diag, wn })
+}
+
+/// The frame of the 6-D features (spec §3): position origin, bbox diagonal, normal weight.
+struct FeatureSpace {
+    origin: [f32; 3],
+    diag: f32,
+    wn: f32,
 }
 
 /// FSCL codebook (spec §3): k distinct random initial points, E shuffled epochs.
@@ -325,17 +332,15 @@ fn kmeans(feats: &[[f32; 6]], k: usize, seed: u64) -> Vec<[f32; 6]> {
 }
 
 /// Per-cluster statistics, density sort, ranks and labels.
-#[allow(clippy::too_many_arguments)]
 fn build_clustering(
     points: &[CausticPoint],
     valid: &[u32],
     feats: &[[f32; 6]],
     assign: &[u32],
     k: usize,
-    origin: [f32; 3],
-    diag: f32,
-    wn: f32,
+    space: FeatureSpace,
 ) -> Clustering {
+    let FeatureSpace { origin, diag, wn } = space;
     // Group valid-point slots by code (counting sort keeps ascending point order).
     let mut groups: Vec<Vec<u32>> = vec![Vec::new(); k];
     for (slot, &c) in assign.iter().enumerate() {
