@@ -10,4 +10,5 @@ pub mod direction_table;
 pub mod estimator;
 pub mod forecast_map;
 pub mod mixture;
+pub mod splat;
 pub mod view;

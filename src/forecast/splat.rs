@@ -1,0 +1,76 @@
+//! Forecaster splatting (issue #11 item 6): how a forecaster's weight is spread over the
+//! 32×16 direction bins of [`super::direction_table`] when a table is built. Every spread adds
+//! exactly the forecaster's weight, so the tables stay valid pdfs and the estimator unbiased.
+
+use super::direction_table::{bin_of, N_BINS, N_MU, N_PHI};
+use crate::math::{Vec3, PI};
+
+/// How a forecaster's weight is spread over the bins when a table is built (issue #11 item 6).
+/// Any spread keeps the tables valid pdfs (and the dual partition), so every choice is unbiased.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Splat {
+    /// All of it into its own bin (the paper; bit-identical to [`super::direction_table::ForecastTables::build`]).
+    #[default]
+    None,
+    /// A separable tent of half-width `radius` bins (clamped to [1, 8]; 1 = bilinear between the
+    /// nearest bin centres) in (φ, μ) bin coordinates, φ wrapping round, rows beyond the pole or the
+    /// horizon dropped; the weights are renormalised so they sum to the forecaster's weight.
+    Tent {
+        /// Half-width in bins.
+        radius: f32,
+    },
+}
+
+/// Bin-coordinate (x, y) of a local direction: bin centres at integers, `None` as [`bin_of`].
+#[inline]
+fn bin_coords(local: Vec3) -> Option<(f32, f32)> {
+    bin_of(local)?;
+    let mu = local.z / local.length();
+    let mut phi = local.y.atan2(local.x);
+    if phi < 0.0 {
+        phi += 2.0 * PI;
+    }
+    Some((phi * (N_PHI as f32 / (2.0 * PI)) - 0.5, mu * N_MU as f32 - 0.5))
+}
+
+/// Tent weights `max(0, 1 − |x − c|/h)` of the integer centres `c` within `h` of `x`.
+#[inline]
+fn tent(x: f32, h: f32) -> impl Iterator<Item = (i32, f32)> {
+    ((x - h).ceil() as i32..=(x + h).floor() as i32).map(move |c| (c, (1.0 - (x - c as f32).abs() / h).max(0.0)))
+}
+
+/// The bin weights of a set of forecasters `(ω local, weight)`: photons with μ ≤ 0 or a weight that is
+/// not positive and finite are skipped; each photon adds exactly its weight (spread by `splat`).
+pub fn splat_histogram(photons: impl IntoIterator<Item = (Vec3, f32)>, splat: Splat) -> [f32; N_BINS] {
+    let mut w = [0.0f32; N_BINS];
+    let ok = |weight: f32| weight.is_finite() && weight > 0.0;
+    match splat {
+        Splat::None => {
+            for (dir, weight) in photons {
+                if let Some(i) = bin_of(dir) {
+                    if ok(weight) {
+                        w[i] += weight;
+                    }
+                }
+            }
+        }
+        Splat::Tent { radius } => {
+            let h = if radius.is_finite() { radius.clamp(1.0, 8.0) } else { 1.0 };
+            for (dir, weight) in photons {
+                let Some((x, y)) = bin_coords(dir).filter(|_| ok(weight)) else { continue };
+                let rows = || tent(y, h).filter(|&(l, _)| (0..N_MU as i32).contains(&l));
+                let (sx, sy): (f32, f32) = (tent(x, h).map(|t| t.1).sum(), rows().map(|t| t.1).sum());
+                if !(sx > 0.0 && sy > 0.0) {
+                    continue; // unreachable: the nearest centre always has weight > 0
+                }
+                for (l, wy) in rows() {
+                    for (j, wx) in tent(x, h) {
+                        let j = j.rem_euclid(N_PHI as i32) as usize;
+                        w[l as usize * N_PHI + j] += weight * (wx / sx) * (wy / sy);
+                    }
+                }
+            }
+        }
+    }
+    w
+}
