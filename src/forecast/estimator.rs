@@ -9,8 +9,9 @@
 //!
 //! Invariants: S depends only on the cluster rank and the diffuse depth, never on samples;
 //! the product is identical after a bitcode round trip (it is what rank 0 broadcasts).
-//! The [`TableCache`] is an explicit object owned by the estimator and shared by all worker
-//! threads: a cached entry is a pure function of its cell, so sharing it changes no image.
+//! The [`TableCache`] (`table_cache.rs`) is an explicit object owned by the estimator and shared
+//! by all worker threads: a cached entry is a pure function of its cell, so sharing it changes
+//! no image.
 
 use super::caustic_point::CausticPoint;
 use super::cluster::{cluster_points, Clustering, ClusteringMethod};
@@ -18,14 +19,14 @@ use super::cluster_map::{ClusterMap, DEFAULT_REPRESENTATIVES};
 use super::direction_table::{ForecastTables, TableMode};
 use super::forecast_map::{search_radius, ForecastMaps};
 use super::mixture::{DefensiveMixture, MixtureWeights};
+pub use super::table_cache::TableCache;
+use super::table_cache::{cell_of, normal_key, CellSizes};
 use crate::bsdf::{self, Mode};
 use crate::math::{luminance, Frame, Rgb, Vec3};
 use crate::profile::{Phase, Stopwatch};
-use crate::scene::Material;
 use crate::transport::context::{Context, ShadingQuery};
-use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
-use std::sync::{Arc, RwLock};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Photon weight in the T1 table.
@@ -87,9 +88,9 @@ pub struct ForecastOptions {
     pub s0: u32,
     /// Splitting rule.
     pub split_rule: SplitRule,
-    /// Table cache cell edge as a fraction of the search radius r (0 disables the cache).
-    /// Lambertian, flat shading points reuse the tables of their cell: a deterministic function
-    /// of x, so still unbiased (spec §9 "caching tables per cluster cell").
+    /// Table cache cell edge as a fraction of the cluster's own radius r_c (0 disables the
+    /// cache). Flat-shaded, non-Dirac points reuse the tables of their cell (`table_cache.rs`):
+    /// a deterministic function of x, so still unbiased (spec §9 "caching tables per cluster cell").
     pub cache_cell: f32,
     /// Photon tables are used at diffuse depths d < table_depth; deeper, one BSDF sample
     /// (S_cos = 1, spec §4). The dual table doubles the samples per vertex, so tables at every
@@ -161,6 +162,8 @@ pub struct CausticForecast {
     pub maps: ForecastMaps,
     /// Search radius r (0 when no cluster is kept).
     pub radius: f32,
+    /// Table-cache cell edges.
+    pub cells: CellSizes,
     /// Preprocess figures.
     pub stats: PreprocessStats,
 }
@@ -182,51 +185,6 @@ pub struct ForecastCounters {
     pub cache_hits: AtomicU64,
 }
 
-/// Table-cache key: (cell, normal bits).
-type CacheKey = ([i32; 3], [u32; 3]);
-/// (cluster, tables) of a cell, or `None` outside every kept cluster.
-type CacheEntry = Option<(usize, Arc<ForecastTables>)>;
-
-/// Shards of the table cache (threads rarely contend on one lock).
-const SHARDS: usize = 64;
-/// Entries per shard before it is cleared (bounds memory at ~1 KB × 2^19 in all).
-const SHARD_CAP: usize = 1 << 13;
-
-/// The table cache of one CF estimator, shared by every worker thread: each table is built
-/// once per cell for all threads. Entries are pure functions of their key, so which thread
-/// builds one (or whether two race to) never changes an estimate.
-pub struct TableCache {
-    shards: Vec<RwLock<HashMap<CacheKey, CacheEntry>>>,
-}
-
-impl Default for TableCache {
-    fn default() -> Self {
-        TableCache { shards: (0..SHARDS).map(|_| RwLock::new(HashMap::new())).collect() }
-    }
-}
-
-impl TableCache {
-    fn shard(&self, k: &CacheKey) -> &RwLock<HashMap<CacheKey, CacheEntry>> {
-        let [a, b, c] = k.0;
-        let h = (a as u32).wrapping_mul(0x9E37_79B1)
-            ^ (b as u32).wrapping_mul(0x85EB_CA77)
-            ^ (c as u32).wrapping_mul(0xC2B2_AE3D);
-        &self.shards[(h ^ k.1[0] ^ k.1[1].rotate_left(7) ^ k.1[2].rotate_left(13)) as usize % SHARDS]
-    }
-
-    fn get(&self, k: &CacheKey) -> Option<CacheEntry> {
-        self.shard(k).read().unwrap_or_else(|e| e.into_inner()).get(k).cloned()
-    }
-
-    fn insert(&self, k: CacheKey, e: CacheEntry) {
-        let mut m = self.shard(&k).write().unwrap_or_else(|e| e.into_inner());
-        if m.len() >= SHARD_CAP {
-            m.clear();
-        }
-        m.insert(k, e);
-    }
-}
-
 impl CausticForecast {
     /// Clusters the caustic points and builds the maps.
     pub fn build(points: Vec<CausticPoint>, opts: ForecastOptions, seed: u64, mut stats: PreprocessStats) -> Self {
@@ -245,7 +203,8 @@ impl CausticForecast {
         let kept_power: f64 = kept.iter().map(|c| c.power as f64).sum();
         stats.energy_kept = if clustering.total_power > 0.0 { kept_power / clustering.total_power } else { 0.0 };
         stats.radius = radius;
-        CausticForecast { opts, points, clustering, cluster_map, maps, radius, stats }
+        let cells = CellSizes::new(&clustering, opts.max_rank, (radius, opts.gather, opts.cache_cell));
+        CausticForecast { opts, points, clustering, cluster_map, maps, radius, cells, stats }
     }
 
     /// Splitting factor S(rank, d) (spec §4): max(1, S0 >> rank) at d = 0, else 1.
@@ -297,36 +256,34 @@ impl CausticForecast {
         ForecastTables::build(photons, brdf_cos, mode)
     }
 
-    /// The (cluster, tables) of a cacheable point: a pure function of its cell, normal and side.
+    /// The (cluster, tables) of a cacheable point: a pure function of its cluster, its cell in
+    /// that cluster's grid and its normal (`table_cache.rs`). Cached tables are weighted by
+    /// lum(Φ)·cos (or lum(Φ)) and the cosine: independent of ωo, they serve every flat non-Dirac
+    /// BSDF (exact for Lambert).
     fn cached_tables(
         &self,
         cache: &TableCache,
         (p, ng): (Vec3, Vec3),
         ctx: &mut Context,
         counters: &ForecastCounters,
-    ) -> CacheEntry {
-        let cell = self.radius * self.opts.cache_cell;
-        let q = (p / cell).floor();
-        let key: CacheKey = ([q.x as i32, q.y as i32, q.z as i32], ng.to_array().map(f32::to_bits));
-        if let Some(e) = cache.get(&key) {
+    ) -> Option<(usize, Arc<ForecastTables>)> {
+        let c = self.cluster_map.query(p, ng)?;
+        let (cell, centre) = cell_of(p, self.cells.edge[c]);
+        let key = (c as u32, cell, normal_key(ng));
+        if let Some(t) = cache.get(&key) {
             counters.cache_hits.fetch_add(1, Relaxed);
-            return e;
+            return Some((c, t));
         }
         let t0 = Instant::now();
-        let center = (q + Vec3::splat(0.5)) * cell;
-        let entry = self.cluster_map.query(center, ng).map(|c| {
-            let frame = Frame::from_normal(ng);
-            // Lambertian: f is constant, so it cancels in each normalised table
-            let w = |cp: &CausticPoint, l: Vec3| match self.opts.photon_weight {
-                PhotonWeight::Paper => cp.energy() * l.z,
-                PhotonWeight::Flux => cp.energy(),
-            };
-            (c, Arc::new(self.build_tables((c, center, &frame), &mut ctx.knn, w, |l| l.z)))
-        });
+        let w = |cp: &CausticPoint, l: Vec3| match self.opts.photon_weight {
+            PhotonWeight::Paper => cp.energy() * l.z,
+            PhotonWeight::Flux => cp.energy(),
+        };
+        let tables = Arc::new(self.build_tables((c, centre, &Frame::from_normal(ng)), &mut ctx.knn, w, |l| l.z));
         counters.tables_built.fetch_add(1, Relaxed);
         counters.cdf_ns.fetch_add(t0.elapsed().as_nanos() as u64, Relaxed);
-        cache.insert(key, entry.clone());
-        entry
+        cache.insert(key, tables.clone());
+        Some((c, tables))
     }
 
     /// The (cluster, tables) at a point that is not cached (tables in the shading frame).
@@ -337,7 +294,7 @@ impl CausticForecast {
         frame: &Frame,
         ctx: &mut Context,
         counters: &ForecastCounters,
-    ) -> CacheEntry {
+    ) -> Option<(usize, Arc<ForecastTables>)> {
         let (sp, m, wo) = (q.x, q.m, q.wo);
         self.cluster_map.query(sp.p, ng).map(|c| {
             let t0 = Instant::now();
@@ -357,7 +314,7 @@ impl CausticForecast {
     }
 
     /// The kept cluster at `q`, its tables and their frame (z = the normal on `q.wo`'s side), or
-    /// `None` outside every kept cluster. `cache` serves Lambertian, flat-shaded points; the result
+    /// `None` outside every kept cluster. `cache` serves flat-shaded, non-Dirac points; the result
     /// is a pure function of the point (never of random numbers), so any caller stays unbiased.
     pub fn tables_at(
         &self,
@@ -368,12 +325,12 @@ impl CausticForecast {
     ) -> Option<(usize, Arc<ForecastTables>, Frame)> {
         let (sp, m, wo) = (q.x, q.m, q.wo);
         let (ng, ns) = if wo.dot(sp.ng) >= 0.0 { (sp.ng, sp.ns) } else { (-sp.ng, -sp.ns) };
-        let cacheable = self.opts.cache_cell > 0.0 && matches!(m, Material::Diffuse { .. }) && sp.ns == sp.ng;
+        let cacheable = self.cells.enabled() && !m.is_dirac() && sp.ns == sp.ng;
         let cache = cache.filter(|_| cacheable);
         // cached tables live in the frame of the geometric normal (equal to ns there)
         let frame = if cache.is_some() { Frame::from_normal(ng) } else { Frame::from_normal(ns) };
         let t_table = Stopwatch::start();
-        let found: CacheEntry = match cache {
+        let found = match cache {
             _ if self.radius <= 0.0 => None,
             Some(cache) => self.cached_tables(cache, (sp.p, ng), ctx, counters),
             None => self.point_tables(q, ng, &frame, ctx, counters),

@@ -11,4 +11,5 @@ pub mod estimator;
 pub mod forecast_map;
 pub mod mixture;
 pub mod splat;
+pub mod table_cache;
 pub mod view;

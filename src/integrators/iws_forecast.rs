@@ -248,6 +248,7 @@ impl CausticEstimator for ForecastCaustics {
         serde_json::json!({
             "caustics": "caustic forecasting (unbiased)",
             "preprocess": self.cf.stats,
+            "cache_cells": self.cf.cells.json(),
             "options": self.cf.opts,
             "render": self.counters.json(),
         })

@@ -243,6 +243,7 @@ impl Integrator for GuidedPathTracer {
                 "table_cache_hits": self.counters.cache_hits.load(Relaxed),
             },
             "preprocess": self.cf.stats,
+            "cache_cells": self.cf.cells.json(),
             "options": self.cf.opts,
         })
     }
