@@ -223,8 +223,9 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs, opts: &forecast::scene::Load
     let seed = r.seed.unwrap_or(world.scene.render.seed);
     let target = cf_args.target_photons(&world);
     let pool = pipeline::thread_pool(r.threads)?;
+    let phases = forecast::progress::PhaseBar::new(!r.quiet);
     let (cf, untargeted) = pool.install(|| {
-        let cf = build_forecast(&world, target, cf_args.options(), seed);
+        let cf = build_forecast(&world, target, cf_args.options(), seed, &phases);
         let n = a.compare_paths;
         let untargeted = (n > 0).then(|| {
             let (pts, paths) = forecast::transport::particle::collect_caustic_vertices(
@@ -234,6 +235,7 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs, opts: &forecast::scene::Load
                 n,
                 seed,
                 forecast::sampling::rng::stream::FORECAST,
+                &|_| {},
             );
             (pts.len() as u64, paths)
         });

@@ -1,7 +1,11 @@
-//! Progress reporting on stderr (the only indicatif user): passes, spp, elapsed and remaining
-//! time, and Mrays/s. Hidden with `--quiet`, on non-zero ranks and when stderr is not a terminal.
+//! Progress reporting on stderr (the only indicatif user): the preprocess phases ([`Phases`]:
+//! name, elapsed time, and counts where known) and then the render passes ([`Progress`]: passes,
+//! spp, elapsed and remaining time, and Mrays/s). Hidden with `--quiet`, on non-zero ranks and
+//! when stderr is not a terminal. Reporting never touches an image or a random stream.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::sync::Mutex;
+use std::time::Duration;
 
 /// A progress bar over passes (spp mode) or milliseconds of budget (time mode).
 pub struct Progress {
@@ -49,6 +53,111 @@ impl Progress {
     /// Clears the bar.
     pub fn finish(&self) {
         if let Some(b) = &self.bar {
+            b.finish_and_clear();
+        }
+    }
+}
+
+/// Where the preprocess reports its phases (tracing, clustering, maps, photon map, pilot). It is
+/// passed down explicitly from the pipeline; an implementation only displays or records, so the
+/// product and every random stream are the same whichever one is passed (or [`Hidden`]).
+/// Phases run one at a time: `begin`, any number of `advance`, then `end`.
+pub trait Phases: Sync {
+    /// A phase starts: its name and, where known, the count it runs to (e.g. photons requested).
+    fn begin(&self, name: &'static str, total: Option<u64>);
+    /// The current phase has reached `done` (e.g. photons stored so far).
+    fn advance(&self, done: u64);
+    /// The current phase ended.
+    fn end(&self);
+}
+
+impl dyn Phases + '_ {
+    /// Starts a phase; it ends when the returned handle is dropped or finished.
+    pub fn phase(&self, name: &'static str, total: Option<u64>) -> PhaseGuard<'_> {
+        self.begin(name, total);
+        PhaseGuard { sink: self }
+    }
+}
+
+/// A running phase (ends on drop).
+pub struct PhaseGuard<'a> {
+    sink: &'a dyn Phases,
+}
+
+impl PhaseGuard<'_> {
+    /// The phase has reached `done` of its count.
+    pub fn set(&self, done: u64) {
+        self.sink.advance(done);
+    }
+
+    /// Ends the phase.
+    pub fn finish(self) {}
+}
+
+impl Drop for PhaseGuard<'_> {
+    fn drop(&mut self) {
+        self.sink.end();
+    }
+}
+
+/// Reports nothing (library callers, tests, the pilot's inner phases).
+pub struct Hidden;
+
+impl Phases for Hidden {
+    fn begin(&self, _: &'static str, _: Option<u64>) {}
+    fn advance(&self, _: u64) {}
+    fn end(&self) {}
+}
+
+/// Preprocess phases on stderr: a bar `done/total` where a count is known, else a spinner, with
+/// the phase name and elapsed time; cleared when the phase ends. Hidden under the render bar's
+/// rules (`visible` false with `--quiet` or on non-zero ranks; indicatif hides it when stderr is
+/// not a terminal).
+pub struct PhaseBar {
+    visible: bool,
+    bar: Mutex<Option<ProgressBar>>,
+}
+
+impl PhaseBar {
+    /// A reporter that draws only when `visible` (and stderr is a terminal).
+    pub fn new(visible: bool) -> PhaseBar {
+        PhaseBar { visible, bar: Mutex::new(None) }
+    }
+
+    fn current(&self) -> std::sync::MutexGuard<'_, Option<ProgressBar>> {
+        self.bar.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+impl Phases for PhaseBar {
+    fn begin(&self, name: &'static str, total: Option<u64>) {
+        let target = ProgressDrawTarget::stderr();
+        if !self.visible || target.is_hidden() {
+            return;
+        }
+        let tpl = match total {
+            Some(_) => "{spinner} [{elapsed_precise}] {msg} {wide_bar} {human_pos}/{human_len}",
+            None => "{spinner} [{elapsed_precise}] {msg}",
+        };
+        let bar = ProgressBar::with_draw_target(total, target);
+        if let Ok(style) = ProgressStyle::with_template(tpl) {
+            bar.set_style(style);
+        }
+        bar.set_message(name);
+        bar.enable_steady_tick(Duration::from_millis(100));
+        if let Some(old) = self.current().replace(bar) {
+            old.finish_and_clear();
+        }
+    }
+
+    fn advance(&self, done: u64) {
+        if let Some(b) = self.current().as_ref() {
+            b.set_position(done);
+        }
+    }
+
+    fn end(&self) {
+        if let Some(b) = self.current().take() {
             b.finish_and_clear();
         }
     }

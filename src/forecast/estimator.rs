@@ -24,6 +24,7 @@ use super::table_cache::{cell_of, normal_key, CellSizes};
 use crate::bsdf::{self, Mode};
 use crate::math::{luminance, Frame, Rgb, Vec3};
 use crate::profile::{Phase, Stopwatch};
+use crate::progress::Phases;
 use crate::transport::context::{Context, ShadingQuery};
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 use std::sync::Arc;
@@ -186,15 +187,26 @@ pub struct ForecastCounters {
 }
 
 impl CausticForecast {
-    /// Clusters the caustic points and builds the maps.
-    pub fn build(points: Vec<CausticPoint>, opts: ForecastOptions, seed: u64, mut stats: PreprocessStats) -> Self {
+    /// Clusters the caustic points and builds the maps, reporting the phases "clustering" and
+    /// "building forecast maps" to `phases` (display only).
+    pub fn build(
+        points: Vec<CausticPoint>,
+        opts: ForecastOptions,
+        seed: u64,
+        mut stats: PreprocessStats,
+        phases: &dyn Phases,
+    ) -> Self {
         let t = Instant::now();
+        let phase = phases.phase("clustering", None);
         let clustering = cluster_points(&points, opts.clusters, opts.clustering, seed);
+        phase.finish();
         stats.clustering_s = t.elapsed().as_secs_f64();
         let t = Instant::now();
+        let phase = phases.phase("building forecast maps", None);
         let radius = search_radius(&clustering, opts.max_rank, opts.gather).unwrap_or(0.0);
         let cluster_map = ClusterMap::build(&points, &clustering, opts.max_rank, DEFAULT_REPRESENTATIVES, radius);
         let maps = ForecastMaps::build(&points, &clustering, opts.max_rank, radius);
+        phase.finish();
         stats.kdtree_s = t.elapsed().as_secs_f64();
         let kept = clustering.kept(opts.max_rank);
         stats.stored = points.len() as u64;

@@ -24,6 +24,7 @@
 use super::caustics::{CausticEstimator, NoCaustics, Recurse, ShadingQuery};
 use super::vpl::{generate_vpls, Vpl, VplKind};
 use super::{Context, Integrator, MethodArgs, MethodSpec};
+use crate::progress::Phases;
 use crate::accel::{offset_origin, ray_epsilon, Hit, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::math::{Rgb, Vec3, PI};
@@ -99,7 +100,7 @@ fn parse_bound(s: &str) -> Result<f32, String> {
 
 impl MethodSpec for Iws {
     type Product = ();
-    fn preprocess(_: &World, _: &MethodArgs, _: u64) -> Result<(), String> {
+    fn preprocess(_: &World, _: &MethodArgs, _: u64, _: &dyn Phases) -> Result<(), String> {
         Ok(())
     }
     fn build(world: &World, args: &MethodArgs, _: ()) -> Result<Box<dyn Integrator>, String> {

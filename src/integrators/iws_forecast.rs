@@ -14,6 +14,7 @@
 use super::caustics::{caustic_chain, CausticEstimator, Recurse, ShadingQuery};
 use super::iws::Iws;
 use super::{Context, Integrator, MethodArgs, MethodSpec};
+use crate::progress::{Hidden, Phases};
 use crate::accel::World;
 use crate::bsdf;
 use crate::forecast::caustic_point::CausticPoint;
@@ -139,8 +140,8 @@ pub struct IwsCf;
 
 impl MethodSpec for IwsCf {
     type Product = CausticForecast;
-    fn preprocess(world: &World, args: &MethodArgs, seed: u64) -> Result<CausticForecast, String> {
-        Ok(preprocess_forecast(world, args, seed))
+    fn preprocess(world: &World, args: &MethodArgs, seed: u64, phases: &dyn Phases) -> Result<CausticForecast, String> {
+        Ok(preprocess_forecast(world, args, seed, phases))
     }
     fn build(world: &World, args: &MethodArgs, cf: CausticForecast) -> Result<Box<dyn Integrator>, String> {
         Ok(Box::new(Iws::new(world, args, Box::new(ForecastCaustics::new(cf)))))
@@ -161,10 +162,16 @@ pub fn targeted_emission(world: &World) -> Emission {
 }
 
 /// Traces forecast photons: returns the caustic points (flux normalised by paths launched),
-/// the number of paths, and the tracing time.
-pub fn trace_forecasters(world: &World, emission: Emission, target: u64, seed: u64) -> (Vec<CausticPoint>, u64, f64) {
+/// the number of paths, and the tracing time. `stored(n)` follows the count (display only).
+pub fn trace_forecasters(
+    world: &World,
+    emission: Emission,
+    target: u64,
+    seed: u64,
+    stored: &dyn Fn(u64),
+) -> (Vec<CausticPoint>, u64, f64) {
     let t0 = Instant::now();
-    let (verts, paths) = particle::collect_caustic_points(world, emission, target, seed, stream::FORECAST);
+    let (verts, paths) = particle::collect_caustic_points(world, emission, target, seed, stream::FORECAST, stored);
     let points = verts.iter().map(|v| CausticPoint::new(v.p, v.n, v.w_in, v.beta)).filter(|c| c.is_finite()).collect();
     (points, paths, t0.elapsed().as_secs_f64())
 }
@@ -173,39 +180,51 @@ pub fn trace_forecasters(world: &World, emission: Emission, target: u64, seed: u
 /// as given; else, with a time budget `T`, `min(cap, 0.05·T / cost)` where `cost` is the seconds
 /// per stored photon of a [`PILOT_PHOTONS`] pilot preprocess and `cap` the scene's (or default)
 /// count; else the scene's count. Any count leaves the image unbiased (the tables are a pdf).
-/// The rule and the pilot's cost go into `stats`.
-pub fn preprocess_forecast(world: &World, args: &MethodArgs, seed: u64) -> CausticForecast {
+/// The rule and the pilot's cost go into `stats`. Phases: "pilot" (its own phases hidden), then
+/// those of [`build_forecast`].
+pub fn preprocess_forecast(world: &World, args: &MethodArgs, seed: u64, phases: &dyn Phases) -> CausticForecast {
     let cap = args.cf.target_photons(world);
     let (n, rule, cost) = match (args.cf.forecast_photons, args.cf.time_budget_s) {
         (Some(n), _) => (n, "cli", 0.0),
         (None, Some(t)) if t.is_finite() && t > 0.0 && cap > PILOT_PHOTONS => {
+            let phase = phases.phase("pilot", None);
             let t0 = Instant::now();
-            let pilot = build_forecast(world, PILOT_PHOTONS, args.cf.options(), seed ^ 0x0050_494c_4f54);
+            let pilot = build_forecast(world, PILOT_PHOTONS, args.cf.options(), seed ^ 0x0050_494c_4f54, &Hidden);
             let cost = t0.elapsed().as_secs_f64() / pilot.stats.stored.max(1) as f64;
+            phase.finish();
             let want = (PREPROCESS_SHARE * t / cost.max(1e-12)).max(MIN_BUDGET_PHOTONS as f64);
             ((want as u64).min(cap), "budget", cost)
         }
         (None, _) if world.scene.forecast_photons.is_some() => (cap, "scene", 0.0),
         (None, _) => (cap, "default", 0.0),
     };
-    let mut cf = build_forecast(world, n, args.cf.options(), seed);
+    let mut cf = build_forecast(world, n, args.cf.options(), seed, phases);
     cf.stats.photons_requested = n;
     cf.stats.photon_rule = rule.to_string();
     cf.stats.pilot_s_per_photon = cost;
     cf
 }
 
-/// The CF preprocess (spec §3) for `target` stored photons.
-pub fn build_forecast(world: &World, target: u64, opts: ForecastOptions, seed: u64) -> CausticForecast {
+/// The CF preprocess (spec §3) for `target` stored photons. Phases: "tracing forecast photons"
+/// (stored / requested), then those of [`CausticForecast::build`].
+pub fn build_forecast(
+    world: &World,
+    target: u64,
+    opts: ForecastOptions,
+    seed: u64,
+    phases: &dyn Phases,
+) -> CausticForecast {
     let emission = targeted_emission(world);
-    let (points, paths, tracing_s) = trace_forecasters(world, emission, target, seed);
+    let tracing = phases.phase("tracing forecast photons", Some(target));
+    let (points, paths, tracing_s) = trace_forecasters(world, emission, target, seed, &|n| tracing.set(n));
+    tracing.finish();
     let stats = PreprocessStats {
         paths,
         tracing_s,
         yield_per_path: if paths > 0 { points.len() as f64 / paths as f64 } else { 0.0 },
         ..Default::default()
     };
-    CausticForecast::build(points, opts, seed, stats)
+    CausticForecast::build(points, opts, seed, stats, phases)
 }
 
 /// `Ĺ_c` by Caustic Forecasting, plugged into the IWS recursion; owns the product, its

@@ -5,7 +5,8 @@
 //! - its parameters: a `#[derive(clap::Args, serde::Serialize)]` group, flattened into the
 //!   command line (`--method` and every flag) and into the JSON report's `options`;
 //! - its one-off preprocess product ([`MethodSpec::Product`], `()` when there is none), built on
-//!   rank 0; [`Method::preprocess`] encodes it with bitcode and [`Method::build`] decodes the
+//!   rank 0, reporting its phases to a [`Phases`] passed down by the pipeline (display only);
+//!   [`Method::preprocess`] encodes it with bitcode and [`Method::build`] decodes the
 //!   broadcast bytes, in one generic place;
 //! - its construction ([`MethodSpec::build`]).
 //!
@@ -22,6 +23,7 @@ pub use caustics::{BsdfCaustics, CausticEstimator, NoCaustics, Recurse, ShadingQ
 use crate::accel::World;
 use crate::math::{Rgb, Vec3};
 use crate::profile::Profile;
+use crate::progress::{Hidden, Phases};
 pub use crate::transport::context::Context;
 
 /// A radiance estimator.
@@ -43,8 +45,8 @@ pub trait Integrator: Send + Sync {
 pub trait MethodSpec {
     /// The one-off preprocess product, broadcast from rank 0 (`()` when there is none).
     type Product: bitcode::Encode + bitcode::DecodeOwned;
-    /// Runs the preprocess (rank 0 only).
-    fn preprocess(world: &World, args: &MethodArgs, seed: u64) -> Result<Self::Product, String>;
+    /// Runs the preprocess (rank 0 only), reporting its phases to `phases` (display only).
+    fn preprocess(world: &World, args: &MethodArgs, seed: u64, phases: &dyn Phases) -> Result<Self::Product, String>;
     /// Builds the integrator from the (broadcast) product.
     fn build(world: &World, args: &MethodArgs, product: Self::Product) -> Result<Box<dyn Integrator>, String>;
 }
@@ -88,10 +90,22 @@ macro_rules! methods {
                 }
             }
 
-            /// The one-off preprocess (rank 0), encoded for the broadcast.
+            /// The one-off preprocess (rank 0), encoded for the broadcast, reporting nothing.
             pub fn preprocess(self, world: &World, args: &MethodArgs, seed: u64) -> Result<Vec<u8>, String> {
+                self.preprocess_reporting(world, args, seed, &Hidden)
+            }
+
+            /// [`Method::preprocess`] reporting its phases (tracing, clustering, maps, …) to
+            /// `phases`; the product is the same whatever `phases` is.
+            pub fn preprocess_reporting(
+                self,
+                world: &World,
+                args: &MethodArgs,
+                seed: u64,
+                phases: &dyn Phases,
+            ) -> Result<Vec<u8>, String> {
                 match self {
-                    $( Method::$variant => encode_product::<$module::$spec>(world, args, seed), )*
+                    $( Method::$variant => encode_product::<$module::$spec>(world, args, seed, phases), )*
                 }
             }
 
@@ -147,8 +161,13 @@ impl Default for MethodArgs {
     }
 }
 
-fn encode_product<S: MethodSpec>(world: &World, args: &MethodArgs, seed: u64) -> Result<Vec<u8>, String> {
-    Ok(bitcode::encode(&S::preprocess(world, args, seed)?))
+fn encode_product<S: MethodSpec>(
+    world: &World,
+    args: &MethodArgs,
+    seed: u64,
+    phases: &dyn Phases,
+) -> Result<Vec<u8>, String> {
+    Ok(bitcode::encode(&S::preprocess(world, args, seed, phases)?))
 }
 
 fn build_from<S: MethodSpec>(

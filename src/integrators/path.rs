@@ -10,6 +10,7 @@
 
 use crate::profile::{Phase, Profile, Stopwatch};
 use super::{Context, Integrator, MethodArgs, MethodSpec};
+use crate::progress::Phases;
 use crate::accel::{offset_origin, Hit, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::math::{Rgb, Vec3};
@@ -44,7 +45,7 @@ impl PtArgs {
 
 impl MethodSpec for PathTracer {
     type Product = ();
-    fn preprocess(_: &World, _: &MethodArgs, _: u64) -> Result<(), String> {
+    fn preprocess(_: &World, _: &MethodArgs, _: u64, _: &dyn Phases) -> Result<(), String> {
         Ok(())
     }
     fn build(_: &World, args: &MethodArgs, _: ()) -> Result<Box<dyn Integrator>, String> {

@@ -23,6 +23,7 @@ use crate::profile::{Phase, Stopwatch};
 use super::caustics::{CausticEstimator, Recurse, ShadingQuery};
 use super::iws::Iws;
 use super::{Context, Integrator, MethodArgs, MethodSpec};
+use crate::progress::Phases;
 use crate::accel::World;
 use crate::bsdf::{self, ShadingPoint};
 use crate::math::{Rgb, Vec3, PI};
@@ -70,9 +71,11 @@ pub struct IwsPm;
 
 impl MethodSpec for IwsPm {
     type Product = PhotonMap;
-    fn preprocess(world: &World, args: &MethodArgs, seed: u64) -> Result<PhotonMap, String> {
+    fn preprocess(world: &World, args: &MethodArgs, seed: u64, phases: &dyn Phases) -> Result<PhotonMap, String> {
         let pm = &args.pm;
-        Ok(PhotonMap::build(world, pm.photons, pm.gather, pm.max_radius, seed))
+        let phase = phases.phase("photon map", Some(pm.photons));
+        let map = PhotonMap::build(world, pm.photons, pm.gather, pm.max_radius, seed, &|n| phase.set(n));
+        Ok(map)
     }
     fn build(world: &World, args: &MethodArgs, pm: PhotonMap) -> Result<Box<dyn Integrator>, String> {
         pm.validate()?;
@@ -121,9 +124,11 @@ pub fn default_max_radius(world: &World) -> f32 {
 
 impl PhotonMap {
     /// Traces light paths until `target` caustic photons are stored (see the module doc).
-    pub fn build(world: &World, target: u64, k: u32, max_radius: Option<f32>, seed: u64) -> PhotonMap {
+    /// `stored(n)` is told the photons stored so far after every block of paths (display only).
+    pub fn build(world: &World, target: u64, k: u32, max_radius: Option<f32>, seed: u64, stored: &dyn Fn(u64)) -> PhotonMap {
         let t0 = Instant::now();
-        let (verts, paths) = particle::collect_caustic_points(world, Emission::Cosine, target, seed, stream::PHOTON);
+        let (verts, paths) =
+            particle::collect_caustic_points(world, Emission::Cosine, target, seed, stream::PHOTON, stored);
         let items: Vec<([f32; 3], Photon)> = verts
             .iter()
             .map(|v| {

@@ -23,6 +23,7 @@
 use super::iws_forecast::IwsCf;
 use super::path::{emitter_hit, RR_DEPTH};
 use super::{Context, Integrator, MethodArgs, MethodSpec};
+use crate::progress::Phases;
 use crate::accel::{offset_origin, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::forecast::direction_table::ForecastTables;
@@ -63,8 +64,8 @@ pub struct PtCf;
 
 impl MethodSpec for PtCf {
     type Product = CausticForecast;
-    fn preprocess(world: &World, args: &MethodArgs, seed: u64) -> Result<CausticForecast, String> {
-        <IwsCf as MethodSpec>::preprocess(world, args, seed)
+    fn preprocess(world: &World, args: &MethodArgs, seed: u64, phases: &dyn Phases) -> Result<CausticForecast, String> {
+        <IwsCf as MethodSpec>::preprocess(world, args, seed, phases)
     }
     fn build(_: &World, args: &MethodArgs, cf: CausticForecast) -> Result<Box<dyn Integrator>, String> {
         let p = &args.ptcf;

@@ -25,7 +25,7 @@ use crate::distributed::{self, Cluster};
 use crate::image_io::{with_ext, Image};
 use crate::integrators::{Integrator, Method, MethodArgs};
 use crate::param_limits as params;
-use crate::progress::Progress;
+use crate::progress::{PhaseBar, Progress};
 use crate::render::film::Film;
 use crate::render::{render_pass, PassCounters};
 use crate::scene::Scene;
@@ -266,7 +266,7 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
         .and_then(|()| Ok((thread_pool(job.threads)?, load(job, cluster.rank())?)));
     let (pool, (world, plan, mut timings)) = distributed::agree(cluster, setup)?;
     let deadline = distributed::shared_deadline(cluster, started, plan.time);
-    let mut pre = preprocess(&world, &plan, cluster)?;
+    let mut pre = preprocess(&world, &plan, cluster, &PhaseBar::new(job.progress && cluster.rank() == 0))?;
     timings.preprocess_s = pre.stats.preprocess_s;
     timings.broadcast_s = pre.stats.broadcast_s;
     let over_budget = preprocess_over_budget(&plan, &timings, started, cluster.rank());
@@ -358,10 +358,11 @@ struct Prepared {
 }
 
 /// Stage 2: the caustic preprocess on rank 0, broadcast to the others; every rank builds its
-/// integrator from the same bytes.
-fn preprocess(world: &World, plan: &Plan, cluster: &dyn Cluster) -> Result<Prepared, String> {
+/// integrator from the same bytes. Its phases are shown under the render bar's rules.
+fn preprocess(world: &World, plan: &Plan, cluster: &dyn Cluster, phases: &PhaseBar) -> Result<Prepared, String> {
     let t_pre = Instant::now();
-    let pre = if cluster.rank() == 0 { plan.method.preprocess(world, &plan.args, plan.seed) } else { Ok(Vec::new()) };
+    let run = || plan.method.preprocess_reporting(world, &plan.args, plan.seed, phases);
+    let pre = if cluster.rank() == 0 { run() } else { Ok(Vec::new()) };
     let preprocess_s = secs(t_pre);
     // every rank must leave together when rank 0 fails, or the others wait in the broadcast
     let mut product = distributed::agree(cluster, pre)?;

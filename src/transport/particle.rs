@@ -287,7 +287,8 @@ pub const BLOCK: u64 = 16_384;
 /// Traces light paths 0, 1, 2, … (stream `(seed, stream_id, 0, i)`) until `target` caustic
 /// vertices (non-specular hits after a Dirac vertex) are collected or `max_paths` are launched.
 /// Returns the vertices of whole paths `0..P` and `P`, the normaliser: deterministic for any
-/// thread count, since blocks run in parallel but are concatenated in path order.
+/// thread count, since blocks run in parallel but are concatenated in path order. `stored(n)`
+/// is told the vertices collected so far after every block (progress display only).
 pub fn collect_caustic_vertices(
     world: &World,
     emission: Emission,
@@ -295,6 +296,7 @@ pub fn collect_caustic_vertices(
     max_paths: u64,
     seed: u64,
     stream_id: u64,
+    stored: &dyn Fn(u64),
 ) -> (Vec<CausticVertex>, u64) {
     use rayon::prelude::*;
     struct Collect(Vec<CausticVertex>);
@@ -332,6 +334,7 @@ pub fn collect_caustic_vertices(
                 break;
             }
         }
+        stored(out.len() as u64);
     }
     (out, paths)
 }
@@ -350,9 +353,10 @@ pub fn collect_caustic_points(
     target: u64,
     seed: u64,
     stream_id: u64,
+    stored: &dyn Fn(u64),
 ) -> (Vec<CausticVertex>, u64) {
     let max_paths = target.saturating_mul(PATH_FACTOR).max(BLOCK);
-    let (mut verts, paths) = collect_caustic_vertices(world, emission, target, max_paths, seed, stream_id);
+    let (mut verts, paths) = collect_caustic_vertices(world, emission, target, max_paths, seed, stream_id, stored);
     let inv = if paths > 0 { 1.0 / paths as f32 } else { 0.0 };
     for v in &mut verts {
         v.beta *= inv;
