@@ -128,17 +128,10 @@ pub fn measure(img: &Image, reference: &Image, regions: &[Region]) -> Result<Vec
         .collect()
 }
 
-/// A budget as a short label: `500ms`, `30s`, `1.5s`, `4m`, `1h`.
+/// A budget as a short label: `500ms`, `30s`, `1.5s`, `4m`, `1h` (the label of a render's
+/// snapshot at that time, `pipeline::snapshot_label`).
 pub fn budget_label(secs: f64) -> String {
-    if secs < 1.0 {
-        format!("{}ms", (secs * 1000.0).round())
-    } else if secs >= 3600.0 && secs % 3600.0 == 0.0 {
-        format!("{}h", secs / 3600.0)
-    } else if secs >= 60.0 && secs % 60.0 == 0.0 {
-        format!("{}m", secs / 60.0)
-    } else {
-        format!("{}s", (secs * 100.0).round() / 100.0)
-    }
+    pipeline::snapshot_label(secs)
 }
 
 /// What `forecast compare` does.

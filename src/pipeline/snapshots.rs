@@ -6,7 +6,7 @@
 //! start like the `--time` budget (scene loading and the preprocess count), rank 0 gathers the
 //! sums exactly as a checkpoint does (`Run::maybe_checkpoint`: one `all_reduce_max` to agree,
 //! then the collective reduce) and writes `PREFIX.snap-LABEL.{exr,json}` as one
-//! `atomic_io::FileSet` (`LABEL` is `compare::budget_label`: `15s`, `1m`).
+//! `atomic_io::FileSet` (`LABEL` is [`snapshot_label`]: `15s`, `1m`, as `compare`'s budget labels).
 //!
 //! Invariants: a snapshot only reads the film, so the final image is bit-identical with and
 //! without snapshots for the same passes; `elapsed_s ≥ nominal_s`, and the passes of successive
@@ -60,9 +60,18 @@ pub fn snapshot_prefix(out: &Path, label: &str) -> PathBuf {
     with_ext(out, &format!("snap-{label}"))
 }
 
-/// The label of a snapshot time (the same as a compare budget's).
+/// A snapshot time (or a compare budget, `compare::budget_label`) as a short label: `500ms`,
+/// `30s`, `1.5s`, `4m`, `1h`.
 pub fn snapshot_label(secs: f64) -> String {
-    crate::compare::budget_label(secs)
+    if secs < 1.0 {
+        format!("{}ms", (secs * 1000.0).round())
+    } else if secs >= 3600.0 && secs % 3600.0 == 0.0 {
+        format!("{}h", secs / 3600.0)
+    } else if secs >= 60.0 && secs % 60.0 == 0.0 {
+        format!("{}m", secs / 60.0)
+    } else {
+        format!("{}s", (secs * 100.0).round() / 100.0)
+    }
 }
 
 /// Checks `--snapshots` against the time budget: every time positive and finite, earlier than
