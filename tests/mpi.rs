@@ -241,7 +241,7 @@ fn snapshots_under_two_ranks_leave_the_image_unchanged() {
     let s = json(&snapped.with_extension("snap-1ms"));
     assert_eq!((s["ranks"].as_u64(), s["label"].as_str()), (Some(2), Some("1ms")));
     let passes = s["passes"].as_u64().unwrap();
-    assert!(passes >= 2 && passes % 2 == 0 && passes <= 40, "whole rounds of 2 passes: {passes}");
+    assert!(passes >= 2 && passes.is_multiple_of(2) && passes <= 40, "whole rounds of 2 passes: {passes}");
     assert!(s["elapsed_s"].as_f64().unwrap() >= 1e-3);
     let j = json(&snapped);
     assert_eq!(j["snapshots"].as_array().map(Vec::len), Some(1));
