@@ -5,17 +5,20 @@
 # SCENES (default "cornell ring") may add `figurines` (its pt reference: FIG_REF, else 8192 spp made here).
 # 256x256, 2 threads; budgets count loading and preprocess. The ring reference is rendered once
 # (RING_REF_SPP, default 32768 spp, two independent halves) and reused.
+# SINGLE_RUN=1 adds `--single-run`: one render per (method, seed) at the largest budget, the smaller
+# budgets measured from its snapshots (e.g. BUDGETS 15s,30s,1m,2m,4m costs one 4-min run, not five).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 budgets="${1:-60s}"; seeds="${2:-3}"; out="${3:-results/equal-time}"
 methods="${METHODS:-pt,iws-cf,pt-cf}"
 bin=target/release/forecast
+single=(); [ "${SINGLE_RUN:-0}" = 1 ] && single=(--single-run)
 cargo build --release --quiet
 mkdir -p "$out"
 scenes="${SCENES:-cornell ring}"
 run() { # NAME SCENE REFERENCE
     "$bin" compare "$2" --methods "$methods" --budgets "$budgets" --seeds "$seeds" --threads 2 \
-        --reference "$3" --out "$out/$1" --quiet
+        --reference "$3" --out "$out/$1" --quiet ${single[@]+"${single[@]}"}
 }
 for s in $scenes; do
     case "$s" in

@@ -102,6 +102,10 @@ pub struct RenderArgs {
     /// Stop after this many rounds of passes (testing kill/resume).
     #[arg(long, hide = true)]
     pub max_rounds: Option<u64>,
+    /// Also write the image as it stood at these times since the start (e.g. 15s,30s,1m), each
+    /// earlier than --time, to PREFIX.snap-LABEL.{exr,json} (`render` only).
+    #[arg(long, value_delimiter = ',', value_parser = parse_secs)]
+    pub snapshots: Vec<f64>,
     /// Every method's parameters (flags from each method's file).
     #[command(flatten)]
     pub method_args: MethodArgs,
@@ -126,6 +130,7 @@ impl RenderArgs {
             max_rounds: self.max_rounds,
             threads: self.threads,
             defines: Vec::new(),
+            snapshots: self.snapshots.clone(),
         }
     }
 }
@@ -239,6 +244,10 @@ pub struct CompareArgs {
     /// Reference image (from `forecast reference`).
     #[arg(long)]
     pub reference: PathBuf,
+    /// Render each (method, seed) once, at the largest budget, and measure the smaller budgets
+    /// from snapshots of that run (`render --snapshots`) instead of separate runs.
+    #[arg(long)]
+    pub single_run: bool,
 }
 
 impl CompareArgs {
@@ -251,6 +260,7 @@ impl CompareArgs {
             seeds: self.seeds,
             reference: self.reference.clone(),
             out: self.render.out.clone(),
+            single_run: self.single_run,
         }
     }
 }

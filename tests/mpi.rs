@@ -224,3 +224,26 @@ fn pt_cf_two_ranks_equal_one_process() {
     assert_eq!(ranks[0]["product_hash"], ranks[1]["product_hash"]);
     assert!(j["method_stats"]["guide"]["fraction_inside_clusters"].as_f64().unwrap() > 0.0);
 }
+
+#[test]
+fn snapshots_under_two_ranks_leave_the_image_unchanged() {
+    let d = tmp_dir("snapshots");
+    let (plain, snapped) = (d.join("plain"), d.join("snapped"));
+    let common = ["render", &scene(), "--spp", "40", "--resolution", "32x32", "--seed", "3", "--quiet"];
+    mpirun(2, &[&common[..], &["--out", plain.to_str().unwrap()][..]].concat());
+    // 1ms is due at the first round boundary (loading alone takes longer); 1h never comes
+    let snaps = ["--snapshots", "1ms,1h", "--out", snapped.to_str().unwrap()];
+    mpirun(2, &[&common[..], &snaps[..]].concat());
+    assert_eq!(
+        std::fs::read(plain.with_extension("exr")).unwrap(),
+        std::fs::read(snapped.with_extension("exr")).unwrap()
+    );
+    let s = json(&snapped.with_extension("snap-1ms"));
+    assert_eq!((s["ranks"].as_u64(), s["label"].as_str()), (Some(2), Some("1ms")));
+    let passes = s["passes"].as_u64().unwrap();
+    assert!(passes >= 2 && passes.is_multiple_of(2) && passes <= 40, "whole rounds of 2 passes: {passes}");
+    assert!(s["elapsed_s"].as_f64().unwrap() >= 1e-3);
+    let j = json(&snapped);
+    assert_eq!(j["snapshots"].as_array().map(Vec::len), Some(1));
+    assert!(j["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains("snapshot 1h not written")));
+}

@@ -10,12 +10,18 @@
 //! * ROIs are given at the scene camera's resolution; [`scale_roi`] maps them to the render
 //!   resolution (outward rounding, clamped to the image, never empty).
 //!
+//! * `--single-run` (`single_run`): each (method, seed) is rendered once at the largest budget
+//!   with snapshots (`render --snapshots`) at the smaller ones; each smaller budget's row is
+//!   measured from its snapshot image (spp, wall time = the snapshot's elapsed seconds). The
+//!   report says so (`CompareOutcome::single_run`): the preprocess was sized for the largest budget.
+//!
 //! Submodules: [`reference`] (two independent halves + their mean), [`report`] (charts, crops,
-//! `report.md`/`report.html`/`results.json`), [`stability`] (the edge-case suite and the scene
-//! warnings every render emits).
+//! `report.md`/`report.html`/`results.json`), `single_run`, [`stability`] (the edge-case suite and
+//! the scene warnings every render emits).
 
 pub mod reference;
 pub mod report;
+mod single_run;
 pub mod stability;
 
 use crate::distributed::Cluster;
@@ -72,8 +78,12 @@ pub struct RunRecord {
     pub nonfinite_samples: u64,
     /// Errors per region (`full` first).
     pub regions: Vec<RegionError>,
-    /// Output prefix of the run's images (`PREFIX.exr`, `.png`, `.json`).
+    /// Output prefix of the run's images (`PREFIX.exr`, `.png`, `.json`; with `from_snapshot`,
+    /// the snapshot's `PREFIX.exr` and `.json`).
     pub prefix: PathBuf,
+    /// Measured from a snapshot of the (method, seed)'s one run at the largest budget
+    /// (`--single-run`), not from a run of its own.
+    pub from_snapshot: bool,
 }
 
 /// Maps an ROI rectangle given at resolution `from` to resolution `to`: edges scale by `to/from`,
@@ -118,17 +128,10 @@ pub fn measure(img: &Image, reference: &Image, regions: &[Region]) -> Result<Vec
         .collect()
 }
 
-/// A budget as a short label: `500ms`, `30s`, `1.5s`, `4m`, `1h`.
+/// A budget as a short label: `500ms`, `30s`, `1.5s`, `4m`, `1h` (the label of a render's
+/// snapshot at that time, `pipeline::snapshot_label`).
 pub fn budget_label(secs: f64) -> String {
-    if secs < 1.0 {
-        format!("{}ms", (secs * 1000.0).round())
-    } else if secs >= 3600.0 && secs % 3600.0 == 0.0 {
-        format!("{}h", secs / 3600.0)
-    } else if secs >= 60.0 && secs % 60.0 == 0.0 {
-        format!("{}m", secs / 60.0)
-    } else {
-        format!("{}s", (secs * 100.0).round() / 100.0)
-    }
+    pipeline::snapshot_label(secs)
 }
 
 /// What `forecast compare` does.
@@ -146,6 +149,8 @@ pub struct CompareConfig {
     pub reference: PathBuf,
     /// Output directory.
     pub out: PathBuf,
+    /// One render per (method, seed) at the largest budget; smaller budgets from its snapshots.
+    pub single_run: bool,
 }
 
 /// The measured comparison (rank 0).
@@ -159,8 +164,12 @@ pub struct CompareOutcome {
     pub resolution: (u32, u32),
     /// Regions measured.
     pub regions: Vec<Region>,
-    /// Every run, in order.
+    /// Every run, in order (method, budget, seed).
     pub runs: Vec<RunRecord>,
+    /// `--single-run`: every (method, seed) was rendered once at the largest budget and the
+    /// smaller budgets' rows were measured from snapshots of that run, so their preprocess (e.g.
+    /// the CF photon count) was sized for the largest budget.
+    pub single_run: bool,
     /// Warnings of the scene (also in every run's JSON).
     pub warnings: Vec<String>,
 }
@@ -210,87 +219,148 @@ fn agree_resolution(cfg: &CompareConfig, cluster: &dyn Cluster) -> Result<(Optio
     }
 }
 
+/// What every run of one comparison shares.
+struct Ctx<'a> {
+    cfg: &'a CompareConfig,
+    cluster: &'a dyn Cluster,
+    /// The reference (rank 0 only: only rank 0 measures).
+    reference: Option<&'a Image>,
+    regions: &'a [Region],
+    res: (u32, u32),
+    base_seed: u64,
+    runs_dir: PathBuf,
+}
+
+impl Ctx<'_> {
+    /// The job of one render: `method` with `seed` under a `budget`, snapshots at `snapshots`.
+    fn job(&self, method: Method, budget: f64, seed: u64, prefix: PathBuf, snapshots: Vec<f64>) -> RenderJob {
+        RenderJob {
+            method: Some(method),
+            time: Some(budget),
+            spp: None,
+            seed: Some(seed),
+            resolution: Some(self.res),
+            out: prefix,
+            progress: false,
+            checkpoint_every: None,
+            resume: None,
+            checkpoint_path: None,
+            max_rounds: None,
+            snapshots,
+            ..self.cfg.base.clone()
+        }
+    }
+
+    /// The output prefix of (method, budget, seed index).
+    fn prefix(&self, method: Method, budget: f64, k: u64) -> PathBuf {
+        self.runs_dir.join(format!("{}_{}_s{k}", method.name(), budget_label(budget)))
+    }
+
+    /// A record of (method, budget, seed index) before measuring.
+    fn record(&self, method: Method, budget: f64, k: u64, prefix: PathBuf) -> RunRecord {
+        RunRecord {
+            method: method.name().into(),
+            budget_s: budget,
+            seed_index: k,
+            seed: self.base_seed.wrapping_add(k),
+            error: None,
+            spp: 0,
+            wall_s: 0.0,
+            preprocess_s: 0.0,
+            preprocess_share: 0.0,
+            nonfinite_samples: 0,
+            regions: Vec::new(),
+            prefix,
+            from_snapshot: false,
+        }
+    }
+
+    /// Measures `img` (the image at `rec.prefix`) into `rec`.
+    fn measure_into(&self, rec: &mut RunRecord, img: &Image) {
+        let Some(reference) = self.reference else { return };
+        match measure(img, reference, self.regions) {
+            Ok(m) => rec.regions = m,
+            Err(e) => rec.error = Some(format!("{}: {e}", with_ext(&rec.prefix, "exr").display())),
+        }
+    }
+
+    /// Fills `rec` from a finished render (rank 0) and measures its film.
+    fn fill_from_render(&self, rec: &mut RunRecord, result: &Result<Option<pipeline::RenderResult>, String>) {
+        match result {
+            Ok(Some(r)) => {
+                let rep = &r.report;
+                rec.spp = rep.spp;
+                rec.wall_s = rep.timings.total_s;
+                rec.preprocess_s = rep.timings.preprocess_s;
+                rec.preprocess_share = rec.preprocess_s / rec.wall_s.max(1e-12);
+                rec.nonfinite_samples = rep.nonfinite_samples;
+                self.measure_into(rec, &pipeline::image_from_film(&r.film));
+            }
+            Ok(None) => rec.error = Some("no result on rank 0".into()),
+            Err(e) => rec.error = Some(e.clone()),
+        }
+    }
+
+    /// One render per (budget, seed), as a separate time box.
+    fn separate_runs(&self, method: Method) -> Vec<RunRecord> {
+        let mut runs = Vec::new();
+        for &budget in &self.cfg.budgets {
+            for k in 0..self.cfg.seeds {
+                let prefix = self.prefix(method, budget, k);
+                let seed = self.base_seed.wrapping_add(k);
+                let result = pipeline::render(
+                    &self.job(method, budget, seed, prefix.clone(), Vec::new()),
+                    self.cluster,
+                    Instant::now(),
+                );
+                if self.reference.is_none() {
+                    continue;
+                }
+                let mut rec = self.record(method, budget, k, prefix);
+                self.fill_from_render(&mut rec, &result);
+                log_record(&rec);
+                runs.push(rec);
+            }
+        }
+        runs
+    }
+}
+
+/// One line per run on stderr.
+fn log_record(rec: &RunRecord) {
+    let what = format!("compare: {} {} seed {}", rec.method, budget_label(rec.budget_s), rec.seed_index);
+    let from = if rec.from_snapshot { " (snapshot)" } else { "" };
+    match &rec.error {
+        Some(e) => crate::errln!("{what}: FAILED: {e}"),
+        None => crate::errln!(
+            "{what}: {} spp in {:.2} s{from}, relMSE {:.4e}",
+            rec.spp,
+            rec.wall_s,
+            rec.regions.first().map_or(f64::NAN, |r| r.rel_mse)
+        ),
+    }
+}
+
 /// Runs the comparison on every rank; returns `Some` on rank 0 (after writing the report).
 pub fn run_compare(cfg: &CompareConfig, cluster: &dyn Cluster) -> Result<Option<CompareOutcome>, String> {
     if cfg.seeds == 0 {
         return Err("--seeds must be at least 1".into());
     }
+    if !cfg.base.snapshots.is_empty() {
+        return Err("compare: --snapshots is a `render` option; use --single-run".into());
+    }
     let scene = crate::scene::load_with(&cfg.base.scene, &cfg.base.load_options()).map_err(|e| e.to_string())?;
     let (reference, res) = agree_resolution(cfg, cluster)?;
     let regions = regions(&scene, res);
-    let base_seed = cfg.base.seed.unwrap_or(scene.render.seed);
     let runs_dir = cfg.out.join("runs");
     if cluster.rank() == 0 {
         std::fs::create_dir_all(&runs_dir).map_err(|e| format!("cannot create {}: {e}", runs_dir.display()))?;
     }
+    let base_seed = cfg.base.seed.unwrap_or(scene.render.seed);
+    let ctx = Ctx { cfg, cluster, reference: reference.as_ref(), regions: &regions, res, base_seed, runs_dir };
     let mut runs = Vec::new();
     for &method in &cfg.methods {
-        for &budget in &cfg.budgets {
-            for k in 0..cfg.seeds {
-                let seed = base_seed.wrapping_add(k);
-                let prefix = runs_dir.join(format!("{}_{}_s{k}", method.name(), budget_label(budget)));
-                let job = RenderJob {
-                    method: Some(method),
-                    time: Some(budget),
-                    spp: None,
-                    seed: Some(seed),
-                    resolution: Some(res),
-                    out: prefix.clone(),
-                    progress: false,
-                    checkpoint_every: None,
-                    resume: None,
-                    checkpoint_path: None,
-                    max_rounds: None,
-                    ..cfg.base.clone()
-                };
-                let result = pipeline::render(&job, cluster, Instant::now());
-                let Some(reference) = &reference else { continue };
-                let mut rec = RunRecord {
-                    method: method.name().into(),
-                    budget_s: budget,
-                    seed_index: k,
-                    seed,
-                    error: None,
-                    spp: 0,
-                    wall_s: 0.0,
-                    preprocess_s: 0.0,
-                    preprocess_share: 0.0,
-                    nonfinite_samples: 0,
-                    regions: Vec::new(),
-                    prefix: prefix.clone(),
-                };
-                match result {
-                    Ok(Some(r)) => {
-                        let rep = &r.report;
-                        rec.spp = rep.spp;
-                        rec.wall_s = rep.timings.total_s;
-                        rec.preprocess_s = rep.timings.preprocess_s;
-                        rec.preprocess_share = rec.preprocess_s / rec.wall_s.max(1e-12);
-                        rec.nonfinite_samples = rep.nonfinite_samples;
-                        let img = pipeline::image_from_film(&r.film);
-                        match measure(&img, reference, &regions) {
-                            Ok(m) => rec.regions = m,
-                            Err(e) => rec.error = Some(format!("{}: {e}", with_ext(&prefix, "exr").display())),
-                        }
-                    }
-                    Ok(None) => rec.error = Some("no result on rank 0".into()),
-                    Err(e) => rec.error = Some(e),
-                }
-                if let Some(e) = &rec.error {
-                    crate::errln!("compare: {} {} seed {k}: FAILED: {e}", method.name(), budget_label(budget));
-                } else {
-                    crate::errln!(
-                        "compare: {} {} seed {k}: {} spp in {:.2} s, relMSE {:.4e}",
-                        method.name(),
-                        budget_label(budget),
-                        rec.spp,
-                        rec.wall_s,
-                        rec.regions.first().map_or(f64::NAN, |r| r.rel_mse)
-                    );
-                }
-                runs.push(rec);
-            }
-        }
+        runs.extend(if cfg.single_run { ctx.single_runs(method) } else { ctx.separate_runs(method) });
     }
     let Some(reference) = reference else { return Ok(None) };
     let outcome = CompareOutcome {
@@ -299,6 +369,7 @@ pub fn run_compare(cfg: &CompareConfig, cluster: &dyn Cluster) -> Result<Option<
         resolution: res,
         regions,
         runs,
+        single_run: cfg.single_run,
         warnings: {
             let mut w = scene.warnings.clone();
             w.extend(crate::scene::scene_warnings(&scene));

@@ -95,6 +95,9 @@ pub fn run_reference(
     if args.method.is_some_and(|m| m != Method::Pt) {
         return Err("reference: only `--method pt` (the unbiased reference) is supported".into());
     }
+    if !args.snapshots.is_empty() {
+        return Err("reference: --snapshots is a `render` option (the reference is two half renders)".into());
+    }
     let base = pipeline::RenderJob { defines: opts.defines.clone(), ..args.job() };
     crate::atomic_io::check_output_prefix(&base.out)?;
     let scene = crate::scene::load_with(&base.scene, opts).map_err(|e| e.to_string())?;

@@ -10,6 +10,9 @@
 //! * `report.md` and `report.html` (same tables; the HTML shows the PNG charts and the crops
 //!   labelled with method, budget, wall time and spp).
 //!
+//! With `--single-run` (`CompareOutcome::single_run`) both reports say, under the header, that
+//! the smaller budgets' rows are snapshots of one run at the largest budget.
+//!
 //! A chart that cannot be drawn (e.g. every run failed) is listed as a note, not an error.
 
 use super::{budget_label, CompareOutcome, RunRecord};
@@ -328,6 +331,7 @@ pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -
                 match &r.error {
                     Some(e) => format!("FAILED: {e}"),
                     None if r.spp == 0 => "0 spp: no pass fit in the budget (left out of means and charts)".into(),
+                    None if r.from_snapshot => "ok (snapshot)".into(),
                     None => "ok".into(),
                 },
                 r.spp.to_string(),
@@ -363,8 +367,21 @@ pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -
         reg_desc.join("; ")
     );
 
+    let single = o.single_run.then(|| {
+        format!(
+            "Single run (--single-run): each (method, seed) was rendered once, at the largest budget ({}); \
+             the rows of smaller budgets were measured from snapshots of that run (`render --snapshots`), \
+             so their preprocess was sized for the largest budget and their wall time is the round \
+             boundary the snapshot was taken at.",
+            budgets.last().map_or_else(|| "–".into(), |&b| budget_label(b))
+        )
+    });
+
     // report.md
     let mut md = format!("# Time-boxed comparison\n\n{header}\n\n");
+    if let Some(line) = &single {
+        let _ = writeln!(md, "**{line}**\n");
+    }
     for w in &o.warnings {
         let _ = writeln!(md, "> **warning:** {w}\n");
     }
@@ -385,6 +402,9 @@ pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -
 
     // report.html
     let mut body = format!("<p>{}</p>\n", esc(&header));
+    if let Some(line) = &single {
+        let _ = writeln!(body, "<p><b>{}</b></p>", esc(line));
+    }
     for w in &o.warnings {
         let _ = writeln!(body, "<p class=\"bad\"><b>warning:</b> {}</p>", esc(w));
     }

@@ -214,6 +214,7 @@ fn job(scene: &Path, run: RunSpec, cfg: &StabilityConfig, out: PathBuf) -> Rende
         max_rounds: None,
         threads: cfg.threads,
         defines: Vec::new(),
+        snapshots: Vec::new(),
     }
 }
 

@@ -9,7 +9,9 @@
 //! and the current `PREFIX.{exr,png,json}` as one set (`atomic_io::FileSet`); a failed checkpoint
 //! is a warning (the previous set stays, the next interval retries). `--resume` continues with the
 //! next pass and repeats none.
-//! Submodules: `memory` (the up-front estimate), `checkpoints` (checkpoint and output sets).
+//! Snapshots (`--snapshots`) are taken at round boundaries the same way: `PREFIX.snap-LABEL.*`.
+//! Submodules: `memory` (the up-front estimate), `checkpoints` (checkpoint and output sets),
+//! `snapshots` (the image at intermediate wall-clock times).
 //!
 //! Failure: every parameter is validated and the memory estimated in [`RenderJob::resolve`],
 //! before any work. An error on any rank — during setup, the preprocess, resuming, inside the
@@ -33,8 +35,10 @@ use serde::{Deserialize, Serialize};
 
 mod checkpoints;
 mod memory;
+mod snapshots;
 
 pub use checkpoints::{image_files, image_from_film, write_images};
+pub use snapshots::{check_snapshots, snapshot_label, snapshot_prefix, SnapshotReport};
 
 use memory::local_ranks;
 use std::path::PathBuf;
@@ -74,6 +78,9 @@ pub struct RenderJob {
     pub threads: Option<usize>,
     /// Mitsuba XML `-D NAME=VALUE` substitutions used when loading `scene`.
     pub defines: Vec<(String, String)>,
+    /// Snapshot times in seconds since the process started (`PREFIX.snap-LABEL.{exr,json}`);
+    /// each must be earlier than the time budget.
+    pub snapshots: Vec<f64>,
 }
 
 /// A job with every default resolved against its scene.
@@ -120,7 +127,9 @@ impl RenderJob {
         let resolution = self.resolution.unwrap_or((scene.camera.width, scene.camera.height));
         let plan = Plan { method, seed: self.seed.unwrap_or(r.seed), args, time, spp, resolution };
         plan.validate()?;
-        let (need, what) = plan.memory_estimate(scene, self.checkpoint_every.is_some() || self.resume.is_some());
+        check_snapshots(&self.snapshots, time)?;
+        let gathers = self.checkpoint_every.is_some() || self.resume.is_some() || !self.snapshots.is_empty();
+        let (need, what) = plan.memory_estimate(scene, gathers);
         params::check_memory(need, params::available_memory(), &what)?;
         Ok(plan)
     }
@@ -241,6 +250,8 @@ pub struct RenderReport {
     pub warnings: Vec<String>,
     /// Whether loading and the preprocess alone took longer than the `--time` budget.
     pub preprocess_over_budget: bool,
+    /// The snapshots written so far (`--snapshots`), in time order.
+    pub snapshots: Vec<SnapshotReport>,
     /// `false` in the JSON written with a checkpoint (a render still running), `true` at the end.
     pub complete: bool,
     /// Mean of the image, per channel.
@@ -271,7 +282,8 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
     timings.broadcast_s = pre.stats.broadcast_s;
     let over_budget = preprocess_over_budget(&plan, &timings, started, cluster.rank());
     let resumed = agree_resume(job, &world, &plan, cluster)?;
-    let run = Run { job, world: &world, plan: &plan, cluster, pool: &pool, started, resumed: &resumed };
+    let preprocess_s = timings.preprocess_s;
+    let run = Run { job, world: &world, plan: &plan, cluster, pool: &pool, started, resumed: &resumed, preprocess_s };
     let mut passes = run_passes(&run, pre.integrator.as_mut(), deadline)?;
     passes.preprocess_over_budget = over_budget.is_some();
     passes.warnings.splice(0..0, over_budget);
@@ -413,6 +425,8 @@ struct Run<'a> {
     pool: &'a rayon::ThreadPool,
     started: Instant,
     resumed: &'a Resume,
+    /// Rank 0's preprocess seconds (for the snapshots' reports).
+    preprocess_s: f64,
 }
 
 /// This rank's passes.
@@ -425,6 +439,8 @@ struct Passes {
     /// The run's warnings (rank 0): failed checkpoints, the preprocess over budget.
     warnings: Vec<String>,
     preprocess_over_budget: bool,
+    /// The snapshot schedule and the snapshots written.
+    snaps: snapshots::Snapshots,
 }
 
 /// Stage 4: rounds of interleaved passes until the spp or the time box is reached, with
@@ -443,6 +459,7 @@ fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) ->
         render_s: 0.0,
         warnings: Vec::new(),
         preprocess_over_budget: false,
+        snaps: snapshots::Snapshots::new(&run.job.snapshots),
     };
     let (t_render, mut last_ckpt, mut timer) = (Instant::now(), Instant::now(), PassTimer::new());
     let mut failure: Option<String> = None;
@@ -473,8 +490,10 @@ fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) ->
         let rays = p.counters.closest_rays + p.counters.shadow_rays;
         progress.update(p.passes_done - first_pass, p.passes_done, secs(t_render), secs(run.started), rays * size);
         p.render_s = secs(t_render);
-        failure = run.maybe_checkpoint(&mut p, &*integrator, &mut last_ckpt).err();
+        failure =
+            run.maybe_checkpoint(&mut p, &*integrator, &mut last_ckpt).and_then(|()| run.maybe_snapshot(&mut p)).err();
     }
+    run.unreached_snapshots(&mut p);
     p.render_s = secs(t_render);
     progress.finish();
     Ok(p)
@@ -578,6 +597,7 @@ impl Run<'_> {
             per_rank: t.per_rank,
             warnings: self.world.scene.warnings.iter().chain(&p.warnings).cloned().collect(),
             preprocess_over_budget: p.preprocess_over_budget,
+            snapshots: p.snaps.written.clone(),
             complete,
             image_mean: image.mean(),
         }

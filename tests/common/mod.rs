@@ -50,6 +50,7 @@ pub fn job(
         max_rounds: None,
         threads: Some(threads),
         defines: Vec::new(),
+        snapshots: Vec::new(),
     }
 }
 
