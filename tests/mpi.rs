@@ -176,14 +176,16 @@ fn a_failed_checkpoint_under_two_ranks_warns_and_completes() {
     std::fs::write(&blocker, b"x").unwrap();
     let ckpt = blocker.join("x.ckpt");
     let out = d.join("ok");
-    let args = ["render", &scene(), "--spp", "8", "--resolution", "16x16", "--quiet", "--checkpoint-every", "1ms"];
+    // 256 passes = 128 agreed rounds: far longer than the 1-ms interval on any machine (8 passes
+    // once finished inside 1 ms, leaving only the final checkpoint to fail)
+    let args = ["render", &scene(), "--spp", "256", "--resolution", "16x16", "--quiet", "--checkpoint-every", "1ms"];
     let o = mpirun(
         2,
         &[&args[..], &["--checkpoint-path", ckpt.to_str().unwrap(), "--out", out.to_str().unwrap()]].concat(),
     );
     let err = String::from_utf8_lossy(&o.stderr);
     let j = json(&out);
-    assert_eq!(j["spp"], 8);
+    assert_eq!(j["spp"], 256);
     let failed = j["warnings"].as_array().unwrap().iter().filter(|w| w.to_string().contains("not written")).count();
     assert!(failed >= 2, "{j}");
     assert_eq!(err.matches("warning: ").count(), failed, "each warning printed once: {err}");
