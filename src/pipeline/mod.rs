@@ -11,7 +11,7 @@
 //! next pass and repeats none.
 //! Snapshots (`--snapshots`) are taken at round boundaries the same way: `PREFIX.snap-LABEL.*`.
 //! Submodules: `memory` (the up-front estimate), `checkpoints` (checkpoint and output sets),
-//! `snapshots` (the image at intermediate wall-clock times).
+//! `snapshots` (the image at intermediate wall-clock times), `report` (the typed `RenderReport`).
 //!
 //! Failure: every parameter is validated and the memory estimated in [`RenderJob::resolve`],
 //! before any work. An error on any rank — during setup, the preprocess, resuming, inside the
@@ -31,13 +31,14 @@ use crate::progress::{PhaseBar, Progress};
 use crate::render::film::Film;
 use crate::render::{render_pass, PassCounters};
 use crate::scene::Scene;
-use serde::{Deserialize, Serialize};
 
 mod checkpoints;
 mod memory;
+mod report;
 mod snapshots;
 
 pub use checkpoints::{image_files, image_from_film, write_images};
+pub use report::{RankStats, Rays, RenderReport, RenderResult, Timings};
 pub use snapshots::{check_snapshots, snapshot_label, snapshot_prefix, SnapshotReport};
 
 use memory::local_ranks;
@@ -146,124 +147,6 @@ impl Plan {
         }
         self.args.validate()
     }
-}
-
-/// Wall-clock seconds of each stage (rank 0's).
-#[derive(Clone, Debug, Default, Serialize)]
-pub struct Timings {
-    /// Scene loading.
-    pub load_s: f64,
-    /// BVH build.
-    pub bvh_s: f64,
-    /// Caustic preprocess (rank 0).
-    pub preprocess_s: f64,
-    /// Its broadcast.
-    pub broadcast_s: f64,
-    /// The passes.
-    pub render_s: f64,
-    /// The reduce.
-    pub reduce_s: f64,
-    /// Writing images, checkpoint and JSON.
-    pub write_s: f64,
-    /// Since the process started.
-    pub total_s: f64,
-}
-
-/// Rays traced by all ranks.
-#[derive(Clone, Copy, Debug, Default, Serialize)]
-pub struct Rays {
-    /// Closest-hit rays.
-    pub closest: u64,
-    /// Shadow rays.
-    pub shadow: u64,
-}
-
-/// One rank's figures (gathered on rank 0).
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-pub struct RankStats {
-    /// Rank.
-    pub rank: usize,
-    /// Passes it rendered.
-    pub passes: u64,
-    /// Its preprocess seconds (0 except on rank 0).
-    pub preprocess_s: f64,
-    /// Its broadcast seconds.
-    pub broadcast_s: f64,
-    /// Its render seconds.
-    pub render_s: f64,
-    /// Its reduce seconds.
-    pub reduce_s: f64,
-    /// Bytes of the broadcast product.
-    pub bytes_broadcast: usize,
-    /// Checksum of the product it built its integrator from.
-    pub product_hash: u64,
-    /// Samples it took.
-    pub samples: u64,
-    /// Its closest-hit rays.
-    pub closest_rays: u64,
-    /// Its shadow rays.
-    pub shadow_rays: u64,
-}
-
-/// The JSON report written next to the image (`PREFIX.json`).
-#[derive(Clone, Debug, Serialize)]
-pub struct RenderReport {
-    /// Method.
-    pub method: Method,
-    /// Scene file.
-    pub scene: String,
-    /// Image size.
-    pub resolution: [u32; 2],
-    /// Samples per pixel in the image.
-    pub spp: u64,
-    /// Passes done (resumed ones included).
-    pub passes: u64,
-    /// First pass of this run.
-    pub first_pass: u64,
-    /// Whether it continued a checkpoint.
-    pub resumed: bool,
-    /// Seed.
-    pub seed: u64,
-    /// MPI ranks.
-    pub ranks: usize,
-    /// Time budget, seconds.
-    pub time_budget_s: Option<f64>,
-    /// Stage timings.
-    pub timings: Timings,
-    /// Rays traced.
-    pub rays: Rays,
-    /// Million rays per second of render time.
-    pub mrays_per_s: f64,
-    /// Samples per second of render time.
-    pub samples_per_s: f64,
-    /// NaN/Inf samples replaced by zero.
-    pub nonfinite_samples: u64,
-    /// Bytes of the broadcast product.
-    pub bytes_broadcast: usize,
-    /// The integrator's own figures.
-    pub method_stats: serde_json::Value,
-    /// The method parameters in use.
-    pub options: MethodArgs,
-    /// Every rank's figures (`None` if one could not be read).
-    pub per_rank: Vec<Option<RankStats>>,
-    /// Scene warnings, then the run's (the preprocess over the time budget, failed checkpoints).
-    pub warnings: Vec<String>,
-    /// Whether loading and the preprocess alone took longer than the `--time` budget.
-    pub preprocess_over_budget: bool,
-    /// The snapshots written so far (`--snapshots`), in time order.
-    pub snapshots: Vec<SnapshotReport>,
-    /// `false` in the JSON written with a checkpoint (a render still running), `true` at the end.
-    pub complete: bool,
-    /// Mean of the image, per channel.
-    pub image_mean: [f64; 3],
-}
-
-/// The outcome on rank 0.
-pub struct RenderResult {
-    /// The accumulated film (rank 0).
-    pub film: Film,
-    /// The report written next to the image.
-    pub report: RenderReport,
 }
 
 fn secs(t: Instant) -> f64 {
