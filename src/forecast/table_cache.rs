@@ -20,7 +20,7 @@ use super::direction_table::ForecastTables;
 use crate::math::Vec3;
 use std::collections::hash_map::DefaultHasher;
 use std::collections::HashMap;
-use std::hash::{BuildHasher, BuildHasherDefault, Hash};
+use std::hash::{BuildHasher, BuildHasherDefault};
 use std::sync::{Arc, RwLock};
 
 /// Shards per map (threads rarely contend on one lock).
@@ -91,54 +91,36 @@ pub fn normal_key(n: Vec3) -> [u32; 3] {
 /// Cache key: (cluster, cell, normal).
 pub type CellKey = (u32, [i32; 3], [u32; 3]);
 
-/// A sharded concurrent map whose values are pure functions of their keys.
-struct Sharded<K, V> {
-    shards: Vec<RwLock<HashMap<K, V>>>,
-    hasher: BuildHasherDefault<DefaultHasher>,
-}
-
-impl<K: Hash + Eq, V: Clone> Sharded<K, V> {
-    fn new() -> Self {
-        Sharded { shards: (0..SHARDS).map(|_| RwLock::new(HashMap::new())).collect(), hasher: Default::default() }
-    }
-
-    fn shard(&self, k: &K) -> &RwLock<HashMap<K, V>> {
-        &self.shards[self.hasher.hash_one(k) as usize % SHARDS]
-    }
-
-    fn get(&self, k: &K) -> Option<V> {
-        self.shard(k).read().unwrap_or_else(|e| e.into_inner()).get(k).cloned()
-    }
-
-    fn insert(&self, k: K, v: V) {
-        let mut m = self.shard(&k).write().unwrap_or_else(|e| e.into_inner());
-        if m.len() >= SHARD_CAP {
-            m.clear();
-        }
-        m.insert(k, v);
-    }
-}
-
-/// The table cache of one CF estimator, shared by every worker thread.
+/// The table cache of one CF estimator, shared by every worker thread: a sharded concurrent
+/// map whose values are pure functions of their keys.
 pub struct TableCache {
-    cells: Sharded<CellKey, Arc<ForecastTables>>,
+    shards: Vec<RwLock<HashMap<CellKey, Arc<ForecastTables>>>>,
+    hasher: BuildHasherDefault<DefaultHasher>,
 }
 
 impl Default for TableCache {
     fn default() -> Self {
-        TableCache { cells: Sharded::new() }
+        TableCache { shards: (0..SHARDS).map(|_| RwLock::new(HashMap::new())).collect(), hasher: Default::default() }
     }
 }
 
 impl TableCache {
-    /// The cell's tables, if cached.
-    pub fn get(&self, k: &CellKey) -> Option<Arc<ForecastTables>> {
-        self.cells.get(k)
+    fn shard(&self, k: &CellKey) -> &RwLock<HashMap<CellKey, Arc<ForecastTables>>> {
+        &self.shards[self.hasher.hash_one(k) as usize % SHARDS]
     }
 
-    /// Stores a cell's tables.
+    /// The cell's tables, if cached.
+    pub fn get(&self, k: &CellKey) -> Option<Arc<ForecastTables>> {
+        self.shard(k).read().unwrap_or_else(|e| e.into_inner()).get(k).cloned()
+    }
+
+    /// Stores a cell's tables (a full shard is cleared first).
     pub fn insert(&self, k: CellKey, t: Arc<ForecastTables>) {
-        self.cells.insert(k, t)
+        let mut m = self.shard(&k).write().unwrap_or_else(|e| e.into_inner());
+        if m.len() >= SHARD_CAP {
+            m.clear();
+        }
+        m.insert(k, t);
     }
 }
 
