@@ -55,6 +55,51 @@ pub struct Profile {
     pub gather_shadow_rays: u64,
     /// CF chains followed (directions that reached a Dirac surface).
     pub cf_chains: u64,
+    /// Caustic Forecasting lookups (per thread, so no shared atomics on the hot path).
+    pub cf: CfCounts,
+}
+
+/// Render-time counters of a CF estimator (`iws-cf`, `pt-cf`), summed over threads.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct CfCounts {
+    /// Table lookups (`Ĺ_c` evaluations, guided-vertex queries).
+    pub queries: u64,
+    /// Lookups inside a kept cluster.
+    pub inside: u64,
+    /// Direction samples taken (splitting factor numerator).
+    pub samples: u64,
+    /// Nanoseconds gathering forecasters and building tables ("creating CDFs").
+    pub cdf_ns: u64,
+    /// Tables built.
+    pub tables_built: u64,
+    /// Table-cache hits.
+    pub cache_hits: u64,
+}
+
+impl CfCounts {
+    fn add(&mut self, o: &CfCounts) {
+        self.queries += o.queries;
+        self.inside += o.inside;
+        self.samples += o.samples;
+        self.cdf_ns += o.cdf_ns;
+        self.tables_built += o.tables_built;
+        self.cache_hits += o.cache_hits;
+    }
+
+    /// Fraction of lookups inside a kept cluster.
+    pub fn fraction_inside(&self) -> f64 {
+        self.inside as f64 / self.queries.max(1) as f64
+    }
+
+    /// Direction samples per lookup.
+    pub fn samples_per_query(&self) -> f64 {
+        self.samples as f64 / self.queries.max(1) as f64
+    }
+
+    /// Seconds creating CDFs (summed over threads).
+    pub fn cdf_s(&self) -> f64 {
+        self.cdf_ns as f64 * 1e-9
+    }
 }
 
 /// The start of a timed phase.
@@ -103,6 +148,7 @@ impl Profile {
         self.gather_vertices += o.gather_vertices;
         self.gather_shadow_rays += o.gather_shadow_rays;
         self.cf_chains += o.cf_chains;
+        self.cf.add(&o.cf);
     }
 
     /// Seconds in `phase`.

@@ -26,7 +26,6 @@ use crate::math::{luminance, Frame, Rgb, Vec3};
 use crate::profile::{Phase, Stopwatch};
 use crate::progress::Phases;
 use crate::transport::context::{Context, ShadingQuery};
-use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -169,23 +168,6 @@ pub struct CausticForecast {
     pub stats: PreprocessStats,
 }
 
-/// Render-time counters (summed over threads).
-#[derive(Debug, Default)]
-pub struct ForecastCounters {
-    /// Ĺ_c evaluations.
-    pub queries: AtomicU64,
-    /// Evaluations inside a kept cluster.
-    pub inside: AtomicU64,
-    /// Direction samples taken (splitting factor numerator).
-    pub samples: AtomicU64,
-    /// Nanoseconds spent gathering and building tables ("creating CDFs").
-    pub cdf_ns: AtomicU64,
-    /// Tables built.
-    pub tables_built: AtomicU64,
-    /// Table-cache hits.
-    pub cache_hits: AtomicU64,
-}
-
 impl CausticForecast {
     /// Clusters the caustic points and builds the maps, reporting the phases "clustering" and
     /// "building forecast maps" to `phases` (display only).
@@ -277,13 +259,12 @@ impl CausticForecast {
         cache: &TableCache,
         (p, ng): (Vec3, Vec3),
         ctx: &mut Context,
-        counters: &ForecastCounters,
     ) -> Option<(usize, Arc<ForecastTables>)> {
         let c = self.cluster_map.query(p, ng)?;
         let (cell, centre) = cell_of(p, self.cells.edge[c]);
         let key = (c as u32, cell, normal_key(ng));
         if let Some(t) = cache.get(&key) {
-            counters.cache_hits.fetch_add(1, Relaxed);
+            ctx.profile.cf.cache_hits += 1;
             return Some((c, t));
         }
         let t0 = Instant::now();
@@ -292,8 +273,8 @@ impl CausticForecast {
             PhotonWeight::Flux => cp.energy(),
         };
         let tables = Arc::new(self.build_tables((c, centre, &Frame::from_normal(ng)), &mut ctx.knn, w, |l| l.z));
-        counters.tables_built.fetch_add(1, Relaxed);
-        counters.cdf_ns.fetch_add(t0.elapsed().as_nanos() as u64, Relaxed);
+        ctx.profile.cf.tables_built += 1;
+        ctx.profile.cf.cdf_ns += t0.elapsed().as_nanos() as u64;
         cache.insert(key, tables.clone());
         Some((c, tables))
     }
@@ -305,7 +286,6 @@ impl CausticForecast {
         ng: Vec3,
         frame: &Frame,
         ctx: &mut Context,
-        counters: &ForecastCounters,
     ) -> Option<(usize, Arc<ForecastTables>)> {
         let (sp, m, wo) = (q.x, q.m, q.wo);
         self.cluster_map.query(sp.p, ng).map(|c| {
@@ -319,8 +299,8 @@ impl CausticForecast {
             };
             let brdf_cos = |l: Vec3| luminance(bsdf::eval(m, sp, wo, frame.to_world(l))) * l.z;
             let t = self.build_tables((c, sp.p, frame), &mut ctx.knn, w, brdf_cos);
-            counters.tables_built.fetch_add(1, Relaxed);
-            counters.cdf_ns.fetch_add(t0.elapsed().as_nanos() as u64, Relaxed);
+            ctx.profile.cf.tables_built += 1;
+            ctx.profile.cf.cdf_ns += t0.elapsed().as_nanos() as u64;
             (c, Arc::new(t))
         })
     }
@@ -332,7 +312,6 @@ impl CausticForecast {
         &self,
         q: &ShadingQuery,
         ctx: &mut Context,
-        counters: &ForecastCounters,
         cache: Option<&TableCache>,
     ) -> Option<(usize, Arc<ForecastTables>, Frame)> {
         let (sp, m, wo) = (q.x, q.m, q.wo);
@@ -344,8 +323,8 @@ impl CausticForecast {
         let t_table = Stopwatch::start();
         let found = match cache {
             _ if self.radius <= 0.0 => None,
-            Some(cache) => self.cached_tables(cache, (sp.p, ng), ctx, counters),
-            None => self.point_tables(q, ng, &frame, ctx, counters),
+            Some(cache) => self.cached_tables(cache, (sp.p, ng), ctx),
+            None => self.point_tables(q, ng, &frame, ctx),
         };
         ctx.profile.record(Phase::CfTable, t_table);
         found.map(|(c, t)| (c, t, frame))
@@ -357,16 +336,15 @@ impl CausticForecast {
         &self,
         q: &ShadingQuery,
         ctx: &mut Context,
-        counters: &ForecastCounters,
         cache: Option<&TableCache>,
         mut g: impl FnMut(Vec3, &mut Context) -> Rgb,
     ) -> Rgb {
-        counters.queries.fetch_add(1, Relaxed);
+        ctx.profile.cf.queries += 1;
         let (sp, m, wo) = (q.x, q.m, q.wo);
-        let found = if q.depth >= self.opts.table_depth { None } else { self.tables_at(q, ctx, counters, cache) };
+        let found = if q.depth >= self.opts.table_depth { None } else { self.tables_at(q, ctx, cache) };
         let Some((c, tables, frame)) = found else {
             // outside valid clusters: one BSDF (cosine for Lambert) sample
-            counters.samples.fetch_add(1, Relaxed);
+            ctx.profile.cf.samples += 1;
             let u = [ctx.rng.next_f32(), ctx.rng.next_f32(), ctx.rng.next_f32()];
             let Some(bs) = bsdf::sample(m, sp, wo, u, Mode::Radiance) else { return Rgb::ZERO };
             if bs.pdf_w <= 0.0 {
@@ -374,7 +352,7 @@ impl CausticForecast {
             }
             return g(bs.wi, ctx) / bs.pdf_w;
         };
-        counters.inside.fetch_add(1, Relaxed);
+        ctx.profile.cf.inside += 1;
         let s = self.split_for(c, q.depth);
         if self.opts.table == TableKind::Mixture {
             // as many samples as the dual table would draw, each from the mixture, averaged
@@ -382,7 +360,7 @@ impl CausticForecast {
             let w = MixtureWeights::new(cb, c1, c2).expect("constant weights are valid");
             let mix = DefensiveMixture::new(m, sp, wo, &tables, frame, w);
             let n = tables.n_samples(s).max(1);
-            counters.samples.fetch_add(n as u64, Relaxed);
+            ctx.profile.cf.samples += n as u64;
             let mut sum = Rgb::ZERO;
             for _ in 0..n {
                 if let Some(ms) = mix.sample(&mut ctx.rng).filter(|ms| ms.pdf_w > 0.0) {
@@ -393,7 +371,7 @@ impl CausticForecast {
         }
         let mut samples = Vec::with_capacity(2 * s);
         tables.for_each_sample(s, &mut ctx.rng, |ts| samples.push(ts));
-        counters.samples.fetch_add(samples.len() as u64, Relaxed);
+        ctx.profile.cf.samples += samples.len() as u64;
         // [BAJ08 §3.2] each table is sampled S times and the two estimates are added
         samples.iter().map(|ts| g(frame.to_world(ts.dir), ctx) * ts.weight).fold(Rgb::ZERO, |a, b| a + b)
     }
@@ -406,20 +384,5 @@ impl CausticForecast {
     /// Decodes a broadcast product.
     pub fn from_bytes(b: &[u8]) -> Result<Self, String> {
         bitcode::decode(b).map_err(|e| format!("corrupt caustic-forecast product ({} bytes): {e}", b.len()))
-    }
-}
-
-impl ForecastCounters {
-    /// JSON figures: fraction inside clusters, mean splitting factor, CDF seconds.
-    pub fn json(&self) -> serde_json::Value {
-        let q = self.queries.load(Relaxed).max(1) as f64;
-        serde_json::json!({
-            "lc_queries": self.queries.load(Relaxed),
-            "fraction_inside_clusters": self.inside.load(Relaxed) as f64 / q,
-            "mean_splitting_factor": self.samples.load(Relaxed) as f64 / q,
-            "creating_cdfs_s": self.cdf_ns.load(Relaxed) as f64 * 1e-9,
-            "tables_built": self.tables_built.load(Relaxed),
-            "table_cache_hits": self.cache_hits.load(Relaxed),
-        })
     }
 }

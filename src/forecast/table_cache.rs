@@ -18,9 +18,8 @@
 use super::cluster::Clustering;
 use super::direction_table::ForecastTables;
 use crate::math::Vec3;
-use std::collections::hash_map::DefaultHasher;
 use std::collections::HashMap;
-use std::hash::{BuildHasher, BuildHasherDefault};
+use std::hash::{BuildHasherDefault, Hash, Hasher};
 use std::sync::{Arc, RwLock};
 
 /// Shards per map (threads rarely contend on one lock).
@@ -94,28 +93,73 @@ pub type CellKey = (u32, [i32; 3], [u32; 3]);
 /// The table cache of one CF estimator, shared by every worker thread: a sharded concurrent
 /// map whose values are pure functions of their keys.
 pub struct TableCache {
-    shards: Vec<RwLock<HashMap<CellKey, Arc<ForecastTables>>>>,
-    hasher: BuildHasherDefault<DefaultHasher>,
+    shards: Vec<RwLock<Shard>>,
 }
+
+/// A key with its hash, computed once per lookup (shard choice and map probe share it).
+#[derive(Clone, Copy, PartialEq, Eq)]
+struct Hashed {
+    hash: u64,
+    key: CellKey,
+}
+
+impl Hash for Hashed {
+    fn hash<H: Hasher>(&self, h: &mut H) {
+        h.write_u64(self.hash);
+    }
+}
+
+impl Hashed {
+    /// The multiply-rotate hash of the `FxHash` recipe over the key's seven words (std's SipHash
+    /// cost 2% of a `pt-cf` render; a cache of our own keys needs no DoS resistance).
+    fn new(key: CellKey) -> Hashed {
+        let (c, cell, n) = key;
+        let words = [c, cell[0] as u32, cell[1] as u32, cell[2] as u32, n[0], n[1], n[2]];
+        let hash =
+            words.iter().fold(0u64, |h, &w| (h.rotate_left(5) ^ u64::from(w)).wrapping_mul(0x517c_c1b7_2722_0a95));
+        Hashed { hash, key }
+    }
+}
+
+/// The identity hasher over a [`Hashed`] key's precomputed hash.
+#[derive(Default)]
+struct PassThrough(u64);
+
+impl Hasher for PassThrough {
+    fn write(&mut self, _: &[u8]) {
+        unreachable!("only Hashed keys are hashed")
+    }
+    fn write_u64(&mut self, h: u64) {
+        self.0 = h;
+    }
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+type Shard = HashMap<Hashed, Arc<ForecastTables>, BuildHasherDefault<PassThrough>>;
 
 impl Default for TableCache {
     fn default() -> Self {
-        TableCache { shards: (0..SHARDS).map(|_| RwLock::new(HashMap::new())).collect(), hasher: Default::default() }
+        TableCache { shards: (0..SHARDS).map(|_| RwLock::new(Shard::default())).collect() }
     }
 }
 
 impl TableCache {
-    fn shard(&self, k: &CellKey) -> &RwLock<HashMap<CellKey, Arc<ForecastTables>>> {
-        &self.shards[self.hasher.hash_one(k) as usize % SHARDS]
+    fn shard(&self, k: &Hashed) -> &RwLock<Shard> {
+        // middle bits: the map itself uses the low ones (bucket) and the top seven (tag)
+        &self.shards[(k.hash >> 32) as usize % SHARDS]
     }
 
     /// The cell's tables, if cached.
     pub fn get(&self, k: &CellKey) -> Option<Arc<ForecastTables>> {
-        self.shard(k).read().unwrap_or_else(|e| e.into_inner()).get(k).cloned()
+        let k = Hashed::new(*k);
+        self.shard(&k).read().unwrap_or_else(|e| e.into_inner()).get(&k).cloned()
     }
 
     /// Stores a cell's tables (a full shard is cleared first).
     pub fn insert(&self, k: CellKey, t: Arc<ForecastTables>) {
+        let k = Hashed::new(k);
         let mut m = self.shard(&k).write().unwrap_or_else(|e| e.into_inner());
         if m.len() >= SHARD_CAP {
             m.clear();

@@ -8,7 +8,7 @@
 use crate::accel::{offset_origin, Hit, World};
 use crate::bsdf::{self, Mode};
 use crate::math::{Rgb, Vec3};
-use crate::profile::{Phase, Stopwatch};
+use crate::profile::{Phase, Profile, Stopwatch};
 use crate::scene::NO_EMITTER;
 pub use crate::transport::context::{Context, ShadingQuery};
 use crate::transport::dirac::follow_dirac_chain;
@@ -30,7 +30,7 @@ pub trait CausticEstimator: Send + Sync {
     /// One estimate of `L_c` at `q`; `full` evaluates `L̂` at chain ends.
     fn estimate(&self, world: &World, q: &ShadingQuery, ctx: &mut Context, full: &dyn Recurse) -> Rgb;
     /// Statistics for the JSON report.
-    fn stats(&self) -> serde_json::Value {
+    fn stats(&self, _profile: &Profile) -> serde_json::Value {
         serde_json::json!({})
     }
 }
@@ -45,7 +45,7 @@ impl CausticEstimator for NoCaustics {
     fn estimate(&self, _: &World, _: &ShadingQuery, _: &mut Context, _: &dyn Recurse) -> Rgb {
         Rgb::ZERO
     }
-    fn stats(&self) -> serde_json::Value {
+    fn stats(&self, _: &Profile) -> serde_json::Value {
         serde_json::json!({ "caustics": "omitted (L_c not estimated)" })
     }
 }

@@ -403,7 +403,7 @@ impl Integrator for Iws {
             "caustics_cpu_s": caustic,
             "compensation_and_rest_cpu_s": (total - gather - caustic).max(0.0),
             "caustic_estimator": self.caustics.name(),
-            "caustics": self.caustics.stats(),
+            "caustics": self.caustics.stats(profile),
         })
     }
 }

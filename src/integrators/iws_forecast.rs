@@ -14,13 +14,14 @@
 use super::caustics::{caustic_chain, CausticEstimator, Recurse, ShadingQuery};
 use super::iws::Iws;
 use super::{Context, Integrator, MethodArgs, MethodSpec};
+use crate::profile::{CfCounts, Profile};
 use crate::progress::{Hidden, Phases};
 use crate::accel::World;
 use crate::bsdf;
 use crate::forecast::caustic_point::CausticPoint;
 use crate::forecast::cluster::ClusteringMethod;
 use crate::forecast::estimator::{
-    CausticForecast, ForecastCounters, ForecastOptions, PhotonWeight, PreprocessStats, SplitRule, TableCache,
+    CausticForecast, ForecastOptions, PhotonWeight, PreprocessStats, SplitRule, TableCache,
     TableKind,
 };
 use crate::math::{Rgb, Vec3};
@@ -227,19 +228,18 @@ pub fn build_forecast(
     CausticForecast::build(points, opts, seed, stats, phases)
 }
 
-/// `Ĺ_c` by Caustic Forecasting, plugged into the IWS recursion; owns the product, its
-/// counters and the table cache shared by all worker threads.
+/// `Ĺ_c` by Caustic Forecasting, plugged into the IWS recursion; owns the product and the
+/// table cache shared by all worker threads.
 pub struct ForecastCaustics {
     /// The broadcast product.
     pub cf: CausticForecast,
-    counters: ForecastCounters,
     cache: TableCache,
 }
 
 impl ForecastCaustics {
     /// Wraps a product.
     pub fn new(cf: CausticForecast) -> Self {
-        ForecastCaustics { cf, counters: ForecastCounters::default(), cache: TableCache::default() }
+        ForecastCaustics { cf, cache: TableCache::default() }
     }
 }
 
@@ -260,16 +260,29 @@ impl CausticEstimator for ForecastCaustics {
             }
             caustic_chain(world, q, wi, f * wi.dot(q.x.ns).abs(), ctx, full)
         };
-        self.cf.estimate(q, ctx, &self.counters, Some(&self.cache), g)
+        self.cf.estimate(q, ctx, Some(&self.cache), g)
     }
 
-    fn stats(&self) -> serde_json::Value {
+    fn stats(&self, profile: &Profile) -> serde_json::Value {
         serde_json::json!({
             "caustics": "caustic forecasting (unbiased)",
             "preprocess": self.cf.stats,
             "cache_cells": self.cf.cells.json(),
             "options": self.cf.opts,
-            "render": self.counters.json(),
+            "render": cf_render_json(&profile.cf),
         })
     }
+}
+
+/// JSON figures of the render-time CF counters: fraction inside clusters, mean splitting
+/// factor, CDF seconds (summed over threads).
+fn cf_render_json(c: &CfCounts) -> serde_json::Value {
+    serde_json::json!({
+        "lc_queries": c.queries,
+        "fraction_inside_clusters": c.fraction_inside(),
+        "mean_splitting_factor": c.samples_per_query(),
+        "creating_cdfs_s": c.cdf_s(),
+        "tables_built": c.tables_built,
+        "table_cache_hits": c.cache_hits,
+    })
 }

@@ -19,7 +19,7 @@
 //!
 //! The estimate is biased (blur, boundary darkening), consistent as `N → ∞, k/N → 0`.
 
-use crate::profile::{Phase, Stopwatch};
+use crate::profile::{Phase, Profile, Stopwatch};
 use super::caustics::{CausticEstimator, Recurse, ShadingQuery};
 use super::iws::Iws;
 use super::{Context, Integrator, MethodArgs, MethodSpec};
@@ -214,7 +214,7 @@ impl CausticEstimator for PhotonMap {
         ctx.profile.record(Phase::PhotonQuery, t0);
         l
     }
-    fn stats(&self) -> serde_json::Value {
+    fn stats(&self, _: &Profile) -> serde_json::Value {
         serde_json::json!({
             "photons_stored": self.photons.len(),
             "photon_paths": self.paths,

@@ -27,15 +27,14 @@ use crate::progress::Phases;
 use crate::accel::{offset_origin, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::forecast::direction_table::ForecastTables;
-use crate::forecast::estimator::{CausticForecast, ForecastCounters, TableCache};
+use crate::forecast::estimator::{CausticForecast, TableCache};
 use crate::forecast::mixture::{DefensiveMixture, MixtureWeights};
 use crate::math::{Frame, Rgb, Vec3};
-use crate::profile::Profile;
+use crate::profile::{Phase, Profile, Stopwatch};
 use crate::scene::NO_EMITTER;
 use crate::transport::context::ShadingQuery;
 use crate::transport::direct;
 use crate::transport::roulette::{q_max, roulette};
-use std::sync::atomic::Ordering::Relaxed;
 use std::sync::Arc;
 
 /// `pt-cf` parameters (the CF preprocess options are `iws-cf`'s: `--forecast-photons`,
@@ -76,14 +75,12 @@ impl MethodSpec for PtCf {
             guide_depth: if p.guide_fraction >= 1.0 { 0 } else { p.guide_depth },
             split: p.guide_split.max(1),
             cf,
-            counters: ForecastCounters::default(),
             cache: TableCache::default(),
         }))
     }
 }
 
-/// The guided path tracer; owns the product, its counters and the table cache shared by all
-/// worker threads.
+/// The guided path tracer; owns the product and the table cache shared by all worker threads.
 pub struct GuidedPathTracer {
     max_depth: u32,
     weights: MixtureWeights,
@@ -92,7 +89,6 @@ pub struct GuidedPathTracer {
     /// Splitting S0 at diffuse depth 0.
     split: u32,
     cf: CausticForecast,
-    counters: ForecastCounters,
     cache: TableCache,
 }
 
@@ -125,15 +121,15 @@ impl GuidedPathTracer {
         if q.depth >= self.guide_depth {
             return None;
         }
-        self.counters.queries.fetch_add(1, Relaxed);
-        let (c, tables, frame) = self.cf.tables_at(q, ctx, &self.counters, Some(&self.cache))?;
+        ctx.profile.cf.queries += 1;
+        let (c, tables, frame) = self.cf.tables_at(q, ctx, Some(&self.cache))?;
         if tables.t1.is_none() && tables.t2.is_none() {
             return None;
         }
-        self.counters.inside.fetch_add(1, Relaxed);
+        ctx.profile.cf.inside += 1;
         let rank = self.cf.clustering.clusters[c].rank;
         let n = if q.depth == 0 { (self.split >> rank.min(31)).max(1) as usize } else { 1 };
-        self.counters.samples.fetch_add(n as u64, Relaxed);
+        ctx.profile.cf.samples += n as u64;
         Some(Guide { tables, frame, n })
     }
 
@@ -224,24 +220,29 @@ fn continue_path(
 
 impl Integrator for GuidedPathTracer {
     fn radiance(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> Rgb {
+        let t0 = Stopwatch::start();
         let st =
             PathState { o: origin, d: dir, beta: Rgb::ONE, vertex: 0, diffuse: 0, prev_delta: true, prev_pdf_w: 0.0 };
-        self.trace(world, st, ctx)
+        let l = self.trace(world, st, ctx);
+        ctx.profile.samples += 1;
+        ctx.profile.record(Phase::Radiance, t0);
+        l
     }
 
-    fn stats(&self, _: &Profile) -> serde_json::Value {
-        let q = self.counters.queries.load(Relaxed).max(1) as f64;
+    fn stats(&self, profile: &Profile) -> serde_json::Value {
+        let c = &profile.cf;
         serde_json::json!({
+            "profile_per_sample": profile.per_sample(),
             "guide": {
                 "fraction_bsdf": self.weights.bsdf,
                 "depth": self.guide_depth,
                 "split_s0": self.split,
-                "lookups": self.counters.queries.load(Relaxed),
-                "fraction_inside_clusters": self.counters.inside.load(Relaxed) as f64 / q,
-                "mean_continuations_per_lookup": self.counters.samples.load(Relaxed) as f64 / q,
-                "creating_cdfs_s": self.counters.cdf_ns.load(Relaxed) as f64 * 1e-9,
-                "tables_built": self.counters.tables_built.load(Relaxed),
-                "table_cache_hits": self.counters.cache_hits.load(Relaxed),
+                "lookups": c.queries,
+                "fraction_inside_clusters": c.fraction_inside(),
+                "mean_continuations_per_lookup": c.samples_per_query(),
+                "creating_cdfs_s": c.cdf_s(),
+                "tables_built": c.tables_built,
+                "table_cache_hits": c.cache_hits,
             },
             "preprocess": self.cf.stats,
             "cache_cells": self.cf.cells.json(),
