@@ -8,7 +8,7 @@
 //! `tests/selection.rs`; `tests/furnace.rs` runs `pt-cf` through `Method::ALL`.
 
 mod common;
-use common::{assert_agrees, assert_furnace_is_one, max_z, render_passes as render};
+use common::{assert_agrees, assert_furnace_is_one, max_z, render_passes as render, render_profiled};
 use forecast::accel::World;
 use forecast::integrators::{Integrator, Method, MethodArgs};
 use forecast::profile::Profile;
@@ -38,9 +38,9 @@ fn pt(world: &World, w: u32, h: u32, spp: u64) -> Film {
     render(world, p.as_mut(), w, h, spp, 11)
 }
 
-/// The guide figures of a `pt-cf` integrator's stats: (lookups, fraction inside clusters).
-fn guide_stats(i: &dyn Integrator) -> (u64, f64) {
-    let s = i.stats(&Profile::default());
+/// The guide figures of a `pt-cf` render's stats: (lookups, fraction inside clusters).
+fn guide_stats(i: &dyn Integrator, profile: &Profile) -> (u64, f64) {
+    let s = i.stats(profile);
     (s["guide"]["lookups"].as_u64().unwrap(), s["guide"]["fraction_inside_clusters"].as_f64().unwrap())
 }
 
@@ -49,8 +49,8 @@ fn guide_stats(i: &dyn Integrator) -> (u64, f64) {
 fn agrees_with_pt(w: &World, o: &MethodArgs, res: u32, (spp_pt, spp): (u64, u64), label: &str) {
     let reference = pt(w, res, res, spp_pt);
     let mut g = build(w, Method::PtCf, o);
-    let img = render(w, g.as_mut(), res, res, spp, 3);
-    let (lookups, inside) = guide_stats(g.as_ref());
+    let (img, profile) = render_profiled(w, g.as_mut(), (res, res), spp, 3);
+    let (lookups, inside) = guide_stats(g.as_ref(), &profile);
     eprintln!("{label}: {lookups} lookups, {:.1}% inside kept clusters", 100.0 * inside);
     assert!(lookups > 0 && inside > 0.01, "{label}: the tables were never used");
     assert_agrees(&img, &reference, label);
@@ -96,8 +96,8 @@ fn glass_furnace_is_exactly_one() {
     let mut o = opts();
     o.ptcf.guide_depth = 4;
     let mut g = build(&w, Method::PtCf, &o);
-    let img = render(&w, g.as_mut(), 16, 16, 512, 5);
-    let (lookups, inside) = guide_stats(g.as_ref());
+    let (img, profile) = render_profiled(&w, g.as_mut(), (16, 16), 512, 5);
+    let (lookups, inside) = guide_stats(g.as_ref(), &profile);
     assert!(lookups > 0 && inside > 0.01, "the tables were never used ({inside})");
     assert_furnace_is_one(&img, "pt-cf glass furnace");
 }
@@ -108,10 +108,10 @@ fn guide_fraction_one_is_pt_bit_for_bit() {
     let mut o = opts();
     (o.ptcf.guide_fraction, o.ptcf.guide_split, o.ptcf.guide_depth) = (1.0, 4, 8);
     let mut g = build(&w, Method::PtCf, &o);
-    let a = render(&w, g.as_mut(), 16, 16, 64, 9);
+    let (a, profile) = render_profiled(&w, g.as_mut(), (16, 16), 64, 9);
     let mut p = Method::Pt.build(&w, &o, &[]).unwrap();
     let b = render(&w, p.as_mut(), 16, 16, 64, 9);
-    assert_eq!(guide_stats(g.as_ref()).0, 0, "c = 1 must never look a table up");
+    assert_eq!(guide_stats(g.as_ref(), &profile).0, 0, "c = 1 must never look a table up");
     assert!(a.data == b.data, "c = 1 differs from pt");
     // and c < 1 does differ (the comparison has power)
     o.ptcf.guide_fraction = 0.5;
@@ -125,8 +125,10 @@ fn no_dirac_objects_means_pt_exactly() {
     let mut o = opts();
     (o.ptcf.guide_fraction, o.ptcf.guide_depth) = (0.2, 8);
     let mut g = build(&w, Method::PtCf, &o);
-    let img = render(&w, g.as_mut(), 12, 12, 256, 3);
-    assert_eq!(guide_stats(g.as_ref()).1, 0.0, "no caustic point, so no kept cluster");
+    let (img, profile) = render_profiled(&w, g.as_mut(), (12, 12), 256, 3);
+    let (lookups, inside) = guide_stats(g.as_ref(), &profile);
+    assert!(lookups > 0, "the guide was queried");
+    assert_eq!(inside, 0.0, "no caustic point, so no kept cluster");
     // in distribution against an independent pt render …
     let reference = pt(&w, 12, 12, 2048);
     let (z, n) = max_z(&img, &reference, None);

@@ -146,6 +146,26 @@ pub fn render_passes(
     film
 }
 
+/// As [`render_passes`], also returning the integrator's per-thread counters summed over the
+/// passes (what the pipeline hands to `Integrator::stats`).
+#[allow(dead_code)]
+pub fn render_profiled(
+    world: &forecast::accel::World,
+    integ: &mut dyn forecast::integrators::Integrator,
+    (w, h): (u32, u32),
+    passes: u64,
+    seed: u64,
+) -> (Film, forecast::profile::Profile) {
+    let cam = world.scene.camera.with_resolution(w, h);
+    let mut film = Film::new(w as usize, h as usize);
+    let mut profile = forecast::profile::Profile::default();
+    for pass in 0..passes {
+        integ.begin_pass(world, seed, pass);
+        profile.add(&forecast::render::render_pass(world, &*integ, &cam, seed, pass, &mut film).profile);
+    }
+    (film, profile)
+}
+
 /// Per-pixel, per-channel Welch z statistics of `a (+ add)` against `b`: (max |z|, tests).
 pub fn max_z(a: &Film, b: &Film, add: Option<&Film>) -> (f64, usize) {
     let (ma, va) = (a.mean(), a.variance_of_mean());
