@@ -137,18 +137,11 @@ pub fn render_passes(
     passes: u64,
     seed: u64,
 ) -> Film {
-    let cam = world.scene.camera.with_resolution(w, h);
-    let mut film = Film::new(w as usize, h as usize);
-    for pass in 0..passes {
-        integ.begin_pass(world, seed, pass);
-        forecast::render::render_pass(world, &*integ, &cam, seed, pass, &mut film);
-    }
-    film
+    render_profiled(world, integ, (w, h), passes, seed).0
 }
 
 /// As [`render_passes`], also returning the integrator's per-thread counters summed over the
 /// passes (what the pipeline hands to `Integrator::stats`).
-#[allow(dead_code)]
 pub fn render_profiled(
     world: &forecast::accel::World,
     integ: &mut dyn forecast::integrators::Integrator,
