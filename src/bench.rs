@@ -8,7 +8,7 @@
 use crate::accel::{offset_origin, World};
 use crate::integrators::{Method, MethodArgs};
 use crate::math::{Frame, Vec3};
-use crate::render::{film::Film, render_pass};
+use crate::render::{film::Film, render_pass, PixelSampler};
 use crate::sampling::rng::{stream, Rng};
 use crate::sampling::warp::sample_cosine_hemisphere;
 use rayon::prelude::*;
@@ -105,7 +105,7 @@ pub fn run(world: &World, resolution: (u32, u32), repeats: usize) -> Result<Benc
         std::hint::black_box((hits, occl));
         let mut film = Film::new(w as usize, h as usize);
         let t = Instant::now();
-        let c = render_pass(world, integ.as_ref(), &camera, 7, r as u64, &mut film);
+        let c = render_pass(world, integ.as_ref(), &PixelSampler::plain(&camera), 7, r as u64, &mut film);
         pt.push(c.samples as f64 / t.elapsed().as_secs_f64());
         rays_per_sample = (c.closest_rays as f64 / c.samples as f64, c.shadow_rays as f64 / c.samples as f64);
     }
@@ -131,11 +131,12 @@ pub fn profile_method(
     let product = method.preprocess(world, &args, 7)?;
     let mut integ = method.build(world, &args, &product)?;
     let camera = world.scene.camera.with_resolution(w, h);
+    let pixels = PixelSampler::new(world, &camera, args.pt.emission_split, args.pt.cap());
     let mut profile = crate::profile::Profile::default();
     for pass in 0..spp.max(1) {
         integ.begin_pass(world, 7, pass);
         let mut film = Film::new(w as usize, h as usize);
-        profile.add(&render_pass(world, integ.as_ref(), &camera, 7, pass, &mut film).profile);
+        profile.add(&render_pass(world, integ.as_ref(), &pixels, 7, pass, &mut film).profile);
     }
     Ok(profile.per_sample())
 }

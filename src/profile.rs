@@ -26,6 +26,8 @@ pub enum Phase {
     CfChain,
     /// Photon-map density queries (`iws-pm`).
     PhotonQuery,
+    /// The extra camera rays of `--emission-split` (their Dirac prefixes), outside [`Phase::Radiance`].
+    EmissionSplit,
 }
 
 /// Counters and phase times of one worker (or their sum).
@@ -49,6 +51,8 @@ pub struct Profile {
     pub cf_chain_ns: u64,
     /// Nanoseconds in [`Phase::PhotonQuery`].
     pub photon_query_ns: u64,
+    /// Nanoseconds in [`Phase::EmissionSplit`].
+    pub emission_split_ns: u64,
     /// Non-specular vertices at which point lights were gathered.
     pub gather_vertices: u64,
     /// Point-light shadow rays traced by the gather.
@@ -131,6 +135,7 @@ impl Profile {
             Phase::CfTable => &mut self.cf_table_ns,
             Phase::CfChain => &mut self.cf_chain_ns,
             Phase::PhotonQuery => &mut self.photon_query_ns,
+            Phase::EmissionSplit => &mut self.emission_split_ns,
         }
     }
 
@@ -145,6 +150,7 @@ impl Profile {
         self.cf_table_ns += o.cf_table_ns;
         self.cf_chain_ns += o.cf_chain_ns;
         self.photon_query_ns += o.photon_query_ns;
+        self.emission_split_ns += o.emission_split_ns;
         self.gather_vertices += o.gather_vertices;
         self.gather_shadow_rays += o.gather_shadow_rays;
         self.cf_chains += o.cf_chains;
@@ -169,6 +175,7 @@ impl Profile {
             compensation_ray_us: us(self.compensation_ns),
             cf_table_us: us(self.cf_table_ns),
             photon_query_us: us(self.photon_query_ns),
+            emission_split_us: us(self.emission_split_ns),
             caustics_inclusive_us: us(self.caustics_ns),
             cf_chain_inclusive_us: us(self.cf_chain_ns),
             camera_and_rest_us: us(self.radiance_ns.saturating_sub(exclusive)),
@@ -199,6 +206,8 @@ pub struct PhaseProfile {
     pub cf_table_us: f64,
     /// Photon-map queries.
     pub photon_query_us: f64,
+    /// The extra camera rays of `--emission-split` (not in `total_us`).
+    pub emission_split_us: f64,
     /// `Ĺ_c` including its nested `L̂`.
     pub caustics_inclusive_us: f64,
     /// CF / BSDF chains and their `L̂`.

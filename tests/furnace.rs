@@ -24,7 +24,7 @@ use common::root;
 use forecast::accel::World;
 use forecast::integrators::{Method, MethodArgs};
 use forecast::render::film::{Film, STRIDE};
-use forecast::render::render_pass;
+use forecast::render::{render_pass, PixelSampler};
 use forecast::stats::z_test_threshold;
 
 const BIAS_ALLOWANCE: f64 = 1e-4;
@@ -67,7 +67,7 @@ fn render(scene: &str, method: Method, spp: u64, seed: u64) -> Vec<Film> {
         .map(|pass| {
             let mut f = Film::new(32, 32);
             integ.begin_pass(&world, seed, pass);
-            render_pass(&world, integ.as_ref(), &cam, seed, pass, &mut f);
+            render_pass(&world, integ.as_ref(), &PixelSampler::plain(&cam), seed, pass, &mut f);
             assert_eq!(f.total_samples(), (32 * 32) as f64);
             f
         })

@@ -23,7 +23,7 @@
 
 use super::caustics::{CausticEstimator, NoCaustics, Recurse, ShadingQuery};
 use super::vpl::{generate_vpls, Vpl, VplKind};
-use super::{Context, Integrator, MethodArgs, MethodSpec};
+use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
 use crate::progress::Phases;
 use crate::accel::{offset_origin, ray_epsilon, Hit, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
@@ -367,13 +367,14 @@ impl Integrator for Iws {
         self.vpl_trace_ns += t0.elapsed().as_nanos() as u64;
     }
 
-    fn radiance(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> Rgb {
+    fn estimate(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
         let t0 = Stopwatch::start();
-        let mut l = Rgb::ZERO;
+        let mut l = CameraEstimate::default();
         if let Some(hit) = world.intersect(origin, dir, f32::INFINITY) {
             // the camera ray follows Dirac chains to the first non-specular vertex (spec §1)
             if let Some((z, d, beta)) = follow_dirac_chain(world, hit, dir, Rgb::ONE, self.max_depth, &mut ctx.rng) {
-                l = beta * self.l_hat(world, &z, -d, 0, ctx);
+                let v = beta * self.l_hat(world, &z, -d, 0, ctx);
+                *if world.scene.emitter_of(z.prim) != NO_EMITTER { &mut l.prefix_le } else { &mut l.rest } = v;
             }
         }
         ctx.profile.samples += 1;

@@ -26,13 +26,37 @@ use crate::profile::Profile;
 use crate::progress::{Hidden, Phases};
 pub use crate::transport::context::Context;
 
+/// One estimate along a camera ray, split at the ray's first non-Dirac vertex so that the
+/// pixel sampler can average the first part over several cheap rays (`render`,
+/// `--emission-split`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CameraEstimate {
+    /// `E`: the emission reached along the ray's Dirac prefix (the first hit, or the end of a
+    /// mirror/glass chain from it), throughput included.
+    pub prefix_le: Rgb,
+    /// `L − E`: everything found at and beyond the first non-Dirac vertex.
+    pub rest: Rgb,
+}
+
+impl CameraEstimate {
+    /// The whole estimate `L = E + (L − E)`.
+    #[inline]
+    pub fn total(self) -> Rgb {
+        self.prefix_le + self.rest
+    }
+}
+
 /// A radiance estimator.
 pub trait Integrator: Send + Sync {
     /// Per-pass refresh; randomness must come from (seed, pass) only.
     fn begin_pass(&mut self, _world: &World, _seed: u64, _pass: u64) {}
     /// One estimate of the radiance arriving at `origin` from direction `dir` (unit), drawing
-    /// from `ctx.rng`.
-    fn radiance(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> Rgb;
+    /// from `ctx.rng`, split into its Dirac-prefix emission and the rest.
+    fn estimate(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate;
+    /// The whole estimate ([`Integrator::estimate`] summed).
+    fn radiance(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> Rgb {
+        self.estimate(world, origin, dir, ctx).total()
+    }
     /// Method-specific statistics for the JSON report; `profile` is the run's summed
     /// per-worker profile.
     fn stats(&self, _profile: &Profile) -> serde_json::Value {

@@ -22,7 +22,7 @@
 
 use super::iws_forecast::IwsCf;
 use super::path::{emitter_hit, RR_DEPTH};
-use super::{Context, Integrator, MethodArgs, MethodSpec};
+use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
 use crate::progress::Phases;
 use crate::accel::{offset_origin, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
@@ -134,14 +134,15 @@ impl GuidedPathTracer {
     }
 
     /// Radiance along `st` (a whole path, or one branch of a split).
-    fn trace(&self, world: &World, mut st: PathState, ctx: &mut Context) -> Rgb {
+    fn trace(&self, world: &World, mut st: PathState, ctx: &mut Context) -> CameraEstimate {
         let s = &world.scene;
-        let mut l = Rgb::ZERO;
+        let mut l = CameraEstimate::default();
         while st.vertex < self.max_depth {
             let Some(hit) = world.intersect(st.o, st.d, f32::INFINITY) else { break };
             if s.emitter_of(hit.prim) != NO_EMITTER {
                 if let Some((le, w)) = emitter_hit(world, &hit, st.d, st.prev_delta, st.prev_pdf_w) {
-                    l += st.beta * le * w;
+                    // no non-Dirac vertex yet: the camera's Dirac prefix
+                    *if st.diffuse == 0 { &mut l.prefix_le } else { &mut l.rest } += st.beta * le * w;
                 }
                 break; // emitters reflect nothing
             }
@@ -158,7 +159,7 @@ impl GuidedPathTracer {
             let Some(g) = guide else {
                 // a `pt` vertex, operation for operation
                 if !m.is_dirac() {
-                    l += st.beta * direct::sample_light(world, &sp, m, wo, &mut ctx.rng);
+                    l.rest += st.beta * direct::sample_light(world, &sp, m, wo, &mut ctx.rng);
                     st.diffuse += 1;
                 }
                 let u = [ctx.rng.next_f32(), ctx.rng.next_f32(), ctx.rng.next_f32()];
@@ -171,7 +172,7 @@ impl GuidedPathTracer {
             st.diffuse += 1;
             let mix = DefensiveMixture::new(m, &sp, wo, &g.tables, g.frame, self.weights);
             let n = g.n as f32;
-            l += st.beta * direct::sample_light_mis(world, &sp, m, wo, &mut ctx.rng, |wi| n * mix.pdf_w(wi));
+            l.rest += st.beta * direct::sample_light_mis(world, &sp, m, wo, &mut ctx.rng, |wi| n * mix.pdf_w(wi));
             if g.n == 1 {
                 let Some(ms) = mix.sample(&mut ctx.rng) else { break };
                 if !continue_path(&mut st, (depth, hit.p, hit.ng), (ms.wi, ms.weight, ms.pdf_w, false), ctx) {
@@ -189,7 +190,7 @@ impl GuidedPathTracer {
                     (ms.wi, ms.weight * (1.0 / n), n * ms.pdf_w, false),
                     ctx,
                 ) {
-                    l += self.trace(world, b, ctx);
+                    l.rest += self.trace(world, b, ctx).total();
                 }
             }
             break;
@@ -219,7 +220,7 @@ fn continue_path(
 }
 
 impl Integrator for GuidedPathTracer {
-    fn radiance(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> Rgb {
+    fn estimate(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
         let t0 = Stopwatch::start();
         let st =
             PathState { o: origin, d: dir, beta: Rgb::ONE, vertex: 0, diffuse: 0, prev_delta: true, prev_pdf_w: 0.0 };

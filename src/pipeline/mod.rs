@@ -29,7 +29,8 @@ use crate::integrators::{Integrator, Method, MethodArgs};
 use crate::param_limits as params;
 use crate::progress::{PhaseBar, Progress};
 use crate::render::film::Film;
-use crate::render::{render_pass, PassCounters};
+use crate::render::pixel::SplitStats;
+use crate::render::{render_pass, PassCounters, PixelSampler};
 use crate::scene::Scene;
 
 mod checkpoints;
@@ -324,6 +325,8 @@ struct Passes {
     preprocess_over_budget: bool,
     /// The snapshot schedule and the snapshots written.
     snaps: snapshots::Snapshots,
+    /// The emission-split probe's findings.
+    pixel_sampler: SplitStats,
 }
 
 /// Stage 4: rounds of interleaved passes until the spp or the time box is reached, with
@@ -333,6 +336,8 @@ fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) ->
     let (first_pass, total) = (run.resumed.first_pass, run.plan.spp.map(|s| s.max(run.resumed.first_pass)));
     let (w, h) = run.plan.resolution;
     let camera = run.world.scene.camera.with_resolution(w, h);
+    let (k, cap) = (run.plan.args.pt.emission_split, run.plan.args.pt.cap());
+    let pixels = run.pool.install(|| PixelSampler::new(run.world, &camera, k, cap));
     let progress = Progress::new(run.job.progress && rank == 0, total.map(|t| t - first_pass), run.plan.time);
     let mut p = Passes {
         film: Film::new(w as usize, h as usize),
@@ -343,6 +348,7 @@ fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) ->
         warnings: Vec::new(),
         preprocess_over_budget: false,
         snaps: snapshots::Snapshots::new(&run.job.snapshots),
+        pixel_sampler: pixels.stats(),
     };
     let (t_render, mut last_ckpt, mut timer) = (Instant::now(), Instant::now(), PassTimer::new());
     let mut failure: Option<String> = None;
@@ -364,7 +370,7 @@ fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) ->
             integrator.begin_pass(run.world, run.plan.seed, pass);
             let integ = &*integrator;
             let (world, seed, film) = (run.world, run.plan.seed, &mut p.film);
-            let c = run.pool.install(|| render_pass(world, integ, &camera, seed, pass, film));
+            let c = run.pool.install(|| render_pass(world, integ, &pixels, seed, pass, film));
             p.counters.add(&c);
             timer.record(secs(t_pass));
             p.my_passes += 1;
@@ -481,6 +487,7 @@ impl Run<'_> {
             warnings: self.world.scene.warnings.iter().chain(&p.warnings).cloned().collect(),
             preprocess_over_budget: p.preprocess_over_budget,
             snapshots: p.snaps.written.clone(),
+            pixel_sampler: p.pixel_sampler,
             complete,
             image_mean: image.mean(),
         }

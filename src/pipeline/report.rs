@@ -110,6 +110,8 @@ pub struct RenderReport {
     pub preprocess_over_budget: bool,
     /// The snapshots written so far (`--snapshots`), in time order.
     pub snapshots: Vec<SnapshotReport>,
+    /// The pixel sampler: emission split and the pixels it applies to (`render::pixel`).
+    pub pixel_sampler: crate::render::pixel::SplitStats,
     /// `false` in the JSON written with a checkpoint (a render still running), `true` at the end.
     pub complete: bool,
     /// Mean of the image, per channel.

@@ -5,17 +5,19 @@
 //! any thread count. Non-finite samples are counted and replaced by zero (never written).
 //! Each tile runs with its own explicit `transport::context::Context` (random stream rekeyed
 //! per pixel, scratch, profile counters); the tiles' profiles are summed into the pass's.
+//! How a pixel sample is drawn (one camera ray, or emission splitting) is `pixel::PixelSampler`.
 
 pub mod film;
+pub mod pixel;
 
 use crate::accel::{take_ray_counts, World};
 use crate::integrators::Integrator;
 use crate::math::Rgb;
 use crate::profile::Profile;
 use crate::sampling::rng::{stream, Rng};
-use crate::scene::Camera;
 use crate::transport::context::Context;
 use film::Film;
+pub use pixel::{PixelSampler, MAX_EMISSION_SPLIT};
 use rayon::prelude::*;
 
 /// Tile edge in pixels.
@@ -52,7 +54,7 @@ impl PassCounters {
 pub fn render_pass(
     world: &World,
     integrator: &dyn Integrator,
-    camera: &Camera,
+    pixels: &PixelSampler,
     seed: u64,
     pass: u64,
     film: &mut Film,
@@ -72,9 +74,7 @@ pub fn render_pass(
                 for x in tx * TILE..((tx + 1) * TILE).min(w) {
                     let pixel = (y * w + x) as u64;
                     ctx.rng = Rng::keyed(seed, stream::CAMERA, pass, pixel);
-                    let [jx, jy] = ctx.rng.next_2d();
-                    let dir = camera.direction(x as f32 + jx, y as f32 + jy);
-                    let mut l = integrator.radiance(world, camera.position, dir, &mut ctx);
+                    let mut l = pixels.sample(world, integrator, (x, y, pixel), (seed, pass), &mut ctx);
                     if !l.is_finite() {
                         c.nonfinite += 1;
                         l = Rgb::ZERO;

@@ -20,6 +20,8 @@ pub mod stream {
     pub const CLUSTER: u64 = 5;
     /// Tests and benchmarks.
     pub const MISC: u64 = 6;
+    /// The extra camera rays of emission splitting (`render::PixelSampler`).
+    pub const PIXEL_SPLIT: u64 = 7;
 }
 
 #[inline]

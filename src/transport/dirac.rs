@@ -44,3 +44,18 @@ pub fn follow_dirac_chain(
     }
     None
 }
+
+/// `E`, the emission a camera ray sees along its Dirac prefix: the first hit if it is an
+/// emitter's front, or the emitter at the end of a mirror/glass chain from it, times the chain's
+/// throughput (one unbiased estimate, the chain followed as [`follow_dirac_chain`]); zero when
+/// the prefix ends on a non-specular surface, escapes or is absorbed. The pixel sampler averages
+/// it over extra camera rays (`render`, `--emission-split`).
+pub fn prefix_emission(world: &World, origin: Vec3, dir: Vec3, cap: u32, rng: &mut Rng) -> Rgb {
+    let Some(hit) = world.intersect(origin, dir, f32::INFINITY) else { return Rgb::ZERO };
+    let Some((z, d, beta)) = follow_dirac_chain(world, hit, dir, Rgb::ONE, cap, rng) else { return Rgb::ZERO };
+    let e = world.scene.emitter_of(z.prim);
+    if e == NO_EMITTER || z.ng.dot(-d) <= 0.0 {
+        return Rgb::ZERO; // one-sided emission
+    }
+    beta * world.scene.emitters[e as usize].radiance
+}

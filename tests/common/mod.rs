@@ -150,11 +150,23 @@ pub fn render_profiled(
     seed: u64,
 ) -> (Film, forecast::profile::Profile) {
     let cam = world.scene.camera.with_resolution(w, h);
+    render_sampled(world, integ, &forecast::render::PixelSampler::plain(&cam), passes, seed)
+}
+
+/// [`render_profiled`] drawing pixel samples with `pixels` (its camera sets the resolution).
+pub fn render_sampled(
+    world: &forecast::accel::World,
+    integ: &mut dyn forecast::integrators::Integrator,
+    pixels: &forecast::render::PixelSampler,
+    passes: u64,
+    seed: u64,
+) -> (Film, forecast::profile::Profile) {
+    let (w, h) = pixels.resolution();
     let mut film = Film::new(w as usize, h as usize);
     let mut profile = forecast::profile::Profile::default();
     for pass in 0..passes {
         integ.begin_pass(world, seed, pass);
-        profile.add(&forecast::render::render_pass(world, &*integ, &cam, seed, pass, &mut film).profile);
+        profile.add(&forecast::render::render_pass(world, &*integ, pixels, seed, pass, &mut film).profile);
     }
     (film, profile)
 }
