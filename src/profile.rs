@@ -11,7 +11,8 @@ use std::time::Instant;
 /// A timed phase of the radiance estimate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Phase {
-    /// A whole camera sample (`Integrator::radiance`).
+    /// A whole camera ray's estimate (`Integrator::estimate`; the extra rays of emission
+    /// splitting are [`Phase::EmissionSplit`]).
     Radiance,
     /// IWS point-light gathering (`VPL_b`).
     Gather,
@@ -196,7 +197,7 @@ impl Profile {
 pub struct PhaseProfile {
     /// Camera samples.
     pub samples: u64,
-    /// Whole `radiance` call.
+    /// Whole `Integrator::estimate` call.
     pub total_us: f64,
     /// Point-light gather (target evaluation, selection and shadow rays).
     pub gather_us: f64,

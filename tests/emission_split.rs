@@ -71,8 +71,8 @@ fn render(w: &World, m: Method, (res, spp, seed): (u32, u64, u64), split: Split)
     let mut i = build(w, m, &opts());
     let cam = w.scene.camera.with_resolution(res, res);
     let pixels = match split {
-        Split::Probed(k) => PixelSampler::new(w, &cam, k, 64),
-        Split::Everywhere(k) => PixelSampler::everywhere(&cam, k, 64),
+        Split::Probed(k) => PixelSampler::new(w, &cam, k, i.prefix_cap()),
+        Split::Everywhere(k) => PixelSampler::everywhere(&cam, k, i.prefix_cap()),
     };
     render_sampled(w, i.as_mut(), &pixels, spp, seed).0
 }
@@ -95,8 +95,8 @@ fn every_method_with_split_agrees_with_pt_on_cornell_box() {
 
 #[test]
 fn probe_marks_the_edges_and_split_removes_their_variance_in_every_integrator() {
-    let w = World::build(forecast::scene::load_str(EMITTER_IN_THE_VOID, "emitter.toml", Path::new(".")).unwrap())
-        .unwrap();
+    let w =
+        World::build(forecast::scene::load_str(EMITTER_IN_THE_VOID, "emitter.toml", Path::new(".")).unwrap()).unwrap();
     let cam = w.scene.camera.with_resolution(16, 16);
     let found = PixelSampler::new(&w, &cam, 16, 64).stats();
     // the quad covers about 7×7 of the 16×16 pixels: its edges cross ~30 of them
@@ -137,4 +137,70 @@ fn furnaces_stay_exact_with_split() {
         let img = render(&glass, m, (16, 256, 3), Split::Everywhere(4));
         assert_furnace_is_one(&img, &format!("{} glass furnace, K = 4 everywhere", m.name()));
     }
+}
+
+/// Two facing lossless mirrors 1 m apart and an emitter (Le = 1) 10 m down the corridor: a ray
+/// at 1:8 to the mirrors' normal reaches it after ~80 reflections.
+const MIRROR_CORRIDOR: &str = r#"
+[camera]
+position   = [0.0, 0.0, 0.5]
+look_at    = [1.0, 0.0, 8.5]
+fov        = 40.0
+resolution = [4, 4]
+
+[materials.mirror]
+type        = "mirror"
+reflectance = [1.0, 1.0, 1.0]
+
+[[shape]]
+type     = "quad"
+corner   = [-1.0, -5.0, 0.0]
+u        = [21.0, 0.0, 0.0]
+v        = [0.0, 10.0, 0.0]
+material = "mirror"
+
+[[shape]]
+type     = "quad"
+corner   = [-1.0, -5.0, 1.0]
+u        = [0.0, 10.0, 0.0]
+v        = [21.0, 0.0, 0.0]
+material = "mirror"
+
+[[shape]]
+type     = "quad"
+corner   = [10.0, -5.0, 0.0]
+u        = [0.0, 0.0, 1.0]
+v        = [0.0, 10.0, 0.0]
+emission = [1.0, 1.0, 1.0]
+"#;
+
+/// The extra rays' Dirac chains stop where the integrator's camera prefix stops: `pt` with
+/// `--max-depth 100` reaches the emitter at the end of an ~80-reflection corridor, so `E` must
+/// too (mean 1: lossless mirrors, unbiased roulette), while a 64-vertex cap (the IWS core's)
+/// gives exactly 0. Tolerance: 5 standard errors of the sample mean (the roulette weights make
+/// single values ≈ 47 with probability ≈ 2%).
+#[test]
+fn extra_rays_follow_the_integrators_prefix_cap() {
+    use forecast::sampling::rng::{stream, Rng};
+    use forecast::transport::dirac::prefix_emission;
+    let w = World::build(forecast::scene::load_str(MIRROR_CORRIDOR, "corridor.toml", Path::new(".")).unwrap()).unwrap();
+    let mut o = opts();
+    o.pt.max_depth = Some(100);
+    let pt = Method::Pt.build(&w, &o, &[]).unwrap();
+    let iws = Method::Iws.build(&w, &o, &[]).unwrap();
+    assert_eq!((pt.prefix_cap(), iws.prefix_cap()), (100, 64));
+    let (origin, dir) =
+        (forecast::math::Vec3::new(0.0, 0.0, 0.5), forecast::math::Vec3::new(1.0, 0.0, 8.0).normalize());
+    let sample = |cap: u32, n: u64| -> (f64, f64) {
+        let v: Vec<f64> = (0..n)
+            .map(|i| prefix_emission(&w, origin, dir, cap, &mut Rng::keyed(1, stream::MISC, 0, i)).x as f64)
+            .collect();
+        let m = v.iter().sum::<f64>() / n as f64;
+        let var = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (n - 1) as f64;
+        (m, (var / n as f64).sqrt())
+    };
+    let (m, se) = sample(pt.prefix_cap(), 40_000);
+    eprintln!("corridor E with cap 100: {m:.4} ± {se:.4}");
+    assert!(se > 0.0 && (m - 1.0).abs() < 5.0 * se, "cap 100: E = {m} ± {se}, expected 1");
+    assert_eq!(sample(iws.prefix_cap(), 1000).0, 0.0, "a 64-vertex chain cannot reach the emitter");
 }

@@ -382,6 +382,10 @@ impl Integrator for Iws {
         l
     }
 
+    fn prefix_cap(&self) -> u32 {
+        self.max_depth.min(MAX_VERTICES) // as `follow_dirac_chain`
+    }
+
     fn stats(&self, profile: &Profile) -> serde_json::Value {
         let passes = self.passes.max(1) as f64;
         let samples = profile.samples.max(1) as f64;

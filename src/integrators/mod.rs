@@ -51,8 +51,14 @@ pub trait Integrator: Send + Sync {
     /// Per-pass refresh; randomness must come from (seed, pass) only.
     fn begin_pass(&mut self, _world: &World, _seed: u64, _pass: u64) {}
     /// One estimate of the radiance arriving at `origin` from direction `dir` (unit), drawing
-    /// from `ctx.rng`, split into its Dirac-prefix emission and the rest.
+    /// from `ctx.rng`, split into its Dirac-prefix emission and the rest. Contract (emission
+    /// splitting is unbiased only under it): `prefix_le` estimates the same `E` as
+    /// `transport::dirac::prefix_emission` with [`Integrator::prefix_cap`]: weight 1, the BSDF's
+    /// own Dirac sampling, `pt`'s roulette, one-sided emitters.
     fn estimate(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate;
+    /// The vertex cap of the camera's Dirac prefix in [`Integrator::estimate`] (the extra rays of
+    /// emission splitting use the same).
+    fn prefix_cap(&self) -> u32;
     /// The whole estimate ([`Integrator::estimate`] summed).
     fn radiance(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> Rgb {
         self.estimate(world, origin, dir, ctx).total()

@@ -20,10 +20,14 @@ use crate::transport::direct;
 use crate::transport::particle::MAX_VERTICES;
 use crate::transport::roulette::{q_max, roulette};
 
-/// First bounce at which Russian roulette may end a path.
-pub const RR_DEPTH: u32 = 5;
+/// First bounce at which Russian roulette may end a path: the Dirac chains' constant, so that a
+/// camera prefix is sampled exactly as `transport::dirac::prefix_emission` samples it.
+pub const RR_DEPTH: u32 = crate::transport::dirac::CHAIN_RR_VERTICES;
 
-/// Parameters shared by every method: the path-length safety cap.
+const MAX_SPLIT: i64 = crate::render::MAX_EMISSION_SPLIT as i64;
+
+/// Parameters shared by every method: the path-length safety cap and the pixel sampler's
+/// emission split (`render::pixel`).
 #[derive(clap::Args, Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PtArgs {
     /// Safety cap on path vertices (default: the scene's `render.max_depth`, 64).
@@ -32,7 +36,7 @@ pub struct PtArgs {
     /// Camera rays per pixel sample in the pixels where a light source has an edge (found by a
     /// probe): they average the emission seen directly or through mirrors and glass, one of them
     /// carries the rest of the estimate (unbiased; 1 = off; default by measurement, README).
-    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=(crate::render::MAX_EMISSION_SPLIT as i64)))]
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=MAX_SPLIT))]
     pub emission_split: u32,
 }
 
@@ -92,6 +96,10 @@ impl Integrator for PathTracer {
         ctx.profile.samples += 1;
         ctx.profile.record(Phase::Radiance, t0);
         l
+    }
+
+    fn prefix_cap(&self) -> u32 {
+        self.max_depth
     }
 
     fn stats(&self, profile: &Profile) -> serde_json::Value {

@@ -230,6 +230,10 @@ impl Integrator for GuidedPathTracer {
         l
     }
 
+    fn prefix_cap(&self) -> u32 {
+        self.max_depth
+    }
+
     fn stats(&self, profile: &Profile) -> serde_json::Value {
         let c = &profile.cf;
         serde_json::json!({

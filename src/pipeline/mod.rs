@@ -336,7 +336,7 @@ fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) ->
     let (first_pass, total) = (run.resumed.first_pass, run.plan.spp.map(|s| s.max(run.resumed.first_pass)));
     let (w, h) = run.plan.resolution;
     let camera = run.world.scene.camera.with_resolution(w, h);
-    let (k, cap) = (run.plan.args.pt.emission_split, run.plan.args.pt.cap());
+    let (k, cap) = (run.plan.args.pt.emission_split, integrator.prefix_cap());
     let pixels = run.pool.install(|| PixelSampler::new(run.world, &camera, k, cap));
     let progress = Progress::new(run.job.progress && rank == 0, total.map(|t| t - first_pass), run.plan.time);
     let mut p = Passes {

@@ -60,6 +60,7 @@ pub fn render_pass(
     film: &mut Film,
 ) -> PassCounters {
     let (w, h) = (film.width, film.height);
+    assert_eq!(pixels.resolution(), (w as u32, h as u32), "pixel sampler and film sizes differ");
     let tiles_x = w.div_ceil(TILE);
     let tiles_y = h.div_ceil(TILE);
     let results: Vec<(usize, Vec<Rgb>, PassCounters)> = (0..tiles_x * tiles_y)

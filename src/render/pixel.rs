@@ -6,20 +6,24 @@
 //! `rows[k]`, a uniform random permutation), each contributing `E`, the emission seen along its
 //! Dirac prefix (`transport::dirac::prefix_emission`: the first hit, or a short mirror/glass
 //! chain), and one of them, `J` uniform, continued by the integrator for everything else
-//! (`Integrator::estimate` returns `E` and `L − E` apart). Each `r_k`, and `r_J`, is uniform over
-//! the pixel, so `E[L̂] = E[E(r)] + E[(L − E)(r)] = E[L(r)]`: unbiased for any `K`. It divides the
+//! (`Integrator::estimate` returns `E` and `L − E` apart). Ray `k` is uniform over its column
+//! stratum (its row stratum is uniform, the permutation being random), so the `K` rays together
+//! cover the pixel once, `E[(1/K)·Σ_k E(r_k)] = E[E(r)]`, and `r_J`, its column uniform, is
+//! uniform over the pixel: `E[L̂] = E[E(r)] + E[(L − E)(r)] = E[L(r)]`, unbiased for any `K`
+//! (the contract on `E` is `transport::dirac`'s). It divides the
 //! antialiasing variance of an emitter's edge by about `K` (more for edges along the rows or the
 //! columns, which are stratified) for `K − 1` cheap rays.
 //!
 //! Which pixels. `K` rays everywhere would cost `K − 1` rays in every pixel for a gain in a few
-//! (on `cornell-box`, 0.7% of the pixels hold half of `pt`'s squared error and three quarters of
-//! `iws-cf`'s at 60 s: the light's edges, direct and in the mirror ball). So a probe traces the
-//! prefix emission at the corners, edge midpoints and centre of every pixel (a lattice of
-//! (2W+1)×(2H+1) points, one ray or chain each, from a fixed stream) and splits exactly the
-//! pixels whose 9 values are not all equal. The set is a pure function of the scene, the camera
-//! and the resolution, not of the samples, so the estimator stays unbiased whatever it marks;
-//! a pixel it misses (an edge thinner than half a pixel) is merely not split. `K = 1` draws
-//! exactly the random numbers of the plain sampler and traces no probe.
+//! (on `cornell-box` at 60 s, the light's edges, direct and in the mirror ball, and the pixels
+//! next to them, 0.7% of the image, hold half of `pt`'s squared error and three quarters of
+//! `iws-cf`'s). So a probe traces the prefix emission at the corners, edge midpoints and centre
+//! of every pixel (a lattice of (2W+1)×(2H+1) points, one ray or chain each, from a fixed
+//! stream, band by band) and splits exactly the pixels whose 9 values are not all equal (0.22%
+//! of `cornell-box`'s). The set is a pure function of the scene, the camera, the resolution and
+//! the cap, not of the samples, so the estimator stays unbiased whatever it marks; a pixel it
+//! misses (an edge thinner than half a pixel) is merely not split. `K = 1` draws exactly the
+//! random numbers of the plain sampler and traces no probe.
 
 use super::Context;
 use crate::accel::World;
@@ -69,8 +73,8 @@ impl<'a> PixelSampler<'a> {
     }
 
     /// `k` rays per sample (clamped to 1..=[`MAX_EMISSION_SPLIT`]) in the pixels where the probe
-    /// finds a light-source edge; `cap` bounds the extra rays' Dirac chains. Runs the probe on
-    /// the current rayon pool.
+    /// finds a light-source edge; `cap` bounds the extra rays' Dirac chains and must be the
+    /// integrator's `Integrator::prefix_cap`. Runs the probe on the current rayon pool.
     pub fn new(world: &World, camera: &'a Camera, k: u32, cap: u32) -> PixelSampler<'a> {
         let k = k.clamp(1, MAX_EMISSION_SPLIT);
         if k == 1 {
@@ -147,25 +151,34 @@ impl<'a> PixelSampler<'a> {
     }
 }
 
+/// Pixel rows per probe band (bounds the probe's memory to 2·(2W+1)·BAND colours).
+const PROBE_BAND: usize = 64;
+
 /// The pixels whose prefix emission differs among their 9 lattice points (corners, edge
-/// midpoints, centre), from a fixed stream: a pure function of scene, camera and resolution.
+/// midpoints, centre), from a fixed stream keyed by the lattice index: a pure function of scene,
+/// camera, resolution and cap. Band by band, so the lattice never needs to be held whole.
 fn probe_edges(world: &World, camera: &Camera, cap: u32) -> Vec<bool> {
     let (w, h) = (camera.width as usize, camera.height as usize);
     let lw = 2 * w + 1;
-    let lattice: Vec<Rgb> = (0..lw * (2 * h + 1))
-        .into_par_iter()
-        .map(|i| {
-            let (u, v) = ((i % lw) as f32 * 0.5, (i / lw) as f32 * 0.5);
-            let mut rng = Rng::keyed(0, stream::PIXEL_SPLIT, u64::MAX, i as u64);
-            prefix_emission(world, camera.position, camera.direction(u, v), cap, &mut rng)
-        })
-        .collect();
-    (0..w * h)
-        .into_par_iter()
-        .map(|p| {
-            let (x, y) = (2 * (p % w), 2 * (p / w));
+    let mut split = Vec::with_capacity(w * h);
+    for y0 in (0..h).step_by(PROBE_BAND) {
+        let y1 = (y0 + PROBE_BAND).min(h);
+        // lattice rows 2·y0 ..= 2·y1
+        let base = 2 * y0 * lw;
+        let lattice: Vec<Rgb> = (base..(2 * y1 + 1) * lw)
+            .into_par_iter()
+            .map(|i| {
+                let (u, v) = ((i % lw) as f32 * 0.5, (i / lw) as f32 * 0.5);
+                let mut rng = Rng::keyed(0, stream::PIXEL_SPLIT, u64::MAX, i as u64);
+                prefix_emission(world, camera.position, camera.direction(u, v), cap, &mut rng)
+            })
+            .collect();
+        let band = (y0 * w..y1 * w).into_par_iter().map(|p| {
+            let (x, y) = (2 * (p % w), 2 * (p / w - y0));
             let first = lattice[y * lw + x];
             (0..9).any(|j| lattice[(y + j / 3) * lw + x + j % 3] != first)
-        })
-        .collect()
+        });
+        split.par_extend(band);
+    }
+    split
 }

@@ -2,6 +2,13 @@
 //! family (camera rays and `L_c` chains, spec §1 "Chain following"). `pt` and the particle
 //! tracer walk Dirac vertices inside their own path loops with the same BSDF sampling and the
 //! same roulette rule (`transport::roulette`).
+//!
+//! [`prefix_emission`] estimates `E`, the emission a camera ray reaches along its Dirac prefix,
+//! for the extra rays of emission splitting (`render::pixel`). Invariant the splitting's
+//! unbiasedness rests on: every integrator's `CameraEstimate::prefix_le` is an estimate of the
+//! same `E` with the same truncation: weight 1 (no MIS on a Dirac prefix), the BSDF's own
+//! sampling, roulette from vertex [`CHAIN_RR_VERTICES`] (`pt`'s `RR_DEPTH` is this constant),
+//! one-sided emitters, and the integrator's own vertex cap (`Integrator::prefix_cap`).
 
 use super::particle::MAX_VERTICES;
 use super::roulette::{q_max, roulette};
@@ -20,6 +27,18 @@ pub const CHAIN_RR_VERTICES: u32 = 5;
 /// absorption or the vertex cap `cap` (at most [`MAX_VERTICES`]).
 pub fn follow_dirac_chain(
     world: &World,
+    hit: Hit,
+    d: Vec3,
+    beta: Rgb,
+    cap: u32,
+    rng: &mut Rng,
+) -> Option<(Hit, Vec3, Rgb)> {
+    follow_chain(world, hit, d, beta, cap.min(MAX_VERTICES), rng)
+}
+
+/// [`follow_dirac_chain`] with the cap `cap` as given (`pt`'s `--max-depth` may exceed 64).
+fn follow_chain(
+    world: &World,
     mut hit: Hit,
     mut d: Vec3,
     mut beta: Rgb,
@@ -27,7 +46,7 @@ pub fn follow_dirac_chain(
     rng: &mut Rng,
 ) -> Option<(Hit, Vec3, Rgb)> {
     let s = &world.scene;
-    for v in 0..cap.min(MAX_VERTICES) {
+    for v in 0..cap {
         let m = s.material_of(hit.prim);
         if s.emitter_of(hit.prim) != NO_EMITTER || !m.is_dirac() {
             return Some((hit, d, beta));
@@ -47,12 +66,13 @@ pub fn follow_dirac_chain(
 
 /// `E`, the emission a camera ray sees along its Dirac prefix: the first hit if it is an
 /// emitter's front, or the emitter at the end of a mirror/glass chain from it, times the chain's
-/// throughput (one unbiased estimate, the chain followed as [`follow_dirac_chain`]); zero when
-/// the prefix ends on a non-specular surface, escapes or is absorbed. The pixel sampler averages
-/// it over extra camera rays (`render`, `--emission-split`).
+/// throughput (one unbiased estimate, the chain followed as [`follow_dirac_chain`] but up to
+/// `cap` vertices as given, the integrator's `prefix_cap`); zero when the prefix ends on a
+/// non-specular surface, escapes, is absorbed or reaches the cap. The pixel sampler averages it
+/// over extra camera rays (`render::pixel`, `--emission-split`).
 pub fn prefix_emission(world: &World, origin: Vec3, dir: Vec3, cap: u32, rng: &mut Rng) -> Rgb {
     let Some(hit) = world.intersect(origin, dir, f32::INFINITY) else { return Rgb::ZERO };
-    let Some((z, d, beta)) = follow_dirac_chain(world, hit, dir, Rgb::ONE, cap, rng) else { return Rgb::ZERO };
+    let Some((z, d, beta)) = follow_chain(world, hit, dir, Rgb::ONE, cap, rng) else { return Rgb::ZERO };
     let e = world.scene.emitter_of(z.prim);
     if e == NO_EMITTER || z.ng.dot(-d) <= 0.0 {
         return Rgb::ZERO; // one-sided emission
