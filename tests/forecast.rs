@@ -213,3 +213,46 @@ fn forecast_product_round_trips_through_bytes() {
     b.stats.kdtree_s = a.stats.kdtree_s;
     assert!(b == a, "the preprocess product depends on more than the seed");
 }
+
+/// A caustic chain's roulette sees the sample's whole weight f·|cos|/p, not f·|cos| alone. At
+/// diffuse depth 1 (≥ `--table-depth`, so CF draws one BSDF sample) on the floor in front of the
+/// glass ball, with `L̂ = 1` at every chain end, `iws-cf`'s `L_c` is `BsdfCaustics`' sample for
+/// sample (same draws, same weight albedo up to rounding, same roulette q = max albedo). A survivor then carries
+/// albedo/q ≤ 1 per channel times the chain's throughput (Fresnel-sampled glass 1, mirror 0.9,
+/// 1/0.95 per chain roulette after the 5th vertex), so no sample exceeds 2; roulette on f·|cos|
+/// (q ≤ albedo/π) gave the survivors ×π/cos θ ≥ 3.1.
+#[test]
+fn caustic_chain_roulette_sees_the_whole_sample_weight() {
+    use forecast::accel::Hit;
+    use forecast::bsdf::ShadingPoint;
+    use forecast::integrators::caustics::{BsdfCaustics, CausticEstimator, Context, Recurse, ShadingQuery};
+    use forecast::integrators::iws_forecast::ForecastCaustics;
+    use forecast::math::{Rgb, Vec3};
+    use forecast::sampling::rng::{stream, Rng};
+    struct White;
+    impl Recurse for White {
+        fn l_hat(&self, _: &World, _: &Hit, _: Vec3, _: u32, _: &mut Context) -> Rgb {
+            Rgb::ONE
+        }
+    }
+    let w = world("scenes/cornell-box.toml");
+    let (_, product) = iws_cf(&w, &opts());
+    assert_eq!(product.opts.table_depth, 1, "the default table depth");
+    let cf = ForecastCaustics::new(product);
+    let hit = w.intersect(Vec3::new(0.45, 1.0, 0.75), Vec3::new(0.0, -1.0, 0.0), f32::INFINITY).unwrap();
+    assert!(hit.p.y.abs() < 1e-4, "the floor in front of the glass ball");
+    let x = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
+    let q = ShadingQuery { x: &x, m: w.scene.material_of(hit.prim), wo: Vec3::new(0.0, 1.0, 0.0), depth: 1 };
+    let (mut nonzero, mut max) = (0u32, 0.0f32);
+    for i in 0..100_000 {
+        let mut a = Context::new(Rng::keyed(5, stream::MISC, 1, i));
+        let mut b = Context::new(Rng::keyed(5, stream::MISC, 1, i));
+        let (lc, reference) = (cf.estimate(&w, &q, &mut a, &White), BsdfCaustics.estimate(&w, &q, &mut b, &White));
+        let tol = 1e-5 * reference.max_element().max(1.0); // f·|cos|/p against the warp's albedo
+        assert!((lc - reference).abs().max_element() <= tol, "sample {i}: CF {lc:?} ≠ BsdfCaustics {reference:?}");
+        nonzero += (lc != Rgb::ZERO) as u32;
+        max = max.max(lc.max_element());
+    }
+    assert!(nonzero >= 1000, "only {nonzero} samples reached the glass ball: the test is vacuous");
+    assert!(max <= 2.0, "a caustic sample of {max} at depth 1: roulette on f·|cos| alone");
+}

@@ -170,3 +170,38 @@ fn furnace_check_can_fail() {
     let r = std::panic::catch_unwind(|| assert_uniform("negative control", &f, 0.98));
     assert!(r.is_err(), "a 2% error went undetected");
 }
+
+/// Roulette on β·etaScale (pbrt-v4): inside glass a chain's β holds the radiance-mode 1/η² of its
+/// entry, and roulette on β alone would give the survivors ×η²/q when they leave. Chains into a
+/// glass ball of ior 3 (R ≈ 25% at normal incidence, so many chains reach the 5 vertices where
+/// roulette starts) inside the emissive enclosure of `furnace_glass.toml`: Fresnel-sampled
+/// weights are 1 and the η² factors cancel on exit, so a survivor leaves with 0.95^-k for its k
+/// roulettes and no chain exceeds 2 (13 roulettes); on β alone q = 1/9 inside and the survivors
+/// leave with ≥ 9. The mean stays 1 (lossless; 5σ), and at least 1% of the chains met roulette.
+#[test]
+fn glass_chain_roulette_leaves_no_eta_squared_tail() {
+    use forecast::math::{Rgb, Vec3};
+    use forecast::sampling::rng::{stream, Rng};
+    use forecast::transport::dirac::follow_dirac_chain;
+    let src = std::fs::read_to_string(root().join("tests/scenes/furnace_glass.toml")).unwrap();
+    let src = src.replace("ior  = 1.5", "ior  = 3.0");
+    assert!(src.contains("ior  = 3.0"));
+    let w = World::build(forecast::scene::load_str(&src, "glass3.toml", &root()).unwrap()).unwrap();
+    let (n, o) = (200_000u64, Vec3::new(0.0, 0.0, 1.5));
+    let (mut sum, mut sum2, mut max, mut rouletted) = (0.0f64, 0.0f64, 0.0f32, 0u64);
+    for i in 0..n {
+        let mut rng = Rng::keyed(21, stream::MISC, 0, i);
+        let [u, v] = rng.next_2d();
+        let (r, phi) = (0.6 * u.sqrt(), std::f32::consts::TAU * v);
+        let d = (Vec3::new(0.1 + r * phi.cos(), -0.1 + r * phi.sin(), 0.0) - o).normalize();
+        let hit = w.intersect(o, d, f32::INFINITY).expect("aimed at the ball");
+        let beta = follow_dirac_chain(&w, hit, d, Rgb::ONE, 64, &mut rng).map_or(0.0, |(_, _, b)| b.x);
+        (sum, sum2, max) = (sum + beta as f64, sum2 + (beta as f64).powi(2), max.max(beta));
+        rouletted += (beta != 0.0 && (beta - 1.0).abs() > 1e-4) as u64;
+    }
+    let mean = sum / n as f64;
+    let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+    assert!(max <= 2.0, "a chain left the glass with β = {max}: roulette without etaScale");
+    assert!(rouletted * 100 >= n, "only {rouletted} of {n} chains met roulette: the test is vacuous");
+    assert!((mean - 1.0).abs() <= 5.0 * se, "mean β {mean} ± {se}, expected 1");
+}

@@ -40,7 +40,7 @@ pub fn sample(ior: f32, sp: &ShadingPoint, wo: Vec3, u: f32, mode: Mode) -> Opti
         if wi.dot(ng) <= 0.0 {
             return None;
         }
-        return Some(BsdfSample { wi, weight: Rgb::ONE, pdf_w: f, is_delta: true });
+        return Some(BsdfSample { wi, weight: Rgb::ONE, pdf_w: f, is_delta: true, eta: 1.0 });
     }
     let sin2_t = (1.0 - cos_i * cos_i).max(0.0) / (eta * eta);
     let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
@@ -49,7 +49,7 @@ pub fn sample(ior: f32, sp: &ShadingPoint, wo: Vec3, u: f32, mode: Mode) -> Opti
         return None;
     }
     let scale = if mode == Mode::Radiance { 1.0 / (eta * eta) } else { 1.0 };
-    Some(BsdfSample { wi, weight: Rgb::splat(scale), pdf_w: 1.0 - f, is_delta: true })
+    Some(BsdfSample { wi, weight: Rgb::splat(scale), pdf_w: 1.0 - f, is_delta: true, eta })
 }
 
 #[cfg(test)]

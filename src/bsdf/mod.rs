@@ -51,6 +51,10 @@ pub struct BsdfSample {
     pub pdf_w: f32,
     /// Dirac lobe.
     pub is_delta: bool,
+    /// Relative index of refraction η_t/η_i of a refraction (pbrt-v4's `eta`), 1 otherwise. A
+    /// path's roulette divides out the radiance-mode 1/η² it put into `weight`
+    /// (`transport::roulette::EtaScale`).
+    pub eta: f32,
 }
 
 impl ShadingPoint {
@@ -119,7 +123,7 @@ pub fn sample(m: &Material, sp: &ShadingPoint, wo: Vec3, u: [f32; 3], mode: Mode
                 return None;
             }
             // f·cos/pdf = albedo for the cosine warp
-            BsdfSample { wi, weight: albedo, pdf_w: cos * INV_PI, is_delta: false }
+            BsdfSample { wi, weight: albedo, pdf_w: cos * INV_PI, is_delta: false, eta: 1.0 }
         }
         Material::Glossy { albedo, specular, exponent } => {
             let (wi, pdf) = phong::sample(albedo, specular, exponent, ns, wo, u)?;
@@ -127,14 +131,14 @@ pub fn sample(m: &Material, sp: &ShadingPoint, wo: Vec3, u: [f32; 3], mode: Mode
                 return None;
             }
             let f = phong::eval(albedo, specular, exponent, ns, wo, wi);
-            BsdfSample { wi, weight: f * wi.dot(ns) / pdf, pdf_w: pdf, is_delta: false }
+            BsdfSample { wi, weight: f * wi.dot(ns) / pdf, pdf_w: pdf, is_delta: false, eta: 1.0 }
         }
         Material::Mirror { reflectance } => {
             let wi = crate::math::reflect(wo, ns);
             if wi.dot(ng) <= 0.0 {
                 return None;
             }
-            BsdfSample { wi, weight: reflectance, pdf_w: 1.0, is_delta: true }
+            BsdfSample { wi, weight: reflectance, pdf_w: 1.0, is_delta: true, eta: 1.0 }
         }
         Material::Conductor { reflectance, eta, k } => {
             let wi = crate::math::reflect(wo, ns);
@@ -142,7 +146,7 @@ pub fn sample(m: &Material, sp: &ShadingPoint, wo: Vec3, u: [f32; 3], mode: Mode
                 return None;
             }
             let f = fresnel_conductor(wo.dot(ns), eta, k);
-            BsdfSample { wi, weight: reflectance * f, pdf_w: 1.0, is_delta: true }
+            BsdfSample { wi, weight: reflectance * f, pdf_w: 1.0, is_delta: true, eta: 1.0 }
         }
         Material::Glass { ior } => dielectric::sample(ior, sp, wo, u[0], mode)?,
         Material::Black => return None,

@@ -330,14 +330,16 @@ impl CausticForecast {
         found.map(|(c, t)| (c, t, frame))
     }
 
-    /// Ĺ_c at `q`. `g(ωi, ctx)` returns the integrand f·|cos|·1[first hit Dirac]·L̂ (world ωi).
+    /// Ĺ_c at `q`. `g(ωi, w, ctx)` returns one sample's contribution: the integrand
+    /// f·|cos|·1[first hit Dirac]·L̂ (world ωi) times its estimator weight `w` (1/pdf, over the
+    /// sample count), so that a roulette inside `g` sees the sample's whole weight.
     /// `cache` enables the table cache for Lambertian, flat-shaded points.
     pub fn estimate(
         &self,
         q: &ShadingQuery,
         ctx: &mut Context,
         cache: Option<&TableCache>,
-        mut g: impl FnMut(Vec3, &mut Context) -> Rgb,
+        mut g: impl FnMut(Vec3, f32, &mut Context) -> Rgb,
     ) -> Rgb {
         ctx.profile.cf.queries += 1;
         let (sp, m, wo) = (q.x, q.m, q.wo);
@@ -350,7 +352,7 @@ impl CausticForecast {
             if bs.pdf_w <= 0.0 {
                 return Rgb::ZERO;
             }
-            return g(bs.wi, ctx) / bs.pdf_w;
+            return g(bs.wi, 1.0 / bs.pdf_w, ctx);
         };
         ctx.profile.cf.inside += 1;
         let s = self.split_for(c, q.depth);
@@ -364,16 +366,16 @@ impl CausticForecast {
             let mut sum = Rgb::ZERO;
             for _ in 0..n {
                 if let Some(ms) = mix.sample(&mut ctx.rng).filter(|ms| ms.pdf_w > 0.0) {
-                    sum += g(ms.wi, ctx) / ms.pdf_w;
+                    sum += g(ms.wi, 1.0 / (n as f32 * ms.pdf_w), ctx);
                 }
             }
-            return sum / n as f32;
+            return sum;
         }
         let mut samples = Vec::with_capacity(2 * s);
         tables.for_each_sample(s, &mut ctx.rng, |ts| samples.push(ts));
         ctx.profile.cf.samples += samples.len() as u64;
         // [BAJ08 §3.2] each table is sampled S times and the two estimates are added
-        samples.iter().map(|ts| g(frame.to_world(ts.dir), ctx) * ts.weight).fold(Rgb::ZERO, |a, b| a + b)
+        samples.iter().map(|ts| g(frame.to_world(ts.dir), ts.weight, ctx)).fold(Rgb::ZERO, |a, b| a + b)
     }
 
     /// Encodes for the broadcast.

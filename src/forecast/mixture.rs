@@ -21,7 +21,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::direction_table::{bin_of, DirectionTable, ForecastTables, BIN_SOLID_ANGLE};
-use crate::bsdf::{self, Mode, ShadingPoint};
+use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
 use crate::math::{Frame, Rgb, Vec3};
 use crate::sampling::rng::Rng;
 use crate::scene::Material;
@@ -74,6 +74,15 @@ pub struct MixtureSample {
     pub component: u8,
     /// Dirac lobe (only for Dirac materials).
     pub is_delta: bool,
+    /// Relative index of a refraction (`BsdfSample::eta`), else 1.
+    pub eta: f32,
+}
+
+impl MixtureSample {
+    /// The same continuation as a [`BsdfSample`] (its pdf the mixture's).
+    pub fn as_bsdf_sample(&self) -> BsdfSample {
+        BsdfSample { wi: self.wi, weight: self.weight, pdf_w: self.pdf_w, is_delta: self.is_delta, eta: self.eta }
+    }
 }
 
 /// The mixture at one vertex: the BSDF `(m, sp, wo)` and the vertex's tables in `frame`.
@@ -179,8 +188,8 @@ impl<'a> DefensiveMixture<'a> {
             if !bs.is_delta && !self.in_domain(bs.wi) {
                 return None;
             }
-            let (wi, weight, pdf_w, is_delta) = (bs.wi, bs.weight, bs.pdf_w, bs.is_delta);
-            return Some(MixtureSample { wi, weight, pdf_w, component: 0, is_delta });
+            let (wi, weight, pdf_w, is_delta, eta) = (bs.wi, bs.weight, bs.pdf_w, bs.is_delta, bs.eta);
+            return Some(MixtureSample { wi, weight, pdf_w, component: 0, is_delta, eta });
         }
         let component = if pick < self.c[0] {
             0
@@ -203,6 +212,6 @@ impl<'a> DefensiveMixture<'a> {
         }
         let f = bsdf::eval(self.m, self.sp, self.wo, wi);
         let weight = f * (wi.dot(self.sp.ns).abs() / q);
-        Some(MixtureSample { wi, weight, pdf_w: q, component: component as u8, is_delta: false })
+        Some(MixtureSample { wi, weight, pdf_w: q, component: component as u8, is_delta: false, eta: 1.0 })
     }
 }

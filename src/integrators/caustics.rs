@@ -71,9 +71,10 @@ impl CausticEstimator for BsdfCaustics {
     }
 }
 
-/// The L_c integrand along `wi` from `q.x`, times `weight` (f·|cos|/p or f·|cos|): 0 unless the
-/// first hit is Dirac (spec §1: L_d owns diffuse and emitter first hits); else roulette, the
-/// Dirac chain, and `L̂` at its end with diffuse depth + 1.
+/// The L_c integrand along `wi` from `q.x`, times `weight`, the sample's whole estimator weight
+/// (f·|cos|/p over the sample count): 0 unless the first hit is Dirac (spec §1: L_d owns diffuse
+/// and emitter first hits); else roulette on `weight`, the Dirac chain, and `L̂` at its end with
+/// diffuse depth + 1.
 pub fn caustic_chain(
     world: &World,
     q: &ShadingQuery,

@@ -18,7 +18,7 @@ use crate::sampling::power_heuristic;
 use crate::scene::NO_EMITTER;
 use crate::transport::direct;
 use crate::transport::particle::MAX_VERTICES;
-use crate::transport::roulette::{q_max, roulette};
+use crate::transport::roulette::{roulette, EtaScale};
 
 /// First bounce at which Russian roulette may end a path: the Dirac chains' constant, so that a
 /// camera prefix is sampled exactly as `transport::dirac::prefix_emission` samples it.
@@ -115,6 +115,7 @@ impl PathTracer {
         let mut l = CameraEstimate::default();
         let mut prefix = true; // no non-Dirac vertex yet
         let mut beta = Rgb::ONE;
+        let mut eta_scale = EtaScale::ONE;
         let mut prev_delta = true;
         let mut prev_pdf_w = 0.0f32;
         for depth in 0..self.max_depth {
@@ -135,8 +136,9 @@ impl PathTracer {
             let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
             let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { break };
             beta *= bs.weight;
+            eta_scale.after(bs.eta);
             if depth + 1 >= RR_DEPTH {
-                let Some(b) = roulette(beta, q_max(beta), rng) else { break };
+                let Some(b) = roulette(beta, eta_scale.q(beta), rng) else { break };
                 beta = b;
             }
             prev_delta = bs.is_delta;

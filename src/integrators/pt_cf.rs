@@ -25,7 +25,7 @@ use super::path::{emitter_hit, RR_DEPTH};
 use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
 use crate::progress::Phases;
 use crate::accel::{offset_origin, World};
-use crate::bsdf::{self, Mode, ShadingPoint};
+use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
 use crate::forecast::direction_table::ForecastTables;
 use crate::forecast::estimator::{CausticForecast, TableCache};
 use crate::forecast::mixture::{DefensiveMixture, MixtureWeights};
@@ -34,7 +34,7 @@ use crate::profile::{Phase, Profile, Stopwatch};
 use crate::scene::NO_EMITTER;
 use crate::transport::context::ShadingQuery;
 use crate::transport::direct;
-use crate::transport::roulette::{q_max, roulette};
+use crate::transport::roulette::{roulette, EtaScale};
 use std::sync::Arc;
 
 /// `pt-cf` parameters (the CF preprocess options are `iws-cf`'s: `--forecast-photons`,
@@ -98,6 +98,8 @@ struct PathState {
     o: Vec3,
     d: Vec3,
     beta: Rgb,
+    /// η² over the refractions so far, for the roulette (`transport::roulette::EtaScale`).
+    eta_scale: EtaScale,
     /// Vertices traced so far.
     vertex: u32,
     /// Non-Dirac vertices traced so far (diffuse depth of the next one).
@@ -164,7 +166,7 @@ impl GuidedPathTracer {
                 }
                 let u = [ctx.rng.next_f32(), ctx.rng.next_f32(), ctx.rng.next_f32()];
                 let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { break };
-                if !continue_path(&mut st, (depth, hit.p, hit.ng), (bs.wi, bs.weight, bs.pdf_w, bs.is_delta), ctx) {
+                if !continue_path(&mut st, (depth, hit.p, hit.ng), &bs, ctx) {
                     break;
                 }
                 continue;
@@ -175,7 +177,7 @@ impl GuidedPathTracer {
             l.rest += st.beta * direct::sample_light_mis(world, &sp, m, wo, &mut ctx.rng, |wi| n * mix.pdf_w(wi));
             if g.n == 1 {
                 let Some(ms) = mix.sample(&mut ctx.rng) else { break };
-                if !continue_path(&mut st, (depth, hit.p, hit.ng), (ms.wi, ms.weight, ms.pdf_w, false), ctx) {
+                if !continue_path(&mut st, (depth, hit.p, hit.ng), &ms.as_bsdf_sample(), ctx) {
                     break;
                 }
                 continue;
@@ -187,7 +189,7 @@ impl GuidedPathTracer {
                 if continue_path(
                     &mut b,
                     (depth, hit.p, hit.ng),
-                    (ms.wi, ms.weight * (1.0 / n), n * ms.pdf_w, false),
+                    &BsdfSample { weight: ms.weight * (1.0 / n), pdf_w: n * ms.pdf_w, ..ms.as_bsdf_sample() },
                     ctx,
                 ) {
                     l.rest += self.trace(world, b, ctx).total();
@@ -199,23 +201,19 @@ impl GuidedPathTracer {
     }
 }
 
-/// Applies a sampled continuation `(wi, weight, pdf_w, is_delta)` at vertex `(index, p, ng)`:
-/// throughput, `pt`'s roulette from [`RR_DEPTH`], the next ray. False when the path ends.
-fn continue_path(
-    st: &mut PathState,
-    (index, p, ng): (u32, Vec3, Vec3),
-    (wi, weight, pdf_w, is_delta): (Vec3, Rgb, f32, bool),
-    ctx: &mut Context,
-) -> bool {
-    st.beta *= weight;
+/// Applies a sampled continuation `bs` at vertex `(index, p, ng)`: throughput, `pt`'s roulette
+/// (on β·etaScale) from [`RR_DEPTH`], the next ray. False when the path ends.
+fn continue_path(st: &mut PathState, (index, p, ng): (u32, Vec3, Vec3), bs: &BsdfSample, ctx: &mut Context) -> bool {
+    st.beta *= bs.weight;
+    st.eta_scale.after(bs.eta);
     if index + 1 >= RR_DEPTH {
-        let Some(b) = roulette(st.beta, q_max(st.beta), &mut ctx.rng) else { return false };
+        let Some(b) = roulette(st.beta, st.eta_scale.q(st.beta), &mut ctx.rng) else { return false };
         st.beta = b;
     }
-    st.prev_delta = is_delta;
-    st.prev_pdf_w = pdf_w;
-    st.o = offset_origin(p, ng, wi);
-    st.d = wi;
+    st.prev_delta = bs.is_delta;
+    st.prev_pdf_w = bs.pdf_w;
+    st.o = offset_origin(p, ng, bs.wi);
+    st.d = bs.wi;
     true
 }
 
@@ -223,7 +221,7 @@ impl Integrator for GuidedPathTracer {
     fn estimate(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
         let t0 = Stopwatch::start();
         let st =
-            PathState { o: origin, d: dir, beta: Rgb::ONE, vertex: 0, diffuse: 0, prev_delta: true, prev_pdf_w: 0.0 };
+            PathState { o: origin, d: dir, beta: Rgb::ONE, eta_scale: EtaScale::ONE, vertex: 0, diffuse: 0, prev_delta: true, prev_pdf_w: 0.0 };
         let l = self.trace(world, st, ctx);
         ctx.profile.samples += 1;
         ctx.profile.record(Phase::Radiance, t0);

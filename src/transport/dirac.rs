@@ -11,7 +11,7 @@
 //! one-sided emitters, and the integrator's own vertex cap (`Integrator::prefix_cap`).
 
 use super::particle::MAX_VERTICES;
-use super::roulette::{q_max, roulette};
+use super::roulette::{roulette, EtaScale};
 use crate::accel::{offset_origin, Hit, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::math::{Rgb, Vec3};
@@ -22,7 +22,7 @@ use crate::scene::NO_EMITTER;
 pub const CHAIN_RR_VERTICES: u32 = 5;
 
 /// Follows a Dirac chain from `hit` (reached along `d`) with throughput `beta`: Fresnel-weighted
-/// choice at glass, roulette after [`CHAIN_RR_VERTICES`]. Returns the first non-Dirac hit
+/// choice at glass, roulette on β·etaScale after [`CHAIN_RR_VERTICES`]. Returns the first non-Dirac hit
 /// (possibly an emitter), the direction that reached it and the throughput; `None` on escape,
 /// absorption or the vertex cap `cap` (at most [`MAX_VERTICES`]).
 pub fn follow_dirac_chain(
@@ -46,6 +46,7 @@ fn follow_chain(
     rng: &mut Rng,
 ) -> Option<(Hit, Vec3, Rgb)> {
     let s = &world.scene;
+    let mut eta_scale = EtaScale::ONE;
     for v in 0..cap {
         let m = s.material_of(hit.prim);
         if s.emitter_of(hit.prim) != NO_EMITTER || !m.is_dirac() {
@@ -55,8 +56,9 @@ fn follow_chain(
         let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
         let bs = bsdf::sample(m, &sp, -d, u, Mode::Radiance)?;
         beta *= bs.weight;
+        eta_scale.after(bs.eta);
         if v + 1 >= CHAIN_RR_VERTICES {
-            beta = roulette(beta, q_max(beta), rng)?;
+            beta = roulette(beta, eta_scale.q(beta), rng)?;
         }
         d = bs.wi;
         hit = world.intersect(offset_origin(hit.p, hit.ng, d), d, f32::INFINITY)?;
