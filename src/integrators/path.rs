@@ -2,7 +2,8 @@
 //!
 //! Next-event estimation with MIS (power heuristic) for area lights, point lights by NEE only,
 //! BSDF sampling for every material, Dirac chains followed with the Fresnel-weighted choice, and
-//! Russian roulette from the 5th bounce (survival min(max β, 0.95), as the Mitsuba reference).
+//! Russian roulette from the 5th bounce (survival min(max β·etaScale, 0.95), as Mitsuba and
+//! pbrt-v4: `transport::roulette::EtaScale`).
 //! `max_depth` (default 64 vertices) is a safety cap only: with RR the truncated energy is far
 //! below the noise (documented in the README).
 //!
