@@ -170,7 +170,7 @@ fn all_photons_missing_still_agrees_with_pt() {
 /// `pt`. Negative control: `assert_agrees` rejects the image scaled by 0.97.
 ///
 /// The reference has 65536 spp, not 4096: `pt` reaches the light through the glass ball only by
-/// BSDF sampling, and before its roulette ran on β·etaScale (`transport::roulette::EtaScale`) it
+/// BSDF sampling, and before its roulette ran on β·etaScale (`transport::roulette::Throughput`) it
 /// acted inside the ball, where β carries the radiance-mode 1/η² = 0.44 of the entry, so
 /// survivors left with ×2.25: samples of
 /// ≈ 40 in a pixel of mean 0.05 (ceiling pixel (12,2): 1003 of 2·10⁶ samples above 5 carry 20% of

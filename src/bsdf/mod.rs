@@ -53,7 +53,7 @@ pub struct BsdfSample {
     pub is_delta: bool,
     /// Relative index of refraction η_t/η_i of a refraction (pbrt-v4's `eta`), 1 otherwise. A
     /// path's roulette divides out the radiance-mode 1/η² it put into `weight`
-    /// (`transport::roulette::EtaScale`).
+    /// (`transport::roulette::Throughput`).
     pub eta: f32,
 }
 

@@ -3,7 +3,7 @@
 //! Next-event estimation with MIS (power heuristic) for area lights, point lights by NEE only,
 //! BSDF sampling for every material, Dirac chains followed with the Fresnel-weighted choice, and
 //! Russian roulette from the 5th bounce (survival min(max β·etaScale, 0.95), as Mitsuba and
-//! pbrt-v4: `transport::roulette::EtaScale`).
+//! pbrt-v4: `transport::roulette::Throughput`).
 //! `max_depth` (default 64 vertices) is a safety cap only: with RR the truncated energy is far
 //! below the noise (documented in the README).
 //!
@@ -19,11 +19,7 @@ use crate::sampling::power_heuristic;
 use crate::scene::NO_EMITTER;
 use crate::transport::direct;
 use crate::transport::particle::MAX_VERTICES;
-use crate::transport::roulette::{roulette, EtaScale};
-
-/// First bounce at which Russian roulette may end a path: the Dirac chains' constant, so that a
-/// camera prefix is sampled exactly as `transport::dirac::prefix_emission` samples it.
-pub const RR_DEPTH: u32 = crate::transport::dirac::CHAIN_RR_VERTICES;
+use crate::transport::roulette::Throughput;
 
 const MAX_SPLIT: i64 = crate::render::MAX_EMISSION_SPLIT as i64;
 
@@ -115,15 +111,14 @@ impl PathTracer {
         let (mut o, mut d) = (origin, dir);
         let mut l = CameraEstimate::default();
         let mut prefix = true; // no non-Dirac vertex yet
-        let mut beta = Rgb::ONE;
-        let mut eta_scale = EtaScale::ONE;
+        let mut t = Throughput::new(Rgb::ONE);
         let mut prev_delta = true;
         let mut prev_pdf_w = 0.0f32;
         for depth in 0..self.max_depth {
             let Some(hit) = world.intersect(o, d, f32::INFINITY) else { break };
             if s.emitter_of(hit.prim) != NO_EMITTER {
                 if let Some((le, w)) = emitter_hit(world, &hit, d, prev_delta, prev_pdf_w) {
-                    *if prefix { &mut l.prefix_le } else { &mut l.rest } += beta * le * w;
+                    *if prefix { &mut l.prefix_le } else { &mut l.rest } += t.beta * le * w;
                 }
                 break; // emitters reflect nothing
             }
@@ -132,15 +127,12 @@ impl PathTracer {
             let wo = -d;
             if !m.is_dirac() {
                 prefix = false;
-                l.rest += beta * direct::sample_light(world, &sp, m, wo, rng);
+                l.rest += t.beta * direct::sample_light(world, &sp, m, wo, rng);
             }
             let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
             let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { break };
-            beta *= bs.weight;
-            eta_scale.after(bs.eta);
-            if depth + 1 >= RR_DEPTH {
-                let Some(b) = roulette(beta, eta_scale.q(beta), rng) else { break };
-                beta = b;
+            if !t.scatter(&bs, depth, rng) {
+                break;
             }
             prev_delta = bs.is_delta;
             prev_pdf_w = bs.pdf_w;

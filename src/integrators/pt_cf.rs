@@ -2,7 +2,7 @@
 //! BAJ08, which combines CF with IWS only).
 //!
 //! Estimator. Exactly `pt` (NEE + power-heuristic MIS for area lights, Dirac chains followed by
-//! BSDF sampling, Russian roulette from the 5th vertex, `path::RR_DEPTH`) except at the guided
+//! BSDF sampling, Russian roulette from the 5th vertex, `transport::roulette::Throughput`) except at the guided
 //! vertices: non-Dirac hits at diffuse depth `d < --guide-depth` that lie inside a kept cluster
 //! (`CausticForecast::tables_at`, the cluster map → forecast map → dual tables, through the shared
 //! `TableCache`). There the continuation direction is drawn from the defensive mixture
@@ -21,7 +21,7 @@
 //! CLI: `forecast render scenes/cornell-box.toml --method pt-cf --time 1m`.
 
 use super::iws_forecast::IwsCf;
-use super::path::{emitter_hit, RR_DEPTH};
+use super::path::emitter_hit;
 use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
 use crate::progress::Phases;
 use crate::accel::{offset_origin, World};
@@ -34,7 +34,7 @@ use crate::profile::{Phase, Profile, Stopwatch};
 use crate::scene::NO_EMITTER;
 use crate::transport::context::ShadingQuery;
 use crate::transport::direct;
-use crate::transport::roulette::{roulette, EtaScale};
+use crate::transport::roulette::Throughput;
 use std::sync::Arc;
 
 /// `pt-cf` parameters (the CF preprocess options are `iws-cf`'s: `--forecast-photons`,
@@ -97,9 +97,8 @@ pub struct GuidedPathTracer {
 struct PathState {
     o: Vec3,
     d: Vec3,
-    beta: Rgb,
-    /// η² over the refractions so far, for the roulette (`transport::roulette::EtaScale`).
-    eta_scale: EtaScale,
+    /// β and etaScale, for the roulette (`transport::roulette::Throughput`).
+    t: Throughput,
     /// Vertices traced so far.
     vertex: u32,
     /// Non-Dirac vertices traced so far (diffuse depth of the next one).
@@ -144,7 +143,7 @@ impl GuidedPathTracer {
             if s.emitter_of(hit.prim) != NO_EMITTER {
                 if let Some((le, w)) = emitter_hit(world, &hit, st.d, st.prev_delta, st.prev_pdf_w) {
                     // no non-Dirac vertex yet: the camera's Dirac prefix
-                    *if st.diffuse == 0 { &mut l.prefix_le } else { &mut l.rest } += st.beta * le * w;
+                    *if st.diffuse == 0 { &mut l.prefix_le } else { &mut l.rest } += st.t.beta * le * w;
                 }
                 break; // emitters reflect nothing
             }
@@ -161,7 +160,7 @@ impl GuidedPathTracer {
             let Some(g) = guide else {
                 // a `pt` vertex, operation for operation
                 if !m.is_dirac() {
-                    l.rest += st.beta * direct::sample_light(world, &sp, m, wo, &mut ctx.rng);
+                    l.rest += st.t.beta * direct::sample_light(world, &sp, m, wo, &mut ctx.rng);
                     st.diffuse += 1;
                 }
                 let u = [ctx.rng.next_f32(), ctx.rng.next_f32(), ctx.rng.next_f32()];
@@ -174,7 +173,7 @@ impl GuidedPathTracer {
             st.diffuse += 1;
             let mix = DefensiveMixture::new(m, &sp, wo, &g.tables, g.frame, self.weights);
             let n = g.n as f32;
-            l.rest += st.beta * direct::sample_light_mis(world, &sp, m, wo, &mut ctx.rng, |wi| n * mix.pdf_w(wi));
+            l.rest += st.t.beta * direct::sample_light_mis(world, &sp, m, wo, &mut ctx.rng, |wi| n * mix.pdf_w(wi));
             if g.n == 1 {
                 let Some(ms) = mix.sample(&mut ctx.rng) else { break };
                 if !continue_path(&mut st, (depth, hit.p, hit.ng), &ms.as_bsdf_sample(), ctx) {
@@ -201,14 +200,11 @@ impl GuidedPathTracer {
     }
 }
 
-/// Applies a sampled continuation `bs` at vertex `(index, p, ng)`: throughput, `pt`'s roulette
-/// (on β·etaScale) from [`RR_DEPTH`], the next ray. False when the path ends.
+/// Applies a sampled continuation `bs` at vertex `(index, p, ng)`: throughput and `pt`'s
+/// roulette ([`Throughput::scatter`]), the next ray. False when the path ends.
 fn continue_path(st: &mut PathState, (index, p, ng): (u32, Vec3, Vec3), bs: &BsdfSample, ctx: &mut Context) -> bool {
-    st.beta *= bs.weight;
-    st.eta_scale.after(bs.eta);
-    if index + 1 >= RR_DEPTH {
-        let Some(b) = roulette(st.beta, st.eta_scale.q(st.beta), &mut ctx.rng) else { return false };
-        st.beta = b;
+    if !st.t.scatter(bs, index, &mut ctx.rng) {
+        return false;
     }
     st.prev_delta = bs.is_delta;
     st.prev_pdf_w = bs.pdf_w;
@@ -221,7 +217,7 @@ impl Integrator for GuidedPathTracer {
     fn estimate(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
         let t0 = Stopwatch::start();
         let st =
-            PathState { o: origin, d: dir, beta: Rgb::ONE, eta_scale: EtaScale::ONE, vertex: 0, diffuse: 0, prev_delta: true, prev_pdf_w: 0.0 };
+            PathState { o: origin, d: dir, t: Throughput::new(Rgb::ONE), vertex: 0, diffuse: 0, prev_delta: true, prev_pdf_w: 0.0 };
         let l = self.trace(world, st, ctx);
         ctx.profile.samples += 1;
         ctx.profile.record(Phase::Radiance, t0);

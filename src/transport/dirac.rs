@@ -7,23 +7,20 @@
 //! for the extra rays of emission splitting (`render::pixel`). Invariant the splitting's
 //! unbiasedness rests on: every integrator's `CameraEstimate::prefix_le` is an estimate of the
 //! same `E` with the same truncation: weight 1 (no MIS on a Dirac prefix), the BSDF's own
-//! sampling, roulette from vertex [`CHAIN_RR_VERTICES`] (`pt`'s `RR_DEPTH` is this constant),
+//! sampling, roulette from vertex [`RR_FROM_VERTEX`](super::roulette::RR_FROM_VERTEX) on β·etaScale ([`Throughput`], as `pt`'s),
 //! one-sided emitters, and the integrator's own vertex cap (`Integrator::prefix_cap`).
 
 use super::particle::MAX_VERTICES;
-use super::roulette::{roulette, EtaScale};
+use super::roulette::Throughput;
 use crate::accel::{offset_origin, Hit, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::math::{Rgb, Vec3};
 use crate::sampling::rng::Rng;
 use crate::scene::NO_EMITTER;
 
-/// Chain vertices after which Russian roulette may end a Dirac chain (as `pt`).
-pub const CHAIN_RR_VERTICES: u32 = 5;
-
 /// Follows a Dirac chain from `hit` (reached along `d`) with throughput `beta`: Fresnel-weighted
-/// choice at glass, roulette on β·etaScale after [`CHAIN_RR_VERTICES`]. Returns the first non-Dirac hit
-/// (possibly an emitter), the direction that reached it and the throughput; `None` on escape,
+/// choice at glass, roulette as `pt`'s ([`Throughput::scatter`], from vertex [`RR_FROM_VERTEX`](super::roulette::RR_FROM_VERTEX)).
+/// Returns the first non-Dirac hit (possibly an emitter), the direction that reached it and the throughput; `None` on escape,
 /// absorption or the vertex cap `cap` (at most [`MAX_VERTICES`]).
 pub fn follow_dirac_chain(
     world: &World,
@@ -41,24 +38,22 @@ fn follow_chain(
     world: &World,
     mut hit: Hit,
     mut d: Vec3,
-    mut beta: Rgb,
+    beta: Rgb,
     cap: u32,
     rng: &mut Rng,
 ) -> Option<(Hit, Vec3, Rgb)> {
     let s = &world.scene;
-    let mut eta_scale = EtaScale::ONE;
+    let mut t = Throughput::new(beta);
     for v in 0..cap {
         let m = s.material_of(hit.prim);
         if s.emitter_of(hit.prim) != NO_EMITTER || !m.is_dirac() {
-            return Some((hit, d, beta));
+            return Some((hit, d, t.beta));
         }
         let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
         let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
         let bs = bsdf::sample(m, &sp, -d, u, Mode::Radiance)?;
-        beta *= bs.weight;
-        eta_scale.after(bs.eta);
-        if v + 1 >= CHAIN_RR_VERTICES {
-            beta = roulette(beta, eta_scale.q(beta), rng)?;
+        if !t.scatter(&bs, v, rng) {
+            return None;
         }
         d = bs.wi;
         hit = world.intersect(offset_origin(hit.p, hit.ng, d), d, f32::INFINITY)?;

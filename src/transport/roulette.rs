@@ -3,10 +3,11 @@
 //! `q ≥ 1` keeps it without a draw, so no random number is spent when the outcome is certain.
 //!
 //! The survival probabilities: [`q_max`] for `pt` and Dirac chains (Mitsuba's and pbrt-v4's
-//! `min(max β·etaScale, 0.95)`, with [`EtaScale`]), [`q_recursion`] for the
+//! `min(max β·etaScale, 0.95)`, applied by [`Throughput::scatter`]), [`q_recursion`] for the
 //! IWS recursion (spec §4 "Termination", on the largest channel rather than the luminance, see
 //! there) and [`q_particle`] for light paths (spec §2).
 
+use crate::bsdf::BsdfSample;
 use crate::math::{luminance, Rgb};
 use crate::sampling::rng::Rng;
 
@@ -31,30 +32,43 @@ pub fn q_max(beta: Rgb) -> f32 {
     beta.max_element().min(0.95)
 }
 
-/// pbrt-v4's `etaScale`: the product of η² over a path's refractions (`BsdfSample::eta`).
-/// Radiance-mode transport puts 1/η² into β at each refraction (`bsdf::dielectric`), so inside a
-/// glass ball β is 0.44 of the energy the path carries; roulette on `β·etaScale` gives a path
-/// inside the ball the survival probability it has outside. Any `q` is unbiased, but roulette on
-/// β alone kills 56% of the paths inside glass and lets the survivors leave with ×2.25/q: a heavy
-/// tail (on `cornell-box`, camera rays through the glass ball that reach the light after an
-/// internal reflection were worth 2.37·Le, and a 1/16 of them carried most of a crop's error).
+/// First path vertex (counting from 1) at which `pt`, `pt-cf` and the Dirac chains may roulette:
+/// one constant, so that a camera prefix is sampled the same way by every integrator and by
+/// `transport::dirac::prefix_emission` (emission splitting relies on it).
+pub const RR_FROM_VERTEX: u32 = 5;
+
+/// The throughput β of a `pt`-style path (`pt`, `pt-cf`, Dirac chains) with pbrt-v4's
+/// `etaScale`, the product of η² over its refractions (`BsdfSample::eta`). Radiance-mode
+/// transport puts 1/η² into β at each refraction (`bsdf::dielectric`), so inside a glass ball β
+/// is 0.44 of the energy the path carries; roulette on `β·etaScale` gives a path inside the ball
+/// the survival probability it has outside. Any `q` is unbiased, but roulette on β alone kills
+/// 56% of the paths inside glass and lets the survivors leave with ×2.25/q: a heavy tail (on
+/// `cornell-box`, camera rays through the glass ball that reach the light after an internal
+/// reflection were worth 2.37·Le, and a 1/16 of them carried most of a crop's error).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct EtaScale(f32);
+pub struct Throughput {
+    /// β, the path's weight so far.
+    pub beta: Rgb,
+    eta_scale: f32,
+}
 
-impl EtaScale {
-    /// A path that starts outside every dielectric.
-    pub const ONE: EtaScale = EtaScale(1.0);
-
-    /// After a BSDF sample of relative index `eta` (1 for reflections).
-    #[inline]
-    pub fn after(&mut self, eta: f32) {
-        self.0 *= eta * eta;
+impl Throughput {
+    /// A path of weight `beta` that starts outside every dielectric.
+    pub fn new(beta: Rgb) -> Throughput {
+        Throughput { beta, eta_scale: 1.0 }
     }
 
-    /// The path's survival probability [`q_max`]`(β·etaScale)`.
+    /// Vertex `vertex` (from 0) scatters into `bs`: β·weight, then from vertex
+    /// [`RR_FROM_VERTEX`] on, roulette with `q = q_max(β·etaScale)`. False when the path ends.
     #[inline]
-    pub fn q(self, beta: Rgb) -> f32 {
-        q_max(beta * self.0)
+    pub fn scatter(&mut self, bs: &BsdfSample, vertex: u32, rng: &mut Rng) -> bool {
+        self.beta *= bs.weight;
+        self.eta_scale *= bs.eta * bs.eta;
+        if vertex + 1 >= RR_FROM_VERTEX {
+            let Some(b) = roulette(self.beta, q_max(self.beta * self.eta_scale), rng) else { return false };
+            self.beta = b;
+        }
+        true
     }
 }
 
