@@ -93,13 +93,60 @@ pub fn cosine_pdf_w(local: Vec3) -> f32 {
     }
 }
 
-/// A piecewise-constant pdf over the 512 hemisphere bins.
+/// A piecewise-constant pdf over the 512 hemisphere bins, sampled in O(1) by an alias table
+/// (Walker 1977, Vose 1991) packed into one word per bin: a sample reads two cache lines (its
+/// column, then the pmf of the bin it lands in), where a binary search of the cdf read up to nine
+/// (the tables of a render do not fit in cache: that search was 10% of an `iws-cf` sample).
+///
+/// Exactness: a uniform `u0 = k/2²⁴` (`Rng::next_f32`) picks column `k >> 15` and accepts it iff
+/// `k mod 2¹⁵ < T_col`, else returns the column's alias. The thresholds `T` are integers and the
+/// pmf is computed from them, so `pmf_i` is exactly the probability of bin `i` under uniform `k`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DirectionTable {
-    /// Normalised bin probabilities (sum 1).
+    /// Bin probabilities (sum 1), exact multiples of 2⁻²⁴.
     pmf: [f32; N_BINS],
-    /// cdf[i] = Σ_{b<i} pmf[b]; bins with pmf 0 have zero width; cdf[N_BINS] = 1.
-    cdf: [f32; N_BINS + 1],
+    /// Column word: acceptance threshold `T ∈ [0, 2¹⁵]` in the high 16 bits, alias bin in the low.
+    cols: [u32; N_BINS],
+}
+
+/// Bits of the 24-bit uniform that decide acceptance (the top 9 choose one of the 2⁹ columns).
+const ACC_BITS: u32 = 15;
+/// 2¹⁵: a column that always accepts.
+const ACC_ONE: u32 = 1 << ACC_BITS;
+
+/// Vose's alias construction on probabilities `p` (sum `norm`), quantised to integer thresholds
+/// `T ∈ [0, 2¹⁵]`: a positive bin keeps `T ≥ 1` in its own column (reachable, pmf ≥ 2⁻²⁴), a
+/// zero bin has `T = 0` and aliases a positive bin, so it is never returned.
+fn vose(p: &[f64], norm: f64) -> ([u32; N_BINS], [u16; N_BINS]) {
+    let mut scaled: Vec<f64> = p.iter().map(|&x| x * N_BINS as f64 / norm).collect();
+    let mut alias: [u16; N_BINS] = std::array::from_fn(|i| i as u16);
+    let mut prob = [1.0f64; N_BINS];
+    let (mut small, mut large): (Vec<usize>, Vec<usize>) = (0..N_BINS).partition(|&i| scaled[i] < 1.0);
+    while let (Some(&s), Some(&l)) = (small.last(), large.last()) {
+        small.pop();
+        prob[s] = scaled[s];
+        alias[s] = l as u16;
+        scaled[l] -= 1.0 - scaled[s];
+        if scaled[l] < 1.0 {
+            large.pop();
+            small.push(l);
+        }
+    }
+    // leftovers (rounding) are full columns: prob 1, alias self (as initialised)
+    let heaviest = (0..N_BINS).max_by(|&a, &b| p[a].total_cmp(&p[b])).unwrap_or(0) as u16;
+    let thresh = std::array::from_fn(|i| {
+        if !(p[i] > 0.0) {
+            if alias[i] as usize == i {
+                alias[i] = heaviest;
+            }
+            0
+        } else if alias[i] as usize == i {
+            ACC_ONE
+        } else {
+            ((prob[i] * ACC_ONE as f64).round() as u32).clamp(1, ACC_ONE)
+        }
+    });
+    (thresh, alias)
 }
 
 impl DirectionTable {
@@ -111,34 +158,34 @@ impl DirectionTable {
         if !(total > 0.0) || !total.is_finite() {
             return None;
         }
-        // Positive bins get probability ≥ MIN_BIN_PMF (then renormalised), so each is reachable with a
-        // frequency matching its pmf to < 0.4% at the 2^-24 resolution of f32 uniforms.
-        let floored = |x: f32| {
-            let p = w(x) / total;
-            if p > 0.0 {
-                p.max(MIN_BIN_PMF)
-            } else {
-                0.0
-            }
-        };
-        let norm: f64 = weights.iter().map(|&x| floored(x)).sum();
-        let mut pmf = [0.0f32; N_BINS];
-        let mut cdf = [0.0f32; N_BINS + 1];
-        let (mut acc, mut last) = (0.0f64, 0usize);
-        for i in 0..N_BINS {
-            let p = floored(weights[i]) / norm;
-            pmf[i] = p as f32;
-            if p > 0.0 {
-                last = i;
-            }
-            acc += p;
-            cdf[i + 1] = acc as f32;
+        // Positive bins get probability ≥ MIN_BIN_PMF (then renormalised): a bin with a vanishing
+        // weight next to bright ones is still sampled, not left as a firefly lottery.
+        let floored: Vec<f64> =
+            weights.iter().map(|&x| if w(x) > 0.0 { (w(x) / total).max(MIN_BIN_PMF) } else { 0.0 }).collect();
+        let (thresh, alias) = vose(&floored, floored.iter().sum());
+        // exact probabilities of the quantised table, in units of 2⁻²⁴: column c gives T_c to
+        // itself and 2¹⁵ − T_c to its alias
+        let mut count = [0u32; N_BINS];
+        for c in 0..N_BINS {
+            count[c] += thresh[c];
+            count[alias[c] as usize] += ACC_ONE - thresh[c];
         }
-        // Bins after the last positive one must have zero width: close the cdf there.
-        for c in cdf.iter_mut().skip(last + 1) {
-            *c = 1.0;
+        let pmf = count.map(|k| k as f32 * (1.0 / 16_777_216.0));
+        let cols = std::array::from_fn(|c| (thresh[c] << 16) | u32::from(alias[c]));
+        Some(DirectionTable { pmf, cols })
+    }
+
+    /// The bin that a uniform `u0 ∈ [0, 1)` selects (never a bin of pmf 0).
+    #[inline]
+    fn bin_for(&self, u0: f32) -> usize {
+        let k = if u0.is_finite() { (u0.clamp(0.0, 1.0) * 16_777_216.0) as u32 } else { 0 }.min((1 << 24) - 1);
+        let col = (k >> ACC_BITS) as usize;
+        let word = self.cols[col];
+        if k & (ACC_ONE - 1) < word >> 16 {
+            col
+        } else {
+            (word & 0xffff) as usize
         }
-        Some(DirectionTable { pmf, cdf })
     }
 
     /// Probability of bin `i` (0 outside).
@@ -153,17 +200,11 @@ impl DirectionTable {
         bin_of(local).map_or(0.0, |i| self.pmf[i] / BIN_SOLID_ANGLE)
     }
 
-    /// Samples a local direction from three uniforms in [0, 1): `u[0]` picks the bin by binary search
-    /// in the cdf, `u[1]`, `u[2]` place it uniformly in (φ, μ) within the bin. Returns `(ω, pdf_w)`.
+    /// Samples a local direction from three uniforms in [0, 1): `u[0]` picks the bin through the
+    /// alias table, `u[1]`, `u[2]` place it uniformly in (φ, μ) within the bin. Returns `(ω, pdf_w)`.
     #[inline]
     pub fn sample(&self, u: [f32; 3]) -> (Vec3, f32) {
-        let u0 = if u[0].is_finite() { u[0].clamp(0.0, 1.0) } else { 0.0 };
-        // First bin whose upper cdf edge exceeds u0 (zero-width bins are never chosen).
-        let mut i = self.cdf[1..].partition_point(|&c| c <= u0).min(N_BINS - 1);
-        if self.pmf[i] == 0.0 {
-            // Only reachable through rounding at u0 → 1: take the last positive bin.
-            i = (0..N_BINS).rev().find(|&b| self.pmf[b] > 0.0).unwrap_or(i);
-        }
+        let i = self.bin_for(u[0]);
         // μ = (l + 1 − u2)/N_MU ∈ (l/N_MU, (l+1)/N_MU]: never exactly on the horizon.
         let (a, b) = (u[1].clamp(0.0, 1.0), 1.0 - u[2].clamp(0.0, 1.0));
         let mut w = dir_in_bin(i, a, b);
@@ -398,7 +439,7 @@ mod tests {
             }
             // Bin-edge uniforms stay in the chosen bin (sample pdf == pdf_w) for every bin.
             for i in (0..N_BINS).filter(|&i| tab.bin_pmf(i) > 0.0) {
-                let u0 = 0.5 * (tab.cdf[i] + tab.cdf[i + 1]);
+                let u0 = tab.u0_for(i).expect("a positive bin is reachable");
                 for (a, b) in [(0.0, 0.0), (0.999_999_94, 0.999_999_94), (0.0, 0.999_999_94), (0.999_999_94, 0.0)] {
                     let (w, pdf) = tab.sample([u0, a, b]);
                     assert_eq!(bin_of(w), Some(i));
@@ -412,6 +453,48 @@ mod tests {
         // Dual tables partition the hemisphere: exactly one of p1, p2 is positive per bin.
         let (t1, t2) = (t.t1.unwrap(), t.t2.unwrap());
         assert!((0..N_BINS).all(|i| (t1.bin_pmf(i) > 0.0) != (t2.bin_pmf(i) > 0.0)));
+    }
+
+    impl DirectionTable {
+        /// A uniform `u0` that selects bin `i`, if any does.
+        fn u0_for(&self, i: usize) -> Option<f32> {
+            let k = (0..N_BINS).find_map(|c| {
+                let (t, a) = (self.cols[c] >> 16, (self.cols[c] & 0xffff) as usize);
+                if c == i && t > 0 {
+                    Some((c as u32) << ACC_BITS)
+                } else {
+                    (a == i && t < ACC_ONE).then_some(((c as u32) << ACC_BITS) + ACC_ONE - 1)
+                }
+            })?;
+            Some(k as f32 / 16_777_216.0)
+        }
+    }
+
+    /// Every one of the 2²⁴ values of `Rng::next_f32` is mapped to a bin; the counts are exactly
+    /// the pmf the estimator divides by (so the alias quantisation adds no bias), zero bins get
+    /// none, and a bin floored from a weight of 1e-30 is among the reachable ones.
+    #[test]
+    fn alias_sampling_is_exactly_the_pmf() {
+        let mut w = [0.0f32; N_BINS];
+        let mut r = Rng::keyed(7, stream::MISC, 0, 0);
+        for (i, x) in w.iter_mut().enumerate() {
+            *x = match i % 5 {
+                0 => 0.0,
+                1 => 1e-30,
+                _ => r.next_f32().powi(4) * 100.0,
+            };
+        }
+        let t = DirectionTable::from_weights(&w).unwrap();
+        let mut count = vec![0u32; N_BINS];
+        for k in 0..(1u32 << 24) {
+            count[t.bin_for(k as f32 / 16_777_216.0)] += 1;
+        }
+        for i in 0..N_BINS {
+            assert_eq!(count[i] as f32 / 16_777_216.0, t.bin_pmf(i), "bin {i}");
+            assert_eq!(count[i] > 0, i % 5 != 0, "bin {i}");
+        }
+        let total: f64 = (0..N_BINS).map(|i| t.bin_pmf(i) as f64).sum();
+        assert_eq!(total, 1.0);
     }
 
     #[test]
@@ -430,7 +513,7 @@ mod tests {
         w[6] = 1.0;
         let t = DirectionTable::from_weights(&w).unwrap();
         assert!(t.bin_pmf(5) as f64 >= 0.99 * MIN_BIN_PMF);
-        let (d, pdf) = t.sample([0.5 * t.cdf[6], 0.5, 0.5]);
+        let (d, pdf) = t.sample([t.u0_for(5).expect("floored bin reachable"), 0.5, 0.5]);
         assert_eq!((bin_of(d), pdf), (Some(5), t.pdf_w(d)));
         // Photons in every bin: no T2.
         let all: Vec<(Vec3, f32)> = (0..N_BINS).map(|i| (bin_center(i), 1.0)).collect();
