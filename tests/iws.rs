@@ -11,7 +11,7 @@ use common::{max_z, render_passes as render, scaled};
 use forecast::accel::World;
 use forecast::bsdf::ShadingPoint;
 use forecast::integrators::iws::Iws;
-use forecast::integrators::iws::VplSelect;
+use forecast::integrators::iws::{DirectLight, VplSelect};
 use forecast::integrators::ShadingQuery;
 use forecast::integrators::{BsdfCaustics, Context, Integrator, Method, MethodArgs, NoCaustics};
 use forecast::math::{Rgb, Vec3};
@@ -41,8 +41,10 @@ fn pm_args(photons: u64, vpl_paths: u32) -> MethodArgs {
 
 /// Mean and standard error of (estimate − expected) over rays from `origin`, with the
 /// standard error taken over per-pass means (samples within a pass share the VPLs).
-fn furnace(world: &World, origin: Vec3, b: f32, expected: impl Fn(Vec3) -> f32) -> (f64, f64) {
-    let mut iws = Iws::new(world, &params(64, Some(b)), Box::new(NoCaustics));
+fn furnace(world: &World, origin: Vec3, (b, direct): (f32, DirectLight), expected: impl Fn(Vec3) -> f32) -> (f64, f64) {
+    let mut a = params(64, Some(b));
+    a.iws.direct = direct;
+    let mut iws = Iws::new(world, &a, Box::new(NoCaustics));
     let (passes, per_pass) = (200u64, 300u64);
     let mut means = Vec::new();
     for pass in 0..passes {
@@ -71,10 +73,12 @@ const TRUNC_TOL: f64 = 1e-3;
 fn furnace_point_light_b_sweep() {
     let w = world("tests/scenes/furnace-point.toml");
     for b in SWEEP {
-        let (m, se) = furnace(&w, Vec3::new(0.2, -0.1, 0.3), b, |_| 1.0);
-        eprintln!("point furnace b={b}: mean error {m:.5} ± {se:.5}");
-        assert!(m.abs() < 5.0 * se + TRUNC_TOL, "point furnace b={b}: error {m} > 5σ={}", 5.0 * se);
-        assert!(se < 0.02, "point furnace b={b}: too noisy to be a test (se {se})");
+        for direct in [DirectLight::Nee, DirectLight::Vpl] {
+            let (m, se) = furnace(&w, Vec3::new(0.2, -0.1, 0.3), (b, direct), |_| 1.0);
+            eprintln!("point furnace b={b} {direct:?}: mean error {m:.5} ± {se:.5}");
+            assert!(m.abs() < 5.0 * se + TRUNC_TOL, "point furnace b={b} {direct:?}: error {m} > 5σ={}", 5.0 * se);
+            assert!(se < 0.02, "point furnace b={b} {direct:?}: too noisy to be a test (se {se})");
+        }
     }
 }
 
@@ -93,14 +97,18 @@ fn furnace_area_light_b_sweep() {
             1.0
         }
     };
+    // NEE for the emitter sphere (default) and the paper's clamped emitter VPLs: with NEE the
+    // compensation ray must drop its emitter hits, or the sphere's light is counted twice
     for b in SWEEP {
-        let (m, se) = furnace(&w, o, b, expected);
-        eprintln!("area furnace b={b}: mean error {m:.5} ± {se:.5}");
-        assert!(m.abs() < 5.0 * se + TRUNC_TOL, "area furnace b={b}: error {m} > 5σ={}", 5.0 * se);
-        assert!(se < 0.05, "area furnace b={b}: too noisy to be a test (se {se})");
+        for direct in [DirectLight::Nee, DirectLight::Vpl] {
+            let (m, se) = furnace(&w, o, (b, direct), expected);
+            eprintln!("area furnace b={b} {direct:?}: mean error {m:.5} ± {se:.5}");
+            assert!(m.abs() < 5.0 * se + TRUNC_TOL, "area furnace b={b} {direct:?}: error {m} > 5σ={}", 5.0 * se);
+            assert!(se < 0.05, "area furnace b={b} {direct:?}: too noisy to be a test (se {se})");
+        }
     }
     // negative control: the same statistic rejects a 10% error in the expected radiance
-    let (m, se) = furnace(&w, o, SWEEP[1], |d| expected(d) * 1.1);
+    let (m, se) = furnace(&w, o, (SWEEP[1], DirectLight::Nee), |d| expected(d) * 1.1);
     assert!(m.abs() > 5.0 * se, "area furnace cannot detect a 10% error (se {se})");
 }
 
@@ -114,15 +122,19 @@ fn iws_agrees_with_pt_without_dirac_surfaces() {
     let w = world("tests/scenes/cornell-nodirac.toml");
     let reference = pt(&w, 24, 24, 8192);
     // RIS (a few shadow rays) has more variance per sample than the full gather: more passes
-    for (select, spp) in [(VplSelect::All, 256), (VplSelect::Ris, 4096)] {
+    for (select, direct, spp) in [
+        (VplSelect::All, DirectLight::Nee, 256),
+        (VplSelect::Ris, DirectLight::Nee, 4096),
+        (VplSelect::Ris, DirectLight::Vpl, 4096),
+    ] {
         let mut a = params(64, None);
-        a.iws.vpl_select = select;
+        (a.iws.vpl_select, a.iws.direct) = (select, direct);
         let mut iws = Iws::new(&w, &a, Box::new(NoCaustics));
         let img = render(&w, &mut iws, 24, 24, spp, 3);
         let (z, n) = max_z(&img, &reference, None);
         let thr = z_test_threshold(1e-3, n);
-        eprintln!("iws {select:?} vs pt (no Dirac): max|z| = {z:.2}, threshold {thr:.2} over {n} tests");
-        assert!(z < thr, "iws {select:?} disagrees with pt: max|z| {z} ≥ {thr}");
+        eprintln!("iws {select:?} {direct:?} vs pt (no Dirac): max|z| = {z:.2}, threshold {thr:.2} over {n} tests");
+        assert!(z < thr, "iws {select:?} {direct:?} disagrees with pt: max|z| {z} ≥ {thr}");
         // negative control: a 3% darker image is rejected by the same test
         let (z3, _) = max_z(&scaled(&img, 0.97), &reference, None);
         assert!(z3 > thr, "{select:?}: the agreement test cannot detect a 3% error (max|z| {z3})");
@@ -257,13 +269,16 @@ fn gather_stats(w: &World, full: &mut Iws, est: &mut Iws, n: u64) -> Vec<(f64, f
 #[test]
 fn ris_gather_equals_full_gather_in_expectation() {
     let w = world("scenes/cornell-box.toml");
+    // the point-light gather alone: `--direct vpl`, so the emitters are point lights too and
+    // the full gather is deterministic (with NEE it would hold a random light sample)
     let mut a = params(64, None);
-    a.iws.vpl_select = VplSelect::All;
+    (a.iws.vpl_select, a.iws.direct) = (VplSelect::All, DirectLight::Vpl);
     let mut full = Iws::new(&w, &a, Box::new(NoCaustics));
     // M = 1 is a plain power-proportional pick: noisier, so more draws to resolve 3%
     for (m, k, n) in [(0, 1, 4000), (8, 2, 4000), (1, 1, 40_000)] {
         let mut r = params(64, None);
         (r.iws.vpl_select, r.iws.ris_candidates, r.iws.ris_survivors) = (VplSelect::Ris, m, k);
+        r.iws.direct = DirectLight::Vpl;
         let mut ris = Iws::new(&w, &r, Box::new(NoCaustics));
         let st = gather_stats(&w, &mut full, &mut ris, n);
         assert!(st.len() >= 20, "too few shading points ({})", st.len());

@@ -10,6 +10,10 @@
 //! - `Dual`: T1 from the photon weights, T2 on exactly the bins where `w_i = 0` with
 //!   `v_i = f·cos(bin centre)` floored at `1e-3·max v`; the estimate is the SUM of the two averages
 //!   (`Ω_1`, `Ω_2` partition the hemisphere, so `E = ∫_{Ω1} g + ∫_{Ω2} g = ∫ g`);
+//! - `DualSpread { radius, alpha }`: T1 as `Dual`; T2 on the same empty bins, but weighted
+//!   `(1−α)·s_i/S + α·v_i/V` where `s` is the forecasters spread by a tent of `radius` bins
+//!   (`splat.rs`): a caustic seen through glass that the photons covered with gaps puts T2's
+//!   samples into the gaps next to the photons instead of over the whole hemisphere;
 //! - `Single { alpha }`: one defensive table `w' = (1−α)w/W + α v/V` with `v > 0` everywhere.
 //!
 //! Invariants: every bin where the integrand may be non-zero has pdf > 0 in exactly one dual table
@@ -20,8 +24,10 @@
 // `!(x > 0.0)`-style tests are deliberate: they are true for NaN (degenerate input is rejected).
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::splat::blend_spread;
 pub use super::splat::{splat_histogram, Splat};
 use crate::math::{Vec3, PI};
+use crate::sampling::alias::quantised_columns;
 use crate::sampling::rng::Rng;
 use std::ops::{Add, Mul};
 
@@ -114,41 +120,6 @@ const ACC_BITS: u32 = 15;
 /// 2¹⁵: a column that always accepts.
 const ACC_ONE: u32 = 1 << ACC_BITS;
 
-/// Vose's alias construction on probabilities `p` (sum `norm`), quantised to integer thresholds
-/// `T ∈ [0, 2¹⁵]`: a positive bin keeps `T ≥ 1` in its own column (reachable, pmf ≥ 2⁻²⁴), a
-/// zero bin has `T = 0` and aliases a positive bin, so it is never returned.
-fn vose(p: &[f64], norm: f64) -> ([u32; N_BINS], [u16; N_BINS]) {
-    let mut scaled: Vec<f64> = p.iter().map(|&x| x * N_BINS as f64 / norm).collect();
-    let mut alias: [u16; N_BINS] = std::array::from_fn(|i| i as u16);
-    let mut prob = [1.0f64; N_BINS];
-    let (mut small, mut large): (Vec<usize>, Vec<usize>) = (0..N_BINS).partition(|&i| scaled[i] < 1.0);
-    while let (Some(&s), Some(&l)) = (small.last(), large.last()) {
-        small.pop();
-        prob[s] = scaled[s];
-        alias[s] = l as u16;
-        scaled[l] -= 1.0 - scaled[s];
-        if scaled[l] < 1.0 {
-            large.pop();
-            small.push(l);
-        }
-    }
-    // leftovers (rounding) are full columns: prob 1, alias self (as initialised)
-    let heaviest = (0..N_BINS).max_by(|&a, &b| p[a].total_cmp(&p[b])).unwrap_or(0) as u16;
-    let thresh = std::array::from_fn(|i| {
-        if !(p[i] > 0.0) {
-            if alias[i] as usize == i {
-                alias[i] = heaviest;
-            }
-            0
-        } else if alias[i] as usize == i {
-            ACC_ONE
-        } else {
-            ((prob[i] * ACC_ONE as f64).round() as u32).clamp(1, ACC_ONE)
-        }
-    });
-    (thresh, alias)
-}
-
 impl DirectionTable {
     /// Table ∝ `weights` (non-finite or negative entries count as 0; positive bins floored at
     /// [`MIN_BIN_PMF`] before renormalising); `None` if nothing is positive.
@@ -162,16 +133,16 @@ impl DirectionTable {
         // weight next to bright ones is still sampled, not left as a firefly lottery.
         let floored: Vec<f64> =
             weights.iter().map(|&x| if w(x) > 0.0 { (w(x) / total).max(MIN_BIN_PMF) } else { 0.0 }).collect();
-        let (thresh, alias) = vose(&floored, floored.iter().sum());
+        let (thresh, alias) = quantised_columns(&floored, ACC_ONE.into());
         // exact probabilities of the quantised table, in units of 2⁻²⁴: column c gives T_c to
         // itself and 2¹⁵ − T_c to its alias
         let mut count = [0u32; N_BINS];
         for c in 0..N_BINS {
-            count[c] += thresh[c];
-            count[alias[c] as usize] += ACC_ONE - thresh[c];
+            count[c] += thresh[c] as u32;
+            count[alias[c] as usize] += ACC_ONE - thresh[c] as u32;
         }
         let pmf = count.map(|k| k as f32 * (1.0 / 16_777_216.0));
-        let cols = std::array::from_fn(|c| (thresh[c] << 16) | u32::from(alias[c]));
+        let cols = std::array::from_fn(|c| ((thresh[c] as u32) << 16) | alias[c]);
         Some(DirectionTable { pmf, cols })
     }
 
@@ -227,6 +198,15 @@ pub enum TableMode {
     /// T2 as in `Dual`. Still a partition of the hemisphere, so still unbiased.
     DualDefensive {
         /// Share of the f·cos fill inside T1 (clamped to [0, 1]).
+        alpha: f32,
+    },
+    /// Dual table whose T2 (still exactly the empty bins) follows the forecasters spread over
+    /// their neighbouring bins: `(1−α) s/S + α v/V` on Ω₂ (`s` = tent splat of half-width
+    /// `radius` bins). T1 is `Dual`'s, so the partition and the unbiasedness are unchanged.
+    DualSpread {
+        /// Tent half-width in bins (`splat::Splat::Tent`).
+        radius: f32,
+        /// Share of the f·cos fill in T2 (clamped to [1e-3, 1]).
         alpha: f32,
     },
     /// One defensive mixture `(1−α) w/W + α v/V`.
@@ -291,9 +271,10 @@ impl ForecastTables {
         mode: TableMode,
         splat: Splat,
     ) -> Self {
-        let w = splat_histogram(photons, splat);
+        let photons: Vec<(Vec3, f32)> = photons.into_iter().collect();
+        let w = splat_histogram(photons.iter().copied(), splat);
         match mode {
-            TableMode::Dual | TableMode::DualDefensive { .. } => {
+            TableMode::Dual | TableMode::DualDefensive { .. } | TableMode::DualSpread { .. } => {
                 // T1 skipped if k = 0 / zero total (from_weights → None).
                 let t1 = match mode {
                     TableMode::DualDefensive { alpha } if alpha > 0.0 => {
@@ -315,7 +296,12 @@ impl ForecastTables {
                 let empty = (0..N_BINS).filter(|&i| !(w[i] > 0.0));
                 // T2 on exactly Ω_2 = {w_i = 0}; skipped if Ω_2 = ∅.
                 let t2 = if empty.clone().next().is_some() {
-                    DirectionTable::from_weights(&fill_values(empty, &brdf_cos))
+                    let mut v = fill_values(empty.clone(), &brdf_cos);
+                    if let TableMode::DualSpread { radius, alpha } = mode {
+                        let spread = splat_histogram(photons.iter().copied(), Splat::Tent { radius });
+                        blend_spread(&mut v, &spread, empty, alpha);
+                    }
+                    DirectionTable::from_weights(&v)
                 } else {
                     None
                 };
@@ -489,9 +475,9 @@ mod tests {
         for k in 0..(1u32 << 24) {
             count[t.bin_for(k as f32 / 16_777_216.0)] += 1;
         }
-        for i in 0..N_BINS {
-            assert_eq!(count[i] as f32 / 16_777_216.0, t.bin_pmf(i), "bin {i}");
-            assert_eq!(count[i] > 0, i % 5 != 0, "bin {i}");
+        for (i, &c) in count.iter().enumerate() {
+            assert_eq!(c as f32 / 16_777_216.0, t.bin_pmf(i), "bin {i}");
+            assert_eq!(c > 0, i % 5 != 0, "bin {i}");
         }
         let total: f64 = (0..N_BINS).map(|i| t.bin_pmf(i) as f64).sum();
         assert_eq!(total, 1.0);
@@ -540,6 +526,9 @@ mod tests {
             tables.push((name, s.t1.unwrap()));
             let dd = ForecastTables::build(set.iter().copied(), lambert, TableMode::DualDefensive { alpha: 0.25 });
             tables.push((name, dd.t1.unwrap()));
+            let ds =
+                ForecastTables::build(set.iter().copied(), lambert, TableMode::DualSpread { radius: 2.0, alpha: 0.5 });
+            tables.push((name, ds.t2.unwrap()));
         }
         // Cosine-fallback table (k = 0) and a sharp glossy lobe whose fill relies on the floor.
         let cos = ForecastTables::build(std::iter::empty(), lambert, TableMode::Dual);
@@ -609,12 +598,40 @@ mod tests {
         let dd = ForecastTables::build(photons.iter().copied(), lambert, TableMode::DualDefensive { alpha: 0.25 });
         let (m, se) = mean_se(n, 17, |r| dd.estimate(1, r, g));
         assert!((m - t).abs() < 4.0 * se, "dual-defensive: {m} vs {t} ± {se}");
+        let ds =
+            ForecastTables::build(photons.iter().copied(), lambert, TableMode::DualSpread { radius: 2.0, alpha: 0.5 });
+        let (m, se) = mean_se(n, 19, |r| ds.estimate(1, r, g));
+        assert!((m - t).abs() < 4.0 * se, "dual-spread: {m} vs {t} ± {se}");
         // Generic value type: the Rgb estimate equals the scalar one channel-wise.
         let mut r1 = Rng::keyed(1, stream::MISC, 0, 0);
         let mut r2 = r1.clone();
         let a = dual.estimate(2, &mut r1, g);
         let b = dual.estimate(2, &mut r2, |w| Vec3::splat(g(w)));
         assert_eq!(b, Vec3::splat(a));
+    }
+
+    /// `DualSpread` keeps `Dual`'s T1 and partition, and moves T2's mass into the empty bins next
+    /// to the photons. Photons at the centres of every other φ column of one μ row (a caustic
+    /// sampled with gaps): the tent of half-width 2 gives each photon's neighbours (±1 column,
+    /// ±1 row) weights ½·½ of the centre's 1·1 in each axis, so a photon keeps ¼ in its own bin and
+    /// spreads ¾ over empty ones (S = 16·¾), and a gap bin between two photons gets 2·(¼·½) = ¼.
+    /// Its T2 pmf is therefore (1−α)·¼/12 + α·p_dual, with p_dual the plain fill's pmf.
+    #[test]
+    fn dual_spread_fills_the_gaps_between_photons() {
+        let row = 10;
+        let photons: Vec<(Vec3, f32)> = (0..N_PHI).step_by(2).map(|j| (bin_center(row * N_PHI + j), 1.0)).collect();
+        let dual = ForecastTables::build(photons.iter().copied(), lambert, TableMode::Dual);
+        let alpha = 0.5;
+        let ds = ForecastTables::build(photons.iter().copied(), lambert, TableMode::DualSpread { radius: 2.0, alpha });
+        assert_eq!(dual.t1, ds.t1);
+        let (t1, t2, t2d) = (ds.t1.as_ref().unwrap(), ds.t2.as_ref().unwrap(), dual.t2.as_ref().unwrap());
+        assert!((0..N_BINS).all(|i| (t1.bin_pmf(i) > 0.0) != (t2.bin_pmf(i) > 0.0)));
+        let gap = row * N_PHI + 1;
+        let want = (1.0 - alpha) * 0.25 / 12.0 + alpha * t2d.bin_pmf(gap);
+        assert!((t2.bin_pmf(gap) / want - 1.0).abs() < 1e-3, "gap pmf {} vs {want}", t2.bin_pmf(gap));
+        // two rows away the tent gives nothing: only the halved fill remains
+        let far = (row - 2) * N_PHI + 1;
+        assert!((t2.bin_pmf(far) / (alpha * t2d.bin_pmf(far)) - 1.0).abs() < 1e-3);
     }
 
     #[test]

@@ -53,11 +53,14 @@ pub enum SplitRule {
 /// Table layout (`--table`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
 pub enum TableKind {
-    /// CF dual table (T1 + T2 on the empty bins, summed).
-    #[default]
+    /// CF dual table (T1 + T2 on the empty bins, summed) [BAJ08].
     Dual,
     /// Dual table with a defensive f·cos share (α = 0.25) inside T1's own bins.
     DualDefensive,
+    /// Dual table whose T2 follows the forecasters spread by [`SPREAD`] = (tent half-width in
+    /// bins, f·cos share) over the empty bins next to them (`TableMode::DualSpread`).
+    #[default]
+    DualSpread,
     /// One defensive table (α = 0.1), for the ablation.
     Single,
     /// The dual table's T1 and T2 inside a defensive mixture with the BSDF
@@ -65,6 +68,10 @@ pub enum TableKind {
     /// no sample is worth more than `1/c_B` BSDF samples.
     Mixture,
 }
+
+/// `(radius, alpha)` of `--table dual-spread`: a tent two bins wide each way, half of T2 on the
+/// f·cos fill (screened on the crop cameras, README "Choosing the table").
+pub const SPREAD: (f32, f32) = (2.0, 0.5);
 
 /// `(c_B, c_1, c_2)` of `--table mixture`.
 pub const MIXTURE_WEIGHTS: (f32, f32, f32) = (0.2, 0.4, 0.4);
@@ -105,7 +112,7 @@ impl Default for ForecastOptions {
             clustering: ClusteringMethod::Vq,
             max_rank: 6,
             gather: 128,
-            table: TableKind::Dual,
+            table: TableKind::DualSpread,
             photon_weight: PhotonWeight::Paper,
             s0: 4,
             split_rule: SplitRule::Rank,
@@ -245,6 +252,7 @@ impl CausticForecast {
         let mode = match self.opts.table {
             TableKind::Dual | TableKind::Mixture => TableMode::Dual,
             TableKind::DualDefensive => TableMode::DualDefensive { alpha: 0.25 },
+            TableKind::DualSpread => TableMode::DualSpread { radius: SPREAD.0, alpha: SPREAD.1 },
             TableKind::Single => TableMode::Single { alpha: 0.1 },
         };
         ForecastTables::build(photons, brdf_cos, mode)

@@ -74,3 +74,25 @@ pub fn splat_histogram(photons: impl IntoIterator<Item = (Vec3, f32)>, splat: Sp
     }
     w
 }
+
+/// Blends the spread forecaster weights `spread` into the fill `v` on `bins` (T2's empty bins):
+/// `v_i ← (1−α)·s_i/S + α·v_i/V` with `S`, `V` the sums over `bins` (`α` clamped to [1e-3, 1]).
+/// Every bin with `v_i > 0` keeps a positive weight (α > 0), so the fill still covers its bins;
+/// without spread mass on `bins` (`S = 0`), `v` is left as it is.
+pub fn blend_spread(
+    v: &mut [f32; N_BINS],
+    spread: &[f32; N_BINS],
+    bins: impl Iterator<Item = usize> + Clone,
+    alpha: f32,
+) {
+    let alpha = if alpha.is_finite() { alpha.clamp(1e-3, 1.0) } else { 1.0 };
+    let ok = |x: f32| if x.is_finite() && x > 0.0 { x } else { 0.0 };
+    let big_s: f32 = bins.clone().map(|i| ok(spread[i])).sum();
+    let big_v: f32 = bins.clone().map(|i| ok(v[i])).sum();
+    if !(big_s > 0.0 && big_v > 0.0) {
+        return;
+    }
+    for i in bins {
+        v[i] = (1.0 - alpha) * ok(spread[i]) / big_s + alpha * ok(v[i]) / big_v;
+    }
+}

@@ -54,10 +54,11 @@ pub struct CfArgs {
     /// iws-cf: forecasters gathered per table (n).
     #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(1..))]
     pub forecasters: u32,
-    /// iws-cf: dual table (BAJ08) or one defensive table (ablation).
-    #[arg(long, default_value = "dual", value_parser = choice(&[
-        ("dual", TableKind::Dual), ("dual-defensive", TableKind::DualDefensive), ("single", TableKind::Single),
-        ("mixture", TableKind::Mixture),
+    /// iws-cf / pt-cf: direction tables: dual-spread (default: T2 follows the spread forecasters),
+    /// dual (BAJ08), dual-defensive, single (ablation) or mixture (defensive BSDF mixture).
+    #[arg(long, default_value = "dual-spread", value_parser = choice(&[
+        ("dual", TableKind::Dual), ("dual-defensive", TableKind::DualDefensive), ("dual-spread", TableKind::DualSpread),
+        ("single", TableKind::Single), ("mixture", TableKind::Mixture),
     ]))]
     pub table: TableKind,
     /// iws-cf: photon weight in the table: lum(Φ)·f·cos (paper) or lum(Φ)·f (flux).

@@ -34,6 +34,56 @@ pub struct AliasTable {
     pmf: Vec<f32>,
 }
 
+/// Vose's alias construction on weights `p` (normalised here; zero, negative and non-finite
+/// entries count as 0; at least one must be positive), its acceptance thresholds quantised to integers in
+/// `[0, one]`: column `c` returns `c` for `one·t_c` of its words and `alias_c` for the rest.
+/// A positive entry keeps a threshold ≥ 1 in its own column (reachable whatever its size); a
+/// zero entry has threshold 0 and aliases a positive entry (never returned). Shared by
+/// [`AliasTable`] (`one` = 2³²) and the 512-bin `forecast::direction_table` (2¹⁵).
+pub fn quantised_columns(p: &[f64], one: u64) -> (Vec<u64>, Vec<u32>) {
+    let n = p.len();
+    let pos = |x: f64| if x.is_finite() && x > 0.0 { x } else { 0.0 };
+    let total: f64 = p.iter().map(|&x| pos(x)).sum();
+    // scaled probabilities n·p_i; columns below 1 are filled from columns above 1
+    let mut scaled: Vec<f64> = p.iter().map(|&x| pos(x) * n as f64 / total).collect();
+    let mut alias: Vec<u32> = (0..n as u32).collect();
+    let (mut small, mut large): (Vec<u32>, Vec<u32>) = (0..n as u32).partition(|&i| scaled[i as usize] < 1.0);
+    let mut prob = vec![1.0f64; n];
+    while let (Some(&s), Some(&l)) = (small.last(), large.last()) {
+        small.pop();
+        prob[s as usize] = scaled[s as usize];
+        alias[s as usize] = l;
+        scaled[l as usize] -= 1.0 - scaled[s as usize];
+        if scaled[l as usize] < 1.0 {
+            large.pop();
+            small.push(l);
+        }
+    }
+    // leftovers (rounding) are full columns: prob 1, alias self (already initialised)
+    for i in small.into_iter().chain(large) {
+        prob[i as usize] = 1.0;
+        alias[i as usize] = i;
+    }
+    let heaviest = (0..n).max_by(|&a, &b| pos(p[a]).total_cmp(&pos(p[b]))).unwrap_or(0) as u32;
+    let mut thresh = Vec::with_capacity(n);
+    for i in 0..n {
+        let t = if !(pos(p[i]) > 0.0) {
+            // a zero-weight column always rejects (to a positive entry, even after rounding)
+            if alias[i] as usize == i {
+                alias[i] = heaviest;
+            }
+            0
+        } else if alias[i] as usize == i {
+            one
+        } else {
+            // reachability floor: a positive entry keeps at least one accepting word
+            ((prob[i] * one as f64).round().clamp(0.0, one as f64) as u64).max(1)
+        };
+        thresh.push(t);
+    }
+    (thresh, alias)
+}
+
 impl AliasTable {
     /// Builds the table ∝ `weights` (zero, negative and non-finite entries get probability 0).
     /// `None` when no weight is positive, the total overflows, or there are more than `u32::MAX`
@@ -48,43 +98,8 @@ impl AliasTable {
         if !(total > 0.0) || !total.is_finite() {
             return None;
         }
-        // Vose: scaled probabilities n·p_i; columns below 1 are filled from columns above 1.
-        let mut scaled: Vec<f64> = weights.iter().map(|&x| w(x) * n as f64 / total).collect();
-        let mut alias: Vec<u32> = (0..n as u32).collect();
-        let (mut small, mut large): (Vec<u32>, Vec<u32>) = (0..n as u32).partition(|&i| scaled[i as usize] < 1.0);
-        let mut prob = vec![1.0f64; n];
-        while let (Some(&s), Some(&l)) = (small.last(), large.last()) {
-            small.pop();
-            prob[s as usize] = scaled[s as usize];
-            alias[s as usize] = l;
-            scaled[l as usize] -= 1.0 - scaled[s as usize];
-            if scaled[l as usize] < 1.0 {
-                large.pop();
-                small.push(l);
-            }
-        }
-        // Leftovers (rounding) are full columns: prob 1, alias self (already initialised).
-        for i in small.into_iter().chain(large) {
-            prob[i as usize] = 1.0;
-            alias[i as usize] = i;
-        }
-        let heaviest = (0..n).max_by(|&a, &b| w(weights[a]).total_cmp(&w(weights[b]))).unwrap_or(0) as u32;
-        let mut thresh = Vec::with_capacity(n);
-        for i in 0..n {
-            let t = if !(w(weights[i]) > 0.0) {
-                // A zero-weight column always rejects (to a positive entry, even after rounding).
-                if alias[i] as usize == i {
-                    alias[i] = heaviest;
-                }
-                0
-            } else if alias[i] as usize == i {
-                SCALE as u64
-            } else {
-                // Reachability floor: a positive entry keeps at least one accepting word.
-                ((prob[i] * SCALE).round().clamp(0.0, SCALE) as u64).max(1)
-            };
-            thresh.push(t);
-        }
+        let p: Vec<f64> = weights.iter().map(|&x| w(x)).collect();
+        let (thresh, alias) = quantised_columns(&p, SCALE as u64);
         let mut pmf64 = vec![0.0f64; n];
         for i in 0..n {
             let acc = thresh[i] as f64 / SCALE;
