@@ -70,7 +70,7 @@ pub enum TableKind {
 }
 
 /// `(radius, alpha)` of `--table dual-spread`: a tent two bins wide each way, half of T2 on the
-/// f·cos fill (screened on the crop cameras, README "Choosing the table").
+/// f·cos fill (screened on the crop cameras: README, the `--table` option).
 pub const SPREAD: (f32, f32) = (2.0, 0.5);
 
 /// `(c_B, c_1, c_2)` of `--table mixture`.
