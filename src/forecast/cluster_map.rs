@@ -31,6 +31,9 @@ pub struct ClusterMap {
     reach: Vec<f32>,
     /// Per kept cluster: mean normal n̄_c.
     normals: Vec<[f32; 3]>,
+    /// Per kept cluster: the box of its representatives grown by its reach (no point outside
+    /// it can be accepted for that cluster).
+    boxes: Vec<([f32; 3], [f32; 3])>,
 }
 
 impl ClusterMap {
@@ -40,6 +43,7 @@ impl ClusterMap {
         let kept = clustering.kept(max_rank);
         let r = if r.is_finite() { r.max(0.0) } else { 0.0 };
         let (mut pos, mut ids) = (Vec::new(), Vec::new());
+        let mut boxes = Vec::with_capacity(kept.len());
         let mut scratch: Vec<(f32, u32)> = Vec::new();
         for (ci, c) in kept.iter().enumerate() {
             // m members nearest the 6-D centroid (ties by index, so deterministic).
@@ -54,16 +58,32 @@ impl ClusterMap {
                 scratch.select_nth_unstable_by(m, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
                 scratch.truncate(m);
             }
+            let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
             for &(_, i) in &scratch {
-                pos.push(points[i as usize].p);
+                let p = points[i as usize].p;
+                (lo, hi) = (lo.min(Vec3::from_array(p)), hi.max(Vec3::from_array(p)));
+                pos.push(p);
                 ids.push(ci as u32);
             }
+            let reach = Vec3::splat(c.radius + r);
+            boxes.push(((lo - reach).to_array(), (hi + reach).to_array()));
         }
         ClusterMap {
             tree: KdTree::build_with_ids(pos, ids),
             reach: kept.iter().map(|c| c.radius + r).collect(),
             normals: kept.iter().map(|c| c.normal).collect(),
+            boxes,
         }
+    }
+
+    /// False when `query(x, ·)` cannot return cluster `c` (x outside the box of `c`'s
+    /// representatives grown by its reach): an O(1) test that lets a caller interested in a few
+    /// clusters skip the tree.
+    #[inline]
+    pub fn may_accept(&self, c: usize, x: Vec3) -> bool {
+        self.boxes
+            .get(c)
+            .is_some_and(|(lo, hi)| x.cmpge(Vec3::from_array(*lo)).all() && x.cmple(Vec3::from_array(*hi)).all())
     }
 
     /// Number of kept clusters in the map.

@@ -258,22 +258,21 @@ impl CausticForecast {
         ForecastTables::build(photons, brdf_cos, mode)
     }
 
-    /// The (cluster, tables) of a cacheable point: a pure function of its cluster, its cell in
+    /// The tables of a cacheable point in cluster `c`: a pure function of `c`, its cell in
     /// that cluster's grid and its normal (`table_cache.rs`). Cached tables are weighted by
     /// lum(Φ)·cos (or lum(Φ)) and the cosine: independent of ωo, they serve every flat non-Dirac
     /// BSDF (exact for Lambert).
     fn cached_tables(
         &self,
         cache: &TableCache,
-        (p, ng): (Vec3, Vec3),
+        (c, p, ng): (usize, Vec3, Vec3),
         ctx: &mut Context,
-    ) -> Option<(usize, Arc<ForecastTables>)> {
-        let c = self.cluster_map.query(p, ng)?;
+    ) -> Arc<ForecastTables> {
         let (cell, centre) = cell_of(p, self.cells.edge[c]);
         let key = (c as u32, cell, normal_key(ng));
         if let Some(t) = cache.get(&key) {
             ctx.profile.cf.cache_hits += 1;
-            return Some((c, t));
+            return t;
         }
         let t0 = Instant::now();
         let w = |cp: &CausticPoint, l: Vec3| match self.opts.photon_weight {
@@ -284,58 +283,85 @@ impl CausticForecast {
         ctx.profile.cf.tables_built += 1;
         ctx.profile.cf.cdf_ns += t0.elapsed().as_nanos() as u64;
         cache.insert(key, tables.clone());
-        Some((c, tables))
+        tables
     }
 
-    /// The (cluster, tables) at a point that is not cached (tables in the shading frame).
-    fn point_tables(
-        &self,
-        q: &ShadingQuery,
-        ng: Vec3,
-        frame: &Frame,
-        ctx: &mut Context,
-    ) -> Option<(usize, Arc<ForecastTables>)> {
+    /// The tables of cluster `c` at a point that is not cached (in the shading frame `frame`).
+    fn point_tables(&self, c: usize, q: &ShadingQuery, frame: &Frame, ctx: &mut Context) -> Arc<ForecastTables> {
         let (sp, m, wo) = (q.x, q.m, q.wo);
-        self.cluster_map.query(sp.p, ng).map(|c| {
-            let t0 = Instant::now();
-            let w = |cp: &CausticPoint, l: Vec3| {
-                let f = luminance(bsdf::eval(m, sp, wo, cp.wi()));
-                match self.opts.photon_weight {
-                    PhotonWeight::Paper => cp.energy() * f * l.z,
-                    PhotonWeight::Flux => cp.energy() * f,
-                }
-            };
-            let brdf_cos = |l: Vec3| luminance(bsdf::eval(m, sp, wo, frame.to_world(l))) * l.z;
-            let t = self.build_tables((c, sp.p, frame), &mut ctx.knn, w, brdf_cos);
-            ctx.profile.cf.tables_built += 1;
-            ctx.profile.cf.cdf_ns += t0.elapsed().as_nanos() as u64;
-            (c, Arc::new(t))
-        })
+        let t0 = Instant::now();
+        let w = |cp: &CausticPoint, l: Vec3| {
+            let f = luminance(bsdf::eval(m, sp, wo, cp.wi()));
+            match self.opts.photon_weight {
+                PhotonWeight::Paper => cp.energy() * f * l.z,
+                PhotonWeight::Flux => cp.energy() * f,
+            }
+        };
+        let brdf_cos = |l: Vec3| luminance(bsdf::eval(m, sp, wo, frame.to_world(l))) * l.z;
+        let t = self.build_tables((c, sp.p, frame), &mut ctx.knn, w, brdf_cos);
+        ctx.profile.cf.tables_built += 1;
+        ctx.profile.cf.cdf_ns += t0.elapsed().as_nanos() as u64;
+        Arc::new(t)
     }
 
-    /// The kept cluster at `q`, its tables and their frame (z = the normal on `q.wo`'s side), or
-    /// `None` outside every kept cluster. `cache` serves flat-shaded, non-Dirac points; the result
-    /// is a pure function of the point (never of random numbers), so any caller stays unbiased.
+    /// The lit-side normals `(ng, ns)` at `q` (flipped to `q.wo`'s side).
+    fn lit_normals(q: &ShadingQuery) -> (Vec3, Vec3) {
+        let sp = q.x;
+        if q.wo.dot(sp.ng) >= 0.0 {
+            (sp.ng, sp.ns)
+        } else {
+            (-sp.ng, -sp.ns)
+        }
+    }
+
+    /// The kept cluster at `q` (the cluster map's membership test with the lit-side normal), or
+    /// `None` outside every kept cluster (and when no cluster is kept).
+    pub fn cluster_at(&self, q: &ShadingQuery, ctx: &mut Context) -> Option<usize> {
+        if self.radius <= 0.0 {
+            return None;
+        }
+        let t = Stopwatch::start();
+        let c = self.cluster_map.query(q.x.p, Self::lit_normals(q).0);
+        ctx.profile.record(Phase::CfTable, t);
+        c
+    }
+
+    /// The tables of kept cluster `c` at `q` and their frame (z = the normal on `q.wo`'s side).
+    /// `cache` serves flat-shaded, non-Dirac points; the result is a pure function of the point
+    /// (never of random numbers), so any caller stays unbiased.
+    pub fn tables_in(
+        &self,
+        c: usize,
+        q: &ShadingQuery,
+        ctx: &mut Context,
+        cache: Option<&TableCache>,
+    ) -> (Arc<ForecastTables>, Frame) {
+        let (sp, m) = (q.x, q.m);
+        let (ng, ns) = Self::lit_normals(q);
+        let cacheable = self.cells.enabled() && !m.is_dirac() && sp.ns == sp.ng;
+        let cache = cache.filter(|_| cacheable);
+        // cached tables live in the frame of the geometric normal (equal to ns there)
+        let frame = if cache.is_some() { Frame::from_normal(ng) } else { Frame::from_normal(ns) };
+        let t_table = Stopwatch::start();
+        let tables = match cache {
+            Some(cache) => self.cached_tables(cache, (c, sp.p, ng), ctx),
+            None => self.point_tables(c, q, &frame, ctx),
+        };
+        ctx.profile.record(Phase::CfTable, t_table);
+        (tables, frame)
+    }
+
+    /// The kept cluster at `q`, its tables and their frame ([`Self::cluster_at`], then
+    /// [`Self::tables_in`]), or `None` outside every kept cluster.
     pub fn tables_at(
         &self,
         q: &ShadingQuery,
         ctx: &mut Context,
         cache: Option<&TableCache>,
     ) -> Option<(usize, Arc<ForecastTables>, Frame)> {
-        let (sp, m, wo) = (q.x, q.m, q.wo);
-        let (ng, ns) = if wo.dot(sp.ng) >= 0.0 { (sp.ng, sp.ns) } else { (-sp.ng, -sp.ns) };
-        let cacheable = self.cells.enabled() && !m.is_dirac() && sp.ns == sp.ng;
-        let cache = cache.filter(|_| cacheable);
-        // cached tables live in the frame of the geometric normal (equal to ns there)
-        let frame = if cache.is_some() { Frame::from_normal(ng) } else { Frame::from_normal(ns) };
-        let t_table = Stopwatch::start();
-        let found = match cache {
-            _ if self.radius <= 0.0 => None,
-            Some(cache) => self.cached_tables(cache, (sp.p, ng), ctx),
-            None => self.point_tables(q, ng, &frame, ctx),
-        };
-        ctx.profile.record(Phase::CfTable, t_table);
-        found.map(|(c, t)| (c, t, frame))
+        let c = self.cluster_at(q, ctx)?;
+        let (t, frame) = self.tables_in(c, q, ctx, cache);
+        Some((c, t, frame))
     }
 
     /// Ĺ_c at `q`. `g(ωi, w, ctx)` returns one sample's contribution: the integrand

@@ -90,7 +90,7 @@ pub const PILOT_PHOTONS: u64 = 5_000;
 pub const MIN_BUDGET_PHOTONS: u64 = 10_000;
 
 /// A clap parser for a domain enum from its (name, value) table (the enums stay free of clap).
-fn choice<T: Clone + Send + Sync + 'static>(
+pub(crate) fn choice<T: Clone + Send + Sync + 'static>(
     table: &'static [(&'static str, T)],
 ) -> impl TypedValueParser<Value = T> {
     PossibleValuesParser::new(table.iter().map(|(n, _)| *n))

@@ -105,7 +105,9 @@ impl Integrator for PathTracer {
 }
 
 impl PathTracer {
-    fn trace(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
+    /// `pt`'s estimate along the ray `(origin, dir)`, emission reached before any non-Dirac
+    /// vertex in `prefix_le`, the rest in `rest` (also `pt-cf`'s guide-share gather).
+    pub fn trace(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
         let s = &world.scene;
         let rng = &mut ctx.rng;
         let (mut o, mut d) = (origin, dir);

@@ -21,7 +21,7 @@
 //! CLI: `forecast render scenes/cornell-box.toml --method pt-cf --time 1m`.
 
 use super::iws_forecast::IwsCf;
-use super::path::emitter_hit;
+use super::path::{emitter_hit, PathTracer};
 use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
 use crate::progress::Phases;
 use crate::accel::{offset_origin, World};
@@ -29,7 +29,11 @@ use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
 use crate::forecast::direction_table::ForecastTables;
 use crate::forecast::estimator::{CausticForecast, TableCache};
 use crate::forecast::mixture::{DefensiveMixture, MixtureWeights};
-use crate::math::{Frame, Rgb, Vec3};
+use crate::math::{luminance, Frame, Rgb, Vec3, PI};
+use crate::sampling::rng::{stream, Rng};
+use crate::sampling::warp::sample_cosine_hemisphere;
+use rayon::prelude::*;
+use std::time::Instant;
 use crate::profile::{Phase, Profile, Stopwatch};
 use crate::scene::NO_EMITTER;
 use crate::transport::context::ShadingQuery;
@@ -49,8 +53,35 @@ pub struct PtCfArgs {
     pub guide_depth: u32,
     /// pt-cf: continuations S0 at a guided vertex of diffuse depth 0 in a rank-0 cluster
     /// (S = max(1, S0 >> rank); 1 deeper).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub guide_split: u32,
+    /// pt-cf: per-cluster guiding. `share`: c_k = max(c, 1 − s_k) from the cluster's caustic
+    /// share s_k of indirect irradiance, and no guiding where s_k < --guide-min-share;
+    /// `fixed`: c in every kept cluster.
+    #[arg(long, default_value = "share", value_parser = super::iws_forecast::choice(&[("share", GuideRule::Share), ("fixed", GuideRule::Fixed)]))]
+    pub guide_rule: GuideRule,
+    /// pt-cf: clusters whose caustic share s_k is below this are not guided (`--guide-rule share`).
+    #[arg(long, default_value_t = 0.5, value_parser = parse_min_share)]
+    pub guide_min_share: f32,
+}
+
+/// How the BSDF share of a guided vertex is chosen (`--guide-rule`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub enum GuideRule {
+    /// `c_k = max(c, 1 − s_k)` per kept cluster, unguided below `--guide-min-share`.
+    #[default]
+    Share,
+    /// `c` at every vertex of a kept cluster.
+    Fixed,
+}
+
+fn parse_min_share(s: &str) -> Result<f32, String> {
+    let v: f32 = s.trim().parse().map_err(|e| format!("`{s}` is not a number: {e}"))?;
+    if (0.0..=1.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("{v} is not a share in [0, 1]"))
+    }
 }
 
 fn parse_guide_fraction(s: &str) -> Result<f32, String> {
@@ -61,34 +92,150 @@ fn parse_guide_fraction(s: &str) -> Result<f32, String> {
 /// The `pt-cf` method.
 pub struct PtCf;
 
+/// `pt-cf`'s preprocess product: `iws-cf`'s, plus the caustic share of every kept cluster.
+#[derive(Clone, Debug, PartialEq, bitcode::Encode, bitcode::Decode)]
+pub struct GuidedForecast {
+    /// The CF product (photons, clusters, maps), as `iws-cf`'s.
+    pub cf: CausticForecast,
+    /// Indirect irradiance split by path type, per kept cluster (index = cluster index).
+    pub shares: Vec<GuideShare>,
+    /// Seconds the share gather took.
+    pub share_s: f64,
+}
+
 impl MethodSpec for PtCf {
-    type Product = CausticForecast;
-    fn preprocess(world: &World, args: &MethodArgs, seed: u64, phases: &dyn Phases) -> Result<CausticForecast, String> {
-        <IwsCf as MethodSpec>::preprocess(world, args, seed, phases)
+    type Product = GuidedForecast;
+    fn preprocess(world: &World, args: &MethodArgs, seed: u64, phases: &dyn Phases) -> Result<GuidedForecast, String> {
+        let cf = <IwsCf as MethodSpec>::preprocess(world, args, seed, phases)?;
+        let t0 = Instant::now();
+        let phase = phases.phase("guide shares", None);
+        let shares = guide_shares(world, &cf, args.pt.cap(), seed);
+        phase.finish();
+        Ok(GuidedForecast { cf, shares, share_s: t0.elapsed().as_secs_f64() })
     }
-    fn build(_: &World, args: &MethodArgs, cf: CausticForecast) -> Result<Box<dyn Integrator>, String> {
+    fn build(_: &World, args: &MethodArgs, g: GuidedForecast) -> Result<Box<dyn Integrator>, String> {
         let p = &args.ptcf;
-        let weights = MixtureWeights::guide_fraction(p.guide_fraction).map_err(|e| format!("--guide-fraction: {e}"))?;
+        let c = p.guide_fraction;
+        let weights = MixtureWeights::guide_fraction(c).map_err(|e| format!("--guide-fraction: {e}"))?;
+        if !(0.0..=1.0).contains(&p.guide_min_share) {
+            return Err(format!("--guide-min-share: {} is not a share in [0, 1]", p.guide_min_share));
+        }
+        let n_kept = g.cf.clustering.n_kept(g.cf.opts.max_rank);
+        if g.shares.len() != n_kept {
+            return Err(format!("pt-cf: {} guide shares for {n_kept} kept clusters", g.shares.len()));
+        }
+        // the BSDF share of each kept cluster (None: a `pt` vertex there)
+        let per_cluster: Vec<Option<MixtureWeights>> = g
+            .shares
+            .iter()
+            .map(|sh| match p.guide_rule {
+                GuideRule::Fixed => Some(weights),
+                GuideRule::Share => {
+                    let s = sh.share();
+                    (s >= p.guide_min_share && s > 0.0).then(|| MixtureWeights::guide_fraction(c.max(1.0 - s)).ok()).flatten()
+                }
+            })
+            .collect();
+        let guided = (0..n_kept).filter(|&c| per_cluster[c].is_some()).collect();
         Ok(Box::new(GuidedPathTracer {
             max_depth: args.pt.cap(),
             weights,
-            guide_depth: if p.guide_fraction >= 1.0 { 0 } else { p.guide_depth },
+            per_cluster,
+            guided,
+            guide_depth: if c >= 1.0 { 0 } else { p.guide_depth },
             split: p.guide_split.max(1),
-            cf,
+            cf: g.cf,
+            shares: g.shares,
+            share_s: g.share_s,
             cache: TableCache::default(),
         }))
     }
 }
 
+/// Irradiance at a kept cluster's caustic points from indirect light, split by path type: what
+/// a guided vertex's continuation estimates (NEE takes the direct light).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
+pub struct GuideShare {
+    /// `E_c`: the cluster's forecast-photon flux over its area (light that reached it through
+    /// Dirac vertices, which the photons find however small the light's image is).
+    pub caustic: f32,
+    /// `E_c` as the cosine gather sees it (a check of `caustic`; not used: a gather misses
+    /// caustics of small lights seen through curved glass, which photons do not).
+    pub caustic_gather: f32,
+    /// `E_d`: light whose path has a non-Dirac vertex before the point, by the cosine gather.
+    pub other: f32,
+}
+
+impl GuideShare {
+    /// The caustic share `s = E_c/(E_c + E_d)` (0 when both vanish).
+    pub fn share(&self) -> f32 {
+        let t = self.caustic + self.other;
+        if t > 0.0 && t.is_finite() {
+            self.caustic / t
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Points per kept cluster and cosine directions per point of the share gather.
+const SHARE_POINTS: usize = 16;
+const SHARE_DIRS: usize = 256;
+
+/// The [`GuideShare`] of every kept cluster: at up to [`SHARE_POINTS`] of its caustic points
+/// (evenly spaced in member order), [`SHARE_DIRS`] cosine-distributed `pt` paths, each split
+/// into emission reached through a Dirac chain (`E_c`) and the rest (`E_d`); paths whose first
+/// hit is an emitter are direct light and skipped. A pure function of (scene, product, seed):
+/// each path's random numbers are keyed by (cluster, path index), whatever the thread count.
+pub fn guide_shares(world: &World, cf: &CausticForecast, max_depth: u32, seed: u64) -> Vec<GuideShare> {
+    let kept = cf.clustering.kept(cf.opts.max_rank);
+    let pt = PathTracer { max_depth };
+    kept.par_iter()
+        .enumerate()
+        .map(|(k, cl)| {
+            let m = cl.members.len();
+            let n_points = SHARE_POINTS.min(m);
+            let (mut ec, mut ed) = (0.0f64, 0.0f64);
+            for i in 0..n_points {
+                let Some(cp) = cf.points.get(cl.members[i * m / n_points] as usize) else { continue };
+                let (x, frame) = (cp.pos(), Frame::from_normal(cp.normal()));
+                for j in 0..SHARE_DIRS {
+                    let mut ctx = Context::new(Rng::keyed(seed, stream::GUIDE, k as u64, (i * SHARE_DIRS + j) as u64));
+                    let wi = frame.to_world(sample_cosine_hemisphere([ctx.rng.next_f32(), ctx.rng.next_f32()]));
+                    let o = offset_origin(x, cp.normal(), wi);
+                    match world.intersect(o, wi, f32::INFINITY) {
+                        Some(h) if world.scene.emitter_of(h.prim) == NO_EMITTER => {}
+                        _ => continue, // escaped, or direct light
+                    }
+                    // cos/pdf = π for cosine sampling
+                    let l = pt.trace(world, o, wi, &mut ctx);
+                    ec += (PI * luminance(l.prefix_le)) as f64;
+                    ed += (PI * luminance(l.rest)) as f64;
+                }
+            }
+            let n = (n_points * SHARE_DIRS).max(1) as f64;
+            let photons = if cl.area > 0.0 { cl.power / cl.area } else { 0.0 };
+            GuideShare { caustic: photons, caustic_gather: (ec / n) as f32, other: (ed / n) as f32 }
+        })
+        .collect()
+}
+
 /// The guided path tracer; owns the product and the table cache shared by all worker threads.
 pub struct GuidedPathTracer {
     max_depth: u32,
+    /// `--guide-fraction`'s mixture (reported).
     weights: MixtureWeights,
+    /// The mixture of each kept cluster; `None`: its vertices are `pt` vertices.
+    per_cluster: Vec<Option<MixtureWeights>>,
+    /// The kept clusters with a mixture.
+    guided: Vec<usize>,
     /// Guided diffuse depths `d < guide_depth` (0 when `c = 1`: no lookups at all).
     guide_depth: u32,
     /// Splitting S0 at diffuse depth 0.
     split: u32,
     cf: CausticForecast,
+    shares: Vec<GuideShare>,
+    share_s: f64,
     cache: TableCache,
 }
 
@@ -109,10 +256,11 @@ struct PathState {
     prev_pdf_w: f32,
 }
 
-/// The guide at one vertex: tables, their frame and the split count.
+/// The guide at one vertex: tables, their frame, the mixture weights and the split count.
 struct Guide {
     tables: Arc<ForecastTables>,
     frame: Frame,
+    weights: MixtureWeights,
     n: usize,
 }
 
@@ -123,7 +271,13 @@ impl GuidedPathTracer {
             return None;
         }
         ctx.profile.cf.queries += 1;
-        let (c, tables, frame) = self.cf.tables_at(q, ctx, Some(&self.cache))?;
+        // only a guided cluster's box can hold a guided vertex (`ClusterMap::may_accept`)
+        if !self.guided.iter().any(|&c| self.cf.cluster_map.may_accept(c, q.x.p)) {
+            return None;
+        }
+        let c = self.cf.cluster_at(q, ctx)?;
+        let weights = self.per_cluster.get(c).copied().flatten()?;
+        let (tables, frame) = self.cf.tables_in(c, q, ctx, Some(&self.cache));
         if tables.t1.is_none() && tables.t2.is_none() {
             return None;
         }
@@ -131,7 +285,7 @@ impl GuidedPathTracer {
         let rank = self.cf.clustering.clusters[c].rank;
         let n = if q.depth == 0 { (self.split >> rank.min(31)).max(1) as usize } else { 1 };
         ctx.profile.cf.samples += n as u64;
-        Some(Guide { tables, frame, n })
+        Some(Guide { tables, frame, weights, n })
     }
 
     /// Radiance along `st` (a whole path, or one branch of a split).
@@ -171,7 +325,7 @@ impl GuidedPathTracer {
                 continue;
             };
             st.diffuse += 1;
-            let mix = DefensiveMixture::new(m, &sp, wo, &g.tables, g.frame, self.weights);
+            let mix = DefensiveMixture::new(m, &sp, wo, &g.tables, g.frame, g.weights);
             let n = g.n as f32;
             l.rest += st.t.beta * direct::sample_light_mis(world, &sp, m, wo, &mut ctx.rng, |wi| n * mix.pdf_w(wi));
             if g.n == 1 {
@@ -242,6 +396,11 @@ impl Integrator for GuidedPathTracer {
                 "creating_cdfs_s": c.cdf_s(),
                 "tables_built": c.tables_built,
                 "table_cache_hits": c.cache_hits,
+            },
+            "shares": {
+                "guided_clusters": self.guided.len(),
+                "gather_s": self.share_s,
+                "per_cluster": self.shares,
             },
             "preprocess": self.cf.stats,
             "cache_cells": self.cf.cells.json(),

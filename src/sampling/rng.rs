@@ -22,6 +22,8 @@ pub mod stream {
     pub const MISC: u64 = 6;
     /// The extra camera rays of emission splitting (`render::PixelSampler`).
     pub const PIXEL_SPLIT: u64 = 7;
+    /// `pt-cf`'s guide-share gather (preprocess).
+    pub const GUIDE: u64 = 8;
 }
 
 #[inline]
