@@ -10,6 +10,8 @@
 mod common;
 use common::{assert_agrees, assert_furnace_is_one, max_z, render_passes as render, render_profiled};
 use forecast::accel::World;
+use forecast::forecast::estimator::CausticForecast;
+use forecast::integrators::pt_cf::{guide_shares, GuideRule, GuidedForecast};
 use forecast::integrators::{Integrator, Method, MethodArgs};
 use forecast::profile::Profile;
 use forecast::render::film::Film;
@@ -65,7 +67,59 @@ fn defaults_agree_with_pt_on_cornell_box() {
 fn strong_guiding_with_splitting_agrees_with_pt_on_cornell_box() {
     let mut o = opts();
     (o.ptcf.guide_fraction, o.ptcf.guide_split, o.ptcf.guide_depth) = (0.1, 4, 3);
-    agrees_with_pt(&world("scenes/cornell-box.toml"), &o, 16, (4096, 512), "pt-cf c=0.1 S0=4 D=3");
+    o.ptcf.guide_rule = GuideRule::Fixed;
+    agrees_with_pt(&world("scenes/cornell-box.toml"), &o, 16, (4096, 512), "pt-cf fixed c=0.1 S0=4 D=3");
+}
+
+/// `--guide-rule share` with every cluster that has any caustic light guided (c_k = max(c, 1 − s_k)
+/// from 0.2 up): the per-cluster mixtures are as unbiased as the fixed one.
+#[test]
+fn share_rule_guiding_every_cluster_agrees_with_pt_on_cornell_box() {
+    let mut o = opts();
+    (o.ptcf.guide_fraction, o.ptcf.guide_min_share) = (0.2, 0.0);
+    agrees_with_pt(&world("scenes/cornell-box.toml"), &o, 16, (4096, 1024), "pt-cf share rule, min share 0");
+}
+
+/// Clusters below `--guide-min-share` are `pt` vertices: with 1 (no cornell-box cluster is free
+/// of diffuse interreflection, so none qualifies) `pt-cf` is `pt` bit for bit, and it queries
+/// no tree (`ClusterMap::may_accept` rejects every vertex).
+#[test]
+fn unguided_clusters_are_pt_vertices_bit_for_bit() {
+    let w = world("scenes/cornell-box.toml");
+    let mut o = opts();
+    o.ptcf.guide_min_share = 1.0;
+    let mut g = build(&w, Method::PtCf, &o);
+    let (a, profile) = render_profiled(&w, g.as_mut(), (16, 16), 64, 9);
+    let stats = g.stats(&profile);
+    assert_eq!(stats["shares"]["guided_clusters"].as_u64(), Some(0), "{}", stats["shares"]);
+    assert!(stats["shares"]["per_cluster"].as_array().is_some_and(|v| !v.is_empty()), "clusters were kept");
+    assert_eq!(guide_stats(g.as_ref(), &profile).1, 0.0, "a vertex was guided");
+    let mut p = Method::Pt.build(&w, &o, &[]).unwrap();
+    assert!(render(&w, p.as_mut(), 16, 16, 64, 9).data == a.data, "unguided pt-cf differs from pt");
+}
+
+/// The share gather is a pure function of (scene, product, seed): the same on 1 and 3 threads,
+/// and the broadcast product round-trips through its bytes.
+#[test]
+fn guide_shares_do_not_depend_on_threads() {
+    let w = world("scenes/cornell-box.toml");
+    let o = opts();
+    let cf = CausticForecast::from_bytes(&Method::IwsCf.preprocess(&w, &o, 17).unwrap()).unwrap();
+    let on = |n| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
+        pool.install(|| guide_shares(&w, &cf, 64, 5))
+    };
+    let (a, b) = (on(1), on(3));
+    assert_eq!(a.len(), cf.clustering.n_kept(cf.opts.max_rank));
+    assert!(a == b, "the shares depend on the thread count");
+    assert!(a.iter().all(|s| s.other > 0.0 && (0.0..=1.0).contains(&s.share())), "{a:?}");
+    assert!(a != on_seed(&w, &cf, 6), "the seed is not used");
+    let g = GuidedForecast { cf: cf.clone(), shares: a, share_s: 0.0 };
+    assert!(bitcode::decode::<GuidedForecast>(&bitcode::encode(&g)).unwrap() == g);
+}
+
+fn on_seed(w: &World, cf: &CausticForecast, seed: u64) -> Vec<forecast::integrators::pt_cf::GuideShare> {
+    guide_shares(w, cf, 64, seed)
 }
 
 /// `ring` with its light 4× wider and 16× dimmer (same power, same centre and orientation). With
@@ -155,4 +209,12 @@ fn bad_guide_fraction_is_a_clear_error() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--guide-fraction") && err.contains("(0, 1]"), "{err}");
+    for bad in ["1.5", "-0.1", "x"] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_forecast"))
+            .args(["render", "scenes/cornell-box.toml", "--method", "pt-cf", &format!("--guide-min-share={bad}")])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains("--guide-min-share"), "{bad}: {err}");
+    }
 }

@@ -154,13 +154,18 @@ mod tests {
         for _ in 0..2000 {
             let x = Vec3::new(4.0 * r.next_f32() - 0.5, 1.2 * r.next_f32() - 0.1, 1.2 * r.next_f32() - 0.1);
             for n in [Vec3::Y, Vec3::X, -Vec3::Y] {
-                assert_eq!(map.query(x, n), brute(&map, x, n));
+                let c = map.query(x, n);
+                assert_eq!(c, brute(&map, x, n));
+                // the box test never rejects a point the query accepts
+                assert!(c.is_none_or(|c| map.may_accept(c, x)), "may_accept({c:?}, {x}) is false");
             }
         }
         // Floor point with the floor normal lands in a floor cluster; the wrong normal is rejected.
         let c = map.query(Vec3::new(0.5, 0.0, 0.5), Vec3::Y).expect("floor cluster");
         assert!(cl.clusters[c].normal[1] > 0.9);
         assert_eq!(map.query(Vec3::new(0.5, 0.0, 0.5), -Vec3::Y), None);
+        // the boxes are tight enough to reject: far from every cluster, no box holds the point
+        assert!((0..map.n_clusters()).all(|c| !map.may_accept(c, Vec3::new(50.0, 0.0, 0.0))));
         // Far away: nothing. The faint blob is culled at rank 3 when it exists as its own cluster.
         assert_eq!(map.query(Vec3::new(50.0, 0.0, 0.0), Vec3::Y), None);
         for ci in 0..map.n_clusters() {
