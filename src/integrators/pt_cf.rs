@@ -3,20 +3,28 @@
 //!
 //! Estimator. Exactly `pt` (NEE + power-heuristic MIS for area lights, Dirac chains followed by
 //! BSDF sampling, Russian roulette from the 5th vertex, `transport::roulette::Throughput`) except at the guided
-//! vertices: non-Dirac hits at diffuse depth `d < --guide-depth` that lie inside a kept cluster
-//! (`CausticForecast::tables_at`, the cluster map → forecast map → dual tables, through the shared
-//! `TableCache`). There the continuation direction is drawn from the defensive mixture
-//! `q(ω) = c·p_BSDF(ω) + (1−c)·p_CF(ω)` (`forecast::mixture`, `p_CF` = ½T1 + ½T2), weighted by
-//! `f·|cos|/q`, so no sample is worth more than `1/c` BSDF samples. MIS against NEE uses the pdf
-//! really used: NEE's weight is `h(p_light, n·q(ω_l))` and a mixture-sampled emitter hit's is
+//! vertices: non-Dirac hits at diffuse depth `d < --guide-depth` that lie inside a *guided* kept
+//! cluster `k` (`CausticForecast::cluster_at`, then `tables_in`: forecast map → dual tables,
+//! through the shared `TableCache`). There the continuation direction is drawn from the defensive
+//! mixture `q(ω) = c_k·p_BSDF(ω) + (1−c_k)·p_CF(ω)` (`forecast::mixture`, `p_CF` = ½T1 + ½T2),
+//! weighted by `f·|cos|/q`, so no sample is worth more than `1/c_k` BSDF samples.
+//!
+//! Per-cluster guiding (`--guide-rule share`). With the caustic share `s = E_c/(E_c + E_d)` of a
+//! cluster's indirect irradiance ([`GuideShare`]: `E_c` from its forecast photons, `E_d` from a
+//! cosine `pt` gather in the preprocess), the mixture's second moment `E_d²/c + E_c²/(1−c)` (tables
+//! matching the caustic, the BSDF the rest) is smallest at `c = 1 − s`; so `c_k = max(c, 1 − s)`
+//! where `s ≥ --guide-min-share` and no guiding elsewhere. `ClusterMap::may_accept` skips the
+//! cluster map's tree where no guided cluster can be found (same image, exactly).
+//!
+//! MIS against NEE uses the pdf really used: NEE's weight is `h(p_light, n·q(ω_l))` and a mixture-sampled emitter hit's is
 //! `h(n·q, p_light)` (power heuristic `h`, `n` the split count), which sum to 1 per direction.
 //! Splitting: at `d = 0` inside a cluster of rank `r`, `n = max(1, S0 >> r)` continuations are
 //! drawn and averaged (`--guide-split S0`); `n` depends only on the vertex, so it stays unbiased.
 //!
 //! Invariants: the tables are a pdf only (any photons give an unbiased image); `c = 1` never
 //! looks a table up and draws exactly `pt`'s random numbers, so it is `pt` bit for bit; outside
-//! kept clusters every vertex is a `pt` vertex. The preprocess product is `iws-cf`'s
-//! (`IwsCf::preprocess`: same photons, clusters, maps, broadcast).
+//! guided clusters every vertex is a `pt` vertex. The preprocess product is `iws-cf`'s
+//! (`IwsCf::preprocess`: same photons, clusters, maps) plus the shares, broadcast together.
 //!
 //! CLI: `forecast render scenes/cornell-box.toml --method pt-cf --time 1m`.
 
