@@ -229,6 +229,7 @@ fn forecast_product_round_trips_through_bytes() {
     b.stats.tracing_s = a.stats.tracing_s;
     b.stats.clustering_s = a.stats.clustering_s;
     b.stats.kdtree_s = a.stats.kdtree_s;
+    b.stats.shares_s = a.stats.shares_s;
     assert!(b == a, "the preprocess product depends on more than the seed");
 }
 

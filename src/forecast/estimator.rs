@@ -19,6 +19,7 @@ use super::cluster_map::{ClusterMap, DEFAULT_REPRESENTATIVES};
 use super::direction_table::{ForecastTables, TableMode};
 use super::forecast_map::{search_radius, ForecastMaps};
 use super::mixture::{DefensiveMixture, MixtureWeights};
+use super::share::CausticShare;
 pub use super::table_cache::TableCache;
 use super::table_cache::{cell_of, normal_key, CellSizes};
 use crate::bsdf::{self, Mode};
@@ -48,7 +49,17 @@ pub enum SplitRule {
     Rank,
     /// From the cluster's measured energy density: `S = clamp(⌈S0·ρ_c/ρ_max⌉, 1, S0)`.
     Energy,
+    /// The rank rule, with S0 multiplied by [`SHARE_BOOST`] in the clusters whose caustic share
+    /// `s ≥` [`SPLIT_MIN_SHARE`] (`forecast::share`): more chains where the caustic dominates the
+    /// point's indirect light.
+    Share,
 }
+
+/// Smallest caustic share at which `--split-rule share` multiplies S0 by [`SHARE_BOOST`] (as
+/// `pt-cf`'s `--guide-min-share` default).
+pub const SPLIT_MIN_SHARE: f32 = 0.5;
+/// The factor on S0 of `--split-rule share` in caustic-dominated clusters.
+pub const SHARE_BOOST: u32 = 4;
 
 /// Table layout (`--table`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
@@ -152,6 +163,8 @@ pub struct PreprocessStats {
     pub photon_rule: String,
     /// Pilot run: preprocess seconds per stored photon (0 without a pilot).
     pub pilot_s_per_photon: f64,
+    /// Seconds measuring the clusters' caustic shares.
+    pub shares_s: f64,
 }
 
 /// The CF product broadcast from rank 0.
@@ -171,6 +184,8 @@ pub struct CausticForecast {
     pub radius: f32,
     /// Table-cache cell edges.
     pub cells: CellSizes,
+    /// Caustic share of each kept cluster (empty until the preprocess measures them).
+    pub shares: Vec<CausticShare>,
     /// Preprocess figures.
     pub stats: PreprocessStats,
 }
@@ -205,7 +220,7 @@ impl CausticForecast {
         stats.energy_kept = if clustering.total_power > 0.0 { kept_power / clustering.total_power } else { 0.0 };
         stats.radius = radius;
         let cells = CellSizes::new(&clustering, opts.max_rank, (radius, opts.gather, opts.cache_cell));
-        CausticForecast { opts, points, clustering, cluster_map, maps, radius, cells, stats }
+        CausticForecast { opts, points, clustering, cluster_map, maps, radius, cells, shares: Vec::new(), stats }
     }
 
     /// Splitting factor S(rank, d) (spec §4): max(1, S0 >> rank) at d = 0, else 1.
@@ -230,6 +245,12 @@ impl CausticForecast {
                 s.clamp(1.0, s0) as usize
             }
             SplitRule::Energy => 1,
+            SplitRule::Share if depth == 0 => {
+                let s = self.shares.get(c).map_or(0.0, |s| s.share());
+                let boost = if s >= SPLIT_MIN_SHARE { SHARE_BOOST } else { 1 };
+                ((self.opts.s0.saturating_mul(boost)) >> cl.rank.min(31)).max(1) as usize
+            }
+            SplitRule::Share => 1,
         }
     }
 

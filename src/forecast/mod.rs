@@ -10,6 +10,7 @@ pub mod direction_table;
 pub mod estimator;
 pub mod forecast_map;
 pub mod mixture;
+pub mod share;
 pub mod splat;
 pub mod table_cache;
 pub mod view;

@@ -11,6 +11,7 @@
 //!
 //! CLI: `forecast render scenes/cornell-box.toml --method iws-cf --time 4m`.
 
+use super::caustic_share::caustic_shares;
 use super::caustics::{caustic_chain, CausticEstimator, Recurse, ShadingQuery};
 use super::iws::Iws;
 use super::{Context, Integrator, MethodArgs, MethodSpec};
@@ -68,7 +69,7 @@ pub struct CfArgs {
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
     pub split: u32,
     /// iws-cf: splitting rule at depth 0: the paper's rank rule or the cluster's energy density.
-    #[arg(long, default_value = "rank", value_parser = choice(&[("rank", SplitRule::Rank), ("energy", SplitRule::Energy)]))]
+    #[arg(long, default_value = "rank", value_parser = choice(&[("rank", SplitRule::Rank), ("energy", SplitRule::Energy), ("share", SplitRule::Share)]))]
     pub split_rule: SplitRule,
     /// iws-cf: table-cache cell edge as a fraction of the search radius (0 = build per point).
     #[arg(long, default_value_t = 1.0)]
@@ -201,6 +202,11 @@ pub fn preprocess_forecast(world: &World, args: &MethodArgs, seed: u64, phases: 
         (None, _) => (cap, "default", 0.0),
     };
     let mut cf = build_forecast(world, n, args.cf.options(), seed, phases);
+    let t0 = Instant::now();
+    let phase = phases.phase("caustic shares", None);
+    cf.shares = caustic_shares(world, &cf, args.pt.cap(), seed);
+    phase.finish();
+    cf.stats.shares_s = t0.elapsed().as_secs_f64();
     cf.stats.photons_requested = n;
     cf.stats.photon_rule = rule.to_string();
     cf.stats.pilot_s_per_photon = cost;

@@ -15,6 +15,7 @@
 //! explicit [`Context`]; `begin_pass` refreshes per-pass data (IWS point lights) from random
 //! streams keyed by (seed, pass).
 
+pub mod caustic_share;
 pub mod caustics;
 pub mod vpl;
 

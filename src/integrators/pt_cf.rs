@@ -29,7 +29,7 @@
 //! CLI: `forecast render scenes/cornell-box.toml --method pt-cf --time 1m`.
 
 use super::iws_forecast::IwsCf;
-use super::path::{emitter_hit, PathTracer};
+use super::path::emitter_hit;
 use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
 use crate::progress::Phases;
 use crate::accel::{offset_origin, World};
@@ -37,11 +37,7 @@ use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
 use crate::forecast::direction_table::ForecastTables;
 use crate::forecast::estimator::{CausticForecast, TableCache};
 use crate::forecast::mixture::{DefensiveMixture, MixtureWeights};
-use crate::math::{luminance, Frame, Rgb, Vec3, PI};
-use crate::sampling::rng::{stream, Rng};
-use crate::sampling::warp::sample_cosine_hemisphere;
-use rayon::prelude::*;
-use std::time::Instant;
+use crate::math::{Frame, Rgb, Vec3};
 use crate::profile::{Phase, Profile, Stopwatch};
 use crate::scene::NO_EMITTER;
 use crate::transport::context::ShadingQuery;
@@ -100,37 +96,21 @@ fn parse_guide_fraction(s: &str) -> Result<f32, String> {
 /// The `pt-cf` method.
 pub struct PtCf;
 
-/// `pt-cf`'s preprocess product: `iws-cf`'s, plus the caustic share of every kept cluster.
-#[derive(Clone, Debug, PartialEq, bitcode::Encode, bitcode::Decode)]
-pub struct GuidedForecast {
-    /// The CF product (photons, clusters, maps), as `iws-cf`'s.
-    pub cf: CausticForecast,
-    /// Indirect irradiance split by path type, per kept cluster (index = cluster index).
-    pub shares: Vec<GuideShare>,
-    /// Seconds the share gather took.
-    pub share_s: f64,
-}
-
 impl MethodSpec for PtCf {
-    type Product = GuidedForecast;
-    fn preprocess(world: &World, args: &MethodArgs, seed: u64, phases: &dyn Phases) -> Result<GuidedForecast, String> {
-        let cf = <IwsCf as MethodSpec>::preprocess(world, args, seed, phases)?;
-        let t0 = Instant::now();
-        let phase = phases.phase("guide shares", None);
-        let shares = guide_shares(world, &cf, args.pt.cap(), seed);
-        phase.finish();
-        Ok(GuidedForecast { cf, shares, share_s: t0.elapsed().as_secs_f64() })
+    type Product = CausticForecast;
+    fn preprocess(world: &World, args: &MethodArgs, seed: u64, phases: &dyn Phases) -> Result<CausticForecast, String> {
+        <IwsCf as MethodSpec>::preprocess(world, args, seed, phases)
     }
-    fn build(_: &World, args: &MethodArgs, g: GuidedForecast) -> Result<Box<dyn Integrator>, String> {
+    fn build(_: &World, args: &MethodArgs, g: CausticForecast) -> Result<Box<dyn Integrator>, String> {
         let p = &args.ptcf;
         let c = p.guide_fraction;
         let weights = MixtureWeights::guide_fraction(c).map_err(|e| format!("--guide-fraction: {e}"))?;
         if !(0.0..=1.0).contains(&p.guide_min_share) {
             return Err(format!("--guide-min-share: {} is not a share in [0, 1]", p.guide_min_share));
         }
-        let n_kept = g.cf.clustering.n_kept(g.cf.opts.max_rank);
+        let n_kept = g.clustering.n_kept(g.opts.max_rank);
         if g.shares.len() != n_kept {
-            return Err(format!("pt-cf: {} guide shares for {n_kept} kept clusters", g.shares.len()));
+            return Err(format!("pt-cf: {} caustic shares for {n_kept} kept clusters", g.shares.len()));
         }
         // the BSDF share of each kept cluster (None: a `pt` vertex there)
         let per_cluster: Vec<Option<MixtureWeights>> = g
@@ -152,80 +132,10 @@ impl MethodSpec for PtCf {
             guided,
             guide_depth: if c >= 1.0 { 0 } else { p.guide_depth },
             split: p.guide_split.max(1),
-            cf: g.cf,
-            shares: g.shares,
-            share_s: g.share_s,
+            cf: g,
             cache: TableCache::default(),
         }))
     }
-}
-
-/// Irradiance at a kept cluster's caustic points from indirect light, split by path type: what
-/// a guided vertex's continuation estimates (NEE takes the direct light).
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
-pub struct GuideShare {
-    /// `E_c`: the cluster's forecast-photon flux over its area (light that reached it through
-    /// Dirac vertices, which the photons find however small the light's image is).
-    pub caustic: f32,
-    /// `E_c` as the cosine gather sees it (a check of `caustic`; not used: a gather misses
-    /// caustics of small lights seen through curved glass, which photons do not).
-    pub caustic_gather: f32,
-    /// `E_d`: light whose path has a non-Dirac vertex before the point, by the cosine gather.
-    pub other: f32,
-}
-
-impl GuideShare {
-    /// The caustic share `s = E_c/(E_c + E_d)` (0 when both vanish).
-    pub fn share(&self) -> f32 {
-        let t = self.caustic + self.other;
-        if t > 0.0 && t.is_finite() {
-            self.caustic / t
-        } else {
-            0.0
-        }
-    }
-}
-
-/// Points per kept cluster and cosine directions per point of the share gather.
-const SHARE_POINTS: usize = 16;
-const SHARE_DIRS: usize = 256;
-
-/// The [`GuideShare`] of every kept cluster: at up to [`SHARE_POINTS`] of its caustic points
-/// (evenly spaced in member order), [`SHARE_DIRS`] cosine-distributed `pt` paths, each split
-/// into emission reached through a Dirac chain (`E_c`) and the rest (`E_d`); paths whose first
-/// hit is an emitter are direct light and skipped. A pure function of (scene, product, seed):
-/// each path's random numbers are keyed by (cluster, path index), whatever the thread count.
-pub fn guide_shares(world: &World, cf: &CausticForecast, max_depth: u32, seed: u64) -> Vec<GuideShare> {
-    let kept = cf.clustering.kept(cf.opts.max_rank);
-    let pt = PathTracer { max_depth };
-    kept.par_iter()
-        .enumerate()
-        .map(|(k, cl)| {
-            let m = cl.members.len();
-            let n_points = SHARE_POINTS.min(m);
-            let (mut ec, mut ed) = (0.0f64, 0.0f64);
-            for i in 0..n_points {
-                let Some(cp) = cf.points.get(cl.members[i * m / n_points] as usize) else { continue };
-                let (x, frame) = (cp.pos(), Frame::from_normal(cp.normal()));
-                for j in 0..SHARE_DIRS {
-                    let mut ctx = Context::new(Rng::keyed(seed, stream::GUIDE, k as u64, (i * SHARE_DIRS + j) as u64));
-                    let wi = frame.to_world(sample_cosine_hemisphere([ctx.rng.next_f32(), ctx.rng.next_f32()]));
-                    let o = offset_origin(x, cp.normal(), wi);
-                    match world.intersect(o, wi, f32::INFINITY) {
-                        Some(h) if world.scene.emitter_of(h.prim) == NO_EMITTER => {}
-                        _ => continue, // escaped, or direct light
-                    }
-                    // cos/pdf = π for cosine sampling
-                    let l = pt.trace(world, o, wi, &mut ctx);
-                    ec += (PI * luminance(l.prefix_le)) as f64;
-                    ed += (PI * luminance(l.rest)) as f64;
-                }
-            }
-            let n = (n_points * SHARE_DIRS).max(1) as f64;
-            let photons = if cl.area > 0.0 { cl.power / cl.area } else { 0.0 };
-            GuideShare { caustic: photons, caustic_gather: (ec / n) as f32, other: (ed / n) as f32 }
-        })
-        .collect()
 }
 
 /// The guided path tracer; owns the product and the table cache shared by all worker threads.
@@ -242,8 +152,6 @@ pub struct GuidedPathTracer {
     /// Splitting S0 at diffuse depth 0.
     split: u32,
     cf: CausticForecast,
-    shares: Vec<GuideShare>,
-    share_s: f64,
     cache: TableCache,
 }
 
@@ -407,8 +315,8 @@ impl Integrator for GuidedPathTracer {
             },
             "shares": {
                 "guided_clusters": self.guided.len(),
-                "gather_s": self.share_s,
-                "per_cluster": self.shares,
+                "gather_s": self.cf.stats.shares_s,
+                "per_cluster": self.cf.shares,
             },
             "preprocess": self.cf.stats,
             "cache_cells": self.cf.cells.json(),
