@@ -112,6 +112,25 @@ fn energy_split_rule_agrees_with_pt() {
     agrees_with_pt(&o, "iws-cf split-rule energy");
 }
 
+/// `--split-rule share`: S0·4 >> rank in the clusters whose caustic share is ≥ ½, S0 >> rank in
+/// the others (both kinds occur on this `cornell-box`), and the image agrees with `pt`.
+#[test]
+fn share_split_rule_agrees_with_pt() {
+    use forecast::forecast::estimator::{SplitRule, SHARE_BOOST, SPLIT_MIN_SHARE};
+    let mut o = opts();
+    o.cf.split_rule = SplitRule::Share;
+    let w = world("scenes/cornell-box.toml");
+    let cf = CausticForecast::from_bytes(&Method::IwsCf.preprocess(&w, &o, 17).unwrap()).unwrap();
+    let dominated = cf.shares.iter().filter(|s| s.share() >= SPLIT_MIN_SHARE).count();
+    assert!(dominated > 0 && dominated < cf.shares.len(), "{:?}", cf.shares);
+    for (c, sh) in cf.shares.iter().enumerate() {
+        let s0 = if sh.share() >= SPLIT_MIN_SHARE { o.cf.split * SHARE_BOOST } else { o.cf.split };
+        assert_eq!(cf.split_for(c, 0), (s0 >> cf.clustering.clusters[c].rank).max(1) as usize, "cluster {c}");
+        assert_eq!(cf.split_for(c, 1), 1);
+    }
+    agrees_with_pt(&o, "iws-cf split-rule share");
+}
+
 #[test]
 fn kmeans_agrees_with_pt() {
     let mut o = opts();
