@@ -70,6 +70,7 @@ fn ring() -> World {
 fn untimed(bytes: &[u8]) -> CausticForecast {
     let mut cf = CausticForecast::from_bytes(bytes).unwrap();
     (cf.stats.tracing_s, cf.stats.clustering_s, cf.stats.kdtree_s, cf.stats.pilot_s_per_photon) = (0.0, 0.0, 0.0, 0.0);
+    cf.stats.shares_s = 0.0;
     cf
 }
 
@@ -83,14 +84,14 @@ fn iws_cf_reports_pilot_tracing_clustering_maps_in_order() {
     let bytes = Method::IwsCf.preprocess_reporting(&w, &o, 17, &rec).unwrap();
     let got = phases(rec.0.into_inner().unwrap());
     let names: Vec<_> = got.iter().map(|p| p.0).collect();
-    assert_eq!(names, ["pilot", "tracing forecast photons", "clustering", "building forecast maps"]);
+    assert_eq!(names, ["pilot", "tracing forecast photons", "clustering", "building forecast maps", "caustic shares"]);
     let (_, total, counts) = &got[1];
     assert_eq!(*total, Some(MIN_BUDGET_PHOTONS));
     assert!(!counts.is_empty() && counts.windows(2).all(|c| c[0] <= c[1]), "{counts:?}");
     let cf = untimed(&bytes);
     assert_eq!(cf.stats.photons_requested, MIN_BUDGET_PHOTONS);
     assert_eq!(*counts.last().unwrap(), cf.stats.stored, "the last count is the photons stored");
-    assert!(got[0].2.is_empty() && got[2].2.is_empty() && got[3].2.is_empty());
+    assert!(got[0].2.is_empty() && got[2].2.is_empty() && got[3].2.is_empty() && got[4].2.is_empty());
     // reporting never changes the product
     assert_eq!(cf, untimed(&Method::IwsCf.preprocess(&w, &o, 17).unwrap()));
 }

@@ -184,7 +184,7 @@ pub fn trace_forecasters(
 /// per stored photon of a [`PILOT_PHOTONS`] pilot preprocess and `cap` the scene's (or default)
 /// count; else the scene's count. Any count leaves the image unbiased (the tables are a pdf).
 /// The rule and the pilot's cost go into `stats`. Phases: "pilot" (its own phases hidden), then
-/// those of [`build_forecast`].
+/// those of [`build_forecast`], then "caustic shares" (`caustic_share::caustic_shares`).
 pub fn preprocess_forecast(world: &World, args: &MethodArgs, seed: u64, phases: &dyn Phases) -> CausticForecast {
     let cap = args.cf.target_photons(world);
     let (n, rule, cost) = match (args.cf.forecast_photons, args.cf.time_budget_s) {
