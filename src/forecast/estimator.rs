@@ -61,6 +61,13 @@ pub const SPLIT_MIN_SHARE: f32 = 0.5;
 /// The factor on S0 of `--split-rule share` in caustic-dominated clusters.
 pub const SHARE_BOOST: u32 = 4;
 
+/// The paper's rank rule: `max(1, s0 >> rank)` continuations at diffuse depth 0 in a cluster of
+/// rank `rank` (`iws-cf`'s `--split`, `pt-cf`'s `--guide-split`).
+#[inline]
+pub fn rank_split(s0: u32, rank: u32) -> usize {
+    (s0 >> rank.min(31)).max(1) as usize
+}
+
 /// Table layout (`--table`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
 pub enum TableKind {
@@ -227,7 +234,7 @@ impl CausticForecast {
     #[inline]
     pub fn split_count(&self, rank: u32, depth: u32) -> usize {
         if depth == 0 {
-            (self.opts.s0 >> rank.min(31)).max(1) as usize
+            rank_split(self.opts.s0, rank)
         } else {
             1
         }
@@ -248,7 +255,7 @@ impl CausticForecast {
             SplitRule::Share if depth == 0 => {
                 let s = self.shares.get(c).map_or(0.0, |s| s.share());
                 let boost = if s >= SPLIT_MIN_SHARE { SHARE_BOOST } else { 1 };
-                ((self.opts.s0.saturating_mul(boost)) >> cl.rank.min(31)).max(1) as usize
+                rank_split(self.opts.s0.saturating_mul(boost), cl.rank)
             }
             SplitRule::Share => 1,
         }

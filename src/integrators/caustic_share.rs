@@ -53,7 +53,8 @@ pub fn caustic_shares(world: &World, cf: &CausticForecast, max_depth: u32, seed:
                 }
             }
             let n = (n_points * SHARE_DIRS).max(1) as f64;
-            let photons = if cl.area > 0.0 { cl.power / cl.area } else { 0.0 };
+            // the cluster's photon flux over its area (`Cluster::density`, power / area)
+            let photons = if cl.density.is_finite() { cl.density } else { 0.0 };
             CausticShare { caustic: photons, caustic_gather: (ec / n) as f32, other: (ed / n) as f32 }
         })
         .collect()

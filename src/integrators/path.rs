@@ -106,7 +106,8 @@ impl Integrator for PathTracer {
 
 impl PathTracer {
     /// `pt`'s estimate along the ray `(origin, dir)`, emission reached before any non-Dirac
-    /// vertex in `prefix_le`, the rest in `rest` (also `pt-cf`'s guide-share gather).
+    /// vertex in `prefix_le`, the rest in `rest` (also the CF preprocess's caustic-share gather,
+    /// `integrators::caustic_share`).
     pub fn trace(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
         let s = &world.scene;
         let rng = &mut ctx.rng;

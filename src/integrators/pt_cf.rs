@@ -10,7 +10,7 @@
 //! weighted by `f·|cos|/q`, so no sample is worth more than `1/c_k` BSDF samples.
 //!
 //! Per-cluster guiding (`--guide-rule share`). With the caustic share `s = E_c/(E_c + E_d)` of a
-//! cluster's indirect irradiance ([`GuideShare`]: `E_c` from its forecast photons, `E_d` from a
+//! cluster's indirect irradiance ([`CausticShare`](crate::forecast::share::CausticShare): `E_c` from its forecast photons, `E_d` from a
 //! cosine `pt` gather in the preprocess), the mixture's second moment `E_d²/c + E_c²/(1−c)` (tables
 //! matching the caustic, the BSDF the rest) is smallest at `c = 1 − s`; so `c_k = max(c, 1 − s)`
 //! where `s ≥ --guide-min-share` and no guiding elsewhere. `ClusterMap::may_accept` skips the
@@ -35,7 +35,7 @@ use crate::progress::Phases;
 use crate::accel::{offset_origin, World};
 use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
 use crate::forecast::direction_table::ForecastTables;
-use crate::forecast::estimator::{CausticForecast, TableCache};
+use crate::forecast::estimator::{rank_split, CausticForecast, TableCache};
 use crate::forecast::mixture::{DefensiveMixture, MixtureWeights};
 use crate::math::{Frame, Rgb, Vec3};
 use crate::profile::{Phase, Profile, Stopwatch};
@@ -80,7 +80,11 @@ pub enum GuideRule {
 }
 
 fn parse_min_share(s: &str) -> Result<f32, String> {
-    let v: f32 = s.trim().parse().map_err(|e| format!("`{s}` is not a number: {e}"))?;
+    min_share(s.trim().parse().map_err(|e| format!("`{s}` is not a number: {e}"))?)
+}
+
+/// `v` if it is a share in [0, 1] (NaN is not).
+fn min_share(v: f32) -> Result<f32, String> {
     if (0.0..=1.0).contains(&v) {
         Ok(v)
     } else {
@@ -105,9 +109,7 @@ impl MethodSpec for PtCf {
         let p = &args.ptcf;
         let c = p.guide_fraction;
         let weights = MixtureWeights::guide_fraction(c).map_err(|e| format!("--guide-fraction: {e}"))?;
-        if !(0.0..=1.0).contains(&p.guide_min_share) {
-            return Err(format!("--guide-min-share: {} is not a share in [0, 1]", p.guide_min_share));
-        }
+        min_share(p.guide_min_share).map_err(|e| format!("--guide-min-share: {e}"))?;
         let n_kept = g.clustering.n_kept(g.opts.max_rank);
         if g.shares.len() != n_kept {
             return Err(format!("pt-cf: {} caustic shares for {n_kept} kept clusters", g.shares.len()));
@@ -199,7 +201,7 @@ impl GuidedPathTracer {
         }
         ctx.profile.cf.inside += 1;
         let rank = self.cf.clustering.clusters[c].rank;
-        let n = if q.depth == 0 { (self.split >> rank.min(31)).max(1) as usize } else { 1 };
+        let n = if q.depth == 0 { rank_split(self.split, rank) } else { 1 };
         ctx.profile.cf.samples += n as u64;
         Some(Guide { tables, frame, weights, n })
     }

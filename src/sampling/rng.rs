@@ -22,7 +22,7 @@ pub mod stream {
     pub const MISC: u64 = 6;
     /// The extra camera rays of emission splitting (`render::PixelSampler`).
     pub const PIXEL_SPLIT: u64 = 7;
-    /// `pt-cf`'s guide-share gather (preprocess).
+    /// The CF preprocess's caustic-share gather (`integrators::caustic_share`).
     pub const GUIDE: u64 = 8;
 }
 
