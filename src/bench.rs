@@ -131,7 +131,7 @@ pub fn profile_method(
     let product = method.preprocess(world, &args, 7)?;
     let mut integ = method.build(world, &args, &product)?;
     let camera = world.scene.camera.with_resolution(w, h);
-    let pixels = PixelSampler::new(world, &camera, args.pt.emission_split, integ.prefix_cap());
+    let pixels = PixelSampler::new(world, &camera, args.pt.split(), integ.prefix_cap());
     let mut profile = crate::profile::Profile::default();
     for pass in 0..spp.max(1) {
         integ.begin_pass(world, 7, pass);

@@ -28,7 +28,7 @@ const SHARE_DIRS: usize = 256;
 /// each path's random numbers are keyed by (cluster, path index), whatever the thread count.
 pub fn caustic_shares(world: &World, cf: &CausticForecast, max_depth: u32, seed: u64) -> Vec<CausticShare> {
     let kept = cf.clustering.kept(cf.opts.max_rank);
-    let pt = PathTracer { max_depth };
+    let pt = PathTracer::new(max_depth);
     kept.par_iter()
         .enumerate()
         .map(|(k, cl)| {

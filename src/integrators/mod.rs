@@ -17,6 +17,7 @@
 
 pub mod caustic_share;
 pub mod caustics;
+pub mod path_class;
 pub mod vpl;
 
 pub use caustics::{BsdfCaustics, CausticEstimator, NoCaustics, Recurse, ShadingQuery};
@@ -142,6 +143,7 @@ macro_rules! methods {
 
             /// Builds the integrator from the broadcast product.
             pub fn build(self, world: &World, args: &MethodArgs, product: &[u8]) -> Result<Box<dyn Integrator>, String> {
+                args.check_for(self)?;
                 match self {
                     $( Method::$variant => build_from::<$module::$spec>(self, world, args, product), )*
                 }
@@ -171,8 +173,20 @@ impl Method {
 }
 
 impl MethodArgs {
+    /// Refuses what `method` does not implement: `--path-filter` is the path tracers' alone.
+    pub fn check_for(&self, method: Method) -> Result<(), String> {
+        if !matches!(method, Method::Pt | Method::PtCf) && self.pt.path_filter.is_some() {
+            return Err(format!(
+                "--path-filter is a diagnostic of `pt` and `pt-cf` only; `{}` does not support it",
+                method.name()
+            ));
+        }
+        Ok(())
+    }
+
     /// Every group's own `validate` (each method file owns its limits), before any work.
     pub fn validate(&self) -> Result<(), String> {
+        self.pt.filter()?;
         self.pt.validate()?;
         self.iws.validate()?;
         self.pm.validate()?;

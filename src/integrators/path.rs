@@ -14,6 +14,7 @@ use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
 use crate::progress::Phases;
 use crate::accel::{offset_origin, Hit, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
+use super::path_class::{PathClass, PathFilter};
 use crate::math::{Rgb, Vec3};
 use crate::sampling::power_heuristic;
 use crate::scene::NO_EMITTER;
@@ -35,12 +36,32 @@ pub struct PtArgs {
     /// carries the rest of the estimate (unbiased; 1 = off; default by measurement, README).
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=MAX_SPLIT))]
     pub emission_split: u32,
+    /// pt and pt-cf only, a biased diagnostic: keep only light paths of these classes, e.g.
+    /// `DSL,DD*` (D a non-Dirac vertex, S a Dirac chain, L the light, `*` a prefix;
+    /// `integrators::path_class`). Turns emission splitting off (one camera ray per sample).
+    #[arg(long, value_name = "CLASSES", value_parser = super::path_class::check_filter)]
+    pub path_filter: Option<String>,
 }
 
 impl PtArgs {
     /// The cap in use (the pipeline resolves `None` to the scene's; direct callers get 64).
     pub fn cap(&self) -> u32 {
         self.max_depth.unwrap_or(MAX_VERTICES)
+    }
+
+    /// The emission split in use: `--emission-split`, or 1 under `--path-filter` (the split's
+    /// extra rays add emission of classes `L` and `SL` that no filter sees).
+    pub fn split(&self) -> u32 {
+        if self.path_filter.is_some() {
+            1
+        } else {
+            self.emission_split
+        }
+    }
+
+    /// `--path-filter`, parsed (`None` when not given).
+    pub fn filter(&self) -> Result<Option<PathFilter>, String> {
+        self.path_filter.as_deref().map(PathFilter::parse).transpose().map_err(|e| format!("--path-filter: {e}"))
     }
 
     /// The limits of `crate::param_limits` (the scene's `render.max_depth` has the same).
@@ -55,7 +76,7 @@ impl MethodSpec for PathTracer {
         Ok(())
     }
     fn build(_: &World, args: &MethodArgs, _: ()) -> Result<Box<dyn Integrator>, String> {
-        Ok(Box::new(PathTracer { max_depth: args.pt.cap() }))
+        Ok(Box::new(PathTracer { max_depth: args.pt.cap(), filter: args.pt.filter()? }))
     }
 }
 
@@ -63,6 +84,8 @@ impl MethodSpec for PathTracer {
 pub struct PathTracer {
     /// Safety cap on path vertices.
     pub max_depth: u32,
+    /// `--path-filter`: the path classes kept (`None`: all, the unbiased estimate).
+    pub filter: Option<PathFilter>,
 }
 
 /// A hit on an emitter's front reached along `d`: `(Le, MIS weight)`, the weight of the
@@ -105,6 +128,17 @@ impl Integrator for PathTracer {
 }
 
 impl PathTracer {
+    /// `pt` without a filter (the reference estimator).
+    pub fn new(max_depth: u32) -> Self {
+        PathTracer { max_depth, filter: None }
+    }
+
+    /// Whether `--path-filter` keeps a contribution reaching the light from `class`.
+    #[inline]
+    fn keeps(&self, class: PathClass) -> bool {
+        self.filter.as_ref().is_none_or(|f| f.keeps(class.lit()))
+    }
+
     /// `pt`'s estimate along the ray `(origin, dir)`, emission reached before any non-Dirac
     /// vertex in `prefix_le`, the rest in `rest` (also the CF preprocess's caustic-share gather,
     /// `integrators::caustic_share`).
@@ -117,10 +151,11 @@ impl PathTracer {
         let mut t = Throughput::new(Rgb::ONE);
         let mut prev_delta = true;
         let mut prev_pdf_w = 0.0f32;
+        let mut class = PathClass::default();
         for depth in 0..self.max_depth {
             let Some(hit) = world.intersect(o, d, f32::INFINITY) else { break };
             if s.emitter_of(hit.prim) != NO_EMITTER {
-                if let Some((le, w)) = emitter_hit(world, &hit, d, prev_delta, prev_pdf_w) {
+                if let Some((le, w)) = emitter_hit(world, &hit, d, prev_delta, prev_pdf_w).filter(|_| self.keeps(class)) {
                     *if prefix { &mut l.prefix_le } else { &mut l.rest } += t.beta * le * w;
                 }
                 break; // emitters reflect nothing
@@ -128,9 +163,14 @@ impl PathTracer {
             let m = s.material_of(hit.prim);
             let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
             let wo = -d;
+            class.push(m.is_dirac());
             if !m.is_dirac() {
                 prefix = false;
-                l.rest += t.beta * direct::sample_light(world, &sp, m, wo, rng);
+                // a filtered-out sample still draws its random numbers (filters partition the image)
+                let nee = t.beta * direct::sample_light(world, &sp, m, wo, rng);
+                if self.keeps(class) {
+                    l.rest += nee;
+                }
             }
             let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
             let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { break };

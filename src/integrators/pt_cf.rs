@@ -30,6 +30,7 @@
 
 use super::iws_forecast::IwsCf;
 use super::path::emitter_hit;
+use super::path_class::{PathClass, PathFilter};
 use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
 use crate::progress::Phases;
 use crate::accel::{offset_origin, World};
@@ -136,6 +137,7 @@ impl MethodSpec for PtCf {
             split: p.guide_split.max(1),
             cf: g,
             cache: TableCache::default(),
+            filter: args.pt.filter()?,
         }))
     }
 }
@@ -155,6 +157,8 @@ pub struct GuidedPathTracer {
     split: u32,
     cf: CausticForecast,
     cache: TableCache,
+    /// `--path-filter` (a diagnostic; `None`: the unbiased estimate).
+    filter: Option<PathFilter>,
 }
 
 /// One path (or branch) in flight: the ray, its throughput and how the last vertex sampled it.
@@ -172,6 +176,8 @@ struct PathState {
     prev_delta: bool,
     /// Effective solid-angle pdf of the last direction for MIS (`n·q` at a guided vertex).
     prev_pdf_w: f32,
+    /// The path's class so far (`--path-filter`).
+    class: PathClass,
 }
 
 /// The guide at one vertex: tables, their frame, the mixture weights and the split count.
@@ -206,6 +212,12 @@ impl GuidedPathTracer {
         Some(Guide { tables, frame, weights, n })
     }
 
+    /// Whether `--path-filter` keeps a contribution reaching the light from `class`.
+    #[inline]
+    fn keeps(&self, class: PathClass) -> bool {
+        self.filter.as_ref().is_none_or(|f| f.keeps(class.lit()))
+    }
+
     /// Radiance along `st` (a whole path, or one branch of a split).
     fn trace(&self, world: &World, mut st: PathState, ctx: &mut Context) -> CameraEstimate {
         let s = &world.scene;
@@ -213,7 +225,7 @@ impl GuidedPathTracer {
         while st.vertex < self.max_depth {
             let Some(hit) = world.intersect(st.o, st.d, f32::INFINITY) else { break };
             if s.emitter_of(hit.prim) != NO_EMITTER {
-                if let Some((le, w)) = emitter_hit(world, &hit, st.d, st.prev_delta, st.prev_pdf_w) {
+                if let Some((le, w)) = emitter_hit(world, &hit, st.d, st.prev_delta, st.prev_pdf_w).filter(|_| self.keeps(st.class)) {
                     // no non-Dirac vertex yet: the camera's Dirac prefix
                     *if st.diffuse == 0 { &mut l.prefix_le } else { &mut l.rest } += st.t.beta * le * w;
                 }
@@ -224,6 +236,7 @@ impl GuidedPathTracer {
             let wo = -st.d;
             let depth = st.vertex;
             st.vertex += 1;
+            st.class.push(m.is_dirac());
             let guide = if m.is_dirac() {
                 None
             } else {
@@ -232,7 +245,10 @@ impl GuidedPathTracer {
             let Some(g) = guide else {
                 // a `pt` vertex, operation for operation
                 if !m.is_dirac() {
-                    l.rest += st.t.beta * direct::sample_light(world, &sp, m, wo, &mut ctx.rng);
+                    let nee = st.t.beta * direct::sample_light(world, &sp, m, wo, &mut ctx.rng);
+                    if self.keeps(st.class) {
+                        l.rest += nee;
+                    }
                     st.diffuse += 1;
                 }
                 let u = [ctx.rng.next_f32(), ctx.rng.next_f32(), ctx.rng.next_f32()];
@@ -245,7 +261,10 @@ impl GuidedPathTracer {
             st.diffuse += 1;
             let mix = DefensiveMixture::new(m, &sp, wo, &g.tables, g.frame, g.weights);
             let n = g.n as f32;
-            l.rest += st.t.beta * direct::sample_light_mis(world, &sp, m, wo, &mut ctx.rng, |wi| n * mix.pdf_w(wi));
+            let nee = st.t.beta * direct::sample_light_mis(world, &sp, m, wo, &mut ctx.rng, |wi| n * mix.pdf_w(wi));
+            if self.keeps(st.class) {
+                l.rest += nee;
+            }
             if g.n == 1 {
                 let Some(ms) = mix.sample(&mut ctx.rng) else { break };
                 if !continue_path(&mut st, (depth, hit.p, hit.ng), &ms.as_bsdf_sample(), ctx) {
@@ -289,7 +308,7 @@ impl Integrator for GuidedPathTracer {
     fn estimate(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
         let t0 = Stopwatch::start();
         let st =
-            PathState { o: origin, d: dir, t: Throughput::new(Rgb::ONE), vertex: 0, diffuse: 0, prev_delta: true, prev_pdf_w: 0.0 };
+            PathState { o: origin, d: dir, t: Throughput::new(Rgb::ONE), vertex: 0, diffuse: 0, prev_delta: true, prev_pdf_w: 0.0, class: PathClass::default() };
         let l = self.trace(world, st, ctx);
         ctx.profile.samples += 1;
         ctx.profile.record(Phase::Radiance, t0);

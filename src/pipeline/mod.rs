@@ -146,6 +146,7 @@ impl Plan {
         if let Some(t) = self.time {
             params::check_time(t).map_err(|m| format!("--time: {m}"))?;
         }
+        self.args.check_for(self.method)?;
         self.args.validate()
     }
 }
@@ -336,7 +337,7 @@ fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) ->
     let (first_pass, total) = (run.resumed.first_pass, run.plan.spp.map(|s| s.max(run.resumed.first_pass)));
     let (w, h) = run.plan.resolution;
     let camera = run.world.scene.camera.with_resolution(w, h);
-    let (k, cap) = (run.plan.args.pt.emission_split, integrator.prefix_cap());
+    let (k, cap) = (run.plan.args.pt.split(), integrator.prefix_cap());
     let pixels = run.pool.install(|| PixelSampler::new(run.world, &camera, k, cap));
     let progress = Progress::new(run.job.progress && rank == 0, total.map(|t| t - first_pass), run.plan.time);
     let mut p = Passes {
