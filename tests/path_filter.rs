@@ -13,7 +13,8 @@
 //!   with `*` (every class kept) at the default split.
 //! - `pt-cf`'s filtered parts sum to its image the same way (its splits and table lookups see the
 //!   same random numbers).
-//! - The IWS methods refuse the option; bad patterns are clear errors.
+//! - The IWS methods refuse the option; bad patterns are clear errors; a filtered render warns
+//!   (stderr and the JSON's `warnings`) that its image is not the scene's radiance.
 
 mod common;
 use common::{job, render_film, root, tmp_dir};
@@ -94,4 +95,5 @@ fn other_methods_and_bad_patterns_are_refused() {
     assert!(err.contains("`X` is not D, S or L"), "{err}");
     let (code, err) = run(&["--method", "pt", "--path-filter", "DSL,DD*"]);
     assert_eq!(code, Some(0), "{err}");
+    assert!(err.contains("warning: --path-filter DSL,DD*: only these path classes"), "{err}");
 }

@@ -237,12 +237,17 @@ fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), String> 
     let limitations = crate::scene::scene_warnings(&scene);
     scene.warnings.extend(limitations);
     let load_s = secs(t_load);
+    let plan = job.resolve(&scene)?;
+    if let Some(f) = &plan.args.pt.path_filter {
+        scene.warnings.push(format!(
+            "--path-filter {f}: only these path classes are rendered (a biased diagnostic, emission splitting off)"
+        ));
+    }
     if rank == 0 {
         for w in &scene.warnings {
             crate::errln!("warning: {w}");
         }
     }
-    let plan = job.resolve(&scene)?;
     let world = World::build(scene).map_err(|e| format!("{}: {e}", job.scene.display()))?;
     let bvh_s = world.build_secs;
     Ok((world, plan, Timings { load_s, bvh_s, ..Timings::default() }))
