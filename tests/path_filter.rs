@@ -9,12 +9,13 @@
 //! - The classes mean what they say: without mirrors or glass (`cornell-nodirac`) every class
 //!   with an `S` is empty and `DDL` is not; `cornell-box` has `DS*` light.
 //! - A filter turns emission splitting off (its extra camera rays add `L`/`SL` light no filter
-//!   sees): without a filter and `--emission-split 1`, `pt` is the same image bit for bit as
-//!   with `*` (every class kept) at the default split.
+//!   sees): the filtered renders here keep the default `--emission-split 16`, the unfiltered one
+//!   has 1, and `*` (every class kept) is the unfiltered image bit for bit.
 //! - `pt-cf`'s filtered parts sum to its image the same way (its splits and table lookups see the
 //!   same random numbers).
 //! - The IWS methods refuse the option; bad patterns are clear errors; a filtered render warns
-//!   (stderr and the JSON's `warnings`) that its image is not the scene's radiance.
+//!   (stderr and the JSON's `warnings`) that its image is not the scene's radiance; `compare`
+//!   and `reference` refuse it, and a checkpoint records it (no resume across filters).
 
 mod common;
 use common::{job, render_film, root, tmp_dir};
@@ -22,10 +23,18 @@ use forecast::integrators::Method;
 use forecast::render::film::{Film, STRIDE};
 
 fn film(method: Method, filter: Option<&str>, name: &str) -> Film {
+    film_of("scenes/cornell-box.toml", method, filter, name)
+}
+
+fn film_of(scene: &str, method: Method, filter: Option<&str>, name: &str) -> Film {
     let dir = tmp_dir(name);
-    let mut j = job(&root().join("scenes/cornell-box.toml"), method, 8, 3, (32, 32), 2, &dir.join("img"));
+    let mut j = job(&root().join(scene), method, 8, 3, (32, 32), 2, &dir.join("img"));
     j.args.pt.path_filter = filter.map(str::to_string);
-    j.args.pt.emission_split = 1; // what a filter implies (its extra rays are unfiltered)
+    if filter.is_none() {
+        // what a filter implies (the split's extra rays are unfiltered): the filtered renders
+        // keep the default split of 16, which `PtArgs::split` must turn off
+        j.args.pt.emission_split = 1;
+    }
     j.args.cf.forecast_photons = Some(20_000);
     render_film(&j)
 }
@@ -72,6 +81,11 @@ fn dirac_classes_are_empty_without_dirac_objects() {
         "Dirac classes in a scene without Dirac objects"
     );
     assert!(render("tests/scenes/cornell-nodirac.toml", "DDL") > 0);
+    // … and every class there is `L` or `D…DL`, so `L,D*` keeps all of it, bit for bit
+    let nodirac = "tests/scenes/cornell-nodirac.toml";
+    let (a, b) =
+        (film_of(nodirac, Method::Pt, None, "pf-nd-all"), film_of(nodirac, Method::Pt, Some("L,D*"), "pf-nd-ld"));
+    assert!(a.data == b.data, "a class with an S in a scene without Dirac objects");
     assert!(render("scenes/cornell-box.toml", "DS*") > 0, "no paths through the mirror or glass ball");
 }
 
@@ -96,4 +110,46 @@ fn other_methods_and_bad_patterns_are_refused() {
     let (code, err) = run(&["--method", "pt", "--path-filter", "DSL,DD*"]);
     assert_eq!(code, Some(0), "{err}");
     assert!(err.contains("warning: --path-filter DSL,DD*: only these path classes"), "{err}");
+    for m in ["iws", "iws-pm"] {
+        let (code, err) = run(&["--method", m, "--path-filter", "DSL"]);
+        assert!(code == Some(1) && err.contains("does not support it"), "{m}: {err}");
+    }
+}
+
+/// `compare` and `reference` refuse a filter before any work; a checkpoint of an unfiltered
+/// render cannot be resumed filtered (the passes would be summed into one image).
+#[test]
+fn filtered_images_never_mix_with_unbiased_ones() {
+    let d = tmp_dir("pf-mix");
+    let cmd = |args: &[&str]| {
+        let out =
+            std::process::Command::new(env!("CARGO_BIN_EXE_forecast")).current_dir(root()).args(args).output().unwrap();
+        (out.status.code(), String::from_utf8_lossy(&out.stderr).to_string())
+    };
+    let out = |n: &str| d.join(n).to_str().unwrap().to_string();
+    let (code, err) = cmd(&[
+        "compare",
+        "scenes/cornell-box.toml",
+        "--methods",
+        "pt",
+        "--budgets",
+        "1s",
+        "--path-filter",
+        "DSL",
+        "--reference",
+        "missing.exr",
+        "--out",
+        &out("cmp"),
+    ]);
+    assert!(code == Some(1) && err.contains("compare: --path-filter"), "{err}");
+    let (code, err) =
+        cmd(&["reference", "scenes/cornell-box.toml", "--time", "1s", "--path-filter", "DSL", "--out", &out("ref")]);
+    assert!(code == Some(1) && err.contains("reference: --path-filter"), "{err}");
+    let base = ["render", "scenes/cornell-box.toml", "--resolution", "8x8", "--seed", "1", "--quiet"];
+    let (code, err) = cmd(&[&base[..], &["--spp", "4", "--checkpoint-every", "1ms", "--out", &out("a")]].concat());
+    assert_eq!(code, Some(0), "{err}");
+    let ckpt = out("a") + ".ckpt";
+    let (code, err) =
+        cmd(&[&base[..], &["--spp", "8", "--path-filter", "DSL", "--resume", &ckpt, "--out", &out("b")]].concat());
+    assert!(code == Some(1) && err.contains("cannot resume") && err.contains("--path-filter DSL"), "{err}");
 }

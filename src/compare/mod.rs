@@ -349,6 +349,9 @@ pub fn run_compare(cfg: &CompareConfig, cluster: &dyn Cluster) -> Result<Option<
     if !cfg.base.snapshots.is_empty() {
         return Err("compare: --snapshots is a `render` option; use --single-run".into());
     }
+    if cfg.base.args.pt.path_filter.is_some() {
+        return Err("compare: --path-filter is a `render` diagnostic (a filtered image has no reference)".into());
+    }
     let scene = crate::scene::load_with(&cfg.base.scene, &cfg.base.load_options()).map_err(|e| e.to_string())?;
     let (reference, res) = agree_resolution(cfg, cluster)?;
     let regions = regions(&scene, res);

@@ -95,6 +95,9 @@ pub fn run_reference(
     if args.method.is_some_and(|m| m != Method::Pt) {
         return Err("reference: only `--method pt` (the unbiased reference) is supported".into());
     }
+    if args.method_args.pt.path_filter.is_some() {
+        return Err("reference: --path-filter is a `render` diagnostic (a reference is unbiased)".into());
+    }
     if !args.snapshots.is_empty() {
         return Err("reference: --snapshots is a `render` option (the reference is two half renders)".into());
     }

@@ -7,6 +7,9 @@
 //! `max_depth` (default 64 vertices) is a safety cap only: with RR the truncated energy is far
 //! below the noise (documented in the README).
 //!
+//! `--path-filter` (a biased diagnostic, off by default) keeps only some path classes
+//! (`integrators::path_class`); without it the estimator is exactly the above.
+//!
 //! CLI: `forecast render scenes/cornell-box.toml --method pt --spp 64`.
 
 use crate::profile::{Phase, Profile, Stopwatch};
@@ -14,7 +17,7 @@ use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
 use crate::progress::Phases;
 use crate::accel::{offset_origin, Hit, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
-use super::path_class::{PathClass, PathFilter};
+use super::path_class::{kept, PathClass, PathFilter};
 use crate::math::{Rgb, Vec3};
 use crate::sampling::power_heuristic;
 use crate::scene::NO_EMITTER;
@@ -25,7 +28,7 @@ use crate::transport::roulette::Throughput;
 const MAX_SPLIT: i64 = crate::render::MAX_EMISSION_SPLIT as i64;
 
 /// Parameters shared by every method: the path-length safety cap and the pixel sampler's
-/// emission split (`render::pixel`).
+/// emission split (`render::pixel`); and `--path-filter`, the path tracers' diagnostic.
 #[derive(clap::Args, Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PtArgs {
     /// Safety cap on path vertices (default: the scene's `render.max_depth`, 64).
@@ -133,10 +136,10 @@ impl PathTracer {
         PathTracer { max_depth, filter: None }
     }
 
-    /// Whether `--path-filter` keeps a contribution reaching the light from `class`.
+    /// A contribution `v` reaching the light from `class`, or 0 if `--path-filter` drops it.
     #[inline]
-    fn keeps(&self, class: PathClass) -> bool {
-        self.filter.as_ref().is_none_or(|f| f.keeps(class.lit()))
+    fn kept(&self, class: PathClass, v: Rgb) -> Rgb {
+        kept(self.filter.as_ref(), class, v)
     }
 
     /// `pt`'s estimate along the ray `(origin, dir)`, emission reached before any non-Dirac
@@ -155,8 +158,8 @@ impl PathTracer {
         for depth in 0..self.max_depth {
             let Some(hit) = world.intersect(o, d, f32::INFINITY) else { break };
             if s.emitter_of(hit.prim) != NO_EMITTER {
-                if let Some((le, w)) = emitter_hit(world, &hit, d, prev_delta, prev_pdf_w).filter(|_| self.keeps(class)) {
-                    *if prefix { &mut l.prefix_le } else { &mut l.rest } += t.beta * le * w;
+                if let Some((le, w)) = emitter_hit(world, &hit, d, prev_delta, prev_pdf_w) {
+                    *if prefix { &mut l.prefix_le } else { &mut l.rest } += self.kept(class, t.beta * le * w);
                 }
                 break; // emitters reflect nothing
             }
@@ -167,10 +170,7 @@ impl PathTracer {
             if !m.is_dirac() {
                 prefix = false;
                 // a filtered-out sample still draws its random numbers (filters partition the image)
-                let nee = t.beta * direct::sample_light(world, &sp, m, wo, rng);
-                if self.keeps(class) {
-                    l.rest += nee;
-                }
+                l.rest += self.kept(class, t.beta * direct::sample_light(world, &sp, m, wo, rng));
             }
             let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
             let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { break };

@@ -5,10 +5,11 @@
 //! non-Dirac vertex, `S` a run of Dirac vertices (mirror, glass: one `S` however long the chain),
 //! `L` the light (an emitter hit or a next-event sample). So `DL` is direct light, `DSL` a caustic
 //! seen directly, `SDSL` one seen through glass, `DDSL` a wall lit by a floor caustic. A filter
-//! is a comma list of patterns, each a class or a prefix ending in `*` (`DS*`); the path tracer
-//! then adds only the contributions whose class matches, drawing the same random numbers as
-//! without a filter, so the images of filters that partition the classes (say `L,S*,D*`) sum to
-//! the unfiltered image.
+//! is a comma list of patterns, each a class (ending in `L`) or a prefix ending in `*` (`DS*`);
+//! the path tracer then adds only the contributions whose class matches, drawing the same random
+//! numbers as without a filter, so the images of filters that partition the classes (say
+//! `L,S*,D*`) sum to the unfiltered image rendered with `--emission-split 1` (a non-finite
+//! sample, which the film zeroes whole, is zeroed only in the part that carries it).
 //!
 //! A filter turns emission splitting off (`PtArgs::split`): the split's extra camera rays add
 //! light of classes `L` and `SL` that the tracer's filter never sees.
@@ -16,6 +17,8 @@
 //! Invariants: a filter is biased by design (it removes light), is off by default and is refused
 //! by every method but `pt` and `pt-cf`; classes longer than [`MAX_TOKENS`] tokens match `*`
 //! patterns only.
+
+use crate::math::Rgb;
 
 /// Tokens a class records exactly (2 bits each in a `u64`).
 pub const MAX_TOKENS: u32 = 31;
@@ -69,35 +72,11 @@ pub struct PathFilter {
 impl PathFilter {
     /// Parses `DL,DS*,…`; the error names the pattern and the character.
     pub fn parse(s: &str) -> Result<Self, String> {
-        let mut patterns = Vec::new();
-        for p in s.split(',').map(str::trim) {
-            let (body, prefix) = p.strip_suffix('*').map_or((p, false), |b| (b, true));
-            if body.is_empty() && !prefix {
-                return Err(format!("empty pattern in `{s}` (classes are made of D, S, L; `*` ends a prefix)"));
-            }
-            if body.len() > MAX_TOKENS as usize {
-                return Err(format!("pattern `{p}` is longer than {MAX_TOKENS} tokens"));
-            }
-            let mut c = PathClass::default();
-            for (i, ch) in body.chars().enumerate() {
-                let t = match ch.to_ascii_uppercase() {
-                    'D' => D,
-                    'S' => S,
-                    'L' => L,
-                    _ => return Err(format!("pattern `{p}`: `{ch}` is not D, S or L (a trailing `*` makes a prefix)")),
-                };
-                if t == L && (i + 1 < body.len() || prefix) {
-                    return Err(format!("pattern `{p}`: L (the light) can only end a class"));
-                }
-                if t == S && c.len > 0 && c.token(c.len - 1) == S {
-                    return Err(format!("pattern `{p}`: SS never occurs (a Dirac chain is one S)"));
-                }
-                c.bits |= t << (2 * c.len);
-                c.len += 1;
-            }
-            patterns.push((c, prefix));
-        }
-        Ok(PathFilter { patterns })
+        s.split(',')
+            .map(str::trim)
+            .map(|p| parse_pattern(p, s))
+            .collect::<Result<_, _>>()
+            .map(|patterns| PathFilter { patterns })
     }
 
     /// True when a contribution of class `c` (ending in `L`) passes.
@@ -110,6 +89,51 @@ impl PathFilter {
                 c.len <= MAX_TOKENS && p == c
             }
         })
+    }
+}
+
+/// One pattern `p` of the list `all`: its class and whether it is a prefix.
+fn parse_pattern(p: &str, all: &str) -> Result<(PathClass, bool), String> {
+    let (body, prefix) = p.strip_suffix('*').map_or((p, false), |b| (b, true));
+    if body.is_empty() && !prefix {
+        return Err(format!("empty pattern in `{all}` (classes are made of D, S, L; `*` ends a prefix)"));
+    }
+    let tokens = body
+        .chars()
+        .map(|ch| match ch.to_ascii_uppercase() {
+            'D' => Ok(D),
+            'S' => Ok(S),
+            'L' => Ok(L),
+            _ => Err(format!("pattern `{p}`: `{ch}` is not D, S or L (a trailing `*` makes a prefix)")),
+        })
+        .collect::<Result<Vec<u64>, String>>()?;
+    if tokens.len() > MAX_TOKENS as usize {
+        return Err(format!("pattern `{p}` is longer than {MAX_TOKENS} tokens"));
+    }
+    if tokens.iter().rev().skip(usize::from(!prefix)).any(|&t| t == L) {
+        return Err(format!("pattern `{p}`: L (the light) can only end a class"));
+    }
+    if tokens.windows(2).any(|w| w == [S, S]) {
+        return Err(format!("pattern `{p}`: SS never occurs (a Dirac chain is one S)"));
+    }
+    if !prefix && tokens.last() != Some(&L) {
+        return Err(format!("pattern `{p}` never matches: a class ends in L (did you mean `{p}L` or `{p}*`?)"));
+    }
+    let mut c = PathClass::default();
+    for t in tokens {
+        c.bits |= t << (2 * c.len);
+        c.len += 1;
+    }
+    Ok((c, prefix))
+}
+
+/// `v` if `filter` (none: every class) keeps a contribution reaching the light from `class`, else 0.
+#[inline]
+pub fn kept(filter: Option<&PathFilter>, class: PathClass, v: Rgb) -> Rgb {
+    if filter.is_none_or(|f| f.keeps(class.lit())) {
+        v
+    } else {
+        Rgb::ZERO
     }
 }
 
@@ -148,6 +172,15 @@ mod tests {
     }
 
     #[test]
+    fn the_token_limit_is_exact() {
+        let long: String = "DS".repeat(15) + "L"; // 31 tokens
+        assert!(PathFilter::parse(&long).unwrap().keeps(class(&long)));
+        assert!(PathFilter::parse(&("D".to_string() + &long)).unwrap_err().contains("longer than 31"));
+        let f = PathFilter::parse(" dd* , l ").unwrap(); // spaces around patterns, lower case
+        assert!(f.keeps(class("L")) && f.keeps(class("DDSL")) && !f.keeps(class("DSL")));
+    }
+
+    #[test]
     fn long_classes_match_prefixes_only() {
         let mut c = PathClass::default();
         for i in 0..40 {
@@ -161,7 +194,15 @@ mod tests {
 
     #[test]
     fn bad_patterns_are_named() {
-        for (p, what) in [("DX", "`X`"), ("LD", "L (the light)"), ("DSSL", "SS"), ("DL,", "empty pattern")] {
+        for (p, what) in [
+            ("DX", "`X`"),
+            ("LD", "L (the light)"),
+            ("DSSL", "SS"),
+            ("DL,", "empty pattern"),
+            ("DS", "did you mean `DSL` or `DS*`"),
+            ("Lé", "`é`"),
+            ("DL*", "L (the light)"),
+        ] {
             let e = PathFilter::parse(p).unwrap_err();
             assert!(e.contains(what), "{p}: {e}");
         }

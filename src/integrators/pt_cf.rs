@@ -26,11 +26,14 @@
 //! guided clusters every vertex is a `pt` vertex. The preprocess product is `iws-cf`'s
 //! (`IwsCf::preprocess`: same photons, clusters, maps) plus the shares, broadcast together.
 //!
+//! `--path-filter` (a biased diagnostic, as `pt`'s) keeps only some path classes; every branch
+//! of a split carries its path's class.
+//!
 //! CLI: `forecast render scenes/cornell-box.toml --method pt-cf --time 1m`.
 
 use super::iws_forecast::IwsCf;
 use super::path::emitter_hit;
-use super::path_class::{PathClass, PathFilter};
+use super::path_class::{kept, PathClass, PathFilter};
 use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
 use crate::progress::Phases;
 use crate::accel::{offset_origin, World};
@@ -212,10 +215,10 @@ impl GuidedPathTracer {
         Some(Guide { tables, frame, weights, n })
     }
 
-    /// Whether `--path-filter` keeps a contribution reaching the light from `class`.
+    /// A contribution `v` reaching the light from `class`, or 0 if `--path-filter` drops it.
     #[inline]
-    fn keeps(&self, class: PathClass) -> bool {
-        self.filter.as_ref().is_none_or(|f| f.keeps(class.lit()))
+    fn kept(&self, class: PathClass, v: Rgb) -> Rgb {
+        kept(self.filter.as_ref(), class, v)
     }
 
     /// Radiance along `st` (a whole path, or one branch of a split).
@@ -225,9 +228,10 @@ impl GuidedPathTracer {
         while st.vertex < self.max_depth {
             let Some(hit) = world.intersect(st.o, st.d, f32::INFINITY) else { break };
             if s.emitter_of(hit.prim) != NO_EMITTER {
-                if let Some((le, w)) = emitter_hit(world, &hit, st.d, st.prev_delta, st.prev_pdf_w).filter(|_| self.keeps(st.class)) {
+                if let Some((le, w)) = emitter_hit(world, &hit, st.d, st.prev_delta, st.prev_pdf_w) {
                     // no non-Dirac vertex yet: the camera's Dirac prefix
-                    *if st.diffuse == 0 { &mut l.prefix_le } else { &mut l.rest } += st.t.beta * le * w;
+                    let v = self.kept(st.class, st.t.beta * le * w);
+                    *if st.diffuse == 0 { &mut l.prefix_le } else { &mut l.rest } += v;
                 }
                 break; // emitters reflect nothing
             }
@@ -245,10 +249,7 @@ impl GuidedPathTracer {
             let Some(g) = guide else {
                 // a `pt` vertex, operation for operation
                 if !m.is_dirac() {
-                    let nee = st.t.beta * direct::sample_light(world, &sp, m, wo, &mut ctx.rng);
-                    if self.keeps(st.class) {
-                        l.rest += nee;
-                    }
+                    l.rest += self.kept(st.class, st.t.beta * direct::sample_light(world, &sp, m, wo, &mut ctx.rng));
                     st.diffuse += 1;
                 }
                 let u = [ctx.rng.next_f32(), ctx.rng.next_f32(), ctx.rng.next_f32()];
@@ -262,9 +263,7 @@ impl GuidedPathTracer {
             let mix = DefensiveMixture::new(m, &sp, wo, &g.tables, g.frame, g.weights);
             let n = g.n as f32;
             let nee = st.t.beta * direct::sample_light_mis(world, &sp, m, wo, &mut ctx.rng, |wi| n * mix.pdf_w(wi));
-            if self.keeps(st.class) {
-                l.rest += nee;
-            }
+            l.rest += self.kept(st.class, nee);
             if g.n == 1 {
                 let Some(ms) = mix.sample(&mut ctx.rng) else { break };
                 if !continue_path(&mut st, (depth, hit.p, hit.ng), &ms.as_bsdf_sample(), ctx) {
@@ -272,22 +271,31 @@ impl GuidedPathTracer {
                 }
                 continue;
             }
-            // splitting: n independent continuations, each with weight 1/n
-            for _ in 0..g.n {
-                let Some(ms) = mix.sample(&mut ctx.rng) else { continue };
-                let mut b = st;
-                if continue_path(
-                    &mut b,
-                    (depth, hit.p, hit.ng),
-                    &BsdfSample { weight: ms.weight * (1.0 / n), pdf_w: n * ms.pdf_w, ..ms.as_bsdf_sample() },
-                    ctx,
-                ) {
-                    l.rest += self.trace(world, b, ctx).total();
-                }
-            }
+            self.split(world, (&st, (depth, hit.p, hit.ng)), (&mix, g.n), &mut l.rest, ctx);
             break;
         }
         l
+    }
+
+    /// Splitting: `n` independent continuations of `st` at vertex `at` drawn from `mix`, each
+    /// with weight 1/n, their radiance added to `rest` one by one.
+    fn split(
+        &self,
+        world: &World,
+        (st, at): (&PathState, (u32, Vec3, Vec3)),
+        (mix, n): (&DefensiveMixture, usize),
+        rest: &mut Rgb,
+        ctx: &mut Context,
+    ) {
+        let nf = n as f32;
+        for _ in 0..n {
+            let Some(ms) = mix.sample(&mut ctx.rng) else { continue };
+            let mut b = *st;
+            let bs = BsdfSample { weight: ms.weight * (1.0 / nf), pdf_w: nf * ms.pdf_w, ..ms.as_bsdf_sample() };
+            if continue_path(&mut b, at, &bs, ctx) {
+                *rest += self.trace(world, b, ctx).total();
+            }
+        }
     }
 }
 
@@ -307,8 +315,16 @@ fn continue_path(st: &mut PathState, (index, p, ng): (u32, Vec3, Vec3), bs: &Bsd
 impl Integrator for GuidedPathTracer {
     fn estimate(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
         let t0 = Stopwatch::start();
-        let st =
-            PathState { o: origin, d: dir, t: Throughput::new(Rgb::ONE), vertex: 0, diffuse: 0, prev_delta: true, prev_pdf_w: 0.0, class: PathClass::default() };
+        let st = PathState {
+            o: origin,
+            d: dir,
+            t: Throughput::new(Rgb::ONE),
+            vertex: 0,
+            diffuse: 0,
+            prev_delta: true,
+            prev_pdf_w: 0.0,
+            class: PathClass::default(),
+        };
         let l = self.trace(world, st, ctx);
         ctx.profile.samples += 1;
         ctx.profile.record(Phase::Radiance, t0);

@@ -61,7 +61,7 @@ impl Run<'_> {
         Checkpoint {
             scene_hash: self.world.scene.hash,
             seed: self.plan.seed,
-            method: self.plan.method.name().to_string(),
+            method: self.plan.checkpoint_label(),
             width,
             height,
             passes_done,

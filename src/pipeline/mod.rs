@@ -138,6 +138,15 @@ impl RenderJob {
 }
 
 impl Plan {
+    /// The method as a checkpoint records it: its name, and its `--path-filter` if any (a
+    /// filtered image must never be resumed as an unfiltered one, nor the other way round).
+    pub fn checkpoint_label(&self) -> String {
+        match &self.args.pt.path_filter {
+            Some(f) => format!("{} --path-filter {f}", self.method.name()),
+            None => self.method.name().to_string(),
+        }
+    }
+
     /// The plan's values against `crate::param_limits` (the same limits as the scene format's).
     pub fn validate(&self) -> Result<(), String> {
         if let Some(s) = self.spp {
@@ -237,16 +246,19 @@ fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), String> 
     let limitations = crate::scene::scene_warnings(&scene);
     scene.warnings.extend(limitations);
     let load_s = secs(t_load);
-    let plan = job.resolve(&scene)?;
-    if let Some(f) = &plan.args.pt.path_filter {
-        scene.warnings.push(format!(
-            "--path-filter {f}: only these path classes are rendered (a biased diagnostic, emission splitting off)"
-        ));
-    }
     if rank == 0 {
         for w in &scene.warnings {
             crate::errln!("warning: {w}");
         }
+    }
+    let plan = job.resolve(&scene)?;
+    if let Some(f) = &plan.args.pt.path_filter {
+        let w =
+            format!("--path-filter {f}: only these path classes are rendered (a biased diagnostic, no emission split)");
+        if rank == 0 {
+            crate::errln!("warning: {w}");
+        }
+        scene.warnings.push(w);
     }
     let world = World::build(scene).map_err(|e| format!("{}: {e}", job.scene.display()))?;
     let bvh_s = world.build_secs;
@@ -293,7 +305,7 @@ fn agree_resume(job: &RenderJob, world: &World, plan: &Plan, cluster: &dyn Clust
     let (w, h) = plan.resolution;
     let loaded = match (&job.resume, cluster.rank()) {
         (Some(p), 0) => Checkpoint::load(p).map_err(|e| e.to_string()).and_then(|c| {
-            c.validate(world.scene.hash, plan.seed, plan.method.name(), w, h)
+            c.validate(world.scene.hash, plan.seed, &plan.checkpoint_label(), w, h)
                 .map_err(|e| format!("{}: cannot resume: {e}", p.display()))
                 .map(|()| Some(c))
         }),
