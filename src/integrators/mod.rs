@@ -186,7 +186,6 @@ impl MethodArgs {
 
     /// Every group's own `validate` (each method file owns its limits), before any work.
     pub fn validate(&self) -> Result<(), String> {
-        self.pt.filter()?;
         self.pt.validate()?;
         self.iws.validate()?;
         self.pm.validate()?;

@@ -67,8 +67,10 @@ impl PtArgs {
         self.path_filter.as_deref().map(PathFilter::parse).transpose().map_err(|e| format!("--path-filter: {e}"))
     }
 
-    /// The limits of `crate::param_limits` (the scene's `render.max_depth` has the same).
+    /// The limits of `crate::param_limits` (the scene's `render.max_depth` has the same) and a
+    /// `--path-filter` that parses.
     pub fn validate(&self) -> Result<(), String> {
+        self.filter()?;
         self.max_depth.map_or(Ok(()), |d| crate::param_limits::MAX_DEPTH.check_flag("--max-depth", d.into()))
     }
 }

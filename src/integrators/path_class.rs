@@ -42,20 +42,23 @@ impl PathClass {
         if t == S && self.len > 0 && self.len <= MAX_TOKENS && self.token(self.len - 1) == S {
             return;
         }
-        if self.len < MAX_TOKENS {
-            self.bits |= t << (2 * self.len);
-        }
-        self.len = self.len.saturating_add(1);
+        self.append(t);
     }
 
     /// The class of a contribution that reaches the light from here (`… L`).
     #[inline]
     pub fn lit(mut self) -> Self {
+        self.append(L);
+        self
+    }
+
+    /// Appends token `t` (recorded only within the first [`MAX_TOKENS`]; the length counts on).
+    #[inline]
+    fn append(&mut self, t: u64) {
         if self.len < MAX_TOKENS {
-            self.bits |= L << (2 * self.len);
+            self.bits |= t << (2 * self.len);
         }
         self.len = self.len.saturating_add(1);
-        self
     }
 
     fn token(&self, i: u32) -> u64 {
@@ -120,10 +123,7 @@ fn parse_pattern(p: &str, all: &str) -> Result<(PathClass, bool), String> {
         return Err(format!("pattern `{p}` never matches: a class ends in L (did you mean `{p}L` or `{p}*`?)"));
     }
     let mut c = PathClass::default();
-    for t in tokens {
-        c.bits |= t << (2 * c.len);
-        c.len += 1;
-    }
+    tokens.into_iter().for_each(|t| c.append(t));
     Ok((c, prefix))
 }
 
