@@ -44,8 +44,32 @@ fn roi_scaling_by_hand() {
     assert_eq!(compare::scale_roi([0, 0, 1, 1], (640, 640), (16, 16)), Some((0, 0, 1, 1)));
     assert_eq!(compare::scale_roi([600, 600, 100, 100], (640, 640), (64, 64)), Some((60, 60, 4, 4)));
     assert_eq!(compare::scale_roi([700, 0, 10, 10], (640, 640), (64, 64)), None);
-    // Non-square: x and y scale separately.
-    assert_eq!(compare::scale_roi([10, 10, 10, 10], (100, 50), (50, 100)), Some((5, 20, 5, 20)));
+    // Another aspect ratio: the frame scales by to.h/from.h = 2 about its centre (vertical field
+    // of view), so 100×50 → 50×100 keeps only the middle quarter of the width: x = 10..20 lies at
+    // 25 + (10 − 50)·2 = −55..−35, outside; x = 45..55 at 15..35; y doubles.
+    assert_eq!(compare::scale_roi([10, 10, 10, 10], (100, 50), (50, 100)), None);
+    assert_eq!(compare::scale_roi([45, 10, 10, 10], (100, 50), (50, 100)), Some((15, 20, 20, 20)));
+    // figurines' knot caustic, 640×360 → 640×640: x 138..269 → 320 + (x − 320)·16/9 = −3.6..229.3
+    assert_eq!(compare::scale_roi([138, 181, 131, 90], (640, 360), (640, 640)), Some((0, 321, 230, 161)));
+}
+
+/// A scene point and the ROI pixel it falls in stay together when the render changes the
+/// aspect ratio: `scale_roi` of the point's pixel at the camera's resolution contains the pixel
+/// the camera projects it to at the render's (figurines' frame, its two caustics' centres).
+#[test]
+fn roi_scaling_follows_the_camera() {
+    use forecast::math::Vec3;
+    use forecast::scene::Camera;
+    let cam = |w, h| Camera::new(Vec3::new(0.05, 2.0, 1.95), Vec3::new(0.05, 0.88, -0.12), Vec3::Y, 30.0, w, h);
+    for p in [Vec3::new(-0.3, 0.8, 0.05), Vec3::new(0.2, 0.8, 0.05), Vec3::new(0.0, 0.8, -0.2)] {
+        let (sx, sy) = cam(640, 360).project(p).unwrap();
+        for to in [(640, 640), (256, 256), (320, 180), (1280, 360)] {
+            let (tx, ty) = cam(to.0, to.1).project(p).unwrap();
+            let (x, y, w, h) = compare::scale_roi([sx as u32, sy as u32, 1, 1], (640, 360), to).unwrap();
+            let inside = (x as f32..(x + w) as f32).contains(&tx) && (y as f32..(y + h) as f32).contains(&ty);
+            assert!(inside, "{p:?} → {to:?}: pixel ({tx}, {ty}) outside the scaled ROI {:?}", (x, y, w, h));
+        }
+    }
 }
 
 #[test]

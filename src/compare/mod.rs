@@ -8,7 +8,8 @@
 //! * Under MPI every rank runs the same loop (each render is collective and the whole job shares
 //!   the budget); only rank 0 measures and writes. Failed runs are recorded, not fatal.
 //! * ROIs are given at the scene camera's resolution; [`scale_roi`] maps them to the render
-//!   resolution (outward rounding, clamped to the image, never empty).
+//!   resolution as the camera maps the scene (vertical field of view, square pixels: another
+//!   aspect ratio crops or widens the sides), rounding outward, clamped to the image, never empty.
 //!
 //! * `--single-run` (`single_run`): each (method, seed) is rendered once at the largest budget
 //!   with snapshots (`render --snapshots`) at the smaller ones; each smaller budget's row is
@@ -86,18 +87,25 @@ pub struct RunRecord {
     pub from_snapshot: bool,
 }
 
-/// Maps an ROI rectangle given at resolution `from` to resolution `to`: edges scale by `to/from`,
-/// rounding outward, clamped to the image; `None` if the ROI lies outside the image.
+/// Maps an ROI rectangle given at resolution `from` to resolution `to`, as the camera does: the
+/// field of view is vertical and pixels are square, so the frame scales by `s = to.h/from.h` about
+/// its centre in both axes (a change of aspect ratio crops or widens the sides: at 640×640 a
+/// 640×360 frame's x = 138 lies at 320 + (138 − 320)·s < 0). With the same aspect ratio this is
+/// the plain `to/from` scaling. Edges round outward, clamped to the image; `None` if the ROI lies
+/// outside it.
 pub fn scale_roi(rect: [u32; 4], from: (u32, u32), to: (u32, u32)) -> Option<Rect> {
-    let [x, y, w, h] = rect.map(|v| v as u64);
-    let (fw, fh, tw, th) = (from.0.max(1) as u64, from.1.max(1) as u64, to.0 as u64, to.1 as u64);
-    let x0 = (x * tw / fw).min(tw);
-    let y0 = (y * th / fh).min(th);
-    let x1 = ((x + w) * tw).div_ceil(fw).min(tw).max(x0 + 1);
-    let y1 = ((y + h) * th).div_ceil(fh).min(th).max(y0 + 1);
-    if x0 >= tw || y0 >= th {
+    let [x, y, w, h] = rect.map(i128::from);
+    let (fw, fh) = (i128::from(from.0.max(1)), i128::from(from.1.max(1)));
+    let (tw, th) = (i128::from(to.0), i128::from(to.1));
+    // target x of source x, times 2·fh: tw/2 + (x − fw/2)·th/fh
+    let xs = |x: i128| (2 * x - fw) * th + tw * fh;
+    let (x0, x1) = (xs(x).div_euclid(2 * fh), (xs(x + w) + 2 * fh - 1).div_euclid(2 * fh));
+    let (y0, y1) = ((y * th).div_euclid(fh), ((y + h) * th + fh - 1).div_euclid(fh));
+    if x1 <= 0 || y1 <= 0 || x0 >= tw || y0 >= th {
         return None;
     }
+    let (x0, y0) = (x0.max(0), y0.max(0));
+    let (x1, y1) = (x1.min(tw).max(x0 + 1), y1.min(th).max(y0 + 1));
     Some((x0 as usize, y0 as usize, (x1 - x0) as usize, (y1 - y0) as usize))
 }
 
