@@ -42,6 +42,7 @@ fn roi_scaling_by_hand() {
     assert_eq!(compare::scale_roi([3, 4, 5, 6], (10, 10), (20, 20)), Some((6, 8, 10, 12)));
     // A 1-pixel ROI never vanishes; one leaving the image is clamped; one outside is dropped.
     assert_eq!(compare::scale_roi([0, 0, 1, 1], (640, 640), (16, 16)), Some((0, 0, 1, 1)));
+    assert_eq!(compare::scale_roi([0, 0, 0, 0], (640, 640), (16, 16)), Some((0, 0, 1, 1)));
     assert_eq!(compare::scale_roi([600, 600, 100, 100], (640, 640), (64, 64)), Some((60, 60, 4, 4)));
     assert_eq!(compare::scale_roi([700, 0, 10, 10], (640, 640), (64, 64)), None);
     // Another aspect ratio: the frame scales by to.h/from.h = 2 about its centre (vertical field

@@ -101,7 +101,9 @@ pub fn scale_roi(rect: [u32; 4], from: (u32, u32), to: (u32, u32)) -> Option<Rec
     let xs = |x: i128| (2 * x - fw) * th + tw * fh;
     let (x0, x1) = (xs(x).div_euclid(2 * fh), (xs(x + w) + 2 * fh - 1).div_euclid(2 * fh));
     let (y0, y1) = ((y * th).div_euclid(fh), ((y + h) * th + fh - 1).div_euclid(fh));
-    if x1 <= 0 || y1 <= 0 || x0 >= tw || y0 >= th {
+    // y0 ≥ 0 always (the height is kept); only x can fall left of the image: a region ending at
+    // or before 0 that starts before it (a zero-width one at 0 stays, as with the plain scaling)
+    if x1 < 0 || (x1 == 0 && x0 < 0) || x0 >= tw || y0 >= th {
         return None;
     }
     let (x0, y0) = (x0.max(0), y0.max(0));
