@@ -6,6 +6,7 @@
 #   scripts/frame-variance.sh SCENE METHOD SPP SEEDS [render options…]
 #   e.g. scripts/frame-variance.sh scenes/figurines.toml iws-cf 8 3 --resolution 256x256 --direct vpl
 # Set FORECAST to use another binary (default: target/release/forecast); images go to out/frames/.
+# CROPS="NAME:X,Y,W,H …" also prints the variance inside each region (pixels of the render).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [ $# -ge 4 ] || { sed -n 2,8p "$0" >&2; exit 2; }
@@ -19,10 +20,16 @@ for s in $(seq 1 "$seeds"); do
     "$bin" render "$scene" --method "$method" --spp "$spp" --seed "$s" --quiet --out "$out/$name-$method-s$s" "$@"
     us="$us $(grep -o '"total_us": *[0-9.e+-]*' "$out/$name-$method-s$s.json" | head -1 | awk -F: '{ printf "%.3g", $2 + 0 }')"
 done
-pairs=0
-for s in $(seq 2 "$seeds"); do
-    rmse=$("$bin" diff "$out/$name-$method-s$((s - 1)).exr" "$out/$name-$method-s$s.exr" | awk '$1 == "RMSE" { print $2 }')
-    pairs=$(awk -v t="$pairs" -v r="$rmse" -v n="$spp" 'BEGIN { print t + r * r * n / 2 }')
+# half the mean squared difference of consecutive seeds times spp, [--crop X,Y,W,H]
+between() {
+    local pairs=0 rmse
+    for s in $(seq 2 "$seeds"); do
+        rmse=$("$bin" diff "$out/$name-$method-s$((s - 1)).exr" "$out/$name-$method-s$s.exr" "$@" | awk '$1 == "RMSE" { print $2 }')
+        pairs=$(awk -v t="$pairs" -v r="$rmse" -v n="$spp" 'BEGIN { print t + r * r * n / 2 }')
+    done
+    awk -v t="$pairs" -v k="$((seeds - 1))" 'BEGIN { printf "%.4g", t / k }'
+}
+echo "$name $method: variance per sample between seeds $(between); µs per sample:$us"
+for crop in ${CROPS:-}; do
+    echo "$name $method: ${crop%%:*} (${crop#*:}) variance per sample $(between --crop "${crop#*:}")"
 done
-awk -v t="$pairs" -v k="$((seeds - 1))" -v m="$method" -v c="$name" -v us="$us" \
-    'BEGIN { printf "%s %s: variance per sample between seeds %.4g; µs per sample:%s\n", c, m, t / k, us }'

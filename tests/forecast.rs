@@ -131,6 +131,22 @@ fn share_split_rule_agrees_with_pt() {
     agrees_with_pt(&o, "iws-cf split-rule share");
 }
 
+/// `--table-min-share ½`: tables only in the clusters whose caustic share is ≥ ½ (one BSDF
+/// sample in the others; both kinds occur on this `cornell-box`), and the image agrees with `pt`.
+#[test]
+fn table_min_share_agrees_with_pt() {
+    let mut o = opts();
+    o.cf.table_min_share = 0.5;
+    let w = world("scenes/cornell-box.toml");
+    let cf = CausticForecast::from_bytes(&Method::IwsCf.preprocess(&w, &o, 17).unwrap()).unwrap();
+    let used = (0..cf.shares.len()).filter(|&c| cf.tables_used_in(c)).count();
+    assert!(used > 0 && used < cf.shares.len(), "{:?}", cf.shares);
+    for (c, sh) in cf.shares.iter().enumerate() {
+        assert_eq!(cf.tables_used_in(c), sh.share() >= 0.5, "cluster {c}: share {}", sh.share());
+    }
+    agrees_with_pt(&o, "iws-cf table-min-share 0.5");
+}
+
 #[test]
 fn kmeans_agrees_with_pt() {
     let mut o = opts();

@@ -121,6 +121,10 @@ pub struct ForecastOptions {
     /// (S_cos = 1, spec §4). The dual table doubles the samples per vertex, so tables at every
     /// depth make the recursion branch; the choice depends on d only, so it stays unbiased.
     pub table_depth: u32,
+    /// Photon tables only in kept clusters whose caustic share s = E_c/(E_c + E_d) is at least
+    /// this (`forecast::share`); elsewhere one BSDF sample, as outside the kept clusters. A
+    /// function of the point's cluster, so unbiased; 0 uses the tables in every kept cluster.
+    pub table_min_share: f32,
 }
 
 impl Default for ForecastOptions {
@@ -136,6 +140,7 @@ impl Default for ForecastOptions {
             split_rule: SplitRule::Rank,
             cache_cell: 1.0,
             table_depth: 1,
+            table_min_share: 0.0,
         }
     }
 }
@@ -379,17 +384,10 @@ impl CausticForecast {
         (tables, frame)
     }
 
-    /// The kept cluster at `q`, its tables and their frame ([`Self::cluster_at`], then
-    /// [`Self::tables_in`]), or `None` outside every kept cluster.
-    pub fn tables_at(
-        &self,
-        q: &ShadingQuery,
-        ctx: &mut Context,
-        cache: Option<&TableCache>,
-    ) -> Option<(usize, Arc<ForecastTables>, Frame)> {
-        let c = self.cluster_at(q, ctx)?;
-        let (t, frame) = self.tables_in(c, q, ctx, cache);
-        Some((c, t, frame))
+    /// Whether `iws-cf` samples the tables of kept cluster `c` (`table_min_share`).
+    pub fn tables_used_in(&self, c: usize) -> bool {
+        let min = self.opts.table_min_share;
+        min <= 0.0 || self.shares.get(c).is_some_and(|s| s.share() >= min)
     }
 
     /// Ĺ_c at `q`. `g(ωi, w, ctx)` returns one sample's contribution: the integrand
@@ -405,8 +403,9 @@ impl CausticForecast {
     ) -> Rgb {
         ctx.profile.cf.queries += 1;
         let (sp, m, wo) = (q.x, q.m, q.wo);
-        let found = if q.depth >= self.opts.table_depth { None } else { self.tables_at(q, ctx, cache) };
-        let Some((c, tables, frame)) = found else {
+        let found = if q.depth >= self.opts.table_depth { None } else { self.cluster_at(q, ctx) };
+        let found = found.filter(|&c| self.tables_used_in(c)).map(|c| (c, self.tables_in(c, q, ctx, cache)));
+        let Some((c, (tables, frame))) = found else {
             // outside valid clusters: one BSDF (cosine for Lambert) sample
             ctx.profile.cf.samples += 1;
             let u = [ctx.rng.next_f32(), ctx.rng.next_f32(), ctx.rng.next_f32()];

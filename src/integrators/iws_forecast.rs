@@ -77,6 +77,10 @@ pub struct CfArgs {
     /// iws-cf: use the photon tables at diffuse depths below this (deeper: one BSDF sample).
     #[arg(long, default_value_t = 1)]
     pub table_depth: u32,
+    /// iws-cf: photon tables only in kept clusters whose caustic share is at least this (0 = all;
+    /// elsewhere one BSDF sample, as outside the kept clusters).
+    #[arg(long, default_value_t = 0.0, value_parser = crate::forecast::share::parse_min_share)]
+    pub table_min_share: f32,
     /// The run's time budget (set by the pipeline from `--time`, not a flag): without an explicit
     /// `--forecast-photons` the preprocess then costs about [`PREPROCESS_SHARE`] of it.
     #[arg(skip)]
@@ -112,6 +116,7 @@ impl CfArgs {
             split_rule: self.split_rule,
             cache_cell: self.table_cache.max(0.0),
             table_depth: self.table_depth,
+            table_min_share: self.table_min_share,
         }
     }
 

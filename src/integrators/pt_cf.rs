@@ -41,6 +41,7 @@ use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
 use crate::forecast::direction_table::ForecastTables;
 use crate::forecast::estimator::{rank_split, CausticForecast, TableCache};
 use crate::forecast::mixture::{DefensiveMixture, MixtureWeights};
+use crate::forecast::share::{min_share, parse_min_share};
 use crate::math::{Frame, Rgb, Vec3};
 use crate::profile::{Phase, Profile, Stopwatch};
 use crate::scene::NO_EMITTER;
@@ -81,19 +82,6 @@ pub enum GuideRule {
     Share,
     /// `c` at every vertex of a kept cluster.
     Fixed,
-}
-
-fn parse_min_share(s: &str) -> Result<f32, String> {
-    min_share(s.trim().parse().map_err(|e| format!("`{s}` is not a number: {e}"))?)
-}
-
-/// `v` if it is a share in [0, 1] (NaN is not).
-fn min_share(v: f32) -> Result<f32, String> {
-    if (0.0..=1.0).contains(&v) {
-        Ok(v)
-    } else {
-        Err(format!("{v} is not a share in [0, 1]"))
-    }
 }
 
 fn parse_guide_fraction(s: &str) -> Result<f32, String> {
