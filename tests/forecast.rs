@@ -105,11 +105,31 @@ fn mixture_table_agrees_with_pt() {
     agrees_with_pt(&o, "iws-cf mixture");
 }
 
+/// The paper's rank rule (S = S0 >> rank, S0 = 4 as BAJ08); the default is the energy rule.
 #[test]
-fn energy_split_rule_agrees_with_pt() {
+fn paper_rank_split_rule_agrees_with_pt() {
+    use forecast::forecast::estimator::SplitRule;
+    assert_eq!((opts().cf.split_rule, opts().cf.split), (SplitRule::Energy, 16), "the defaults");
     let mut o = opts();
-    o.cf.split_rule = forecast::forecast::estimator::SplitRule::Energy;
-    agrees_with_pt(&o, "iws-cf split-rule energy");
+    (o.cf.split_rule, o.cf.split) = (SplitRule::Rank, 4);
+    agrees_with_pt(&o, "iws-cf split-rule rank");
+}
+
+/// The default energy rule: S = clamp(⌈S0·ρ_c/ρ_max⌉, 1, S0) at depth 0 (the densest cluster
+/// gets S0, `cornell-box`'s wall clusters 1), 1 deeper.
+#[test]
+fn energy_split_follows_the_density() {
+    let o = opts();
+    let w = world("scenes/cornell-box.toml");
+    let cf = CausticForecast::from_bytes(&Method::IwsCf.preprocess(&w, &o, 17).unwrap()).unwrap();
+    let clusters = &cf.clustering.clusters;
+    let max = clusters.iter().map(|k| k.density).fold(0.0f32, f32::max);
+    let s: Vec<usize> = (0..clusters.len()).map(|c| cf.split_for(c, 0)).collect();
+    for (c, k) in clusters.iter().enumerate() {
+        let want = (16.0 * k.density / max).ceil().clamp(1.0, 16.0) as usize;
+        assert_eq!((s[c], cf.split_for(c, 1)), (want, 1), "cluster {c}: density {} of {max}", k.density);
+    }
+    assert!(s.contains(&16) && s.contains(&1), "{s:?}");
 }
 
 /// `--split-rule share`: S0·4 >> rank in the clusters whose caustic share is ≥ ½, S0 >> rank in
@@ -118,7 +138,7 @@ fn energy_split_rule_agrees_with_pt() {
 fn share_split_rule_agrees_with_pt() {
     use forecast::forecast::estimator::{SplitRule, SHARE_BOOST, SPLIT_MIN_SHARE};
     let mut o = opts();
-    o.cf.split_rule = SplitRule::Share;
+    (o.cf.split_rule, o.cf.split) = (SplitRule::Share, 4);
     let w = world("scenes/cornell-box.toml");
     let cf = CausticForecast::from_bytes(&Method::IwsCf.preprocess(&w, &o, 17).unwrap()).unwrap();
     let dominated = cf.shares.iter().filter(|s| s.share() >= SPLIT_MIN_SHARE).count();

@@ -65,11 +65,13 @@ pub struct CfArgs {
     /// iws-cf: photon weight in the table: lum(Φ)·f·cos (paper) or lum(Φ)·f (flux).
     #[arg(long, default_value = "paper", value_parser = choice(&[("paper", PhotonWeight::Paper), ("flux", PhotonWeight::Flux)]))]
     pub photon_weight: PhotonWeight,
-    /// iws-cf: splitting factor S0 at diffuse depth 0 for rank 0 (S = max(1, S0 >> rank); 1 at depth >= 1).
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
+    /// iws-cf: splitting factor S0 at diffuse depth 0: the most samples per table (energy rule:
+    /// S = clamp(ceil(S0·ρ_c/ρ_max), 1, S0); rank rule: S = max(1, S0 >> rank)); 1 at depth >= 1.
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
     pub split: u32,
-    /// iws-cf: splitting rule at depth 0: the paper's rank rule or the cluster's energy density.
-    #[arg(long, default_value = "rank", value_parser = choice(&[("rank", SplitRule::Rank), ("energy", SplitRule::Energy), ("share", SplitRule::Share)]))]
+    /// iws-cf: splitting rule at depth 0: the cluster's energy density (default), the paper's
+    /// rank rule, or the rank rule boosted where the caustic share is >= 1/2.
+    #[arg(long, default_value = "energy", value_parser = choice(&[("energy", SplitRule::Energy), ("rank", SplitRule::Rank), ("share", SplitRule::Share)]))]
     pub split_rule: SplitRule,
     /// iws-cf: table-cache cell edge as a fraction of the search radius (0 = build per point).
     #[arg(long, default_value_t = 1.0)]
