@@ -253,7 +253,8 @@ impl CausticForecast {
         match self.opts.split_rule {
             SplitRule::Rank => self.split_count(cl.rank, depth),
             SplitRule::Energy if depth == 0 => {
-                let max = self.clustering.clusters.iter().map(|k| k.density).fold(0.0f32, f32::max);
+                // the clusters are sorted by density, descending (`Clustering::clusters`)
+                let max = self.clustering.clusters[0].density;
                 let s0 = self.opts.s0.max(1) as f32;
                 let s = if max > 0.0 && cl.density.is_finite() { (s0 * cl.density / max).ceil() } else { 1.0 };
                 s.clamp(1.0, s0) as usize
