@@ -10,7 +10,7 @@
 mod common;
 use common::{assert_agrees, assert_furnace_is_one, max_z, render_passes as render, render_profiled};
 use forecast::accel::World;
-use forecast::forecast::estimator::CausticForecast;
+use forecast::forecast::estimator::{CausticForecast, SplitRule};
 use forecast::integrators::caustic_share::{caustic_shares, CausticShare};
 use forecast::integrators::pt_cf::GuideRule;
 use forecast::integrators::{Integrator, Method, MethodArgs};
@@ -64,12 +64,51 @@ fn defaults_agree_with_pt_on_cornell_box() {
     agrees_with_pt(&world("scenes/cornell-box.toml"), &opts(), 16, (4096, 1024), "pt-cf cornell-box");
 }
 
+/// The paper's rank rule for the split (`--guide-split-rule rank`, S0 = 4: `4 >> rank`
+/// continuations in every kept cluster), strong guiding everywhere, three guided depths.
 #[test]
 fn strong_guiding_with_splitting_agrees_with_pt_on_cornell_box() {
+    let w = world("scenes/cornell-box.toml");
     let mut o = opts();
     (o.ptcf.guide_fraction, o.ptcf.guide_split, o.ptcf.guide_depth) = (0.1, 4, 3);
-    o.ptcf.guide_rule = GuideRule::Fixed;
-    agrees_with_pt(&world("scenes/cornell-box.toml"), &o, 16, (4096, 512), "pt-cf fixed c=0.1 S0=4 D=3");
+    (o.ptcf.guide_rule, o.ptcf.guide_split_rule) = (GuideRule::Fixed, SplitRule::Rank);
+    let bytes = Method::PtCf.preprocess(&w, &o, 17).unwrap();
+    let cf = CausticForecast::from_bytes(&bytes).unwrap();
+    let want: Vec<u64> =
+        cf.shares.iter().enumerate().map(|(c, _)| (4u64 >> cf.clustering.clusters[c].rank).max(1)).collect();
+    assert_eq!(split_per_cluster(Method::PtCf.build(&w, &o, &bytes).unwrap().as_ref()), want);
+    assert!(want.contains(&4) && want.contains(&1), "{want:?}");
+    agrees_with_pt(&w, &o, 16, (4096, 512), "pt-cf fixed c=0.1 S0=4 D=3");
+}
+
+/// The continuations at diffuse depth 0 per kept cluster, from the stats.
+fn split_per_cluster(i: &dyn Integrator) -> Vec<u64> {
+    let s = i.stats(&Profile::default());
+    s["guide"]["split_per_cluster"].as_array().unwrap().iter().map(|v| v.as_u64().unwrap()).collect()
+}
+
+/// The default split (`--guide-split-rule energy`, S0 = 16): ⌈16·ρ_k/ρ_max⌉ clamped to [1, 16],
+/// ρ_max the densest *guided* cluster's density (shares ≥ `--guide-min-share`); the densest
+/// guided cluster gets 16. The defaults' agreement with `pt` is
+/// `defaults_agree_with_pt_on_cornell_box`.
+#[test]
+fn energy_guide_split_follows_the_density() {
+    let w = world("scenes/cornell-box.toml");
+    let o = opts();
+    assert_eq!((o.ptcf.guide_split_rule, o.ptcf.guide_split), (SplitRule::Energy, 16), "the defaults");
+    let bytes = Method::PtCf.preprocess(&w, &o, 17).unwrap();
+    let cf = CausticForecast::from_bytes(&bytes).unwrap();
+    let k = &cf.clustering.clusters;
+    let guided: Vec<usize> = (0..cf.shares.len())
+        .filter(|&c| cf.shares[c].share() >= o.ptcf.guide_min_share && cf.shares[c].share() > 0.0)
+        .collect();
+    assert!(!guided.is_empty() && guided.len() < cf.shares.len(), "{:?}", cf.shares);
+    let max = guided.iter().map(|&c| k[c].density).fold(0.0f32, f32::max);
+    let want: Vec<u64> =
+        (0..cf.shares.len()).map(|c| (16.0 * k[c].density / max).ceil().clamp(1.0, 16.0) as u64).collect();
+    let got = split_per_cluster(Method::PtCf.build(&w, &o, &bytes).unwrap().as_ref());
+    assert_eq!(got, want, "densities {:?}", k.iter().map(|c| c.density).collect::<Vec<_>>());
+    assert!(guided.iter().any(|&c| got[c] == 16), "the densest guided cluster splits 16 ways: {got:?}");
 }
 
 /// `--guide-rule share` with every cluster that has any caustic light guided (c_k = max(c, 1 − s_k)

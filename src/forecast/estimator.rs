@@ -63,6 +63,15 @@ pub const SPLIT_MIN_SHARE: f32 = 0.5;
 /// The factor on S0 of `--split-rule share` in caustic-dominated clusters.
 pub const SHARE_BOOST: u32 = 4;
 
+/// The energy rule: `clamp(⌈s0·ρ/ρ_max⌉, 1, s0)` continuations at diffuse depth 0 in a cluster
+/// of energy density `density` (`iws-cf`'s `--split-rule energy`, `pt-cf`'s `--guide-split-rule
+/// energy`); 1 where the densities are not usable.
+pub fn energy_split(s0: u32, density: f32, max: f32) -> usize {
+    let s0 = s0.max(1) as f32;
+    let s = if max > 0.0 && density.is_finite() { (s0 * density / max).ceil() } else { 1.0 };
+    s.clamp(1.0, s0) as usize
+}
+
 /// The paper's rank rule: `max(1, s0 >> rank)` continuations at diffuse depth 0 in a cluster of
 /// rank `rank` (`iws-cf`'s `--split`, `pt-cf`'s `--guide-split`).
 #[inline]
@@ -254,10 +263,7 @@ impl CausticForecast {
             SplitRule::Rank => self.split_count(cl.rank, depth),
             SplitRule::Energy if depth == 0 => {
                 // the clusters are sorted by density, descending (`Clustering::clusters`)
-                let max = self.clustering.clusters[0].density;
-                let s0 = self.opts.s0.max(1) as f32;
-                let s = if max > 0.0 && cl.density.is_finite() { (s0 * cl.density / max).ceil() } else { 1.0 };
-                s.clamp(1.0, s0) as usize
+                energy_split(self.opts.s0, cl.density, self.clustering.clusters[0].density)
             }
             SplitRule::Energy => 1,
             SplitRule::Share if depth == 0 => {

@@ -19,7 +19,9 @@
 //! MIS against NEE uses the pdf really used: NEE's weight is `h(p_light, n·q(ω_l))` and a mixture-sampled emitter hit's is
 //! `h(n·q, p_light)` (power heuristic `h`, `n` the split count), which sum to 1 per direction.
 //! Splitting: at `d = 0` inside a cluster of rank `r`, `n = max(1, S0 >> r)` continuations are
-//! drawn and averaged (`--guide-split S0`); `n` depends only on the vertex, so it stays unbiased.
+//! drawn and averaged (`--guide-split S0`), or under `--guide-split-rule energy`
+//! `n = clamp(⌈S0·ρ_k/ρ_max⌉, 1, S0)` from the cluster's energy density against the densest guided
+//! cluster's; `n` depends only on the vertex's cluster, so it stays unbiased.
 //!
 //! Invariants: the tables are a pdf only (any photons give an unbiased image); `c = 1` never
 //! looks a table up and draws exactly `pt`'s random numbers, so it is `pt` bit for bit; outside
@@ -39,7 +41,7 @@ use crate::progress::Phases;
 use crate::accel::{offset_origin, World};
 use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
 use crate::forecast::direction_table::ForecastTables;
-use crate::forecast::estimator::{rank_split, CausticForecast, TableCache};
+use crate::forecast::estimator::{energy_split, rank_split, CausticForecast, SplitRule, TableCache};
 use crate::forecast::mixture::{DefensiveMixture, MixtureWeights};
 use crate::forecast::share::{min_share, parse_min_share};
 use crate::math::{Frame, Rgb, Vec3};
@@ -60,10 +62,14 @@ pub struct PtCfArgs {
     /// pt-cf: the tables guide vertices at diffuse depths below this (0 = pt).
     #[arg(long, default_value_t = 1)]
     pub guide_depth: u32,
-    /// pt-cf: continuations S0 at a guided vertex of diffuse depth 0 in a rank-0 cluster
-    /// (S = max(1, S0 >> rank); 1 deeper).
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
+    /// pt-cf: the most continuations S0 at a guided vertex of diffuse depth 0 (1 deeper); see
+    /// --guide-split-rule.
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub guide_split: u32,
+    /// pt-cf: splitting at diffuse depth 0. `rank`: S = max(1, S0 >> rank); `energy`:
+    /// S = clamp(⌈S0·ρ_k/ρ_max⌉, 1, S0), ρ_max the densest guided cluster's energy density.
+    #[arg(long, default_value = "energy", value_parser = super::iws_forecast::choice(&[("energy", SplitRule::Energy), ("rank", SplitRule::Rank)]))]
+    pub guide_split_rule: SplitRule,
     /// pt-cf: per-cluster guiding. `share`: c_k = max(c, 1 − s_k) from the cluster's caustic
     /// share s_k of indirect irradiance, and no guiding where s_k < --guide-min-share;
     /// `fixed`: c in every kept cluster.
@@ -118,19 +124,37 @@ impl MethodSpec for PtCf {
                 }
             })
             .collect();
-        let guided = (0..n_kept).filter(|&c| per_cluster[c].is_some()).collect();
+        let guided: Vec<usize> = (0..n_kept).filter(|&c| per_cluster[c].is_some()).collect();
+        let split = split_counts(&g, &guided, p);
         Ok(Box::new(GuidedPathTracer {
             max_depth: args.pt.cap(),
             weights,
             per_cluster,
             guided,
             guide_depth: if c >= 1.0 { 0 } else { p.guide_depth },
-            split: p.guide_split.max(1),
+            split,
+            split_rule: (p.guide_split_rule, p.guide_split),
             cf: g,
             cache: TableCache::default(),
             filter: args.pt.filter()?,
         }))
     }
+}
+
+/// Continuations at diffuse depth 0 in each kept cluster under `--guide-split-rule` (a function
+/// of the cluster only, so unbiased): the rank rule, or the energy rule against the densest
+/// guided cluster.
+fn split_counts(g: &CausticForecast, guided: &[usize], p: &PtCfArgs) -> Vec<usize> {
+    let clusters = &g.clustering.clusters[..g.shares.len()];
+    let max = guided.iter().map(|&c| clusters[c].density).fold(0.0f32, f32::max);
+    let s0 = p.guide_split.max(1);
+    clusters
+        .iter()
+        .map(|cl| match p.guide_split_rule {
+            SplitRule::Energy => energy_split(s0, cl.density, max),
+            _ => rank_split(s0, cl.rank),
+        })
+        .collect()
 }
 
 /// The guided path tracer; owns the product and the table cache shared by all worker threads.
@@ -144,8 +168,10 @@ pub struct GuidedPathTracer {
     guided: Vec<usize>,
     /// Guided diffuse depths `d < guide_depth` (0 when `c = 1`: no lookups at all).
     guide_depth: u32,
-    /// Splitting S0 at diffuse depth 0.
-    split: u32,
+    /// Continuations at a guided vertex of diffuse depth 0, per kept cluster (1 deeper).
+    split: Vec<usize>,
+    /// `--guide-split-rule` and `--guide-split` (reported).
+    split_rule: (SplitRule, u32),
     cf: CausticForecast,
     cache: TableCache,
     /// `--path-filter` (a diagnostic; `None`: the unbiased estimate).
@@ -197,8 +223,7 @@ impl GuidedPathTracer {
             return None;
         }
         ctx.profile.cf.inside += 1;
-        let rank = self.cf.clustering.clusters[c].rank;
-        let n = if q.depth == 0 { rank_split(self.split, rank) } else { 1 };
+        let n = if q.depth == 0 { self.split.get(c).copied().unwrap_or(1) } else { 1 };
         ctx.profile.cf.samples += n as u64;
         Some(Guide { tables, frame, weights, n })
     }
@@ -330,7 +355,9 @@ impl Integrator for GuidedPathTracer {
             "guide": {
                 "fraction_bsdf": self.weights.bsdf,
                 "depth": self.guide_depth,
-                "split_s0": self.split,
+                "split_s0": self.split_rule.1,
+                "split_rule": self.split_rule.0,
+                "split_per_cluster": self.split,
                 "lookups": c.queries,
                 "fraction_inside_clusters": c.fraction_inside(),
                 "mean_continuations_per_lookup": c.samples_per_query(),
