@@ -40,8 +40,9 @@ pub enum PhotonWeight {
     Flux,
 }
 
-/// Splitting rule at diffuse depth 0 (`--split-rule`); 1 sample per table deeper. Both are
-/// functions of the point's cluster and the depth only, so the estimator stays unbiased.
+/// Splitting rule at diffuse depth 0 (`iws-cf`'s `--split-rule`; `Energy` and `Rank` are also
+/// `pt-cf`'s `--guide-split-rule`); 1 sample per table deeper. All are functions of the point's
+/// cluster and the depth only, so the estimator stays unbiased.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
 pub enum SplitRule {
     /// The paper's rank rule `S = max(1, S0 >> rank)`.
@@ -65,10 +66,14 @@ pub const SHARE_BOOST: u32 = 4;
 
 /// The energy rule: `clamp(⌈s0·ρ/ρ_max⌉, 1, s0)` continuations at diffuse depth 0 in a cluster
 /// of energy density `density` (`iws-cf`'s `--split-rule energy`, `pt-cf`'s `--guide-split-rule
-/// energy`); 1 where the densities are not usable.
+/// energy`); 1 where the densities are not usable, never 0 (a zero split would drop the light).
+#[inline]
 pub fn energy_split(s0: u32, density: f32, max: f32) -> usize {
     let s0 = s0.max(1) as f32;
-    let s = if max > 0.0 && density.is_finite() { (s0 * density / max).ceil() } else { 1.0 };
+    let s = if max > 0.0 && max.is_finite() && density.is_finite() { (s0 * density / max).ceil() } else { 1.0 };
+    if s.is_nan() {
+        return 1;
+    }
     s.clamp(1.0, s0) as usize
 }
 

@@ -18,10 +18,10 @@
 //!
 //! MIS against NEE uses the pdf really used: NEE's weight is `h(p_light, n·q(ω_l))` and a mixture-sampled emitter hit's is
 //! `h(n·q, p_light)` (power heuristic `h`, `n` the split count), which sum to 1 per direction.
-//! Splitting: at `d = 0` inside a cluster of rank `r`, `n = max(1, S0 >> r)` continuations are
-//! drawn and averaged (`--guide-split S0`), or under `--guide-split-rule energy`
-//! `n = clamp(⌈S0·ρ_k/ρ_max⌉, 1, S0)` from the cluster's energy density against the densest guided
-//! cluster's; `n` depends only on the vertex's cluster, so it stays unbiased.
+//! Splitting: at `d = 0` inside a guided cluster `k`, `n = clamp(⌈S0·ρ_k/ρ_max⌉, 1, S0)`
+//! continuations are drawn and averaged (`--guide-split-rule energy`, the default, `--guide-split
+//! S0`; `ρ_k` the cluster's energy density, `ρ_max` the densest guided cluster's), or the paper's
+//! `n = max(1, S0 >> rank)` (`rank`); `n` depends only on the vertex's cluster, so it stays unbiased.
 //!
 //! Invariants: the tables are a pdf only (any photons give an unbiased image); `c = 1` never
 //! looks a table up and draws exactly `pt`'s random numbers, so it is `pt` bit for bit; outside
@@ -40,6 +40,7 @@ use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
 use crate::progress::Phases;
 use crate::accel::{offset_origin, World};
 use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
+use crate::forecast::cluster::Cluster;
 use crate::forecast::direction_table::ForecastTables;
 use crate::forecast::estimator::{energy_split, rank_split, CausticForecast, SplitRule, TableCache};
 use crate::forecast::mixture::{DefensiveMixture, MixtureWeights};
@@ -125,7 +126,7 @@ impl MethodSpec for PtCf {
             })
             .collect();
         let guided: Vec<usize> = (0..n_kept).filter(|&c| per_cluster[c].is_some()).collect();
-        let split = split_counts(&g, &guided, p);
+        let split = split_counts(&g.clustering.clusters[..n_kept], &guided, p)?;
         Ok(Box::new(GuidedPathTracer {
             max_depth: args.pt.cap(),
             weights,
@@ -142,19 +143,23 @@ impl MethodSpec for PtCf {
 }
 
 /// Continuations at diffuse depth 0 in each kept cluster under `--guide-split-rule` (a function
-/// of the cluster only, so unbiased): the rank rule, or the energy rule against the densest
-/// guided cluster.
-fn split_counts(g: &CausticForecast, guided: &[usize], p: &PtCfArgs) -> Vec<usize> {
-    let clusters = &g.clustering.clusters[..g.shares.len()];
+/// of the cluster only, so unbiased): the energy rule against the densest guided cluster, or the
+/// rank rule; 1 in the unguided clusters (their vertices are `pt` vertices).
+fn split_counts(clusters: &[Cluster], guided: &[usize], p: &PtCfArgs) -> Result<Vec<usize>, String> {
     let max = guided.iter().map(|&c| clusters[c].density).fold(0.0f32, f32::max);
     let s0 = p.guide_split.max(1);
-    clusters
-        .iter()
-        .map(|cl| match p.guide_split_rule {
-            SplitRule::Energy => energy_split(s0, cl.density, max),
-            _ => rank_split(s0, cl.rank),
-        })
-        .collect()
+    let rule = p.guide_split_rule;
+    if rule == SplitRule::Share {
+        return Err("--guide-split-rule: `share` is iws-cf's --split-rule; pt-cf takes energy or rank".into());
+    }
+    let mut n = vec![1; clusters.len()];
+    for &c in guided {
+        n[c] = match rule {
+            SplitRule::Energy => energy_split(s0, clusters[c].density, max),
+            SplitRule::Rank | SplitRule::Share => rank_split(s0, clusters[c].rank),
+        };
+    }
+    Ok(n)
 }
 
 /// The guided path tracer; owns the product and the table cache shared by all worker threads.
@@ -374,5 +379,30 @@ impl Integrator for GuidedPathTracer {
             "cache_cells": self.cf.cells.json(),
             "options": self.cf.opts,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cluster(density: f32, rank: u32) -> Cluster {
+        let z = [0.0; 3];
+        Cluster { centroid: z, normal: z, feature: [0.0; 6], power: density, area: 1.0, density, radius: 0.0, rank, members: vec![0] }
+    }
+
+    /// ρ_max is the densest *guided* cluster's (the densest kept cluster is unguided here), the
+    /// unguided get 1, and the rank rule is S0 >> rank in the guided ones.
+    #[test]
+    fn split_counts_follow_the_guided_clusters() {
+        let k = [cluster(4.0, 0), cluster(2.0, 0), cluster(1.0, 1), cluster(0.01, 2)];
+        let guided = [1, 2, 3];
+        let mut p = crate::integrators::MethodArgs::default().ptcf;
+        (p.guide_split_rule, p.guide_split) = (SplitRule::Energy, 16);
+        assert_eq!(split_counts(&k, &guided, &p), Ok(vec![1, 16, 8, 1]));
+        (p.guide_split_rule, p.guide_split) = (SplitRule::Rank, 4);
+        assert_eq!(split_counts(&k, &guided, &p), Ok(vec![1, 4, 2, 1]));
+        p.guide_split_rule = SplitRule::Share;
+        assert!(split_counts(&k, &guided, &p).is_err());
     }
 }
