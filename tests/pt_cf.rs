@@ -127,6 +127,15 @@ fn energy_guide_split_follows_the_density() {
     assert!(want.contains(&16) && want.iter().any(|&n| n > 1 && n < 16), "{want:?}");
 }
 
+/// `--guide-rule share` with every cluster that has any caustic light guided (c_k = max(c, 1 − s_k)
+/// from 0.2 up): the per-cluster mixtures are as unbiased as the fixed one.
+#[test]
+fn share_rule_guiding_every_cluster_agrees_with_pt_on_cornell_box() {
+    let mut o = opts();
+    (o.ptcf.guide_fraction, o.ptcf.guide_min_share) = (0.2, 0.0);
+    agrees_with_pt(&world("scenes/cornell-box.toml"), &o, 16, (4096, 1024), "pt-cf share rule, min share 0");
+}
+
 /// Clusters below `--guide-min-share` are `pt` vertices: with 1 (no cornell-box cluster is free
 /// of diffuse interreflection, so none qualifies) `pt-cf` is `pt` bit for bit, and it queries
 /// no tree (`ClusterMap::may_accept` rejects every vertex).

@@ -70,10 +70,8 @@ pub const SHARE_BOOST: u32 = 4;
 #[inline]
 pub fn energy_split(s0: u32, density: f32, max: f32) -> usize {
     let s0 = s0.max(1) as f32;
+    // finite ρ and 0 < ρ_max < ∞: never NaN (an overflow is +∞, clamped to s0)
     let s = if max > 0.0 && max.is_finite() && density.is_finite() { (s0 * density / max).ceil() } else { 1.0 };
-    if s.is_nan() {
-        return 1;
-    }
     s.clamp(1.0, s0) as usize
 }
 

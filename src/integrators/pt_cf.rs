@@ -148,16 +148,16 @@ impl MethodSpec for PtCf {
 fn split_counts(clusters: &[Cluster], guided: &[usize], p: &PtCfArgs) -> Result<Vec<usize>, String> {
     let max = guided.iter().map(|&c| clusters[c].density).fold(0.0f32, f32::max);
     let s0 = p.guide_split.max(1);
-    let rule = p.guide_split_rule;
-    if rule == SplitRule::Share {
-        return Err("--guide-split-rule: `share` is iws-cf's --split-rule; pt-cf takes energy or rank".into());
-    }
+    let energy = match p.guide_split_rule {
+        SplitRule::Energy => true,
+        SplitRule::Rank => false,
+        SplitRule::Share => {
+            return Err("--guide-split-rule: `share` is iws-cf's --split-rule; pt-cf takes energy or rank".into())
+        }
+    };
     let mut n = vec![1; clusters.len()];
     for &c in guided {
-        n[c] = match rule {
-            SplitRule::Energy => energy_split(s0, clusters[c].density, max),
-            SplitRule::Rank | SplitRule::Share => rank_split(s0, clusters[c].rank),
-        };
+        n[c] = if energy { energy_split(s0, clusters[c].density, max) } else { rank_split(s0, clusters[c].rank) };
     }
     Ok(n)
 }
