@@ -83,12 +83,26 @@ impl KdTree {
         self.ids.iter().copied().zip(self.points.iter().copied())
     }
 
-    /// Nearest stored point to `p`: `(id, dist²)`. `None` for an empty tree or a non-finite query.
+    /// Nearest stored point to `p`: `(id, dist²)`, the smallest `(dist², id)`. `None` for an empty
+    /// tree or a non-finite query.
     pub fn nearest(&self, p: [f32; 3]) -> Option<(u32, f32)> {
+        self.nearest_within(p, f32::INFINITY)
+    }
+
+    /// The smallest `(dist², id)` with `dist² ≤ r2`, as `(id, dist²)`; `None` when no point is
+    /// that close (a bounded search: it never looks beyond `r2`).
+    pub fn nearest_within(&self, p: [f32; 3], r2: f32) -> Option<(u32, f32)> {
+        if !(r2 >= 0.0) {
+            return None;
+        }
         let mut best: Option<(u32, f32)> = None;
-        let bound = Cell::new(f32::INFINITY);
+        let bound = Cell::new(r2);
         self.traverse(&p, &bound, |id, d2| {
-            if d2 < bound.get() {
+            let better = match best {
+                None => d2 <= bound.get(),
+                Some((bid, bd)) => d2 < bd || (d2 == bd && id < bid),
+            };
+            if better {
                 bound.set(d2);
                 best = Some((id, d2));
             }
@@ -299,9 +313,16 @@ mod tests {
                 Some((id, d2)) => {
                     assert_eq!(d2, bn);
                     assert_eq!(dist2(&pts[id as usize], &q), d2);
+                    // ties go to the smallest id
+                    let first = pts.iter().position(|x| dist2(x, &q) == bn).unwrap();
+                    assert_eq!(id as usize, first);
                 }
                 None => assert!(pts.is_empty()),
             }
+            // the bounded search: the nearest within r2, or nothing when every point is farther
+            let r2n = [0.0, 0.001, 0.01, 0.1][qi % 4];
+            let within = tree.nearest_within(q, r2n);
+            assert_eq!(within, tree.nearest(q).filter(|&(_, d2)| d2 <= r2n));
             let k = [1, 5, 8, 32, 1000][qi % 5];
             let r2 = [0.001, 0.01, 0.1, f32::INFINITY][qi % 4];
             tree.k_nearest_within(q, k, r2, &mut out);
