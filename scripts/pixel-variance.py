@@ -6,7 +6,7 @@
 PREFIX is frame-variance's image prefix (out/frames/SCENE-METHOD; images PREFIX-s1.exr ..
 PREFIX-sSEEDS.exr). Prints the region's variance of one sample (half the squared difference of
 consecutive seeds times SPP, mean over RGB: the figure frame-variance.sh prints for --crop), the
-share of it held by its brightest 1% / 5% / 10% pixels (how heavy-tailed it is), a map of the
+share of it held by its noisiest 1% / 5% / 10% of pixels (how heavy-tailed it is), a map of the
 region (left: mean, right: variance, log scale from the median), and the share of each named
 sub-rectangle (coordinates relative to the region). Needs `pip install numpy OpenEXR`; not used
 by the tests.
@@ -38,7 +38,7 @@ def main(argv):
     total = var.sum()
     top = np.sort(var.ravel())[::-1]
     shares = [top[: max(1, len(top) * p // 100)].sum() / total for p in (1, 5, 10)]
-    print(f"variance per sample {var.mean():.4g}; brightest 1% / 5% / 10% of pixels hold "
+    print(f"variance per sample {var.mean():.4g}; noisiest 1% / 5% / 10% of pixels hold "
           + " / ".join(f"{s:.2f}" for s in shares))
     ramp = " .:-=+*#%@"
     median = max(np.median(var), 1e-30)
