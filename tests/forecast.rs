@@ -92,6 +92,13 @@ fn full_gather_agrees_with_pt() {
 }
 
 #[test]
+fn light_tree_agrees_with_pt() {
+    let mut o = opts();
+    o.iws.vpl_select = forecast::integrators::iws::VplSelect::Tree;
+    agrees_with_pt(&o, "iws-cf --vpl-select tree");
+}
+
+#[test]
 fn ris_one_survivor_many_candidates_agrees_with_pt() {
     let mut o = opts();
     (o.iws.ris_candidates, o.iws.ris_survivors) = (64, 1);
@@ -189,7 +196,7 @@ fn single_cluster_and_max_rank_zero_agree_with_pt() {
 #[test]
 fn glass_furnace_is_exactly_one() {
     let mut o = opts();
-    for (select, table) in [(VplSelect::Ris, TableKind::Dual), (VplSelect::All, TableKind::Mixture)] {
+    for (select, table) in [(VplSelect::Ris, TableKind::Dual), (VplSelect::All, TableKind::Mixture), (VplSelect::Tree, TableKind::DualSpread)] {
         (o.iws.vpl_select, o.cf.table) = (select, table);
         glass_furnace(&o);
     }

@@ -269,8 +269,8 @@ fn gather_stats(w: &World, full: &mut Iws, est: &mut Iws, n: u64) -> Vec<(f64, f
 
 /// RIS selection of the IWS gather equals the full gather in expectation at every shading point
 /// (z-test per point, Šidák α = 1e-3): all VPLs as candidates with K = 1 (the exact `p̂/Σp̂`
-/// selection) and the finite-M, shared-candidate default. Negative control: the same test
-/// rejects the full gather scaled by 0.97.
+/// selection) and the finite-M, shared-candidate default; and the light tree with K = 2.
+/// Negative control: the same test rejects the full gather scaled by 0.97.
 #[test]
 fn ris_gather_equals_full_gather_in_expectation() {
     let w = world("scenes/cornell-box.toml");
@@ -279,10 +279,12 @@ fn ris_gather_equals_full_gather_in_expectation() {
     let mut a = params(64, None);
     (a.iws.vpl_select, a.iws.direct) = (VplSelect::All, DirectLight::Vpl);
     let mut full = Iws::new(&w, &a, Box::new(NoCaustics));
-    // M = 1 is a plain power-proportional pick: noisier, so more draws to resolve 3%
-    for (m, k, n) in [(0, 1, 4000), (8, 2, 4000), (1, 1, 40_000)] {
+    // M = 1 is a plain power-proportional pick: noisier, so more draws to resolve 3%; the light
+    // tree (`--vpl-select tree`, K traversals; per point noisier than RIS here, so more draws)
+    let cases = [(VplSelect::Ris, 0, 1, 4000), (VplSelect::Ris, 8, 2, 4000), (VplSelect::Ris, 1, 1, 40_000), (VplSelect::Tree, 0, 2, 16_000)];
+    for (select, m, k, n) in cases {
         let mut r = params(64, None);
-        (r.iws.vpl_select, r.iws.ris_candidates, r.iws.ris_survivors) = (VplSelect::Ris, m, k);
+        (r.iws.vpl_select, r.iws.ris_candidates, r.iws.ris_survivors, r.iws.tree_samples) = (select, m, k, k);
         r.iws.direct = DirectLight::Vpl;
         let mut ris = Iws::new(&w, &r, Box::new(NoCaustics));
         let st = gather_stats(&w, &mut full, &mut ris, n);
@@ -292,9 +294,9 @@ fn ris_gather_equals_full_gather_in_expectation() {
             st.iter().filter(|s| s.2 > 0.0).map(|&(e, mu, se)| ((mu - scale * e) / se).abs()).fold(0.0, f64::max)
         };
         let (z1, z97) = (z(1.0), z(0.97));
-        eprintln!("RIS M={m} K={k}: max|z| = {z1:.2} (threshold {thr:.2}); vs 0.97×full {z97:.2}");
-        assert!(z1 < thr, "RIS M={m} K={k} differs from the full gather: max|z| {z1}");
-        assert!(z97 > thr, "RIS M={m} K={k}: the test cannot detect a 3% error (max|z| {z97})");
+        eprintln!("{select:?} M={m} K={k}: max|z| = {z1:.2} (threshold {thr:.2}); vs 0.97×full {z97:.2}");
+        assert!(z1 < thr, "{select:?} M={m} K={k} differs from the full gather: max|z| {z1}");
+        assert!(z97 > thr, "{select:?} M={m} K={k}: the test cannot detect a 3% error (max|z| {z97})");
         // points with zero variance must match exactly (e.g. unlit points)
         for &(e, mu, se) in &st {
             assert!(se > 0.0 || (mu - e).abs() <= 1e-4 * e.abs().max(1e-6), "zero-variance point: {mu} vs {e}");

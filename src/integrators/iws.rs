@@ -41,6 +41,7 @@ use crate::transport::direct;
 use crate::transport::particle::MAX_VERTICES;
 use crate::transport::roulette::{q_recursion, roulette};
 use crate::transport::light_select::{LightSelector, RisParams, MAX_CANDIDATES, MAX_SURVIVORS};
+use crate::transport::light_tree::{LightTree, TreeLight, TreeQuery};
 use std::time::Instant;
 
 /// IWS parameters (shared by `iws`, `iws-pm` and `iws-cf`).
@@ -56,7 +57,8 @@ pub struct IwsArgs {
     #[arg(long, default_value_t = 16)]
     pub vpl_subset: u32,
     /// IWS point-light selection at each non-specular vertex: `all` (every VPL at depth 0, the
-    /// uniform subset deeper) or `ris` (resampled importance sampling, a few shadow rays).
+    /// uniform subset deeper), `ris` (resampled importance sampling, a few shadow rays) or
+    /// `tree` (a light tree, one traversal and shadow ray per `--tree-samples`).
     #[arg(long, value_enum, default_value_t = VplSelect::Ris)]
     pub vpl_select: VplSelect,
     /// RIS candidates M per reservoir, drawn ∝ VPL power (0 = every VPL once).
@@ -65,6 +67,9 @@ pub struct IwsArgs {
     /// RIS survivors K (shadow rays per vertex), from one shared candidate set.
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=(MAX_SURVIVORS as i64)))]
     pub ris_survivors: u32,
+    /// Light-tree traversals (shadow rays) per vertex with `--vpl-select tree`.
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=(MAX_SURVIVORS as i64)))]
+    pub tree_samples: u32,
     /// IWS direct light from the emitters: `nee` (one light sample and shadow ray per vertex,
     /// unclamped) or `vpl` (the paper: the light paths' first vertices as clamped point lights).
     #[arg(long, value_enum, default_value_t = DirectLight::Nee)]
@@ -92,6 +97,9 @@ pub enum VplSelect {
     All,
     /// RIS (Talbot 2005) with target `Σ_rgb |f|·min(G,b)·Φ` (no visibility) from candidates ∝ `Σ_rgb Φ`.
     Ris,
+    /// A light tree (Conty Estevez & Kulla 2018) over the pass's VPLs: per node the bound
+    /// `Φ·min(b, c_x·c_y/d²)`, the exact target at single lights (`transport::light_tree`).
+    Tree,
 }
 
 impl IwsArgs {
@@ -143,11 +151,23 @@ pub struct Iws {
     vpls: Vec<Vpl>,
     /// The pass's RIS source (∝ VPL power); `None` with `--vpl-select all` or no lights.
     selector: Option<LightSelector>,
+    /// The pass's light tree; `None` unless `--vpl-select tree` (or no lights).
+    tree: Option<LightTree>,
     ris: RisParams,
     caustics: Box<dyn CausticEstimator>,
     passes: u64,
     vpls_total: u64,
     vpl_trace_ns: u64,
+}
+
+/// A non-Dirac material's colour for the light tree: albedo (+ specular); > 0 in every channel
+/// in which its BSDF can be.
+fn reflectance(m: &Material) -> Rgb {
+    match *m {
+        Material::Diffuse { albedo } => albedo,
+        Material::Glossy { albedo, specular, .. } => albedo + specular,
+        _ => Rgb::ONE,
+    }
 }
 
 /// The spec §2 default bound `b = κ·π·N/A_D` with `κ = 0.25` (one clamped Lambertian VPL adds
@@ -183,6 +203,7 @@ impl Iws {
             b,
             vpls: Vec::new(),
             selector: None,
+            tree: None,
             ris,
             caustics,
             passes: 0,
@@ -280,6 +301,9 @@ impl Iws {
         if let Some(sel) = &self.selector {
             return self.gather_ris(world, q, sel, ctx);
         }
+        if let Some(tree) = &self.tree {
+            return self.gather_tree(world, q, tree, ctx);
+        }
         let mut l = Rgb::ZERO;
         if q.depth == 0 || m_sub == 0 || m_sub >= n {
             for v in &self.vpls {
@@ -310,6 +334,28 @@ impl Iws {
             (c.x.max(0.0) + c.y.max(0.0) + c.z.max(0.0), c)
         };
         sel.select(&self.ris, &mut ctx.rng, target, |s| {
+            rays += 1;
+            let v = &self.vpls[s.index];
+            if world.visible(x.p, x.ng, v.p, v.ng) {
+                l += s.value * s.weight;
+            }
+        });
+        ctx.profile.gather_shadow_rays += rays;
+        l
+    }
+
+    /// `VPL_b` by the light tree: `K` traversals, one shadow ray each, weight `1/(K·P(y))`.
+    fn gather_tree(&self, world: &World, q: &ShadingQuery, tree: &LightTree, ctx: &mut Context) -> Rgb {
+        let (x, m, wo) = (q.x, q.m, q.wo);
+        let mut l = Rgb::ZERO;
+        let mut rays = 0u64;
+        let target = |i: usize| {
+            let c = self.unshadowed(x, m, wo, &self.vpls[i]);
+            (c.x.max(0.0) + c.y.max(0.0) + c.z.max(0.0), c)
+        };
+        let k = self.params.tree_samples.clamp(1, MAX_SURVIVORS);
+        let tq = TreeQuery { x: x.p, nx: x.ng, tint: reflectance(m), b: self.b };
+        tree.select(&tq, k, &mut ctx.rng, target, |s| {
             rays += 1;
             let v = &self.vpls[s.index];
             if world.visible(x.p, x.ng, v.p, v.ng) {
@@ -405,11 +451,23 @@ impl Integrator for Iws {
             // the emitters' own vertices are NEE's (the surface VPLs' weights do not depend on them)
             self.vpls.retain(|v| matches!(v.kind, VplKind::Surface(_)));
         }
-        self.selector = match self.params.vpl_select {
-            VplSelect::All => None,
-            VplSelect::Ris => {
-                let power: Vec<f32> = self.vpls.iter().map(|v| v.power.x.max(0.0) + v.power.y.max(0.0) + v.power.z.max(0.0)).collect();
-                LightSelector::new(&power)
+        let power = |v: &Vpl| v.power.x.max(0.0) + v.power.y.max(0.0) + v.power.z.max(0.0);
+        (self.selector, self.tree) = match self.params.vpl_select {
+            VplSelect::All => (None, None),
+            VplSelect::Ris => (LightSelector::new(&self.vpls.iter().map(power).collect::<Vec<_>>()), None),
+            VplSelect::Tree => {
+                let lights: Vec<TreeLight> = self
+                    .vpls
+                    .iter()
+                    .map(|v| TreeLight {
+                        p: v.p,
+                        n: v.ng,
+                        power: v.power.max(Rgb::ZERO) * if let VplKind::Surface(my) = v.kind { reflectance(&my) } else { Rgb::ONE },
+                        clamped: !matches!(v.kind, VplKind::Point),
+                        omni: matches!(v.kind, VplKind::Point),
+                    })
+                    .collect();
+                (None, LightTree::new(&lights))
             }
         };
         self.passes += 1;
@@ -449,6 +507,7 @@ impl Integrator for Iws {
             "vpl_select": self.params.vpl_select,
             "direct": self.params.direct,
             "ris": self.ris,
+            "tree_samples": self.params.tree_samples,
             "profile_per_sample": profile.per_sample(),
             "point_lights_per_pass": self.vpls_total as f64 / passes,
             "compensation_rays_per_sample": profile.compensation_rays as f64 / samples,

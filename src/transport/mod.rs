@@ -8,5 +8,6 @@ pub mod context;
 pub mod dirac;
 pub mod direct;
 pub mod light_select;
+pub mod light_tree;
 pub mod particle;
 pub mod roulette;
