@@ -196,7 +196,11 @@ fn single_cluster_and_max_rank_zero_agree_with_pt() {
 #[test]
 fn glass_furnace_is_exactly_one() {
     let mut o = opts();
-    for (select, table) in [(VplSelect::Ris, TableKind::Dual), (VplSelect::All, TableKind::Mixture), (VplSelect::Tree, TableKind::DualSpread)] {
+    for (select, table) in [
+        (VplSelect::Ris, TableKind::Dual),
+        (VplSelect::All, TableKind::Mixture),
+        (VplSelect::Tree, TableKind::DualSpread),
+    ] {
         (o.iws.vpl_select, o.cf.table) = (select, table);
         glass_furnace(&o);
     }

@@ -281,7 +281,12 @@ fn ris_gather_equals_full_gather_in_expectation() {
     let mut full = Iws::new(&w, &a, Box::new(NoCaustics));
     // M = 1 is a plain power-proportional pick: noisier, so more draws to resolve 3%; the light
     // tree (`--vpl-select tree`, K traversals; per point noisier than RIS here, so more draws)
-    let cases = [(VplSelect::Ris, 0, 1, 4000), (VplSelect::Ris, 8, 2, 4000), (VplSelect::Ris, 1, 1, 40_000), (VplSelect::Tree, 0, 2, 16_000)];
+    let cases = [
+        (VplSelect::Ris, 0, 1, 4000),
+        (VplSelect::Ris, 8, 2, 4000),
+        (VplSelect::Ris, 1, 1, 40_000),
+        (VplSelect::Tree, 0, 2, 16_000),
+    ];
     for (select, m, k, n) in cases {
         let mut r = params(64, None);
         (r.iws.vpl_select, r.iws.ris_candidates, r.iws.ris_survivors, r.iws.tree_samples) = (select, m, k, k);

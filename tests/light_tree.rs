@@ -31,7 +31,13 @@ fn box_lights(n: usize, seed: u64, omni_every: usize) -> Vec<TreeLight> {
             let mut nrm = Vec3::ZERO;
             nrm[axis] = if side == 0.0 { 1.0 } else { -1.0 };
             let omni = omni_every > 0 && i % omni_every == 0;
-            TreeLight { p, n: nrm, power: Rgb::new(0.05 + r.next_f32(), 0.05 + r.next_f32(), 0.05), clamped: !omni, omni }
+            TreeLight {
+                p,
+                n: nrm,
+                power: Rgb::new(0.05 + r.next_f32(), 0.05 + r.next_f32(), 0.05),
+                clamped: !omni,
+                omni,
+            }
         })
         .collect()
 }
@@ -53,10 +59,34 @@ impl Case {
 
 fn cases() -> Vec<Case> {
     vec![
-        Case { name: "floor corner, b = 4", lights: box_lights(75, 1, 0), x: Vec3::new(0.95, 0.0, 0.5), nx: Vec3::Y, b: 4.0 },
-        Case { name: "floor centre, b = inf", lights: box_lights(75, 2, 0), x: Vec3::new(0.5, 0.0, 0.5), nx: Vec3::Y, b: f32::INFINITY },
-        Case { name: "outside, omni lights", lights: box_lights(40, 3, 5), x: Vec3::new(0.5, 2.0, 0.5), nx: -Vec3::Y, b: 2.0 },
-        Case { name: "wall, 300 lights, b = 1", lights: box_lights(300, 4, 0), x: Vec3::new(1.0, 0.3, 0.7), nx: -Vec3::X, b: 1.0 },
+        Case {
+            name: "floor corner, b = 4",
+            lights: box_lights(75, 1, 0),
+            x: Vec3::new(0.95, 0.0, 0.5),
+            nx: Vec3::Y,
+            b: 4.0,
+        },
+        Case {
+            name: "floor centre, b = inf",
+            lights: box_lights(75, 2, 0),
+            x: Vec3::new(0.5, 0.0, 0.5),
+            nx: Vec3::Y,
+            b: f32::INFINITY,
+        },
+        Case {
+            name: "outside, omni lights",
+            lights: box_lights(40, 3, 5),
+            x: Vec3::new(0.5, 2.0, 0.5),
+            nx: -Vec3::Y,
+            b: 2.0,
+        },
+        Case {
+            name: "wall, 300 lights, b = 1",
+            lights: box_lights(300, 4, 0),
+            x: Vec3::new(1.0, 0.3, 0.7),
+            nx: -Vec3::X,
+            b: 1.0,
+        },
     ]
 }
 
@@ -189,7 +219,13 @@ fn tree_draws_two_words_per_traversal_and_handles_degenerate_input() {
     }
     // b = 0 (pure compensation) or an all-zero target: nothing is selected.
     let mut rng = Rng::keyed(9, stream::MISC, 1, 0);
-    tree.select(&TreeQuery { b: 0.0, ..c.q() }, 4, &mut rng, |i| (p_hat(c, i), ()), |_| panic!("b = 0: no light may be selected"));
+    tree.select(
+        &TreeQuery { b: 0.0, ..c.q() },
+        4,
+        &mut rng,
+        |i| (p_hat(c, i), ()),
+        |_| panic!("b = 0: no light may be selected"),
+    );
     tree.select(&c.q(), 4, &mut rng, |_| (f32::NAN, ()), |_| panic!("zero target: no light may be selected"));
     // No positive power: no tree. One light: selected with weight 1/K wherever it contributes.
     let dark: Vec<TreeLight> = c.lights.iter().map(|l| TreeLight { power: Rgb::ZERO, ..*l }).collect();

@@ -205,13 +205,19 @@ impl LightTree {
             if u < p_left {
                 (u, pmf, id, picked) = (u / p_left, pmf * p_left, l, vl);
             } else {
-                (u, pmf, id, picked) = (((u - p_left) / (1.0 - p_left)).min(1.0 - f64::EPSILON), pmf * (1.0 - p_left), r, vr);
+                (u, pmf, id, picked) =
+                    (((u - p_left) / (1.0 - p_left)).min(1.0 - f64::EPSILON), pmf * (1.0 - p_left), r, vr);
             }
         }
     }
 
     /// A child's importance: the bound, and for a single light its value (0 where `p̂` is 0).
-    fn importance<T: Copy>(&self, id: usize, q: &TreeQuery, target: &mut impl FnMut(usize) -> (f32, T)) -> (f64, Option<T>) {
+    fn importance<T: Copy>(
+        &self,
+        id: usize,
+        q: &TreeQuery,
+        target: &mut impl FnMut(usize) -> (f32, T),
+    ) -> (f64, Option<T>) {
         let n = &self.nodes[id];
         if n.light != u32::MAX {
             // the same geometric bound as the inner nodes (one scale at every level: `p̂` itself
@@ -281,7 +287,13 @@ fn build(lights: &[TreeLight], ids: &mut [u32], nodes: &mut Vec<Node>) -> u32 {
     }
     // median split along the box's longest axis (ties by index: a pure function of the lights)
     let ext = hi - lo;
-    let a = if ext.x >= ext.y && ext.x >= ext.z { 0 } else if ext.y >= ext.z { 1 } else { 2 };
+    let a = if ext.x >= ext.y && ext.x >= ext.z {
+        0
+    } else if ext.y >= ext.z {
+        1
+    } else {
+        2
+    };
     let mid = ids.len() / 2;
     ids.select_nth_unstable_by(mid, |&i, &j| {
         let (pi, pj) = (lights[i as usize].p[a], lights[j as usize].p[a]);
