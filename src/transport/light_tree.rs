@@ -149,7 +149,7 @@ impl LightTree {
             let (l, r) = (node.left as usize, node.right as usize);
             let il = self.importance(l, q, &mut |j| (target(j), ()));
             let ir = self.importance(r, q, &mut |j| (target(j), ()));
-            if !(il.0 + ir.0 > 0.0) {
+            if il.0 + ir.0 <= 0.0 || (il.0 + ir.0).is_nan() {
                 return 0.0;
             }
             let p_left = il.0 / (il.0 + ir.0);
@@ -198,7 +198,7 @@ impl LightTree {
             let (il, vl) = self.importance(l, q, target);
             let (ir, vr) = self.importance(r, q, target);
             let sum = il + ir;
-            if !(sum > 0.0) {
+            if sum <= 0.0 || sum.is_nan() {
                 return None; // no light below can contribute
             }
             let p_left = il / sum;
@@ -314,7 +314,7 @@ fn line_cone(lights: &[TreeLight], ids: &[u32]) -> (Vec3, f32, f32) {
     let mut sum = Vec3::ZERO;
     for &i in ids {
         let l = &lights[i as usize];
-        if l.omni || !(l.n.length_squared() > 0.0) || !l.n.is_finite() {
+        if l.omni || !l.n.is_finite() || l.n.length_squared() <= 0.0 {
             return WHOLE;
         }
         sum += if l.n.dot(first) < 0.0 { -l.n } else { l.n };
