@@ -86,6 +86,31 @@ impl ClusterMap {
             .is_some_and(|(lo, hi)| x.cmpge(Vec3::from_array(*lo)).all() && x.cmple(Vec3::from_array(*hi)).all())
     }
 
+    /// The box of cluster `c`'s representatives grown by its reach (`may_accept`'s box).
+    pub fn bounds(&self, c: usize) -> Option<(Vec3, Vec3)> {
+        self.boxes.get(c).map(|(lo, hi)| (Vec3::from_array(*lo), Vec3::from_array(*hi)))
+    }
+
+    /// Cluster `c`'s acceptance distance `R_c + r` (0 for an unknown cluster).
+    pub fn reach(&self, c: usize) -> f32 {
+        self.reach.get(c).copied().unwrap_or(0.0)
+    }
+
+    /// Cluster `c`'s mean normal `n̄_c` (zero for an unknown cluster).
+    pub fn normal(&self, c: usize) -> Vec3 {
+        self.normals.get(c).map_or(Vec3::ZERO, |n| Vec3::from_array(*n))
+    }
+
+    /// Every representative as `(kept-cluster index, position)`.
+    pub fn representatives(&self) -> impl Iterator<Item = (u32, [f32; 3])> + '_ {
+        self.tree.items()
+    }
+
+    /// The representative nearest to `x` (any cluster) as `(cluster, dist²)`, as `query` finds it.
+    pub fn nearest_representative(&self, x: Vec3) -> Option<(u32, f32)> {
+        self.tree.nearest(x.to_array())
+    }
+
     /// Number of kept clusters in the map.
     pub fn n_clusters(&self) -> usize {
         self.reach.len()

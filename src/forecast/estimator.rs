@@ -350,7 +350,7 @@ impl CausticForecast {
     }
 
     /// The lit-side normals `(ng, ns)` at `q` (flipped to `q.wo`'s side).
-    fn lit_normals(q: &ShadingQuery) -> (Vec3, Vec3) {
+    pub fn lit_normals(q: &ShadingQuery) -> (Vec3, Vec3) {
         let sp = q.x;
         if q.wo.dot(sp.ng) >= 0.0 {
             (sp.ng, sp.ns)

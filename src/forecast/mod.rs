@@ -12,5 +12,6 @@ pub mod forecast_map;
 pub mod mixture;
 pub mod share;
 pub mod splat;
+pub mod subset_grid;
 pub mod table_cache;
 pub mod view;

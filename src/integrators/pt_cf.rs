@@ -13,8 +13,8 @@
 //! cluster's indirect irradiance ([`CausticShare`](crate::forecast::share::CausticShare): `E_c` from its forecast photons, `E_d` from a
 //! cosine `pt` gather in the preprocess), the mixture's second moment `E_d²/c + E_c²/(1−c)` (tables
 //! matching the caustic, the BSDF the rest) is smallest at `c = 1 − s`; so `c_k = max(c, 1 − s)`
-//! where `s ≥ --guide-min-share` and no guiding elsewhere. `ClusterMap::may_accept` skips the
-//! cluster map's tree where no guided cluster can be found (same image, exactly).
+//! where `s ≥ --guide-min-share` and no guiding elsewhere. A `SubsetGrid` of the guided clusters
+//! skips the cluster map's tree where no guided cluster can be found (same image, exactly).
 //!
 //! MIS against NEE uses the pdf really used: NEE's weight is `h(p_light, n·q(ω_l))` and a mixture-sampled emitter hit's is
 //! `h(n·q, p_light)` (power heuristic `h`, `n` the split count), which sum to 1 per direction.
@@ -45,6 +45,7 @@ use crate::forecast::direction_table::ForecastTables;
 use crate::forecast::estimator::{energy_split, rank_split, CausticForecast, SplitRule, TableCache};
 use crate::forecast::mixture::{DefensiveMixture, MixtureWeights};
 use crate::forecast::share::{min_share, parse_min_share};
+use crate::forecast::subset_grid::SubsetGrid;
 use crate::math::{Frame, Rgb, Vec3};
 use crate::profile::{Phase, Profile, Stopwatch};
 use crate::scene::NO_EMITTER;
@@ -127,11 +128,13 @@ impl MethodSpec for PtCf {
             .collect();
         let guided: Vec<usize> = (0..n_kept).filter(|&c| per_cluster[c].is_some()).collect();
         let split = split_counts(&g.clustering.clusters[..n_kept], &guided, p)?;
+        let guided_grid = SubsetGrid::build(&g.cluster_map, &guided);
         Ok(Box::new(GuidedPathTracer {
             max_depth: args.pt.cap(),
             weights,
             per_cluster,
             guided,
+            guided_grid,
             guide_depth: if c >= 1.0 { 0 } else { p.guide_depth },
             split,
             split_rule: (p.guide_split_rule, p.guide_split),
@@ -171,6 +174,8 @@ pub struct GuidedPathTracer {
     per_cluster: Vec<Option<MixtureWeights>>,
     /// The kept clusters with a mixture.
     guided: Vec<usize>,
+    /// Where the cluster map may return one of them (skips its kd-tree elsewhere).
+    guided_grid: SubsetGrid,
     /// Guided diffuse depths `d < guide_depth` (0 when `c = 1`: no lookups at all).
     guide_depth: u32,
     /// Continuations at a guided vertex of diffuse depth 0, per kept cluster (1 deeper).
@@ -217,8 +222,8 @@ impl GuidedPathTracer {
             return None;
         }
         ctx.profile.cf.queries += 1;
-        // only a guided cluster's box can hold a guided vertex (`ClusterMap::may_accept`)
-        if !self.guided.iter().any(|&c| self.cf.cluster_map.may_accept(c, q.x.p)) {
+        // only a cell of the guided clusters' grid can hold a guided vertex (`SubsetGrid`)
+        if !self.guided_grid.may_contain(q.x.p, CausticForecast::lit_normals(q).0) {
             return None;
         }
         let c = self.cf.cluster_at(q, ctx)?;
@@ -365,6 +370,7 @@ impl Integrator for GuidedPathTracer {
                 "split_per_cluster": self.split,
                 "lookups": c.queries,
                 "fraction_inside_clusters": c.fraction_inside(),
+                "guided_grid_fill": self.guided_grid.fill(),
                 "mean_continuations_per_lookup": c.samples_per_query(),
                 "creating_cdfs_s": c.cdf_s(),
                 "tables_built": c.tables_built,
