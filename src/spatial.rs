@@ -110,6 +110,23 @@ impl KdTree {
         best
     }
 
+    /// True when some stored point has `dist² ≤ r2`: `nearest_within(p, r2).is_some()`, but the
+    /// search stops at the first such point (the forecast maps' margin test).
+    pub fn any_within(&self, p: [f32; 3], r2: f32) -> bool {
+        if !(r2 >= 0.0) {
+            return false;
+        }
+        let bound = Cell::new(r2);
+        let mut found = false;
+        self.traverse(&p, &bound, |_, d2| {
+            if !found && d2 <= r2 {
+                found = true;
+                bound.set(-1.0); // every remaining node has a lower bound ≥ 0: prune them all
+            }
+        });
+        found
+    }
+
     /// The `k` nearest points with `dist² ≤ r2`, written to `out` as `(dist², id)` sorted by distance
     /// (ties by id). `out` is cleared first and used as a max-heap during the search; nothing else is
     /// allocated.
@@ -323,6 +340,7 @@ mod tests {
             let r2n = [0.0, 0.001, 0.01, 0.1][qi % 4];
             let within = tree.nearest_within(q, r2n);
             assert_eq!(within, tree.nearest(q).filter(|&(_, d2)| d2 <= r2n));
+            assert_eq!(tree.any_within(q, r2n), within.is_some());
             let k = [1, 5, 8, 32, 1000][qi % 5];
             let r2 = [0.001, 0.01, 0.1, f32::INFINITY][qi % 4];
             tree.k_nearest_within(q, k, r2, &mut out);

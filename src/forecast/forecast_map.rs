@@ -77,7 +77,7 @@ impl ForecastMaps {
                             return; // a member (labels index kept clusters in the same order)
                         }
                         if points[i as usize].normal().normalize_or_zero().dot(nbar) > MARGIN_NORMAL_COS
-                            && members.nearest_within(p, r2).is_some()
+                            && members.any_within(p, r2)
                         {
                             ids.push(i);
                         }
