@@ -21,6 +21,10 @@
 //!
 //! All file-system calls go through [`FileOps`], so tests inject a failure at any single step
 //! ([`RealFs`] is the real thing). Nothing here panics; errors are `String`s naming the file.
+//!
+//! Also the guards around them: [`read_regular`] (every whole-file read of an input: a FIFO
+//! would block forever, `/dev/zero` would fill the memory), [`same_file`] and
+//! [`check_not_clobbering`] (an output path that names an input or another output).
 
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
@@ -234,9 +238,84 @@ pub fn check_output_prefix(prefix: &Path) -> Result<(), String> {
     Ok(())
 }
 
+/// Refuses a path that is not a regular file (a FIFO, socket, device or directory) before it is
+/// opened: reading a FIFO blocks until a writer comes, a device such as `/dev/zero` never ends.
+pub fn require_regular(path: &Path) -> io::Result<()> {
+    let m = std::fs::metadata(path)?;
+    if m.is_file() {
+        return Ok(());
+    }
+    let kind = if m.is_dir() { "a directory" } else { "not a regular file (a FIFO, socket or device?)" };
+    Err(io::Error::new(io::ErrorKind::InvalidInput, format!("it is {kind}")))
+}
+
+/// `std::fs::read` of a regular file only ([`require_regular`]).
+pub fn read_regular(path: &Path) -> io::Result<Vec<u8>> {
+    require_regular(path)?;
+    std::fs::read(path)
+}
+
+/// True when `a` and `b` name the same file: the same canonical path where both exist, else the
+/// same absolute path written out (a file not yet created has no canonical form).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        (Err(_), Err(_)) => std::path::absolute(a).ok() == std::path::absolute(b).ok(),
+        _ => false, // one exists and the other does not
+    }
+}
+
+/// Refuses an output `out` (named by `flag` in the message) that is one of the `inputs` or of
+/// the command's other `outputs`: writing it would destroy that file.
+pub fn check_not_clobbering(flag: &str, out: &Path, inputs: &[&Path], outputs: &[PathBuf]) -> Result<(), String> {
+    if let Some(i) = inputs.iter().find(|i| same_file(out, i)) {
+        return Err(format!("{flag} `{}` is the input `{}`: writing it would destroy it", out.display(), i.display()));
+    }
+    if let Some(o) = outputs.iter().find(|o| same_file(out, o)) {
+        return Err(format!(
+            "{flag} `{}` is also the output `{}`: one would overwrite the other",
+            out.display(),
+            o.display()
+        ));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fifos_devices_and_directories_are_not_read() {
+        let dir = std::env::temp_dir().join(format!("forecast-read-regular-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("a.bin");
+        std::fs::write(&file, b"abc").unwrap();
+        assert_eq!(read_regular(&file).unwrap(), b"abc");
+        for bad in [Path::new("/dev/zero"), dir.as_path()] {
+            let e = read_regular(bad).unwrap_err();
+            assert_eq!(e.kind(), io::ErrorKind::InvalidInput, "{}: {e}", bad.display());
+        }
+        assert_eq!(read_regular(&dir.join("missing")).unwrap_err().kind(), io::ErrorKind::NotFound);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn clobbering_an_input_or_another_output_is_refused() {
+        let dir = std::env::temp_dir().join(format!("forecast-clobber-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("sub")).unwrap();
+        let scene = dir.join("scene.toml");
+        std::fs::write(&scene, b"x").unwrap();
+        let via_dots = dir.join("sub").join("..").join("scene.toml");
+        assert!(same_file(&scene, &via_dots));
+        let e = check_not_clobbering("--checkpoint-path", &via_dots, &[&scene], &[]).unwrap_err();
+        assert!(e.contains("--checkpoint-path") && e.contains("destroy"), "{e}");
+        let out = dir.join("r.exr"); // not yet written: compared as absolute paths
+        let e = check_not_clobbering("--checkpoint-path", &out, &[&scene], &[out.clone()]).unwrap_err();
+        assert!(e.contains("overwrite"), "{e}");
+        assert!(check_not_clobbering("--checkpoint-path", &dir.join("r.ckpt"), &[&scene], &[out]).is_ok());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn path_conventions() {

@@ -295,7 +295,7 @@ impl Checkpoint {
 
     /// Reads and checks a checkpoint file (see [`CheckpointError`] for the failure cases).
     pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
-        let bytes = fs::read(path).map_err(io_err(path, "read"))?;
+        let bytes = crate::atomic_io::read_regular(path).map_err(io_err(path, "read"))?;
         Self::from_bytes(&bytes, path)
     }
 

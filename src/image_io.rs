@@ -209,7 +209,7 @@ type FlatLayer = exr::image::Layer<exr::image::AnyChannels<exr::image::FlatSampl
 
 fn read_first_layer(path: &Path) -> Result<FlatLayer, String> {
     use exr::image::read::{image::ReadLayers, layers::ReadChannels, read};
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let bytes = crate::atomic_io::read_regular(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -259,14 +259,28 @@ pub fn read_exr(path: &Path) -> Result<Image, String> {
     let idx = find_channels(&layer, &["R", "G", "B"])
         .or_else(|| find_channels(&layer, &["Y"]))
         .ok_or_else(|| format!("{}: no R, G, B or Y channels", path.display()))?;
-    layer_to_image(path, &layer, &idx)
+    layer_to_image(path, &layer, &idx).and_then(|img| checked(path, img, "not finite", |v| v.is_finite()))
+}
+
+/// `img` if every channel of every pixel passes `ok`; else an error naming the first pixel that
+/// does not (a NaN would make every metric NaN, and a check that compares with NaN pass).
+fn checked(path: &Path, img: Image, what: &str, ok: impl Fn(f32) -> bool) -> Result<Image, String> {
+    let bad = |p: &[f32; 3]| !p.iter().all(|&v| ok(v));
+    let Some(first) = img.pixels.iter().position(bad) else { return Ok(img) };
+    let n = img.pixels.iter().filter(|p| bad(p)).count();
+    let (x, y) = (first % img.width, first / img.width);
+    Err(format!("{}: {n} pixel(s) {what}, the first at ({x}, {y}): {:?}", path.display(), img.pixels[first]))
 }
 
 /// Reads the [`VARIANCE_CHANNELS`] of the colour layer of an EXR, or `Ok(None)` if it has none.
 pub fn read_exr_variance(path: &Path) -> Result<Option<Image>, String> {
     let layer = read_first_layer(path)?;
     match find_channels(&layer, &VARIANCE_CHANNELS) {
-        Some(idx) => layer_to_image(path, &layer, &idx).map(Some),
+        Some(idx) => layer_to_image(path, &layer, &idx)
+            .and_then(|v| {
+                checked(path, v, "with a variance that is negative or not finite", |v| v.is_finite() && v >= 0.0)
+            })
+            .map(Some),
         None => Ok(None),
     }
 }
@@ -333,6 +347,7 @@ pub fn encode_png_rgb8(w: usize, h: usize, rgb: &[u8]) -> Result<Vec<u8>, String
 /// Reads an 8-bit RGB or RGBA PNG into `(width, height, RGB bytes)` (alpha dropped). Used by
 /// tests and tools that inspect written PNGs.
 pub fn read_png_rgb8(path: &Path) -> Result<(usize, usize, Vec<u8>), String> {
+    crate::atomic_io::require_regular(path).map_err(|e| format!("cannot open {}: {e}", path.display()))?;
     let file = std::fs::File::open(path).map_err(|e| format!("cannot open {}: {e}", path.display()))?;
     let decoder = png::Decoder::new(std::io::BufReader::new(file));
     let mut reader = decoder.read_info().map_err(|e| format!("cannot decode PNG {}: {e}", path.display()))?;

@@ -265,25 +265,9 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs, opts: &forecast::scene::Load
     Ok(())
 }
 
-/// Restores the default SIGPIPE action so that `forecast diff … | head` ends quietly like other
-/// Unix tools instead of panicking on a closed stdout (Rust ignores SIGPIPE by default).
-fn default_sigpipe() {
-    #[cfg(unix)]
-    {
-        extern "C" {
-            fn signal(signum: i32, handler: usize) -> usize;
-        }
-        const SIGPIPE: i32 = 13;
-        const SIG_DFL: usize = 0;
-        // SAFETY: resetting a signal disposition to its default before any thread is started.
-        unsafe {
-            signal(SIGPIPE, SIG_DFL);
-        }
-    }
-}
-
 fn main() -> ExitCode {
-    default_sigpipe();
+    // SIGPIPE stays ignored (Rust's default): a closed stdout is handled in `output`, a closed
+    // stderr must never end a render
     let cli = match parse() {
         Ok(cli) => cli,
         Err(code) => return code,

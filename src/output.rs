@@ -9,8 +9,10 @@
 //! * [`errln!`](crate::errln) writes one line to stderr and ignores failures: diagnostics must
 //!   never turn a run into a failure or a panic, and when stderr itself is gone there is nowhere
 //!   left to report anything. The exit status still tells the story.
-//! * A closed pipe (`forecast diff … | head`) ends the process quietly through SIGPIPE, whose
-//!   default action the binary restores, as other Unix tools do.
+//! * A closed pipe on stdout (`forecast diff … | head`) ends the process quietly with
+//!   [`EXIT_BROKEN_PIPE`], the status a shell shows for a tool killed by SIGPIPE. The binary keeps
+//!   Rust's ignored SIGPIPE, so a closed *stderr* (`forecast render … 2>&1 | true`) only loses
+//!   the messages: the render goes on and writes its files.
 //!
 //! Exit statuses of the binary: [`EXIT_OK`], [`EXIT_ERROR`], [`EXIT_USAGE`] (clap's own
 //! convention for a command line it cannot parse); a panic (101) is always a bug.
@@ -28,9 +30,16 @@ pub const EXIT_ERROR: u8 = 1;
 /// value); clap prints the usage.
 pub const EXIT_USAGE: u8 = 2;
 
-/// Writes `args` and a newline to stdout and flushes; an error names the stream.
+/// 128 + SIGPIPE: the status of a process whose stdout reader has gone (see the module docs).
+pub const EXIT_BROKEN_PIPE: u8 = 141;
+
+/// Writes `args` and a newline to stdout and flushes; an error names the stream. A closed pipe
+/// ends the process at once, quietly, with [`EXIT_BROKEN_PIPE`] (nobody is left to read a result).
 pub fn stdout_line(args: fmt::Arguments<'_>) -> Result<(), String> {
-    write_line(&mut io::stdout().lock(), args).map_err(|e| format!("cannot write to stdout: {e}"))
+    match write_line(&mut io::stdout().lock(), args) {
+        Err(e) if e.kind() == io::ErrorKind::BrokenPipe => std::process::exit(EXIT_BROKEN_PIPE.into()),
+        r => r.map_err(|e| format!("cannot write to stdout: {e}")),
+    }
 }
 
 /// Writes `args` and a newline to stderr; failures are ignored (see the module docs).

@@ -164,6 +164,20 @@ fn bad_values() {
     );
     case(&mut f, "negative emission", &with("emission", "emission = [5.0, -1.0, 5.0] #<"), "shape[2].emission");
     case(&mut f, "inf emission", &with("emission", "emission = [5.0, inf, 5.0] #<"), "shape[2].emission");
+    // above 1e15 a render's variance layer overflows f32 (src/scene/limits.rs)
+    case(&mut f, "emission 1e16", &with("emission", "emission = [5.0, 1e16, 5.0] #<"), "shape[2].emission");
+    // arrays of the wrong length, longer ones too (serde alone would drop the surplus)
+    case(&mut f, "albedo of 4", &with("albedo = [0.5", "albedo = [0.5, 0.5, 0.5, 0.5] #<"), "materials.white.albedo");
+    case(&mut f, "albedo of 2", &with("albedo = [0.5", "albedo = [0.5, 0.5] #<"), "materials.white.albedo");
+    case(&mut f, "position of 4", &with("position", "position = [0.0, 1.0, 3.0, 1.0] #<"), "camera.position");
+    case(&mut f, "resolution of 3", &with("resolution", "resolution = [32, 32, 3] #<"), "camera.resolution");
+    case(
+        &mut f,
+        "corner of 5",
+        &with("corner   = [-1.0", "corner = [-1.0, 0.0, -1.0, 0.0, 0.0] #<"),
+        "shape[0].corner",
+    );
+    case(&mut f, "emission of 4", &with("emission", "emission = [5.0, 5.0, 5.0, 5.0] #<"), "shape[2].emission");
     case(
         &mut f,
         "zero-area emissive quad",
@@ -404,14 +418,15 @@ fn overflowing_light_power_names_the_light() {
     let light = "\n[[light]]\ntype = \"point\"\nposition = [0.0, 1.5, 0.0]\nintensity = [3e38, 3e38, 3e38] #<\n";
     let src = format!("{BASE}{light}");
     let e = expect_err("point 3e38", &src, Path::new("."), marked_line(&src), "light[0].intensity");
-    assert!(e.message.contains("overflows") && !e.message.contains("no light"), "{e}");
-    // an emissive sphere of radius 1e30 leaves the extent; one of radius 1e11 overflows by its power
+    assert!(e.message.contains("at most 1e9") && !e.message.contains("no light"), "{e}");
+    // an emissive sphere of radius 1e30 leaves the extent; one of radius 1e12 (the extent's edge)
+    // overflows by its power even at the largest radiance, 1e15
     let sphere = |r: &str, e: &str| {
         format!("{BASE}\n[[shape]]\ntype = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = {r}\nemission = {e}\n")
     };
     let src = sphere("1e30 #<", "[1.0, 1.0, 1.0]");
     expect_err("emissive radius 1e30", &src, Path::new("."), marked_line(&src), "shape[3].radius");
-    let src = sphere("1e11", "[1e17, 1e17, 1e17] #<");
+    let src = sphere("1e12", "[1e15, 1e15, 1e15] #<");
     let e = expect_err("emissive power", &src, Path::new("."), marked_line(&src), "shape[3].emission");
     assert!(e.message.contains("overflows"), "{e}");
 }
@@ -467,9 +482,23 @@ fn overflowing_quad_is_an_error_not_dropped() {
 #[test]
 fn roi_rect_overflow_is_refused() {
     let mut f = Vec::new();
-    for rect in ["[4294967295, 0, 1, 1]", "[0, 4294967295, 1, 1]", "[1, 0, 4294967295, 1]"] {
+    for rect in ["[4294967295, 0, 1, 1]", "[0, 4294967295, 1, 1]", "[1, 0, 4294967295, 1]", "[0, 0, 4, 4, 4]"] {
         let src = format!("{BASE}\n[[roi]]\nname = \"r\"\nrect = {rect} #<\n");
         case(&mut f, rect, &src, "roi[0].rect");
     }
     finish(f);
+}
+
+/// A `target_box` corner of four values, and a point light above the intensity limit (1e9, so
+/// that I/d² at 1 mm stays within the radiance limit): each names its key on its own line.
+#[test]
+fn target_box_corners_and_point_intensity_have_their_limits() {
+    let mut f = Vec::new();
+    let src = format!("{BASE}\n[forecast]\ntarget_box = [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0, 1.0]] #<\n");
+    case(&mut f, "target_box corner of 4", &src, "forecast.target_box");
+    let light = "\n[[light]]\ntype = \"point\"\nposition = [0.0, 1.5, 0.0]\nintensity = [2e9, 1.0, 1.0] #<\n";
+    case(&mut f, "intensity 2e9", &format!("{BASE}{light}"), "light[0].intensity");
+    finish(f);
+    let ok = "\n[[light]]\ntype = \"point\"\nposition = [0.0, 1.5, 0.0]\nintensity = [1e9, 1.0, 1.0]\n";
+    load_str(&format!("{BASE}{ok}"), "ok.toml", Path::new(".")).expect("the limit itself loads");
 }

@@ -347,6 +347,11 @@ fn malformed_inputs_are_clear_errors_with_file_and_line() {
         (ply_scene("\n<emitter type=\"envmap\"/>"), 4, vec!["envmap", "not supported"]),
         (ply_scene("\n<medium type=\"homogeneous\"/>"), 4, vec!["medium"]),
         (ply_scene("\n<shape type=\"ply\"><integer name=\"x\" value=\"$nope\"/></shape>"), 4, vec!["$nope", "not defined"]),
+        // 0 photons is an error, as `[forecast] photons = 0` (it used to fall back to the default)
+        (ply_scene("\n<default name=\"forecast_photons\" value=\"0\"/>"), 4, vec!["forecast_photons", "at least 1"]),
+        // the light limits of src/scene/limits.rs
+        (ply_scene("\n<emitter type=\"point\"><point name=\"position\" value=\"0, 2, 0\"/><rgb name=\"intensity\" value=\"2e9\"/></emitter>"), 4, vec!["intensity", "at most 1e9"]),
+        (ply_scene("<shape type=\"ply\"><string name=\"filename\" value=\"quad.ply\"/>\n<emitter type=\"area\"><rgb name=\"radiance\" value=\"1e16\"/></emitter></shape>"), 4, vec!["radiance", "at most 1e15"]),
     ];
     for (src, line, words) in cases {
         let e = match std::panic::catch_unwind(|| xml(&src, &dir)) {

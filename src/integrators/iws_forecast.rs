@@ -74,7 +74,7 @@ pub struct CfArgs {
     #[arg(long, default_value = "energy", value_parser = choice(&[("energy", SplitRule::Energy), ("rank", SplitRule::Rank), ("share", SplitRule::Share)]))]
     pub split_rule: SplitRule,
     /// iws-cf: table-cache cell edge as a fraction of the search radius (0 = build per point).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = parse_table_cache)]
     pub table_cache: f32,
     /// iws-cf: use the photon tables at diffuse depths below this (deeper: one BSDF sample).
     #[arg(long, default_value_t = 1)]
@@ -102,6 +102,16 @@ pub(crate) fn choice<T: Clone + Send + Sync + 'static>(
 ) -> impl TypedValueParser<Value = T> {
     PossibleValuesParser::new(table.iter().map(|(n, _)| *n))
         .map(move |s| table.iter().find(|(n, _)| *n == s).map_or_else(|| table[0].1.clone(), |(_, v)| v.clone()))
+}
+
+/// `--table-cache F`: a finite F ≥ 0 (NaN, negative and infinite cells are refused).
+fn parse_table_cache(s: &str) -> Result<f32, String> {
+    let f: f32 = s.trim().parse().map_err(|e| format!("`{s}` is not a number: {e}"))?;
+    if f.is_finite() && f >= 0.0 {
+        Ok(f)
+    } else {
+        Err(format!("the cell edge must be a finite number >= 0 (0 = a table per point), got {s}"))
+    }
 }
 
 impl CfArgs {

@@ -53,7 +53,13 @@ pub struct NoiseReport {
 impl NoiseReport {
     /// `true` if a test variance was given and `|ratio − 1| <= ratio_tolerance`.
     pub fn ratio_ok(&self) -> bool {
-        self.test_var_available && (self.ratio - 1.0).abs() <= self.ratio_tolerance
+        self.has_estimate() && (self.ratio - 1.0).abs() <= self.ratio_tolerance
+    }
+
+    /// False when there is nothing to compare the ratio with: no variance channels, or halves
+    /// and variances that give no noise at all (identical halves, zero variance: n_eff = 0).
+    pub fn has_estimate(&self) -> bool {
+        self.test_var_available && self.ratio.is_finite() && self.ratio_tolerance.is_finite()
     }
 }
 
@@ -209,6 +215,11 @@ pub fn mitsuba_agreement(
     }
     if !noise.test_var_available {
         failures.push("noise: test image has no variance channels (var.R, var.G, var.B); cannot check noise".into());
+    } else if !noise.has_estimate() {
+        failures.push(format!(
+            "noise: no noise estimate (ratio {}, n_eff {:.0}): the reference's halves are identical or the variances zero",
+            noise.ratio, noise.n_eff
+        ));
     } else if !noise.ratio_ok() {
         failures.push(format!(
             "noise: ratio {:.4} differs from 1 by more than {:.4} (5 sigma, sigma {:.4})",

@@ -103,6 +103,14 @@ pub struct Plan {
 }
 
 impl RenderJob {
+    /// An explicit `--checkpoint-path` must name neither the scene file nor one of the render's
+    /// outputs (`PREFIX.exr`, `.png`, `.json`): each checkpoint would replace that file.
+    fn check_checkpoint_path(&self) -> Result<(), String> {
+        let Some(ckpt) = &self.checkpoint_path else { return Ok(()) };
+        let outputs: Vec<PathBuf> = ["exr", "png", "json"].iter().map(|e| with_ext(&self.out, e)).collect();
+        crate::atomic_io::check_not_clobbering("--checkpoint-path", ckpt, &[&self.scene], &outputs)
+    }
+
     /// How `scene` is loaded (the job's `-D` values).
     pub fn load_options(&self) -> crate::scene::LoadOptions {
         crate::scene::LoadOptions { defines: self.defines.clone() }
@@ -168,6 +176,7 @@ fn secs(t: Instant) -> f64 {
 /// across ranks (see the module docs): all ranks return it, rank 0's names the failing ranks.
 pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Result<Option<RenderResult>, String> {
     let setup = crate::atomic_io::check_output_prefix(&job.out)
+        .and_then(|()| job.check_checkpoint_path())
         .and_then(|()| Ok((thread_pool(job.threads)?, load(job, cluster.rank())?)));
     let (pool, (world, plan, mut timings)) = distributed::agree(cluster, setup)?;
     let deadline = distributed::shared_deadline(cluster, started, plan.time);

@@ -107,6 +107,8 @@ pub(super) struct Snapshots {
     next: usize,
     /// Rank 0: the snapshots written.
     pub(super) written: Vec<SnapshotReport>,
+    /// Rank 0: seconds since the start at the last round boundary that looked for due snapshots.
+    last_boundary_s: f64,
 }
 
 impl Snapshots {
@@ -114,7 +116,7 @@ impl Snapshots {
         let mut times: Vec<(f64, String)> = times.iter().map(|&t| (t, snapshot_label(t))).collect();
         times.sort_by(|a, b| a.0.total_cmp(&b.0));
         times.dedup_by(|a, b| a.1 == b.1);
-        Snapshots { times, next: 0, written: Vec::new() }
+        Snapshots { times, next: 0, written: Vec::new(), last_boundary_s: 0.0 }
     }
 }
 
@@ -128,6 +130,7 @@ impl Run<'_> {
             return Ok(());
         }
         let now = secs(self.started);
+        p.snaps.last_boundary_s = now;
         let mine = if self.cluster.rank() == 0 { pending.iter().take_while(|(t, _)| *t <= now).count() } else { 0 };
         let due = self.cluster.all_reduce_max(mine as f64) as usize;
         if due == 0 {
@@ -172,10 +175,14 @@ impl Run<'_> {
         if self.cluster.rank() != 0 {
             return;
         }
-        let end = secs(self.started);
+        // the last boundary, not the end: writing earlier snapshots there may outlast later ones' times
+        let end = p.snaps.last_boundary_s;
         let missed: Vec<String> = p.snaps.times[p.snaps.next..].iter().map(|(_, l)| l.clone()).collect();
         for label in missed {
-            p.warn(format!("snapshot {label} not written: the render ended at {end:.2} s, before it"), None);
+            p.warn(
+                format!("snapshot {label} not written: the render's last round ended at {end:.2} s, before it"),
+                None,
+            );
         }
     }
 }

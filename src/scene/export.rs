@@ -43,6 +43,13 @@ fn esc(s: &str) -> String {
 
 /// Exports a TOML scene file to Mitsuba XML at `out` (meshes in `OUT_STEM_meshes/`).
 pub fn export_mitsuba(scene_path: &Path, out: &Path) -> Result<ExportReport, String> {
+    if scene_path.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml")) {
+        return Err(format!(
+            "{}: export-mitsuba converts TOML scenes; this one is Mitsuba XML already",
+            scene_path.display()
+        ));
+    }
+    crate::atomic_io::check_not_clobbering("--out", out, &[scene_path], &[])?;
     let scene = super::file::load(scene_path).map_err(|e| e.to_string())?;
     let src = std::fs::read_to_string(scene_path).map_err(|e| format!("{}: {e}", scene_path.display()))?;
     let doc: Doc = toml::from_str(&src).map_err(|e| format!("{}: {e}", scene_path.display()))?;

@@ -5,7 +5,7 @@
 //! warning; everything else that is wrong (NaN, negative values, zero-area lights, a bad fov, a
 //! missing OBJ, an empty scene) is an error, never a panic.
 
-use super::limits::{extent_message, within_extent};
+use super::limits::{extent_message, light_value_error, within_extent, MAX_INTENSITY, MAX_RADIANCE};
 use super::schema::{Doc, LightDef, MaterialDef, ShapeDef};
 use super::{
     light_power, limits, locate, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere,
@@ -279,8 +279,8 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
         let resolve = |mat: &Option<String>, emission: &Option<[f32; 3]>| -> Result<(u32, Option<Vec3>), SceneError> {
             let e = match emission {
                 Some(e) => {
-                    if !finite3(*e) || e.iter().any(|&x| x < 0.0) {
-                        return Err(cx.err(ss.clone(), &key("emission"), "emission must be finite and non-negative"));
+                    if let Some(m) = light_value_error("emission", v3(*e), MAX_RADIANCE) {
+                        return Err(cx.err(ss.clone(), &key("emission"), m));
                     }
                     Some(v3(*e)).filter(|e| e.max_element() > 0.0)
                 }
@@ -474,8 +474,8 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
         if !within_extent(v3(*position)) {
             return Err(cx.err(ls, &format!("light[{idx}].position"), extent_message("position", v3(*position))));
         }
-        if !finite3(*intensity) || intensity.iter().any(|&x| x < 0.0) {
-            return Err(cx.err(ls, &format!("light[{idx}].intensity"), "intensity must be finite and non-negative"));
+        if let Some(m) = light_value_error("intensity", v3(*intensity), MAX_INTENSITY) {
+            return Err(cx.err(ls, &format!("light[{idx}].intensity"), m));
         }
         point_lights.push(PointLight { position: v3(*position), intensity: v3(*intensity) });
     }

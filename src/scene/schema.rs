@@ -2,7 +2,8 @@
 //! (`deny_unknown_fields`). Values are checked, and turned into a `Scene`, by `file`.
 //! The format is documented in `scenes/README.md`.
 
-use serde::Deserialize;
+use serde::de::Error as _;
+use serde::{Deserialize, Deserializer};
 use std::collections::BTreeMap;
 use toml::Spanned;
 
@@ -25,16 +26,42 @@ pub(super) struct Doc {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct CameraDef {
+    #[serde(deserialize_with = "exact")]
     pub(super) position: [f32; 3],
+    #[serde(deserialize_with = "exact")]
     pub(super) look_at: [f32; 3],
-    #[serde(default = "default_up")]
+    #[serde(default = "default_up", deserialize_with = "exact")]
     pub(super) up: [f32; 3],
     pub(super) fov: f32,
+    #[serde(deserialize_with = "exact")]
     pub(super) resolution: [u32; 2],
 }
 
 fn default_up() -> [f32; 3] {
     [0.0, 1.0, 0.0]
+}
+
+/// `[T; N]` from an array of exactly `N` values. serde's own array impl reads the first `N` and
+/// toml does not report the rest, so `position = [0, 1, 2, 3]` would load as `[0, 1, 2]`.
+fn exact<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(d: D) -> Result<[T; N], D::Error> {
+    let v: Vec<T> = Vec::deserialize(d)?;
+    let n = v.len();
+    v.try_into().map_err(|_| D::Error::invalid_length(n, &format!("an array of length {N}").as_str()))
+}
+
+/// [`exact`] of an optional key (with `#[serde(default)]` for a missing one).
+fn exact_opt<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(d: D) -> Result<Option<[T; N]>, D::Error> {
+    exact(d).map(Some)
+}
+
+/// `target_box = [[x, y, z], [x, y, z]]`: two corners of exactly three values each.
+fn exact_box<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[[f32; 3]; 2]>, D::Error> {
+    let corners: [Vec<f32>; 2] = exact(d)?;
+    let [a, b] = corners.map(|c| {
+        let n = c.len();
+        <[f32; 3]>::try_from(c).map_err(|_| D::Error::invalid_length(n, &"a corner of 3 values"))
+    });
+    Ok(Some([a?, b?]))
 }
 
 #[derive(Deserialize)]
@@ -55,9 +82,12 @@ pub(super) struct RenderDef {
 pub(super) struct MaterialRaw {
     #[serde(rename = "type")]
     kind: String,
+    #[serde(default, deserialize_with = "exact_opt")]
     albedo: Option<[f32; 3]>,
+    #[serde(default, deserialize_with = "exact_opt")]
     specular: Option<[f32; 3]>,
     exponent: Option<f32>,
+    #[serde(default, deserialize_with = "exact_opt")]
     reflectance: Option<[f32; 3]>,
     ior: Option<f32>,
 }
@@ -133,18 +163,24 @@ impl MaterialRaw {
 pub(super) struct ShapeRaw {
     #[serde(rename = "type")]
     kind: String,
+    #[serde(default, deserialize_with = "exact_opt")]
     corner: Option<[f32; 3]>,
+    #[serde(default, deserialize_with = "exact_opt")]
     u: Option<[f32; 3]>,
+    #[serde(default, deserialize_with = "exact_opt")]
     v: Option<[f32; 3]>,
+    #[serde(default, deserialize_with = "exact_opt")]
     center: Option<[f32; 3]>,
     radius: Option<f32>,
     inward: Option<bool>,
     file: Option<String>,
     normals: Option<String>,
+    #[serde(default, deserialize_with = "exact_opt")]
     translate: Option<[f32; 3]>,
     scale: Option<f32>,
     rotate_y: Option<f32>,
     material: Option<String>,
+    #[serde(default, deserialize_with = "exact_opt")]
     emission: Option<[f32; 3]>,
 }
 
@@ -237,7 +273,9 @@ impl ShapeRaw {
 pub(super) struct LightRaw {
     #[serde(rename = "type")]
     kind: String,
+    #[serde(default, deserialize_with = "exact_opt")]
     position: Option<[f32; 3]>,
+    #[serde(default, deserialize_with = "exact_opt")]
     intensity: Option<[f32; 3]>,
 }
 
@@ -263,12 +301,14 @@ impl LightRaw {
 #[serde(deny_unknown_fields)]
 pub(super) struct RoiDef {
     pub(super) name: String,
+    #[serde(deserialize_with = "exact")]
     pub(super) rect: [u32; 4],
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct ForecastDef {
+    #[serde(default, deserialize_with = "exact_box")]
     pub(super) target_box: Option<[[f32; 3]; 2]>,
     pub(super) photons: Option<u64>,
 }

@@ -35,14 +35,18 @@ pub(super) fn forecast_defaults(
         let num = |v: &str| v.trim().parse::<u64>().map_err(|_| bad(k, format!("`{v}` is not a non-negative integer")));
         match k.as_str() {
             "forecast_method" => {
-                if !["pt", "iws", "iws-pm", "iws-cf"].contains(&v.as_str()) {
-                    return Err(bad(k, format!("unknown method `{v}` (pt, iws, iws-pm, iws-cf)")));
+                if !["pt", "iws", "iws-pm", "iws-cf", "pt-cf"].contains(&v.as_str()) {
+                    return Err(bad(k, format!("unknown method `{v}` (pt, iws, iws-pm, iws-cf, pt-cf)")));
                 }
                 render.method = v.clone();
             }
             "forecast_seed" => render.seed = num(v)?,
             "forecast_time" => render.time = Some(crate::scene::parse_duration(v).map_err(|m| bad(k, m))?),
-            "forecast_photons" => ex.photons = Some(num(v)?).filter(|&n| n > 0),
+            "forecast_photons" => {
+                let n = num(v)?;
+                crate::param_limits::FORECAST_PHOTONS.check(n).map_err(|m| bad(k, m))?;
+                ex.photons = Some(n);
+            }
             "forecast_target_box" => match super::params::numbers(v).as_deref() {
                 Some([a, b, c, d, e, f]) if a <= d && b <= e && c <= f => {
                     ex.target = Some((Vec3::new(*a, *b, *c), Vec3::new(*d, *e, *f)))

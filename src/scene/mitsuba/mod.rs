@@ -242,8 +242,10 @@ fn point(cx: &mut Cx, n: &Node) -> Result<PointLight, SceneError> {
     let xf = p.transform(cx, "to_world")?;
     let position = pos.or(xf.map(|x| x.m.w_axis.truncate().as_vec3())).unwrap_or(Vec3::ZERO);
     let intensity = p.color(cx, "intensity")?.unwrap_or(Vec3::ONE);
-    if intensity.min_element() < 0.0 {
-        return Err(p.err(cx, n.line, "intensity", "intensity must be non-negative"));
+    if let Some(m) =
+        crate::scene::limits::light_value_error("intensity", intensity, crate::scene::limits::MAX_INTENSITY)
+    {
+        return Err(p.err(cx, n.line, "intensity", m));
     }
     p.finish(cx);
     Ok(PointLight { position, intensity })

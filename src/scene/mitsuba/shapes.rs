@@ -72,8 +72,8 @@ fn emitter(cx: &mut Cx, p: &mut Plugin) -> Result<Option<Rgb>, SceneError> {
     let Some(l) = ep.color(cx, "radiance")? else {
         return Err(ep.err(cx, e.line, "radiance", "the area emitter needs `radiance`"));
     };
-    if l.min_element() < 0.0 {
-        return Err(ep.err(cx, e.line, "radiance", "radiance must be non-negative"));
+    if let Some(m) = crate::scene::limits::light_value_error("radiance", l, crate::scene::limits::MAX_RADIANCE) {
+        return Err(ep.err(cx, e.line, "radiance", m));
     }
     ep.finish(cx);
     Ok(Some(l).filter(|l| l.max_element() > 0.0))

@@ -1,0 +1,184 @@
+//! The guards found by an adversarial pass over the binary (2026-12-01), run as a user would
+//! (`env!("CARGO_BIN_EXE_forecast")`):
+//!
+//! * an input that is a FIFO or a device (`--resume /dev/zero`, `diff A FIFO`, `compare
+//!   --reference FIFO`) is refused at once instead of blocking or filling the memory;
+//! * an output path that names an input or another output (`--checkpoint-path` onto the scene or
+//!   onto `PREFIX.exr`, `export-mitsuba --out` onto its input) is refused and the file stays;
+//! * a closed stderr never ends a render (its files are written, exit 0), a closed stdout ends
+//!   `diff` quietly with 141 (SIGPIPE's status), not a panic;
+//! * images with NaN pixels or a negative variance are refused by `diff`, and an agreement check
+//!   without any noise estimate (identical halves) fails instead of passing vacuously;
+//! * `--table-cache` takes only finite values ≥ 0.
+
+mod common;
+
+use common::{root, tmp_dir};
+use forecast::image_io::{write_exr, write_exr_layers, Image};
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn forecast() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_forecast"));
+    c.current_dir(root()).env_remove("MPI_LOCALNRANKS").stdin(Stdio::null());
+    c
+}
+
+/// Runs `args` with captured output; (exit code, stderr). Fails on a signal or a panic.
+fn run(args: &[&str]) -> (i32, String) {
+    let out = forecast().args(args).output().expect("spawn forecast");
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    let code = out.status.code().unwrap_or_else(|| panic!("{args:?} ended by a signal: {err}"));
+    assert!(code != 101 && !err.contains("panicked"), "{args:?} panicked: {err}");
+    (code, err)
+}
+
+fn s(p: &Path) -> String {
+    p.display().to_string()
+}
+
+fn scene() -> String {
+    s(&root().join("scenes/cornell-box.toml"))
+}
+
+#[test]
+fn fifo_and_device_inputs_are_refused_at_once() {
+    let d = tmp_dir("guards-fifo");
+    let fifo = d.join("pipe.exr");
+    assert!(Command::new("mkfifo").arg(&fifo).status().is_ok_and(|st| st.success()), "mkfifo failed");
+    let img = d.join("a.exr");
+    write_exr(&img, &Image::new(8, 8)).unwrap();
+    let out = s(&d.join("r"));
+    let cases: [Vec<String>; 4] = [
+        vec!["diff".into(), s(&img), s(&fifo)],
+        vec!["diff".into(), s(&img), "/dev/zero".into()],
+        ["render", &scene(), "--spp", "1", "--resolution", "8x8", "--quiet", "--out", &out, "--resume", "/dev/zero"]
+            .map(String::from)
+            .to_vec(),
+        ["compare", &scene(), "--methods", "pt", "--budgets", "1s", "--seeds", "1", "--out", &out, "--reference"]
+            .iter()
+            .map(|a| a.to_string())
+            .chain([s(&fifo)])
+            .collect(),
+    ];
+    for args in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let t = Instant::now();
+        let (code, err) = run(&args);
+        assert_eq!(code, 1, "{args:?}: {err}");
+        assert!(err.contains("not a regular file"), "{args:?}: {err}");
+        assert!(t.elapsed() < Duration::from_secs(20), "{args:?} took {:?}", t.elapsed());
+    }
+    let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
+fn outputs_never_overwrite_inputs_or_each_other() {
+    let d = tmp_dir("guards-clobber");
+    let victim = d.join("victim.toml");
+    std::fs::copy(root().join("scenes/cornell-box.toml"), &victim).unwrap();
+    let before = std::fs::read(&victim).unwrap();
+    let prefix = s(&d.join("r"));
+    let render = |ckpt: &str| {
+        let a = ["render", &s(&victim), "--spp", "2", "--resolution", "8x8", "--quiet", "--out", &prefix];
+        let mut args: Vec<&str> = a.to_vec();
+        args.extend(["--checkpoint-every", "1ms", "--checkpoint-path", ckpt]);
+        run(&args)
+    };
+    // the scene itself, also spelled through `..`
+    let dotted = s(&d.join("sub").join("..").join("victim.toml"));
+    std::fs::create_dir_all(d.join("sub")).unwrap();
+    for ckpt in [s(&victim), dotted] {
+        let (code, err) = render(&ckpt);
+        assert_eq!(code, 1, "{err}");
+        assert!(err.contains("--checkpoint-path") && err.contains("destroy"), "{err}");
+    }
+    let (code, err) = render(&format!("{prefix}.exr"));
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("overwrite"), "{err}");
+    let (code, err) = run(&["export-mitsuba", &s(&victim), "--out", &s(&victim)]);
+    assert_eq!(code, 1, "{err}");
+    assert_eq!(std::fs::read(&victim).unwrap(), before, "the scene was changed");
+    // an XML scene is not exported again (it used to be parsed as TOML)
+    let xml = s(&root().join("scenes/external/sms-ring/ring.xml"));
+    let (code, err) = run(&["export-mitsuba", &xml, "--out", &s(&d.join("again.xml"))]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("TOML scenes"), "{err}");
+    // a checkpoint beside the outputs is fine
+    let (code, err) = render(&format!("{prefix}.ckpt"));
+    assert_eq!(code, 0, "{err}");
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// A pipe whose reading end is already closed: every write to it fails with EPIPE at once.
+fn closed_pipe() -> std::io::PipeWriter {
+    let (reader, writer) = std::io::pipe().expect("pipe");
+    drop(reader);
+    writer
+}
+
+#[test]
+fn a_closed_stderr_never_ends_a_render_and_a_closed_stdout_ends_quietly() {
+    let d = tmp_dir("guards-pipe");
+    let prefix = d.join("r");
+    // point light + glass: the render warns on stderr before its first pass
+    let warns = s(&root().join("scenes/stability/point-glass.toml"));
+    let args = ["render", &warns, "--spp", "1", "--resolution", "8x8", "--quiet", "--out", &s(&prefix)];
+    let st = forecast().args(args).stdout(Stdio::null()).stderr(closed_pipe()).status().unwrap();
+    assert_eq!(st.code(), Some(0), "the render was ended by its closed stderr: {st:?}");
+    for ext in ["exr", "png", "json"] {
+        assert!(prefix.with_extension(ext).is_file(), "no {ext} written");
+    }
+    let json = std::fs::read_to_string(prefix.with_extension("json")).unwrap();
+    assert!(json.contains("point light"), "the warning is in the JSON all the same");
+    // a closed stdout: `diff`'s numbers have no reader
+    let img = s(&prefix.with_extension("exr"));
+    let out = forecast().args(["diff", &img, &img]).stdout(closed_pipe()).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(141), "{:?}: {err}", out.status);
+    assert!(err.is_empty(), "not quiet: {err}");
+    let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
+fn non_finite_images_and_checks_without_noise_are_refused() {
+    let d = tmp_dir("guards-nan");
+    let mut img = Image::new(4, 4);
+    img.pixels.iter_mut().for_each(|p| *p = [0.5; 3]);
+    let ok = d.join("ok.exr");
+    write_exr(&ok, &img).unwrap();
+    let mut bad = img.clone();
+    bad.pixels[6] = [0.5, f32::NAN, 0.5];
+    let nan = d.join("nan.exr");
+    write_exr(&nan, &bad).unwrap();
+    let (code, err) = run(&["diff", &s(&nan), &s(&ok)]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("nan.exr") && err.contains("not finite") && err.contains("(2, 1)"), "{err}");
+    // a negative variance layer
+    let mut var = Image::new(4, 4);
+    var.pixels[0] = [-1.0, 0.0, 0.0];
+    let negvar = d.join("negvar.exr");
+    write_exr_layers(&negvar, &img, Some(&var)).unwrap();
+    let o = s(&ok);
+    let (code, err) = run(&["diff", &s(&negvar), &o, "--half0", &o, "--half1", &o]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("negative"), "{err}");
+    // identical halves and zero variance: no noise estimate, so no pass
+    let zero = d.join("zerovar.exr");
+    write_exr_layers(&zero, &img, Some(&Image::new(4, 4))).unwrap();
+    let (code, err) = run(&["diff", &s(&zero), &o, "--half0", &o, "--half1", &o]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("no noise estimate"), "{err}");
+    let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
+fn table_cache_takes_finite_values_only() {
+    for bad in ["nan", "-1", "inf", "-inf", "1e39"] {
+        let flag = format!("--table-cache={bad}");
+        let (code, err) = run(&["render", &scene(), "--method", "iws-cf", "--spp", "1", "--resolution", "8x8", &flag]);
+        assert_eq!(code, 2, "--table-cache {bad}: {err}");
+        assert!(err.contains("--table-cache"), "{err}");
+    }
+}
