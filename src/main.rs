@@ -159,6 +159,7 @@ fn diff(a: &forecast::cli::DiffArgs) -> Result<(), String> {
 }
 
 fn bench_cmd(a: &forecast::cli::BenchArgs, opts: &forecast::scene::LoadOptions) -> Result<(), String> {
+    forecast::param_limits::SPP.check_flag("--spp", a.spp)?;
     let scene = forecast::scene::load_with(&a.scene, opts).map_err(|e| e.to_string())?;
     let t = Instant::now();
     let ntri = scene.triangles.len();
@@ -197,6 +198,9 @@ fn stability(a: &forecast::cli::StabilityArgs) -> Result<(), String> {
         return Err("stability runs single-process; start it without mpirun".into());
     }
     let cfg = a.config();
+    if !a.only.is_empty() && cfg.only.is_empty() {
+        return Err("--only: no case named (give case names, comma-separated)".into());
+    }
     let recs = compare::stability::run_suite(&cfg)?;
     compare::stability::write_stability_report(&cfg.out, &cfg, &recs)?;
     let bad = recs.iter().filter(|r| !r.ok()).count();

@@ -195,6 +195,7 @@ fn bad_values() {
     case(&mut f, "zero duration", &with("spp", "time = \"0s\" #<"), "render.time");
     case(&mut f, "unknown method", &with("method", "method = \"bdpt\" #<"), "render.method");
     case(&mut f, "zero spp", &with("spp", "spp = 0 #<"), "render.spp");
+    case(&mut f, "spp and time", &with("spp", "spp = 4\ntime = \"1s\" #<"), "render.time");
     case(
         &mut f,
         "glass ior < 1",
@@ -501,4 +502,16 @@ fn target_box_corners_and_point_intensity_have_their_limits() {
     finish(f);
     let ok = "\n[[light]]\ntype = \"point\"\nposition = [0.0, 1.5, 0.0]\nintensity = [1e9, 1.0, 1.0]\n";
     load_str(&format!("{BASE}{ok}"), "ok.toml", Path::new(".")).expect("the limit itself loads");
+}
+
+/// `[render] method` takes every method: `scene::METHOD_NAMES` is `Method::ALL`'s names, written
+/// twice because the scene module lies below the integrators (`pt-cf` was missing from it).
+#[test]
+fn every_method_is_a_valid_scene_default() {
+    let names: Vec<&str> = forecast::integrators::Method::ALL.iter().map(|m| m.name()).collect();
+    assert_eq!(names, forecast::scene::METHOD_NAMES);
+    for n in names {
+        let s = load_str(&with("method", &format!("method = \"{n}\"")), "m.toml", Path::new(".")).expect(n);
+        assert_eq!(s.render.method, n);
+    }
 }

@@ -9,7 +9,8 @@
 //!   `diff` quietly with 141 (SIGPIPE's status), not a panic;
 //! * images with NaN pixels or a negative variance are refused by `diff`, and an agreement check
 //!   without any noise estimate (identical halves) fails instead of passing vacuously;
-//! * `--table-cache` takes only finite values ≥ 0.
+//! * `--table-cache` takes only finite values ≥ 0; options that do not apply are refused, not
+//!   ignored (`-D` on a TOML scene, `compare --spp`, `stability --only ""`, `bench --spp 0`).
 
 mod common;
 
@@ -181,4 +182,25 @@ fn table_cache_takes_finite_values_only() {
         assert_eq!(code, 2, "--table-cache {bad}: {err}");
         assert!(err.contains("--table-cache"), "{err}");
     }
+}
+
+#[test]
+fn options_that_do_not_apply_are_refused() {
+    let d = tmp_dir("guards-unused");
+    let out = s(&d.join("c"));
+    let sc = scene();
+    let cases: [(&[&str], &str); 4] = [
+        (&["-D", "spp=3", "render", &sc, "--spp", "1", "--resolution", "8x8", "--out", &out], "TOML scene"),
+        (&["compare", &sc, "--spp", "1", "--reference", &sc, "--out", &out], "--spp is a `render` option"),
+        (&["stability", "--only", "", "--out", &out], "no case named"),
+        (&["bench", &sc, "--spp", "0"], "--spp"),
+    ];
+    for (args, want) in cases {
+        let t = Instant::now();
+        let (code, err) = run(args);
+        assert_eq!(code, 1, "{args:?}: {err}");
+        assert!(err.contains(want), "{args:?}: {err}");
+        assert!(t.elapsed() < Duration::from_secs(20), "{args:?} took {:?}", t.elapsed());
+    }
+    let _ = std::fs::remove_dir_all(d);
 }

@@ -362,6 +362,17 @@ pub fn run_compare(cfg: &CompareConfig, cluster: &dyn Cluster) -> Result<Option<
     if cfg.base.args.pt.path_filter.is_some() {
         return Err("compare: --path-filter is a `render` diagnostic (a filtered image has no reference)".into());
     }
+    let b = &cfg.base;
+    let unused = [
+        ("--spp", b.spp.is_some()),
+        ("--time", b.time.is_some()),
+        ("--resume", b.resume.is_some()),
+        ("--checkpoint-every", b.checkpoint_every.is_some()),
+        ("--checkpoint-path", b.checkpoint_path.is_some()),
+    ];
+    if let Some((flag, _)) = unused.iter().find(|(_, set)| *set) {
+        return Err(format!("compare: {flag} is a `render` option; compare's runs are time-boxed by --budgets"));
+    }
     let scene = crate::scene::load_with(&cfg.base.scene, &cfg.base.load_options()).map_err(|e| e.to_string())?;
     let (reference, res) = agree_resolution(cfg, cluster)?;
     let regions = regions(&scene, res);

@@ -209,8 +209,9 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
         let rs = r.span();
         let r = r.get_ref();
         if let Some(m) = &r.method {
-            if !["pt", "iws", "iws-pm", "iws-cf"].contains(&m.as_str()) {
-                return Err(cx.err(rs, "render.method", format!("unknown method `{m}` (pt, iws, iws-pm, iws-cf)")));
+            if !super::METHOD_NAMES.contains(&m.as_str()) {
+                let all = super::METHOD_NAMES.join(", ");
+                return Err(cx.err(rs, "render.method", format!("unknown method `{m}` ({all})")));
             }
             render.method = m.clone();
         }
@@ -218,6 +219,10 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
         if let Some(s) = r.spp {
             params::SPP.check(s).map_err(|m| cx.err(rs.clone(), "render.spp", m))?;
             render.spp = Some(s);
+        }
+        if let (Some(_), Some(_)) = (r.spp, &r.time) {
+            let m = "`spp` and `time` exclude each other (as --spp and --time): give one";
+            return Err(cx.err(rs.clone(), "render.time", m));
         }
         if let Some(t) = &r.time {
             let secs = parse_duration(t).and_then(|v| params::check_time(v).map(|()| v));

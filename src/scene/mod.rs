@@ -48,8 +48,21 @@ pub fn load_with(path: &std::path::Path, opts: &LoadOptions) -> Result<Scene, Sc
         })?;
         return mitsuba::load(path, &opts.defines);
     }
+    if let Some((name, _)) = opts.defines.first() {
+        return Err(SceneError {
+            file: path.display().to_string(),
+            line: 0,
+            key: String::new(),
+            message: format!("-D {name}=…: -D sets Mitsuba XML `<default>` parameters; this is a TOML scene"),
+        });
+    }
     file::load(path)
 }
+
+/// The `--method` names a scene file may choose as its default (`[render] method`, XML
+/// `forecast_method`): `integrators::Method::ALL`'s, which lie above this module
+/// (`tests/bad_scenes.rs` checks that the two lists agree).
+pub const METHOD_NAMES: [&str; 5] = ["pt", "iws", "iws-pm", "iws-cf", "pt-cf"];
 
 /// Parses one `-D NAME=VALUE` (NAME non-empty, alphanumeric or `_`), as clap's value parser.
 pub fn parse_define(s: &str) -> Result<(String, String), String> {

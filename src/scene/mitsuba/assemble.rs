@@ -35,8 +35,8 @@ pub(super) fn forecast_defaults(
         let num = |v: &str| v.trim().parse::<u64>().map_err(|_| bad(k, format!("`{v}` is not a non-negative integer")));
         match k.as_str() {
             "forecast_method" => {
-                if !["pt", "iws", "iws-pm", "iws-cf", "pt-cf"].contains(&v.as_str()) {
-                    return Err(bad(k, format!("unknown method `{v}` (pt, iws, iws-pm, iws-cf, pt-cf)")));
+                if !crate::scene::METHOD_NAMES.contains(&v.as_str()) {
+                    return Err(bad(k, format!("unknown method `{v}` ({})", crate::scene::METHOD_NAMES.join(", "))));
                 }
                 render.method = v.clone();
             }
