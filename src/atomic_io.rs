@@ -311,7 +311,7 @@ mod tests {
         let e = check_not_clobbering("--checkpoint-path", &via_dots, &[&scene], &[]).unwrap_err();
         assert!(e.contains("--checkpoint-path") && e.contains("destroy"), "{e}");
         let out = dir.join("r.exr"); // not yet written: compared as absolute paths
-        let e = check_not_clobbering("--checkpoint-path", &out, &[&scene], &[out.clone()]).unwrap_err();
+        let e = check_not_clobbering("--checkpoint-path", &out, &[&scene], std::slice::from_ref(&out)).unwrap_err();
         assert!(e.contains("overwrite"), "{e}");
         assert!(check_not_clobbering("--checkpoint-path", &dir.join("r.ckpt"), &[&scene], &[out]).is_ok());
         std::fs::remove_dir_all(&dir).unwrap();
