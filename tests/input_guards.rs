@@ -26,11 +26,31 @@ fn forecast() -> Command {
     c
 }
 
-/// Runs `args` with captured output; (exit code, stderr). Fails on a signal or a panic.
+/// Runs `args` with captured output; (exit code, stderr). Fails on a signal, a panic, or a run
+/// past 30 s (it is killed: a blocked read must fail the test, not hang it).
 fn run(args: &[&str]) -> (i32, String) {
-    let out = forecast().args(args).output().expect("spawn forecast");
-    let err = String::from_utf8_lossy(&out.stderr).to_string();
-    let code = out.status.code().unwrap_or_else(|| panic!("{args:?} ended by a signal: {err}"));
+    let mut child = forecast().args(args).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().expect("spawn forecast");
+    // stderr is drained on its own thread, so a chatty child never blocks on a full pipe
+    let mut pipe = child.stderr.take().expect("stderr");
+    let reader = std::thread::spawn(move || {
+        let mut buf = String::new();
+        let _ = std::io::Read::read_to_string(&mut pipe, &mut buf);
+        buf
+    });
+    let t = Instant::now();
+    let status = loop {
+        if let Some(st) = child.try_wait().expect("wait") {
+            break st;
+        }
+        if t.elapsed() > Duration::from_secs(30) {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("{args:?} still running after 30 s (blocked?)");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let err = reader.join().expect("stderr reader");
+    let code = status.code().unwrap_or_else(|| panic!("{args:?} ended by a signal: {err}"));
     assert!(code != 101 && !err.contains("panicked"), "{args:?} panicked: {err}");
     (code, err)
 }

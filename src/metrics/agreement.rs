@@ -51,7 +51,7 @@ pub struct NoiseReport {
 }
 
 impl NoiseReport {
-    /// `true` if a test variance was given and `|ratio − 1| <= ratio_tolerance`.
+    /// `true` if there is a noise estimate ([`Self::has_estimate`]) and `|ratio − 1| <= ratio_tolerance`.
     pub fn ratio_ok(&self) -> bool {
         self.has_estimate() && (self.ratio - 1.0).abs() <= self.ratio_tolerance
     }

@@ -2,7 +2,6 @@
 //! (`deny_unknown_fields`). Values are checked, and turned into a `Scene`, by `file`.
 //! The format is documented in `scenes/README.md`.
 
-use serde::de::Error as _;
 use serde::{Deserialize, Deserializer};
 use std::collections::BTreeMap;
 use toml::Spanned;
@@ -44,9 +43,13 @@ fn default_up() -> [f32; 3] {
 /// `[T; N]` from an array of exactly `N` values. serde's own array impl reads the first `N` and
 /// toml does not report the rest, so `position = [0, 1, 2, 3]` would load as `[0, 1, 2]`.
 fn exact<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(d: D) -> Result<[T; N], D::Error> {
-    let v: Vec<T> = Vec::deserialize(d)?;
+    sized(Vec::deserialize(d)?)
+}
+
+/// `v` as `[T; N]`, or serde's invalid-length error.
+fn sized<T, E: serde::de::Error, const N: usize>(v: Vec<T>) -> Result<[T; N], E> {
     let n = v.len();
-    v.try_into().map_err(|_| D::Error::invalid_length(n, &format!("an array of length {N}").as_str()))
+    v.try_into().map_err(|_| E::invalid_length(n, &format!("an array of length {N}").as_str()))
 }
 
 /// [`exact`] of an optional key (with `#[serde(default)]` for a missing one).
@@ -56,12 +59,8 @@ fn exact_opt<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(d: 
 
 /// `target_box = [[x, y, z], [x, y, z]]`: two corners of exactly three values each.
 fn exact_box<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[[f32; 3]; 2]>, D::Error> {
-    let corners: [Vec<f32>; 2] = exact(d)?;
-    let [a, b] = corners.map(|c| {
-        let n = c.len();
-        <[f32; 3]>::try_from(c).map_err(|_| D::Error::invalid_length(n, &"a corner of 3 values"))
-    });
-    Ok(Some([a?, b?]))
+    let [a, b]: [Vec<f32>; 2] = exact(d)?;
+    Ok(Some([sized(a)?, sized(b)?]))
 }
 
 #[derive(Deserialize)]

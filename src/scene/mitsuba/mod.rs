@@ -22,7 +22,7 @@ mod xml;
 pub use shapes::SEGMENTS;
 
 use crate::math::Vec3;
-use crate::scene::{Camera, Material, PointLight, RenderDefaults, Scene, SceneError};
+use crate::scene::{limits, Camera, Material, PointLight, RenderDefaults, Scene, SceneError};
 use params::Plugin;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -242,9 +242,7 @@ fn point(cx: &mut Cx, n: &Node) -> Result<PointLight, SceneError> {
     let xf = p.transform(cx, "to_world")?;
     let position = pos.or(xf.map(|x| x.m.w_axis.truncate().as_vec3())).unwrap_or(Vec3::ZERO);
     let intensity = p.color(cx, "intensity")?.unwrap_or(Vec3::ONE);
-    if let Some(m) =
-        crate::scene::limits::light_value_error("intensity", intensity, crate::scene::limits::MAX_INTENSITY)
-    {
+    if let Some(m) = limits::light_value_error("intensity", intensity, limits::MAX_INTENSITY) {
         return Err(p.err(cx, n.line, "intensity", m));
     }
     p.finish(cx);

@@ -14,6 +14,7 @@ use super::params::{Plugin, Xform};
 use super::xml::Node;
 use super::Cx;
 use crate::math::{Rgb, Vec3};
+use crate::scene::limits;
 use crate::scene::ply::IndexedMesh;
 use crate::scene::{SceneError, Sphere, Triangle, NO_EMITTER};
 use glam::{DMat3, DVec3};
@@ -72,7 +73,7 @@ fn emitter(cx: &mut Cx, p: &mut Plugin) -> Result<Option<Rgb>, SceneError> {
     let Some(l) = ep.color(cx, "radiance")? else {
         return Err(ep.err(cx, e.line, "radiance", "the area emitter needs `radiance`"));
     };
-    if let Some(m) = crate::scene::limits::light_value_error("radiance", l, crate::scene::limits::MAX_RADIANCE) {
+    if let Some(m) = limits::light_value_error("radiance", l, limits::MAX_RADIANCE) {
         return Err(ep.err(cx, e.line, "radiance", m));
     }
     ep.finish(cx);
