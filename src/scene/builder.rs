@@ -388,44 +388,53 @@ impl SceneBuilder {
         }
     }
 
-    /// Validates what is left (a camera, a shape, a light) and assembles the scene; `root` is the
-    /// document's origin, `light_key` the format's key for "add a light".
-    pub fn build(mut self, root: &Origin, light_key: &str) -> Result<Scene, SceneError> {
-        let camera = self.camera.take().ok_or_else(|| self.err(root, "the scene has no camera"))?;
-        self.shape_warnings();
-        if self.triangles.is_empty() && self.spheres.is_empty() {
-            let msg = match self.shapes.iter().rev().find(|r| r.skipped > 0) {
-                Some(r) => {
-                    let at = r.shape.at.clone();
-                    let m = format!(
-                        "empty scene: no shapes (skipped {} degenerate triangle(s) in {})",
-                        r.skipped, r.shape.what
-                    );
-                    return Err(self.err(&at, m));
-                }
-                None => "empty scene: no shapes",
-            };
-            return Err(self.err(&Origin::new(root.line, "shape"), msg));
+    /// Refuses a scene without primitives, at the last shape whose triangles were all dropped.
+    fn check_not_empty(&self, root: &Origin) -> Result<(), SceneError> {
+        if !self.triangles.is_empty() || !self.spheres.is_empty() {
+            return Ok(());
         }
-        let mut emitters = Vec::new();
-        let mut emitter_at = Vec::new();
-        let ntri = self.triangles.len() as u32;
-        let prims = (self.tri_shape.iter().enumerate())
-            .chain(self.sph_shape.iter().enumerate().map(|(i, s)| (i + ntri as usize, s)));
-        for (prim, &s) in prims.collect::<Vec<_>>() {
+        match self.shapes.iter().rev().find(|r| r.skipped > 0) {
+            Some(r) => {
+                let (n, what) = (r.skipped, &r.shape.what);
+                Err(self
+                    .err(&r.shape.at, format!("empty scene: no shapes (skipped {n} degenerate triangle(s) in {what})")))
+            }
+            None => Err(self.err(&Origin::new(root.line, "shape"), "empty scene: no shapes")),
+        }
+    }
+
+    /// One emitter per primitive of an emitting shape, in primitive order (triangles, then
+    /// spheres), with the origin of its radiance; sets each primitive's `emitter`.
+    fn emitters(&mut self) -> (Vec<Emitter>, Vec<Origin>) {
+        let (mut emitters, mut emitter_at) = (Vec::new(), Vec::new());
+        let ntri = self.triangles.len();
+        let prims: Vec<(usize, u32)> = (self.tri_shape.iter().copied().enumerate())
+            .chain(self.sph_shape.iter().enumerate().map(|(i, &s)| (i + ntri, s)))
+            .collect();
+        for (prim, s) in prims {
             let Some((le, at)) = self.shapes[s as usize].shape.emission.clone() else { continue };
             let e = emitters.len() as u32;
-            let area = if prim < ntri as usize {
+            let area = if prim < ntri {
                 self.triangles[prim].emitter = e;
                 self.triangles[prim].area
             } else {
-                let sp = &mut self.spheres[prim - ntri as usize];
+                let sp = &mut self.spheres[prim - ntri];
                 sp.emitter = e;
                 4.0 * PI * sp.radius * sp.radius
             };
             emitters.push(Emitter { prim: prim as u32, radiance: le, area });
             emitter_at.push(at);
         }
+        (emitters, emitter_at)
+    }
+
+    /// Validates what is left (a camera, a shape, a light) and assembles the scene; `root` is the
+    /// document's origin, `light_key` the format's key for "add a light".
+    pub fn build(mut self, root: &Origin, light_key: &str) -> Result<Scene, SceneError> {
+        let camera = self.camera.take().ok_or_else(|| self.err(root, "the scene has no camera"))?;
+        self.shape_warnings();
+        self.check_not_empty(root)?;
+        let (emitters, emitter_at) = self.emitters();
         let (point_lights, light_at): (Vec<PointLight>, Vec<Origin>) = self.point_lights.drain(..).unzip();
         let mut lights: Vec<LightRef> = (0..emitters.len() as u32).map(LightRef::Area).collect();
         lights.extend((0..point_lights.len() as u32).map(LightRef::Point));

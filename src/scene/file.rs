@@ -311,45 +311,61 @@ fn shape(
             let id = begin(b, material, emission, "radius", format!("sphere shape[{idx}]"))?;
             b.sphere(id, (v3(*center), &at("center")), (*radius, &at("radius")), *inward)?;
         }
-        ShapeDef::Mesh { file: f, normals, material, emission, translate, scale, rotate_y } => {
-            let smooth = match normals.as_str() {
-                "flat" => false,
-                "smooth" => true,
-                other => {
-                    let m = format!("normals must be `flat` or `smooth`, got `{other}`");
-                    return Err(cx.err(ss, &key("normals"), m));
-                }
-            };
-            let (t, sc, ry) = (translate.unwrap_or([0.0; 3]), scale.unwrap_or(1.0), rotate_y.unwrap_or(0.0));
-            if !within_extent(v3(t)) {
-                return Err(cx.err(ss, &key("translate"), extent_message("translate", v3(t))));
-            }
-            if !(sc.is_finite() && sc > 0.0) {
-                return Err(cx.err(ss, &key("scale"), format!("scale must be positive and finite, got {sc}")));
-            }
-            if !ry.is_finite() {
-                return Err(cx.err(ss, &key("rotate_y"), format!("rotate_y must be finite, got {ry}")));
-            }
-            let path = dir.join(f);
-            let id = begin(b, material, emission, "file", path.display().to_string())?;
-            let mesh = super::load_mesh_file(&path, smooth).map_err(|m| cx.err(ss.clone(), &key("file"), m))?;
-            b.hash_mesh(mesh.bytes_hash);
-            let (sin, cos) = ry.to_radians().sin_cos();
-            let rot = |p: Vec3| Vec3::new(cos * p.x + sin * p.z, p.y, -sin * p.x + cos * p.z);
-            let xf = |p: Vec3| rot(p * sc) + v3(t);
-            for (k, tri) in mesh.triangles.iter().enumerate() {
-                // a vertex outside the extent names the key that took it there
-                let blame = if tri.iter().any(|&r| r.is_finite() && !within_extent(r)) {
-                    "file"
-                } else if scale.is_some() {
-                    "scale"
-                } else {
-                    "translate"
-                };
-                let n = mesh.normals.as_ref().map(|ns| ns[k].map(rot));
-                b.triangle(id, (tri.map(xf), *tri), n, &at(blame), Some(k))?;
-            }
+        ShapeDef::Mesh { material, emission, file, .. } => {
+            let id = begin(b, material, emission, "file", dir.join(file).display().to_string())?;
+            mesh(cx, b, &def, dir, (ss, idx), id)?;
         }
+    }
+    Ok(())
+}
+
+/// A `type = "mesh"` shape's triangles (shape `id` begun): the file, its transform.
+fn mesh(
+    cx: &Ctx,
+    b: &mut SceneBuilder,
+    def: &ShapeDef,
+    dir: &Path,
+    (ss, idx): (std::ops::Range<usize>, usize),
+    id: usize,
+) -> Result<(), SceneError> {
+    let ShapeDef::Mesh { file: f, normals, translate, scale, rotate_y, .. } = def else { return Ok(()) };
+    let key = |k: &str| format!("shape[{idx}].{k}");
+    let at = |k: &str| cx.at(ss.clone(), &key(k));
+    let smooth = match normals.as_str() {
+        "flat" => false,
+        "smooth" => true,
+        other => {
+            let m = format!("normals must be `flat` or `smooth`, got `{other}`");
+            return Err(cx.err(ss, &key("normals"), m));
+        }
+    };
+    let (t, sc, ry) = (translate.unwrap_or([0.0; 3]), scale.unwrap_or(1.0), rotate_y.unwrap_or(0.0));
+    if !within_extent(v3(t)) {
+        return Err(cx.err(ss, &key("translate"), extent_message("translate", v3(t))));
+    }
+    if !(sc.is_finite() && sc > 0.0) {
+        return Err(cx.err(ss, &key("scale"), format!("scale must be positive and finite, got {sc}")));
+    }
+    if !ry.is_finite() {
+        return Err(cx.err(ss, &key("rotate_y"), format!("rotate_y must be finite, got {ry}")));
+    }
+    let path = dir.join(f);
+    let mesh = super::load_mesh_file(&path, smooth).map_err(|m| cx.err(ss.clone(), &key("file"), m))?;
+    b.hash_mesh(mesh.bytes_hash);
+    let (sin, cos) = ry.to_radians().sin_cos();
+    let rot = |p: Vec3| Vec3::new(cos * p.x + sin * p.z, p.y, -sin * p.x + cos * p.z);
+    let xf = |p: Vec3| rot(p * sc) + v3(t);
+    for (k, tri) in mesh.triangles.iter().enumerate() {
+        // a vertex outside the extent names the key that took it there
+        let blame = if tri.iter().any(|&r| r.is_finite() && !within_extent(r)) {
+            "file"
+        } else if scale.is_some() {
+            "scale"
+        } else {
+            "translate"
+        };
+        let n = mesh.normals.as_ref().map(|ns| ns[k].map(rot));
+        b.triangle(id, (tri.map(xf), *tri), n, &at(blame), Some(k))?;
     }
     Ok(())
 }

@@ -286,17 +286,9 @@ pub fn parse(bytes: &[u8]) -> Result<IndexedMesh, String> {
     let mut vals = Vec::new();
     let mut poly: Vec<u32> = Vec::new();
     for el in &elements {
-        let col = |n: &str| el.props.iter().position(|p| p.name == n && p.list.is_none());
-        let (xyz, nxyz) = ([col("x"), col("y"), col("z")], [col("nx"), col("ny"), col("nz")]);
+        let (xyz, nxyz, face_list) = columns(el)?;
         if el.name == "vertex" {
-            if xyz.iter().any(|c| c.is_none()) {
-                return Err("element `vertex` needs float properties x, y, z".into());
-            }
             has_normals = nxyz.iter().all(|c| c.is_some());
-        }
-        let face_list = el.props.iter().position(|p| p.list.is_some() && p.name.starts_with("vertex_ind"));
-        if el.name == "face" && face_list.is_none() {
-            return Err("element `face` needs a list property `vertex_indices`".into());
         }
         if el.props.is_empty() {
             continue; // rows of no properties occupy no bytes: nothing to read, whatever the count
@@ -339,16 +331,33 @@ pub fn parse(bytes: &[u8]) -> Result<IndexedMesh, String> {
         vertex_read |= el.name == "vertex";
     }
     // faces read before the vertex element: their indices are checked now
+    let nv = positions.len();
     if let Some((k, i)) =
-        faces.iter().enumerate().find_map(|(k, f)| f.iter().find(|&&i| i as usize >= positions.len()).map(|&i| (k, i)))
+        faces.iter().enumerate().find_map(|(k, f)| f.iter().find(|&&i| i as usize >= nv).map(|&i| (k, i)))
     {
-        let nv = positions.len();
         return Err(format!("triangle {}: face index {i} out of range (the file has {nv} vertices)", k + 1));
     }
     if faces.is_empty() {
         return Err("no faces".into());
     }
     Ok(IndexedMesh { positions, normals: has_normals.then_some(normals), faces, bytes_hash })
+}
+
+/// An element's x, y, z and nx, ny, nz columns and its face list (`vertex` needs x, y, z;
+/// `face` needs `vertex_indices`).
+type Columns = ([Option<usize>; 3], [Option<usize>; 3], Option<usize>);
+
+fn columns(el: &Element) -> Result<Columns, String> {
+    let col = |n: &str| el.props.iter().position(|p| p.name == n && p.list.is_none());
+    let (xyz, nxyz) = ([col("x"), col("y"), col("z")], [col("nx"), col("ny"), col("nz")]);
+    if el.name == "vertex" && xyz.iter().any(|c| c.is_none()) {
+        return Err("element `vertex` needs float properties x, y, z".into());
+    }
+    let face_list = el.props.iter().position(|p| p.list.is_some() && p.name.starts_with("vertex_ind"));
+    if el.name == "face" && face_list.is_none() {
+        return Err("element `face` needs a list property `vertex_indices`".into());
+    }
+    Ok((xyz, nxyz, face_list))
 }
 
 /// A face index read as `i`: a whole number in `[0, nv)` (`nv` once known, else `[0, 2³²)`).
