@@ -1,6 +1,11 @@
-//! Scene-parser robustness (issue #9): a fixed-seed mutation corpus of the shipped scenes
-//! (scenes/*.toml, scenes/stability/*.toml, tests/scenes/*.toml) must never panic in
-//! `scene::load_str` + `World::build`, and each case must finish within `CASE_BOUND_S`.
+//! Scene-parser robustness (issues #9, #31): fixed-seed mutation corpora of the TOML scenes
+//! (scenes/*.toml, scenes/stability/*.toml, tests/scenes/*.toml), of Mitsuba XML scenes (the SMS
+//! ring and `XML_BASE`, every shape and BSDF kind) and of PLY meshes (ASCII and binary) must
+//! never panic, hang or abort in the loaders + `World::build`, and each case must finish within
+//! `CASE_BOUND_S` (a case past `HANG_S` is a hang: the test fails naming the mutant).
+//!
+//! `FORECAST_FUZZ_SECS=600 cargo test --release --test scene_fuzz -- --ignored` runs the three
+//! corpora for that long (new seeds) and prints mutants run, panics, hangs and the slowest case.
 //!
 //! Mutations (1 to 3 per case, seeded by the case index): byte replacements with TOML
 //! punctuation, digits and letters; numbers swapped for extreme values (1e39, −0, nan, inf,
@@ -19,11 +24,14 @@ use forecast::accel::World;
 use forecast::sampling::rng::{stream, Rng};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
 
 /// Cases in CI; `SCENE_FUZZ_CASES=N` runs more (a deeper local search, same seeds).
 const CASES: usize = 5000;
 const CASE_BOUND_S: f64 = 2.0;
+/// A case still running after this long is a hang (the worker is abandoned, the case reported).
+const HANG_S: f64 = 10.0;
 
 const EXTREMES: &[&str] = &[
     "1e39",
@@ -149,11 +157,52 @@ fn mutate(src: &str, rng: &mut Rng) -> String {
 
 /// Loads and builds; Err(panic message) on a panic.
 fn run_case(src: &str, dir: &Path) -> Result<bool, String> {
-    catch_unwind(AssertUnwindSafe(|| match forecast::scene::load_str(src, "fuzz.toml", dir) {
-        Ok(scene) => World::build(scene).is_ok(),
-        Err(e) => {
-            assert!(!e.message.is_empty() && e.file == "fuzz.toml", "error without a message: {e:?}");
-            false
+    run_input(&Input::Toml(src.to_string()), dir)
+}
+
+/// One mutant of one of the three formats.
+#[derive(Clone)]
+enum Input {
+    Toml(String),
+    Xml(String),
+    Ply(Vec<u8>),
+}
+
+impl Input {
+    fn show(&self) -> String {
+        match self {
+            Input::Toml(s) | Input::Xml(s) => s.chars().take(4000).collect(),
+            Input::Ply(b) => String::from_utf8_lossy(&b[..b.len().min(4000)]).into_owned(),
+        }
+    }
+}
+
+/// Loads (and builds) one input; Ok(loaded), Err(panic message) on a panic.
+fn run_input(input: &Input, dir: &Path) -> Result<bool, String> {
+    catch_unwind(AssertUnwindSafe(|| {
+        let (r, file) = match input {
+            Input::Toml(s) => (forecast::scene::load_str(s, "fuzz.toml", dir), "fuzz.toml"),
+            Input::Xml(s) => (forecast::scene::mitsuba::load_str(s, "fuzz.xml", dir, &[]), "fuzz.xml"),
+            Input::Ply(b) => {
+                return match forecast::scene::ply::parse(b) {
+                    Ok(m) => {
+                        assert!(m.faces.iter().flatten().all(|&i| (i as usize) < m.positions.len()), "bad index");
+                        assert!(m.normals.as_ref().is_none_or(|n| n.len() == m.positions.len()), "short normals");
+                        true
+                    }
+                    Err(e) => {
+                        assert!(!e.is_empty(), "PLY error without a message");
+                        false
+                    }
+                }
+            }
+        };
+        match r {
+            Ok(scene) => World::build(scene).is_ok(),
+            Err(e) => {
+                assert!(!e.message.is_empty() && e.file == file, "error without a message: {e:?}");
+                false
+            }
         }
     }))
     .map_err(|p| {
@@ -164,42 +213,415 @@ fn run_case(src: &str, dir: &Path) -> Result<bool, String> {
     })
 }
 
-#[test]
-fn mutated_shipped_scenes_never_panic_or_hang() {
-    let dir = tmp_dir("scene-fuzz");
+/// Runs inputs on a worker thread, each with a deadline: a case past `HANG_S` is reported as
+/// a hang and the worker abandoned (a new one takes the next case).
+struct Runner {
+    dir: PathBuf,
+    tx: Option<mpsc::Sender<Input>>,
+    rx: Option<mpsc::Receiver<Result<bool, String>>>,
+}
+
+enum Outcome {
+    Done(Result<bool, String>, f64),
+    Hang,
+}
+
+impl Runner {
+    fn new(dir: &Path) -> Runner {
+        Runner { dir: dir.to_path_buf(), tx: None, rx: None }
+    }
+    fn run(&mut self, input: Input) -> Outcome {
+        if self.tx.is_none() {
+            let (tx, wrx) = mpsc::channel::<Input>();
+            let (wtx, rx) = mpsc::channel();
+            let dir = self.dir.clone();
+            std::thread::spawn(move || {
+                for i in wrx {
+                    if wtx.send(run_input(&i, &dir)).is_err() {
+                        break;
+                    }
+                }
+            });
+            (self.tx, self.rx) = (Some(tx), Some(rx));
+        }
+        let t = Instant::now();
+        self.tx.as_ref().unwrap().send(input).unwrap();
+        match self.rx.as_ref().unwrap().recv_timeout(Duration::from_secs_f64(HANG_S)) {
+            Ok(r) => Outcome::Done(r, t.elapsed().as_secs_f64()),
+            Err(_) => {
+                (self.tx, self.rx) = (None, None);
+                Outcome::Hang
+            }
+        }
+    }
+}
+
+/// The fuzz directory: the tiny stand-in meshes every corpus points at.
+fn fuzz_dir(name: &str) -> PathBuf {
+    let dir = tmp_dir(name);
     std::fs::write(dir.join("tiny.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n")
         .unwrap();
+    std::fs::write(dir.join("tiny.ply"), PLY_ASCII).unwrap();
+    dir
+}
+
+#[test]
+fn mutated_shipped_scenes_never_panic_or_hang() {
+    let dir = fuzz_dir("scene-fuzz");
     let corpus = corpus();
     // the unmutated corpus loads (else the mutants would test nothing but the first error)
     for (name, src) in &corpus {
         assert_eq!(run_case(src, &dir), Ok(true), "{name} does not load unmutated");
     }
-    let (mut failures, mut slow, mut loaded) = (Vec::new(), Vec::new(), 0usize);
     let cases = std::env::var("SCENE_FUZZ_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(CASES);
-    let mut worst = 0.0f64;
-    let started = Instant::now();
-    for case in 0..cases {
+    let inputs = (0..cases).map(|case| {
         let mut rng = Rng::keyed(0x5eed, stream::MISC, case as u64, 0);
         let (name, src) = &corpus[case % corpus.len()];
-        let m = mutate(src, &mut rng);
-        let t = Instant::now();
-        let r = run_case(&m, &dir);
-        let dt = t.elapsed().as_secs_f64();
-        worst = worst.max(dt);
-        match r {
-            Ok(ok) => loaded += ok as usize,
-            Err(msg) => failures.push(format!("case {case} ({name}): panic: {msg}\n--- mutant ---\n{m}")),
-        }
-        if dt > CASE_BOUND_S {
-            slow.push(format!("case {case} ({name}): {dt:.2} s"));
+        (name.clone(), Input::Toml(mutate(src, &mut rng)))
+    });
+    let loaded = fuzz("TOML", &dir, inputs);
+    // the corpus must exercise both paths
+    assert!(loaded > cases / 10 && loaded < cases, "{loaded} of {cases} mutants loaded");
+}
+
+/// Runs every input with its deadline; fails on a panic, a hang or a case over `CASE_BOUND_S`;
+/// returns how many loaded (and built).
+fn fuzz(what: &str, dir: &Path, inputs: impl Iterator<Item = (String, Input)>) -> usize {
+    let mut runner = Runner::new(dir);
+    let (mut failures, mut slow, mut loaded, mut n) = (Vec::new(), Vec::new(), 0usize, 0usize);
+    let mut worst = 0.0f64;
+    let started = Instant::now();
+    for (case, (name, input)) in inputs.enumerate() {
+        n += 1;
+        match runner.run(input.clone()) {
+            Outcome::Done(Ok(ok), dt) => {
+                loaded += ok as usize;
+                worst = worst.max(dt);
+                if dt > CASE_BOUND_S {
+                    slow.push(format!("case {case} ({name}): {dt:.2} s"));
+                }
+            }
+            Outcome::Done(Err(msg), _) => {
+                failures.push(format!("case {case} ({name}): panic: {msg}\n--- mutant ---\n{}", input.show()))
+            }
+            Outcome::Hang => {
+                failures.push(format!("case {case} ({name}): hang (> {HANG_S} s)\n--- mutant ---\n{}", input.show()))
+            }
         }
     }
     eprintln!(
-        "scene fuzz: {cases} cases, {loaded} loaded and built, worst {worst:.4} s, total {:.2} s",
+        "{what} fuzz: {n} cases, {loaded} loaded and built, worst {worst:.4} s, total {:.2} s",
         started.elapsed().as_secs_f64()
     );
-    assert!(failures.is_empty(), "{} panic(s); first:\n{}", failures.len(), failures[0]);
+    assert!(failures.is_empty(), "{} panic(s) or hang(s); first:\n{}", failures.len(), failures[0]);
     assert!(slow.is_empty(), "cases over {CASE_BOUND_S} s: {slow:?}");
-    // the corpus must exercise both paths
-    assert!(loaded > cases / 10 && loaded < cases, "{loaded} of {cases} mutants loaded");
+    loaded
+}
+
+// ---- Mitsuba XML ----
+
+/// Cases in CI for XML and PLY each.
+const CASES_XML: usize = 3000;
+const CASES_PLY: usize = 3000;
+
+/// A scene with every shape and BSDF kind the XML reader knows (meshes: the tiny stand-ins).
+const XML_BASE: &str = r#"<scene version="3.0.0">
+<default name="spp" value="4"/>
+<default name="forecast_method" value="pt"/>
+<integrator type="path"><integer name="max_depth" value="16"/></integrator>
+<sensor type="perspective"><float name="fov" value="40"/><string name="fov_axis" value="y"/>
+  <transform name="to_world"><lookat origin="0, 1, 3.88" target="0, 1, 0" up="0, 1, 0"/></transform>
+  <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
+  <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film>
+</sensor>
+<bsdf type="diffuse" id="white"><rgb name="reflectance" value="0.7, 0.7, 0.7"/></bsdf>
+<bsdf type="twosided" id="two"><bsdf type="diffuse"><rgb name="reflectance" value="0.2"/></bsdf></bsdf>
+<bsdf type="conductor" id="gold"><string name="material" value="Au"/></bsdf>
+<bsdf type="dielectric" id="glass"><float name="int_ior" value="1.5"/></bsdf>
+<shape type="rectangle"><transform name="to_world"><scale value="2"/><rotate x="1" angle="-90"/></transform><ref id="white"/></shape>
+<shape type="cube"><transform name="to_world"><scale value="0.2"/><translate value="0.5 0.2 0"/></transform><ref id="two"/></shape>
+<shape type="sphere"><point name="center" value="-0.5 0.3 0"/><float name="radius" value="0.3"/><ref id="glass"/></shape>
+<shape type="disk"><transform name="to_world"><translate value="0 0.01 0.5"/></transform><ref id="gold"/></shape>
+<shape type="cylinder"><point name="p0" value="0 0 -0.5"/><point name="p1" value="0 0.5 -0.5"/><float name="radius" value="0.1"/></shape>
+<shape type="ply"><string name="filename" value="tiny.ply"/><transform name="to_world"><matrix value="0.5 0 0 0 0 0.5 0 0.5 0 0 0.5 0 0 0 0 1"/></transform></shape>
+<shape type="obj"><string name="filename" value="tiny.obj"/><boolean name="face_normals" value="true"/></shape>
+<shape type="rectangle"><transform name="to_world"><scale value="0.3"/><rotate x="1" angle="90"/><translate value="0 1.9 0"/></transform>
+  <emitter type="area"><rgb name="radiance" value="10"/></emitter></shape>
+<emitter type="point"><point name="position" x="0" y="1.5" z="1"/><rgb name="intensity" value="2"/></emitter>
+</scene>
+"#;
+
+const XML_BYTES: &[u8] = b"<>/=\"' \n0123456789.-e,$&;!abc";
+const XML_SNIPPETS: &[&str] = &[
+    "<shape type=\"ply\"><string name=\"filename\" value=\"tiny.ply\"/></shape>",
+    "<shape type=\"sphere\"><float name=\"radius\" value=\"1e19\"/></shape>",
+    "<emitter type=\"point\"><point name=\"position\" value=\"0 5 0\"/><rgb name=\"intensity\" value=\"1e9\"/></emitter>",
+    "<default name=\"forecast_photons\" value=\"4000000000\"/>",
+    "<default name=\"forecast_roi_0\" value=\"0 0 8 8 r\"/>",
+    "<transform name=\"to_world\"><scale value=\"0\"/></transform>",
+    "<transform name=\"to_world\"><matrix value=\"1 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0\"/></transform>",
+    "<bsdf type=\"twosided\"><bsdf type=\"twosided\"><bsdf type=\"diffuse\"/></bsdf></bsdf>",
+    "<integrator type=\"sppm\"><integer name=\"photonCount\" value=\"1000\"/></integrator>",
+    "<ref id=\"white\"/>",
+    "<bsdf type=\"diffuse\" id=\"white\"/>",
+    "<![CDATA[x]]>",
+    "<!-- c -->",
+];
+const XML_TYPES: &[&str] = &[
+    "rectangle",
+    "cube",
+    "sphere",
+    "disk",
+    "cylinder",
+    "obj",
+    "ply",
+    "diffuse",
+    "conductor",
+    "dielectric",
+    "twosided",
+    "area",
+    "point",
+    "path",
+    "sppm",
+    "",
+];
+
+fn xml_corpus() -> Vec<(String, String)> {
+    let ring = std::fs::read_to_string(root().join("scenes/external/sms-ring/ring.xml")).unwrap();
+    // (the ring's shapes are analytic: no mesh files)
+    vec![("ring.xml".into(), ring), ("base.xml".into(), XML_BASE.to_string())]
+}
+
+fn mutate_xml(src: &str, rng: &mut Rng) -> String {
+    let mut s = src.to_string();
+    for _ in 0..1 + pick(rng, 3) {
+        match pick(rng, 8) {
+            0 => {
+                let b: Vec<usize> = s.char_indices().filter(|(_, c)| c.is_ascii()).map(|(i, _)| i).collect();
+                if let Some(&i) = b.get(pick(rng, b.len())) {
+                    let c = XML_BYTES[pick(rng, XML_BYTES.len())] as char;
+                    s.replace_range(i..i + 1, &c.to_string());
+                }
+            }
+            1 | 2 => {
+                let spans = number_spans(&s);
+                if let Some(&(i, j)) = spans.get(pick(rng, spans.len())) {
+                    s.replace_range(i..j, EXTREMES[pick(rng, EXTREMES.len())]);
+                }
+            }
+            3 => {
+                // a type="..." swapped
+                let at: Vec<usize> = s.match_indices("type=\"").map(|(i, _)| i + 6).collect();
+                if let Some(&i) = at.get(pick(rng, at.len())) {
+                    let j = i + s[i..].find('"').unwrap_or(0);
+                    s.replace_range(i..j, XML_TYPES[pick(rng, XML_TYPES.len())]);
+                }
+            }
+            4 => {
+                // a snippet inserted after a random '>'
+                let at: Vec<usize> = s.match_indices('>').map(|(i, _)| i + 1).collect();
+                if let Some(&i) = at.get(pick(rng, at.len())) {
+                    s.insert_str(i, XML_SNIPPETS[pick(rng, XML_SNIPPETS.len())]);
+                }
+            }
+            5 => {
+                // deep nesting around a random point
+                let at: Vec<usize> = s.match_indices('>').map(|(i, _)| i + 1).collect();
+                if let Some(&i) = at.get(pick(rng, at.len())) {
+                    let n = [10, 70, 2000][pick(rng, 3)];
+                    s.insert_str(i, &format!("{}{}", "<bsdf type=\"twosided\">".repeat(n), "</bsdf>".repeat(n)));
+                }
+            }
+            _ => s = line_op(&s, rng),
+        }
+    }
+    s
+}
+
+/// A line swapped, deleted or duplicated.
+fn line_op(s: &str, rng: &mut Rng) -> String {
+    let mut lines: Vec<String> = s.lines().map(str::to_string).collect();
+    if lines.is_empty() {
+        return s.to_string();
+    }
+    let (a, b) = (pick(rng, lines.len()), pick(rng, lines.len()));
+    match pick(rng, 3) {
+        0 => lines.swap(a, b),
+        1 => {
+            lines.remove(a);
+        }
+        _ => {
+            let l = lines[a].clone();
+            lines.insert(b, l);
+        }
+    }
+    lines.join("\n") + "\n"
+}
+
+fn xml_inputs(seed: u64, cases: usize) -> impl Iterator<Item = (String, Input)> {
+    let corpus = xml_corpus();
+    (0..cases).map(move |case| {
+        let mut rng = Rng::keyed(seed, stream::MISC, case as u64, 1);
+        let (name, src) = &corpus[case % corpus.len()];
+        (name.clone(), Input::Xml(mutate_xml(src, &mut rng)))
+    })
+}
+
+#[test]
+fn mutated_xml_scenes_never_panic_or_hang() {
+    let dir = fuzz_dir("scene-fuzz-xml");
+    for (name, src) in xml_corpus() {
+        assert_eq!(run_input(&Input::Xml(src), &dir), Ok(true), "{name} does not load unmutated");
+    }
+    let loaded = fuzz("XML", &dir, xml_inputs(0x5eed, CASES_XML));
+    assert!(loaded > CASES_XML / 10 && loaded < CASES_XML, "{loaded} of {CASES_XML} mutants loaded");
+}
+
+// ---- PLY ----
+
+const PLY_ASCII: &str = "ply\nformat ascii 1.0\ncomment tiny\nelement vertex 4\nproperty float x\nproperty float y\n\
+property float z\nproperty float nx\nproperty float ny\nproperty float nz\nelement face 2\n\
+property list uchar int vertex_indices\nend_header\n0 0 0 0 0 1\n1 0 0 0 0 1\n1 1 0 0 0 1\n0 1 0 0 0 1\n3 0 1 2\n4 0 2 3 1\n";
+
+fn ply_corpus() -> Vec<(String, Vec<u8>)> {
+    let m = forecast::scene::ply::parse(PLY_ASCII.as_bytes()).unwrap();
+    let bin = forecast::scene::ply::write_binary(&m);
+    let flat = forecast::scene::ply::write_binary(&forecast::scene::ply::IndexedMesh { normals: None, ..m });
+    vec![("ascii.ply".into(), PLY_ASCII.as_bytes().to_vec()), ("binary.ply".into(), bin), ("flat.ply".into(), flat)]
+}
+
+const PLY_WORDS: &[&str] = &[
+    "element vertex 3", "element face 1", "element junk 18446744073709551615", "property float x", "property float nx",
+    "property list uchar int vertex_indices", "property list float int vertex_indices", "property list uint uint vertex_indices",
+    "element vertex 1\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz",
+    "format binary_big_endian 1.0", "format binary_little_endian 1.0", "format ascii 1.0", "end_header", "comment x",
+];
+
+fn mutate_ply(src: &[u8], rng: &mut Rng) -> Vec<u8> {
+    let mut b = src.to_vec();
+    let header_end = b.windows(10).position(|w| w == b"end_header").map_or(b.len(), |i| i + 11);
+    for _ in 0..1 + pick(rng, 3) {
+        match pick(rng, 6) {
+            0 => {
+                // any byte anywhere (binary bodies)
+                for _ in 0..1 + pick(rng, 4) {
+                    let i = pick(rng, b.len());
+                    if i < b.len() {
+                        b[i] = rng.next_u32() as u8;
+                    }
+                }
+            }
+            1 | 2 => {
+                // a number in the text (header counts, ASCII values) → an extreme
+                let s = String::from_utf8_lossy(&b).into_owned();
+                let spans = number_spans(&s);
+                if let Some(&(i, j)) = spans.get(pick(rng, spans.len())) {
+                    if s.is_char_boundary(i) && s.is_char_boundary(j) && j <= b.len() {
+                        b.splice(i..j, EXTREMES[pick(rng, EXTREMES.len())].bytes());
+                    }
+                }
+            }
+            3 => {
+                // a header line replaced or inserted
+                let lines: Vec<usize> = (0..header_end.min(b.len())).filter(|&i| i == 0 || b[i - 1] == b'\n').collect();
+                if let Some(&i) = lines.get(pick(rng, lines.len())) {
+                    let w = format!("{}\n", PLY_WORDS[pick(rng, PLY_WORDS.len())]);
+                    if pick(rng, 2) == 0 {
+                        let j = i + b[i..].iter().position(|&c| c == b'\n').map_or(0, |k| k + 1);
+                        b.splice(i..j, w.bytes());
+                    } else {
+                        b.splice(i..i, w.bytes());
+                    }
+                }
+            }
+            4 => {
+                let n = pick(rng, b.len() + 1);
+                b.truncate(n);
+            }
+            _ => {
+                // body bytes duplicated or removed
+                let (i, n) = (pick(rng, b.len()), 1 + pick(rng, 16));
+                if pick(rng, 2) == 0 {
+                    let chunk: Vec<u8> = b[i..(i + n).min(b.len())].to_vec();
+                    b.splice(i..i, chunk);
+                } else {
+                    b.drain(i..(i + n).min(b.len()));
+                }
+            }
+        }
+    }
+    b
+}
+
+fn ply_inputs(seed: u64, cases: usize) -> impl Iterator<Item = (String, Input)> {
+    let corpus = ply_corpus();
+    (0..cases).map(move |case| {
+        let mut rng = Rng::keyed(seed, stream::MISC, case as u64, 2);
+        let (name, src) = &corpus[case % corpus.len()];
+        (name.clone(), Input::Ply(mutate_ply(src, &mut rng)))
+    })
+}
+
+#[test]
+fn mutated_ply_meshes_never_panic_or_hang() {
+    let dir = fuzz_dir("scene-fuzz-ply");
+    for (name, b) in ply_corpus() {
+        assert_eq!(run_input(&Input::Ply(b), &dir), Ok(true), "{name} does not load unmutated");
+    }
+    let loaded = fuzz("PLY", &dir, ply_inputs(0x5eed, CASES_PLY));
+    assert!(loaded > CASES_PLY / 20 && loaded < CASES_PLY, "{loaded} of {CASES_PLY} mutants loaded");
+}
+
+// ---- the long run ----
+
+/// `FORECAST_FUZZ_SECS` seconds (default 600) of TOML, XML and PLY mutants in turn, new seeds;
+/// prints the counts and fails on any panic or hang (an abort ends the process: no summary).
+#[test]
+#[ignore]
+fn fuzz_for_a_while() {
+    let secs: f64 = std::env::var("FORECAST_FUZZ_SECS").ok().and_then(|v| v.parse().ok()).unwrap_or(600.0);
+    let dir = fuzz_dir("scene-fuzz-long");
+    let toml = corpus();
+    let mut runner = Runner::new(&dir);
+    let started = Instant::now();
+    let mut counts = [[0usize; 4]; 3]; // per format: run, loaded, panics, hangs
+    let mut worst = [0.0f64; 3];
+    let mut found = Vec::new();
+    let mut round = 0u64;
+    while started.elapsed().as_secs_f64() < secs {
+        let seed = 0xf022 + round;
+        let batch: Vec<(usize, String, Input)> = (0..200)
+            .map(|case| {
+                let mut rng = Rng::keyed(seed, stream::MISC, case as u64, 3);
+                let (name, src) = &toml[case % toml.len()];
+                (0, name.clone(), Input::Toml(mutate(src, &mut rng)))
+            })
+            .chain(xml_inputs(seed, 200).map(|(n, i)| (1, n, i)))
+            .chain(ply_inputs(seed, 200).map(|(n, i)| (2, n, i)))
+            .collect();
+        for (f, name, input) in batch {
+            counts[f][0] += 1;
+            match runner.run(input.clone()) {
+                Outcome::Done(Ok(ok), dt) => {
+                    counts[f][1] += ok as usize;
+                    worst[f] = worst[f].max(dt);
+                }
+                Outcome::Done(Err(msg), _) => {
+                    counts[f][2] += 1;
+                    found.push(format!("seed {seed} ({name}): panic: {msg}\n{}", input.show()));
+                }
+                Outcome::Hang => {
+                    counts[f][3] += 1;
+                    found.push(format!("seed {seed} ({name}): hang\n{}", input.show()));
+                }
+            }
+        }
+        round += 1;
+    }
+    for (f, what) in ["TOML", "XML", "PLY"].iter().enumerate() {
+        let [n, l, p, h] = counts[f];
+        eprintln!("{what}: {n} mutants, {l} loaded, {p} panics, {h} hangs, slowest {:.3} s", worst[f]);
+    }
+    eprintln!("total {:.0} s, 0 aborts (the process ran to the end)", started.elapsed().as_secs_f64());
+    assert!(found.is_empty(), "{} finding(s); first:\n{}", found.len(), found[0]);
 }

@@ -1,4 +1,6 @@
-//! `Scene`: immutable geometry, materials, lights and camera, as loaded from a TOML scene file.
+//! `Scene`: immutable geometry, materials, lights and camera, as loaded from a scene file (TOML,
+//! `file`, or Mitsuba XML, `mitsuba`), each a translator into the one `builder::SceneBuilder`
+//! that validates and assembles every scene.
 //!
 //! Primitives are triangles (quads and OBJ meshes) and analytic spheres. Primitive ids are
 //! `[0, ntri)` for triangles and `[ntri, ntri+nsph)` for spheres. Every emissive primitive is one
@@ -7,19 +9,22 @@
 //! Invariants: geometric normals are unit and define the emitting side of area lights; shading
 //! normals lie on the geometric normal's side; emitters have the black material.
 
+mod builder;
 mod camera;
 pub mod export;
 mod file;
 mod limits;
 mod locate;
 mod material;
+mod mesh;
 pub mod mitsuba;
 mod obj;
 pub mod ply;
 mod schema;
 
+pub use builder::{parse_duration, SceneError};
 pub use camera::Camera;
-pub use file::{load_str, parse_duration, SceneError};
+pub use file::load_str;
 pub use limits::{within_extent, MAX_EXTENT};
 
 /// How a scene file is loaded: the `-D NAME=VALUE` substitutions for Mitsuba XML `$NAME`
@@ -75,7 +80,7 @@ pub fn parse_define(s: &str) -> Result<(String, String), String> {
 }
 
 /// A TOML `type = "mesh"` file by extension: `.ply` (PLY reader) or OBJ.
-fn load_mesh_file(path: &std::path::Path, smooth: bool) -> Result<obj::Mesh, String> {
+fn load_mesh_file(path: &std::path::Path, smooth: bool) -> Result<mesh::Mesh, String> {
     if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply")) {
         return ply::load_mesh(path, smooth);
     }

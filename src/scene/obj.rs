@@ -6,15 +6,7 @@
 use crate::math::Vec3;
 use std::path::Path;
 
-/// A loaded triangle mesh.
-pub struct Mesh {
-    /// Triangle vertex positions.
-    pub triangles: Vec<[Vec3; 3]>,
-    /// Per-triangle vertex normals (smooth meshes only).
-    pub normals: Option<Vec<[Vec3; 3]>>,
-    /// Hash of the file bytes (scene hashing).
-    pub bytes_hash: u64,
-}
+use super::mesh::{IndexedMesh, Mesh};
 
 /// Loads an OBJ file; errors are messages that name the file.
 pub fn load_mesh(path: &Path, smooth: bool) -> Result<Mesh, String> {
@@ -63,7 +55,7 @@ pub fn load_mesh(path: &Path, smooth: bool) -> Result<Mesh, String> {
 
 /// Loads an OBJ file as one indexed mesh (all objects merged; a vertex per distinct
 /// position/normal/uv index triple, as Mitsuba's OBJ loader keys them).
-pub fn load_indexed(path: &Path) -> Result<super::ply::IndexedMesh, String> {
+pub fn load_indexed(path: &Path) -> Result<IndexedMesh, String> {
     let (models, bytes_hash) = read_models(path)?;
     let (mut positions, mut normals, mut faces) = (Vec::new(), Vec::new(), Vec::new());
     let mut all_normals = true;
@@ -85,7 +77,7 @@ pub fn load_indexed(path: &Path) -> Result<super::ply::IndexedMesh, String> {
         return Err(format!("OBJ `{}` has no faces", path.display()));
     }
     let normals = (all_normals && normals.len() == positions.len()).then_some(normals);
-    Ok(super::ply::IndexedMesh { positions, normals, faces, bytes_hash })
+    Ok(IndexedMesh { positions, normals, faces, bytes_hash })
 }
 
 /// Reads and parses an OBJ file (a regular file only: a FIFO would block), triangulated with one

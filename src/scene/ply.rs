@@ -10,18 +10,7 @@
 use crate::math::Vec3;
 use std::path::Path;
 
-/// An indexed triangle mesh as stored in a file (OBJ or PLY).
-#[derive(Clone, Debug)]
-pub struct IndexedMesh {
-    /// Vertex positions.
-    pub positions: Vec<Vec3>,
-    /// Per-vertex normals, when the file has them.
-    pub normals: Option<Vec<Vec3>>,
-    /// Triangles (indices into `positions`).
-    pub faces: Vec<[u32; 3]>,
-    /// Hash of the file bytes (scene hashing).
-    pub bytes_hash: u64,
-}
+pub use super::mesh::IndexedMesh;
 
 #[derive(Clone, Copy, PartialEq)]
 enum Format {
@@ -139,14 +128,73 @@ impl Body<'_> {
         tok.parse::<f64>().map_err(|_| format!("line {}: `{tok}` is not a number", self.line))
     }
 
-    fn at(&mut self) -> String {
+    /// Where the next row starts: its line (ASCII) or byte offset (binary), for `describe`.
+    fn at(&mut self) -> usize {
         match self.format {
             Format::Ascii => {
                 self.skip_ws();
-                format!("line {}", self.line)
+                self.line
             }
-            _ => format!("byte {}", self.pos),
+            _ => self.pos,
         }
+    }
+
+    /// `line N` or `byte N` of an `at`.
+    fn describe(&self, at: usize) -> String {
+        match self.format {
+            Format::Ascii => format!("line {at}"),
+            _ => format!("byte {at}"),
+        }
+    }
+
+    /// The fewest bytes a value of `ty` takes: its size in binary, one character and a
+    /// separator in ASCII (the last value of the file may lack its separator: `left` adds 1).
+    fn min_bytes(&self, ty: Scalar) -> usize {
+        match self.format {
+            Format::Ascii => 2,
+            _ => ty.size(),
+        }
+    }
+
+    /// Bytes left to read (+1 for ASCII's last value without a separator).
+    fn left(&self) -> usize {
+        self.bytes.len().saturating_sub(self.pos) + (self.format == Format::Ascii) as usize
+    }
+
+    /// Refuses an element whose rows cannot fit in the bytes left (each property takes at least
+    /// `min_bytes`, a list at least its length's), before any row is read.
+    fn check_rows(&self, el: &Element) -> Result<(), String> {
+        let row: usize = el.props.iter().map(|p| self.min_bytes(p.list.unwrap_or(p.ty))).sum();
+        let left = self.left();
+        if el.count.checked_mul(row).is_none_or(|need| need > left) {
+            return Err(format!(
+                "body cut short at byte {}: element `{}` declares {} rows, but the {left} byte(s) left hold at most {} (at least {row} byte(s) per row)",
+                self.pos,
+                el.name,
+                el.count,
+                left / row.max(1)
+            ));
+        }
+        Ok(())
+    }
+
+    /// A list's length: a whole number in [0, 1e6] whose items fit in the bytes left.
+    fn list_len(&mut self, count_ty: Scalar, ty: Scalar) -> Result<usize, String> {
+        let at = self.at();
+        let n = self.read(count_ty)?;
+        if !(n.fract() == 0.0 && (0.0..=1e6).contains(&n)) {
+            return Err(format!("{}: bad list length {n} (a whole number in [0, 1e6])", self.describe(at)));
+        }
+        let n = n as usize;
+        if n * self.min_bytes(ty) > self.left() {
+            let (need, left) = (n * self.min_bytes(ty), self.left());
+            return Err(format!(
+                "{}: body cut short at byte {}: a list of {n} values needs {need} byte(s), {left} left",
+                self.describe(at),
+                self.pos
+            ));
+        }
+        Ok(n)
     }
 }
 
@@ -184,12 +232,18 @@ fn parse_header(bytes: &[u8]) -> Result<(Format, Vec<Element>, usize, usize), St
                 let (Some(name), Some(Ok(count))) = (w.get(1), w.get(2).map(|c| c.parse::<usize>())) else {
                     return bad("expected `element NAME COUNT`");
                 };
+                if matches!(*name, "vertex" | "face") && elements.iter().any(|e| e.name == *name) {
+                    return bad(&format!("a second `element {name}` (a mesh has one vertex and one face element)"));
+                }
                 elements.push(Element { name: name.to_string(), count, props: Vec::new() });
             }
             Some("property") => {
                 let Some(el) = elements.last_mut() else { return bad("property before any element") };
                 let prop = if w.get(1) == Some(&"list") {
                     match (w.get(2).and_then(|t| Scalar::parse(t)), w.get(3).and_then(|t| Scalar::parse(t)), w.get(4)) {
+                        (Some(Scalar::F32 | Scalar::F64), _, _) => {
+                            return bad("a list's count type must be an integer type")
+                        }
                         (Some(c), Some(t), Some(n)) => Property { name: n.to_string(), list: Some(c), ty: t },
                         _ => return bad("expected `property list COUNT_TYPE TYPE NAME`"),
                     }
@@ -216,88 +270,104 @@ pub fn load_indexed(path: &Path) -> Result<IndexedMesh, String> {
     parse(&bytes).map_err(|m| format!("PLY `{}`: {m}", path.display()))
 }
 
-/// Parses PLY bytes.
+/// Parses PLY bytes. Work and memory are bounded by the file: every element's row count is
+/// checked against the bytes left before its rows are read (`check_rows`), every list's length
+/// likewise, and faces are checked as they are read (a 20 MB file of empty faces fails at the
+/// first one instead of storing them all).
 pub fn parse(bytes: &[u8]) -> Result<IndexedMesh, String> {
     let bytes_hash = crate::math::fnv1a(0xcbf2_9ce4_8422_2325, bytes);
     let (format, elements, start, header_lines) = parse_header(bytes)?;
     let mut body = Body { bytes, pos: start, format, line: header_lines + 1 };
-    let mut positions = Vec::new();
+    let mut positions: Vec<Vec3> = Vec::new();
     let mut normals = Vec::new();
     let mut has_normals = false;
-    let mut polys: Vec<(Vec<f64>, String)> = Vec::new();
+    let mut vertex_read = false;
+    let mut faces: Vec<[u32; 3]> = Vec::new();
+    let mut vals = Vec::new();
+    let mut poly: Vec<u32> = Vec::new();
     for el in &elements {
-        let col = |n: &str| el.props.iter().position(|p| p.name == n && p.list.is_none());
-        let (xyz, nxyz) = ([col("x"), col("y"), col("z")], [col("nx"), col("ny"), col("nz")]);
+        let (xyz, nxyz, face_list) = columns(el)?;
         if el.name == "vertex" {
-            if xyz.iter().any(|c| c.is_none()) {
-                return Err("element `vertex` needs float properties x, y, z".into());
-            }
             has_normals = nxyz.iter().all(|c| c.is_some());
         }
-        let face_list = el.props.iter().position(|p| p.list.is_some() && p.name.starts_with("vertex_ind"));
-        if el.name == "face" && face_list.is_none() {
-            return Err("element `face` needs a list property `vertex_indices`".into());
+        if el.props.is_empty() {
+            continue; // rows of no properties occupy no bytes: nothing to read, whatever the count
         }
+        body.check_rows(el)?;
+        // the vertex count, when the vertex element came first (face indices are checked as read)
+        let nv = vertex_read.then_some(positions.len());
         for _ in 0..el.count {
-            let mut vals = vec![0.0f64; el.props.len()];
-            let mut list = Vec::new();
+            vals.clear();
             let at = body.at();
             for (k, p) in el.props.iter().enumerate() {
-                match p.list {
-                    Some(ct) => {
-                        let n = body.read(ct)?;
-                        if !(0.0..=1e6).contains(&n) {
-                            return Err(format!("{}: bad list length {n}", body.at()));
-                        }
-                        let items = (0..n as usize).map(|_| body.read(p.ty)).collect::<Result<Vec<_>, _>>()?;
-                        if Some(k) == face_list {
-                            list = items;
-                        }
-                    }
-                    None => vals[k] = body.read(p.ty)?,
+                vals.push(0.0);
+                let Some(ct) = p.list else {
+                    vals[k] = body.read(p.ty)?;
+                    continue;
+                };
+                let n = body.list_len(ct, p.ty)?;
+                let is_face = el.name == "face" && Some(k) == face_list;
+                if is_face && n < 3 {
+                    return Err(format!("{}: face with {n} vertices (a face needs at least 3)", body.describe(at)));
                 }
+                poly.clear();
+                for _ in 0..n {
+                    let i = body.read(p.ty)?;
+                    if is_face {
+                        poly.push(face_index(i, nv).map_err(|m| format!("{}: {m}", body.describe(at)))?);
+                    }
+                }
+                // a fan, as Mitsuba splits polygons
+                faces.extend((1..poly.len().saturating_sub(1)).map(|j| [poly[0], poly[j], poly[j + 1]]));
             }
-            let v = |c: [Option<usize>; 3]| {
-                Vec3::new(vals[c[0].unwrap()] as f32, vals[c[1].unwrap()] as f32, vals[c[2].unwrap()] as f32)
-            };
-            match el.name.as_str() {
-                "vertex" => {
-                    positions.push(v(xyz));
-                    if has_normals {
-                        normals.push(v(nxyz));
-                    }
+            if el.name == "vertex" {
+                let v = |c: [Option<usize>; 3]| c.map(|c| c.map_or(0.0, |c| vals[c] as f32));
+                positions.push(Vec3::from_array(v(xyz)));
+                if has_normals {
+                    normals.push(Vec3::from_array(v(nxyz)));
                 }
-                "face" => polys.push((list, at)),
-                _ => {}
             }
         }
+        vertex_read |= el.name == "vertex";
     }
-    let faces = triangulate(&polys, positions.len())?;
+    // faces read before the vertex element: their indices are checked now
+    let nv = positions.len();
+    if let Some((k, i)) =
+        faces.iter().enumerate().find_map(|(k, f)| f.iter().find(|&&i| i as usize >= nv).map(|&i| (k, i)))
+    {
+        return Err(format!("triangle {}: face index {i} out of range (the file has {nv} vertices)", k + 1));
+    }
     if faces.is_empty() {
         return Err("no faces".into());
     }
     Ok(IndexedMesh { positions, normals: has_normals.then_some(normals), faces, bytes_hash })
 }
 
-/// Polygons (vertex index lists with their location) → triangle fans, indices checked.
-fn triangulate(polys: &[(Vec<f64>, String)], nv: usize) -> Result<Vec<[u32; 3]>, String> {
-    let mut faces = Vec::new();
-    for (poly, at) in polys {
-        if poly.len() < 3 {
-            return Err(format!("{at}: face with {} vertices", poly.len()));
-        }
-        let mut idx = Vec::with_capacity(poly.len());
-        for &i in poly {
-            if i < 0.0 || i.fract() != 0.0 || i as usize >= nv {
-                return Err(format!("{at}: face index {i} out of range (the file has {nv} vertices)"));
-            }
-            idx.push(i as u32);
-        }
-        for k in 1..idx.len() - 1 {
-            faces.push([idx[0], idx[k], idx[k + 1]]);
-        }
+/// An element's x, y, z and nx, ny, nz columns and its face list (`vertex` needs x, y, z;
+/// `face` needs `vertex_indices`).
+type Columns = ([Option<usize>; 3], [Option<usize>; 3], Option<usize>);
+
+fn columns(el: &Element) -> Result<Columns, String> {
+    let col = |n: &str| el.props.iter().position(|p| p.name == n && p.list.is_none());
+    let (xyz, nxyz) = ([col("x"), col("y"), col("z")], [col("nx"), col("ny"), col("nz")]);
+    if el.name == "vertex" && xyz.iter().any(|c| c.is_none()) {
+        return Err("element `vertex` needs float properties x, y, z".into());
     }
-    Ok(faces)
+    let face_list = el.props.iter().position(|p| p.list.is_some() && p.name.starts_with("vertex_ind"));
+    if el.name == "face" && face_list.is_none() {
+        return Err("element `face` needs a list property `vertex_indices`".into());
+    }
+    Ok((xyz, nxyz, face_list))
+}
+
+/// A face index read as `i`: a whole number in `[0, nv)` (`nv` once known, else `[0, 2³²)`).
+fn face_index(i: f64, nv: Option<usize>) -> Result<u32, String> {
+    let limit = nv.map_or(u32::MAX as f64, |n| n as f64);
+    if i < 0.0 || i.fract() != 0.0 || i >= limit {
+        let n = nv.map_or("up to 2^32".to_string(), |n| n.to_string());
+        return Err(format!("face index {i} out of range (the file has {n} vertices)"));
+    }
+    Ok(i as u32)
 }
 
 /// Writes a binary little-endian PLY (float positions, optional float normals, uchar/uint faces).
@@ -323,28 +393,10 @@ pub fn write_binary(mesh: &IndexedMesh) -> Vec<u8> {
     out
 }
 
-/// A PLY mesh as the TOML loader's `obj::Mesh`: triangles and, for smooth shading, the file's
-/// normals or area-weighted vertex normals (the same rule as OBJ).
-pub fn load_mesh(path: &Path, smooth: bool) -> Result<super::obj::Mesh, String> {
-    let m = load_indexed(path)?;
-    let p = |f: &[u32; 3]| f.map(|i| m.positions[i as usize]);
-    let vn = if smooth { Some(m.normals.clone().unwrap_or_else(|| area_weighted_normals(&m))) } else { None };
-    Ok(super::obj::Mesh {
-        triangles: m.faces.iter().map(p).collect(),
-        normals: vn.map(|vn| m.faces.iter().map(|f| f.map(|i| vn[i as usize])).collect()),
-        bytes_hash: m.bytes_hash,
-    })
-}
-
-/// Area-weighted vertex normals (unnormalised sums of face cross products).
-pub fn area_weighted_normals(m: &IndexedMesh) -> Vec<Vec3> {
-    let mut vn = vec![Vec3::ZERO; m.positions.len()];
-    for f in &m.faces {
-        let [a, b, c] = f.map(|i| m.positions[i as usize]);
-        let n = (b - a).cross(c - a);
-        f.iter().for_each(|&i| vn[i as usize] += n);
-    }
-    vn
+/// A PLY mesh as the TOML loader's `Mesh`: triangles and, for smooth shading, the file's normals
+/// or area-weighted vertex normals (the same rule as OBJ).
+pub fn load_mesh(path: &Path, smooth: bool) -> Result<super::mesh::Mesh, String> {
+    Ok(super::mesh::Mesh::from_indexed(&load_indexed(path)?, smooth))
 }
 
 #[cfg(test)]

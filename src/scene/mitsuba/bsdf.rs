@@ -22,8 +22,7 @@ pub(super) fn resolve(cx: &mut Cx, n: &Node) -> Result<u32, SceneError> {
         });
     }
     let m = material(cx, n)?;
-    let idx = cx.materials.len() as u32;
-    cx.materials.push(m);
+    let idx = cx.b.material(m);
     if let Some(id) = n.attr("id") {
         cx.ids.insert(id.to_string(), idx);
     }
@@ -34,7 +33,7 @@ pub(super) fn resolve(cx: &mut Cx, n: &Node) -> Result<u32, SceneError> {
 pub(super) fn material(cx: &mut Cx, n: &Node) -> Result<Material, SceneError> {
     if n.tag == "ref" {
         let i = resolve(cx, n)?;
-        return Ok(cx.materials[i as usize]);
+        return Ok(cx.b.material_at(i));
     }
     let mut p = Plugin::new(n);
     let m = match n.ty() {

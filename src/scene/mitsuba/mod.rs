@@ -7,11 +7,13 @@
 //! options, which Mitsuba has no place for, travel as `<default name="forecast_*">` values that
 //! Mitsuba ignores (written by `export`): method, seed, time, photons, target box, ROIs.
 //!
-//! Invariants: the result is assembled exactly as the TOML loader assembles its scene (material
-//! 0 black, triangles then spheres, emitters in primitive order), so an exported TOML scene loads
-//! back identical. Unsupported plugins and parameters that change the image are errors naming
-//! the file, line, plugin and parameter; unknown parameters of supported plugins are warnings
-//! (`Scene::warnings`, hence the JSON report).
+//! Invariants: a translator into `SceneBuilder`, which checks and assembles the scene exactly as
+//! it does the TOML file's (material 0 black, triangles then spheres, emitters in primitive
+//! order; the same extent, camera and light checks with the same words), so an exported TOML
+//! scene loads back identical. Unsupported plugins and parameters that change the image are
+//! errors naming the file, line, plugin and parameter; unknown parameters of supported plugins,
+//! and every parameter of another renderer's integrator, are warnings (`Scene::warnings`, hence
+//! the JSON report).
 
 mod bsdf;
 mod params;
@@ -22,36 +24,36 @@ mod xml;
 pub use shapes::SEGMENTS;
 
 use crate::math::Vec3;
-use crate::scene::{limits, Camera, Material, PointLight, RenderDefaults, Scene, SceneError};
+use crate::scene::builder::{CameraSpec, Origin, SceneBuilder, View};
+use crate::scene::{Material, Scene, SceneError};
 use params::Plugin;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use xml::Node;
 
-/// Loading state.
+/// Loading state: the builder the elements go to, and the XML reader's own (ids, Mitsuba's
+/// default BSDF).
 pub(super) struct Cx {
-    file: String,
     dir: PathBuf,
-    warnings: Vec<String>,
-    hash: u64,
-    materials: Vec<Material>,
+    b: SceneBuilder,
     ids: BTreeMap<String, u32>,
     default_diffuse: Option<u32>,
 }
 
 impl Cx {
     fn err(&self, line: usize, key: &str, message: impl Into<String>) -> SceneError {
-        SceneError { file: self.file.clone(), line, key: key.to_string(), message: message.into() }
+        self.b.err(&Origin::new(line, key), message)
     }
     fn warn(&mut self, line: usize, msg: String) {
-        self.warnings.push(format!("{}:{line}: {msg}", self.file));
+        self.b.warn(&Origin::new(line, ""), msg);
     }
     /// Mitsuba's BSDF for shapes without one: `diffuse` with reflectance 0.5.
     fn default_diffuse(&mut self) -> u32 {
-        *self.default_diffuse.get_or_insert_with(|| {
-            self.materials.push(Material::Diffuse { albedo: Vec3::splat(0.5) });
-            self.materials.len() as u32 - 1
-        })
+        if let Some(i) = self.default_diffuse {
+            return i;
+        }
+        let i = self.b.material(Material::Diffuse { albedo: Vec3::splat(0.5) });
+        *self.default_diffuse.insert(i)
     }
 }
 
@@ -70,68 +72,61 @@ pub fn load(path: &Path, defines: &[(String, String)]) -> Result<Scene, SceneErr
 /// Parses Mitsuba XML text; `dir` resolves mesh paths; `file` is used in messages.
 pub fn load_str(src: &str, file: &str, dir: &Path, defines: &[(String, String)]) -> Result<Scene, SceneError> {
     let mut cx = Cx {
-        file: file.to_string(),
         dir: dir.to_path_buf(),
-        warnings: Vec::new(),
-        hash: crate::math::fnv1a(0xcbf2_9ce4_8422_2325, src.as_bytes()),
-        materials: vec![Material::Black],
+        b: SceneBuilder::new(file, crate::math::fnv1a(0xcbf2_9ce4_8422_2325, src.as_bytes())),
         ids: BTreeMap::new(),
         default_diffuse: None,
     };
     let (root, _version, vars) = xml::parse(src, defines).map_err(|(l, m)| cx.err(l, "", m))?;
-    let mut camera = None;
-    let mut render = RenderDefaults { method: "pt".into(), spp: None, time: None, seed: 0, max_depth: 64 };
-    let mut shapes = Vec::new();
-    let mut point_lights = Vec::new();
+    let mut sensors = 0;
     for n in &root.children {
         match n.tag.as_str() {
             "default" => {}
-            "integrator" => render.max_depth = integrator(&mut cx, n)?,
+            "integrator" => integrator(&mut cx, n)?,
             "sensor" => {
-                if camera.is_some() {
+                sensors += 1;
+                if sensors > 1 {
                     return Err(cx.err(n.line, "sensor", "only one sensor is supported"));
                 }
-                let (c, spp) = sensor(&mut cx, n)?;
-                camera = Some(c);
-                render.spp = spp;
+                sensor(&mut cx, n)?;
             }
             "bsdf" => {
                 bsdf::resolve(&mut cx, n)?;
             }
-            "shape" => shapes.push(shapes::shape(&mut cx, n)?),
-            "emitter" => point_lights.push(point(&mut cx, n)?),
+            "shape" => shapes::shape(&mut cx, n)?,
+            "emitter" => point(&mut cx, n)?,
             t => {
                 let what = format!("`<{t}>` is not supported (textures, media, includes, shape groups, ...)");
                 return Err(cx.err(n.line, t, what));
             }
         }
     }
-    let camera = camera.ok_or_else(|| cx.err(root.line, "sensor", "the scene has no `<sensor>`"))?;
-    let extras = forecast_defaults(&cx, &root, &vars, &mut render, &camera)?;
-    assemble(cx, camera, render, shapes, point_lights, extras)
+    if sensors == 0 {
+        return Err(cx.err(root.line, "sensor", "the scene has no `<sensor>`"));
+    }
+    options::forecast_defaults(&mut cx, &root, &vars)?;
+    cx.b.build(&Origin::new(root.line, ""), "emitter")
 }
 
-/// The integrator's `max_depth` (−1: the default cap 64); its type is not used.
-fn integrator(cx: &mut Cx, n: &Node) -> Result<u32, SceneError> {
+/// The integrator's `max_depth` (−1: the default cap 64). Its type is not used: the method is
+/// `--method`, so another renderer's integrator (`sppm`, `bdpt`, ...) and its parameters are
+/// warnings (the unread parameters, by `Plugin::finish`), never errors.
+fn integrator(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
     let mut p = Plugin::new(n);
-    let d = p.int(cx, "max_depth")?.unwrap_or(-1);
-    let depth = match d {
-        -1 => 64,
-        d if (2..=1_000_000).contains(&d) => d as u32,
-        d => return Err(p.err(cx, n.line, "max_depth", format!("max_depth {d}: use -1 or a value >= 2"))),
-    };
+    let dl = p.line_of("max_depth");
+    match p.int(cx, "max_depth")?.unwrap_or(-1) {
+        -1 => {}
+        d if d >= 0 => cx.b.max_depth(d as u64, &Origin::new(dl, format!("{}.max_depth", n.ty())))?,
+        d => return Err(p.err(cx, dl, "max_depth", format!("max_depth {d}: use -1 or a value >= 2"))),
+    }
     if !matches!(n.ty(), "path" | "volpath") {
         cx.warn(n.line, format!("integrator `{}` ignored (the method is forecast's `--method`)", n.ty()));
-        if let Some(c) = n.children.iter().find(|c| c.name() != "max_depth") {
-            let msg = format!("integrator `{}`: parameter `{}` is not supported", n.ty(), c.name());
-            return Err(cx.err(c.line, &format!("{}.{}", n.ty(), c.name()), msg));
-        }
     }
     if p.boolean(cx, "hide_emitters")? == Some(true) {
         return Err(p.err(cx, n.line, "hide_emitters", "hiding emitters is not supported"));
     }
     p.finish(cx);
-    Ok(depth)
+    Ok(())
 }
 
 /// Vertical field of view (degrees) from Mitsuba's `fov` along `axis`.
@@ -149,26 +144,34 @@ fn fov_y(fov: f32, axis: &str, w: u32, h: u32) -> Option<f32> {
     }
 }
 
-/// The perspective sensor → camera, and the sampler's `sample_count`.
-fn sensor(cx: &mut Cx, n: &Node) -> Result<(Camera, Option<u64>), SceneError> {
+/// The perspective sensor → the builder's camera, and the sampler's `sample_count` → spp.
+fn sensor(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
     let mut p = Plugin::new(n);
     if n.ty() != "perspective" {
         return Err(cx.err(n.line, &format!("sensor.{}", n.ty()), format!("sensor `{}`: only `perspective`", n.ty())));
     }
     p.reject(cx, &["focal_length", "principal_point_offset_x", "principal_point_offset_y"], "use `fov`")?;
+    let fl = p.line_of("fov");
     let Some(fov) = p.float(cx, "fov")? else { return Err(p.err(cx, n.line, "fov", "missing `fov`")) };
     let (axis, al) = p.string(cx, "fov_axis")?.unwrap_or(("x".into(), n.line));
+    let xl = p.line_of("to_world");
     let xf = p.transform(cx, "to_world")?;
-    let ((w, h), spp) = (film(cx, &mut p)?, sampler(cx, &mut p)?);
+    let (w, h) = film(cx, &mut p)?;
+    sampler(cx, &mut p)?;
     let fovy = fov_y(fov, &axis, w, h).ok_or_else(|| {
         p.err(cx, al, "fov_axis", format!("unknown fov_axis `{axis}` (x, y, smaller, larger, diagonal)"))
     })?;
-    if !(fovy > 0.0 && fovy < 180.0) {
-        return Err(p.err(cx, n.line, "fov", format!("fov must give a vertical fov in (0, 180), got {fovy}")));
-    }
-    let camera = camera_from(cx, &p, xf, fovy, (w, h))?;
+    let at = |line: usize, k: &str| Origin::new(line, format!("perspective.{k}"));
+    let (position, view) = camera_view(xf);
+    cx.b.camera(CameraSpec {
+        position: (position, at(xl, "to_world")),
+        view: (view, at(xl, "to_world")),
+        up_at: at(xl, "to_world"),
+        fov: (fovy, at(fl, "fov")),
+        resolution: ([w, h], at(n.line, "film")),
+    })?;
     p.finish(cx);
-    Ok((camera, spp))
+    Ok(())
 }
 
 /// The film's `width`, `height` (Mitsuba's defaults 768 × 576).
@@ -193,61 +196,53 @@ fn film(cx: &mut Cx, p: &mut Plugin) -> Result<(u32, u32), SceneError> {
     Ok((w, h))
 }
 
-/// The sampler's `sample_count` (Mitsuba's default 4), if there is a sampler.
-fn sampler(cx: &mut Cx, p: &mut Plugin) -> Result<Option<u64>, SceneError> {
-    let mut spp = None;
+/// The sampler's `sample_count` (Mitsuba's default 4) → the default spp, if there is a sampler.
+fn sampler(cx: &mut Cx, p: &mut Plugin) -> Result<(), SceneError> {
     for s in p.objects(&["sampler"]) {
         let mut sp = Plugin::new(s);
+        let line = sp.line_of("sample_count");
         let c = sp.int(cx, "sample_count")?.unwrap_or(4);
-        spp =
-            Some(u64::try_from(c).ok().filter(|&c| c > 0).ok_or_else(|| {
-                sp.err(cx, s.line, "sample_count", format!("sample_count must be positive, got {c}"))
-            })?);
+        let c = u64::try_from(c)
+            .map_err(|_| sp.err(cx, line, "sample_count", format!("sample_count must be positive, got {c}")))?;
+        cx.b.spp(c, &Origin::new(line, format!("{}.sample_count", s.ty())))?;
         sp.finish(cx);
     }
-    Ok(spp)
+    Ok(())
 }
 
 /// The camera of `to_world`: a lone `lookat` exactly as the TOML camera, else the matrix's
-/// frame (position, forward = +z, up = +y, right = −x, Mitsuba's camera space).
-fn camera_from(
-    cx: &Cx,
-    p: &Plugin,
-    xf: Option<params::Xform>,
-    fovy: f32,
-    (w, h): (u32, u32),
-) -> Result<Camera, SceneError> {
+/// frame (position, forward = +z, up = +y, right = −x, Mitsuba's camera space). The builder
+/// checks both (extent, a finite non-zero rigid frame).
+fn camera_view(xf: Option<params::Xform>) -> (Vec3, View) {
     if let Some([o, t, u]) = xf.as_ref().and_then(|x| x.lookat) {
-        return Ok(Camera::new(Vec3::from_array(o), Vec3::from_array(t), Vec3::from_array(u), fovy, w, h));
+        let (target, up) = (Vec3::from_array(t), Vec3::from_array(u));
+        return (Vec3::from_array(o), View::LookAt { target, up });
     }
     let m = xf.map_or(glam::DMat4::IDENTITY, |x| x.m);
     let (f, u, l) = (m.z_axis.truncate(), m.y_axis.truncate(), m.x_axis.truncate());
-    let (f, u, r) = (f.normalize(), u.normalize(), -l.normalize());
-    if f.dot(u).abs() > 1e-4 || f.dot(r).abs() > 1e-4 || u.dot(r).abs() > 1e-4 || !f.is_finite() {
-        return Err(p.err(cx, p.node.line, "to_world", "the camera transform must be rigid (no shear)"));
-    }
-    let position = m.w_axis.truncate().as_vec3();
-    let (forward, right, up) = (f.as_vec3(), r.as_vec3(), u.as_vec3());
-    Ok(Camera { position, forward, right, up, fov_deg: fovy, width: w, height: h })
+    let (forward, up, right) = (f.normalize().as_vec3(), u.normalize().as_vec3(), (-l.normalize()).as_vec3());
+    (m.w_axis.truncate().as_vec3(), View::Frame { forward, up, right })
 }
 
 /// A top-level `point` emitter.
-fn point(cx: &mut Cx, n: &Node) -> Result<PointLight, SceneError> {
+fn point(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
     if n.ty() != "point" {
         let msg = format!("emitter `{}` is not supported (`point` at the top level, `area` inside shapes)", n.ty());
         return Err(cx.err(n.line, &format!("emitter.{}", n.ty()), msg));
     }
     let mut p = Plugin::new(n);
+    let (pl, xl, il) = (p.line_of("position"), p.line_of("to_world"), p.line_of("intensity"));
     let pos = p.point(cx, "position")?.map(Vec3::from_array);
     let xf = p.transform(cx, "to_world")?;
-    let position = pos.or(xf.map(|x| x.m.w_axis.truncate().as_vec3())).unwrap_or(Vec3::ZERO);
+    let (position, pat) = match (pos, xf) {
+        (Some(q), _) => (q, Origin::new(pl, "point.position")),
+        (None, Some(x)) => (x.m.w_axis.truncate().as_vec3(), Origin::new(xl, "point.to_world")),
+        (None, None) => (Vec3::ZERO, Origin::new(n.line, "point.position")),
+    };
     let intensity = p.color(cx, "intensity")?.unwrap_or(Vec3::ONE);
-    if let Some(m) = limits::light_value_error("intensity", intensity, limits::MAX_INTENSITY) {
-        return Err(p.err(cx, n.line, "intensity", m));
-    }
+    cx.b.point_light((position, &pat), (intensity, &Origin::new(il, "point.intensity")))?;
     p.finish(cx);
-    Ok(PointLight { position, intensity })
+    Ok(())
 }
 
-mod assemble;
-use assemble::{assemble, forecast_defaults};
+mod options;

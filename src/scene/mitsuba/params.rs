@@ -52,6 +52,11 @@ impl<'a> Plugin<'a> {
         cx.err(line, &format!("{}.{param}", self.node.ty()), format!("{}: {msg}", self.what()))
     }
 
+    /// The line of the child named `name` (the element's own line when it has none).
+    pub fn line_of(&self, name: &str) -> usize {
+        self.node.children.iter().find(|c| c.name() == name).map_or(self.node.line, |c| c.line)
+    }
+
     /// The child element named `name` (marked read).
     pub fn find(&mut self, name: &str) -> Option<&'a Node> {
         let i = self.node.children.iter().position(|c| c.name() == name)?;
@@ -92,8 +97,16 @@ impl<'a> Plugin<'a> {
     pub fn int(&mut self, cx: &Cx, name: &str) -> Result<Option<i64>, SceneError> {
         let Some(n) = self.find(name) else { return Ok(None) };
         let v = self.value(cx, n)?;
-        match (n.tag.as_str(), v.trim().parse::<i64>()) {
+        let t = v.trim();
+        match (n.tag.as_str(), t.parse::<i64>()) {
             ("integer", Ok(x)) => Ok(Some(x)),
+            ("integer", Err(_))
+                if !t.is_empty() && t.trim_start_matches(['-', '+']).bytes().all(|c| c.is_ascii_digit()) =>
+            {
+                let msg = format!("`{t}` is out of range (an integer between {} and {})", i64::MIN, i64::MAX);
+                Err(self.err(cx, n.line, name, msg))
+            }
+            ("integer", Err(_)) => Err(self.err(cx, n.line, name, format!("`{v}` is not an integer"))),
             _ => Err(self.err(cx, n.line, name, format!("expected `<integer>`, got `<{}>` `{v}`", n.tag))),
         }
     }
@@ -164,6 +177,13 @@ impl<'a> Plugin<'a> {
         }
         if !m.is_finite() {
             return Err(self.err(cx, n.line, name, "the transform is not finite"));
+        }
+        if m.row(3) != DVec4::W {
+            let msg = format!(
+                "the transform's last row is {:?}, not [0, 0, 0, 1]: projective transforms are not supported",
+                m.row(3).to_array()
+            );
+            return Err(self.err(cx, n.line, name, msg));
         }
         Ok(Some(Xform { m, lookat }))
     }

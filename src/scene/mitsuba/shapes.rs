@@ -14,27 +14,19 @@ use super::params::{Plugin, Xform};
 use super::xml::Node;
 use super::Cx;
 use crate::math::{Rgb, Vec3};
+use crate::scene::builder::{Origin, ShapeIn};
 use crate::scene::limits;
 use crate::scene::ply::IndexedMesh;
-use crate::scene::{SceneError, Sphere, Triangle, NO_EMITTER};
+use crate::scene::SceneError;
 use glam::{DMat3, DVec3};
 
 /// Slices of the tessellated `disk` and `cylinder`.
 pub const SEGMENTS: u32 = 512;
 
-/// The primitives of one `<shape>`.
-pub(super) struct ShapeOut {
-    /// Triangles (material set, emitter unset).
-    pub tris: Vec<Triangle>,
-    /// The analytic sphere, for `sphere`.
-    pub sphere: Option<Sphere>,
-    /// Area-light radiance.
-    pub emission: Option<Rgb>,
-}
-
-/// Loads one `<shape>`.
-pub(super) fn shape(cx: &mut Cx, n: &Node) -> Result<ShapeOut, SceneError> {
+/// Loads one `<shape>` into the builder.
+pub(super) fn shape(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
     let mut p = Plugin::new(n);
+    let xl = p.line_of("to_world");
     let xf = p.transform(cx, "to_world")?;
     let flip = p.boolean(cx, "flip_normals")?.unwrap_or(false);
     if let Some(m) = p.objects(&["medium"]).first() {
@@ -42,42 +34,60 @@ pub(super) fn shape(cx: &mut Cx, n: &Node) -> Result<ShapeOut, SceneError> {
     }
     let emission = emitter(cx, &mut p)?;
     let material = shape_material(cx, &mut p, emission.is_some())?;
-    let mesh = match n.ty() {
-        "obj" | "ply" => Some(file_mesh(cx, &mut p)?),
-        "rectangle" => Some(rectangle()),
-        "cube" => Some(cube()),
-        "disk" => Some(disk()),
-        "cylinder" => Some(cylinder(cx, &mut p)?),
-        "sphere" => None,
+    let ty = n.ty();
+    // the key blamed when a vertex leaves the extent before the transform (the file, the
+    // cylinder's points) and after it
+    let (mesh, raw_at) = match ty {
+        "obj" | "ply" => {
+            let (m, fl) = file_mesh(cx, &mut p)?;
+            (Some(m), Origin::new(fl, format!("{ty}.filename")))
+        }
+        "rectangle" => (Some(rectangle()), Origin::new(n.line, ty)),
+        "cube" => (Some(cube()), Origin::new(n.line, ty)),
+        "disk" => (Some(disk()), Origin::new(n.line, ty)),
+        "cylinder" => (Some(cylinder(cx, &mut p)?), Origin::new(p.line_of("p1"), "cylinder.p1")),
+        "sphere" => (None, Origin::new(n.line, ty)),
         t => {
             let msg = format!("shape `{t}` is not supported (obj, ply, rectangle, cube, sphere, disk, cylinder)");
             return Err(cx.err(n.line, &format!("shape.{t}"), msg));
         }
     };
-    let out = match mesh {
-        Some(m) => ShapeOut { tris: triangles(cx, n.line, &m, xf.as_ref(), flip, material), sphere: None, emission },
-        None => ShapeOut { tris: Vec::new(), sphere: Some(sphere(cx, &mut p, xf, flip, material)?), emission },
+    let xf_at = Origin::new(xl, format!("{ty}.to_world"));
+    let what = match &raw_at.key {
+        k if k.ends_with(".filename") => format!("shape `{ty}` ({})", mesh_name(&p)),
+        _ => format!("shape `{ty}`"),
     };
+    let at = Origin::new(n.line, format!("shape.{ty}"));
+    let id = cx.b.shape(ShapeIn { at, material, emission, what, exact_normals: true });
+    match mesh {
+        Some(m) => triangles(cx, id, &m, xf.as_ref(), flip, (&raw_at, &xf_at))?,
+        None => sphere(cx, &mut p, id, xf, flip, &xf_at)?,
+    }
     p.finish(cx);
-    Ok(out)
+    Ok(())
 }
 
-/// The area emitter's radiance, if the shape has one.
-fn emitter(cx: &mut Cx, p: &mut Plugin) -> Result<Option<Rgb>, SceneError> {
+/// The `filename` value (for messages; "" when absent).
+fn mesh_name(p: &Plugin) -> String {
+    p.node.children.iter().find(|c| c.name() == "filename").and_then(|c| c.attr("value")).unwrap_or("").to_string()
+}
+
+/// The area emitter's radiance (`None` when black) and its origin, if the shape has one.
+fn emitter(cx: &mut Cx, p: &mut Plugin) -> Result<Option<(Rgb, Origin)>, SceneError> {
     let es = p.objects(&["emitter"]);
     let Some(e) = es.first() else { return Ok(None) };
     if e.ty() != "area" || es.len() > 1 {
         return Err(cx.err(e.line, &format!("emitter.{}", e.ty()), "a shape takes one `area` emitter"));
     }
     let mut ep = Plugin::new(e);
+    let rl = ep.line_of("radiance");
     let Some(l) = ep.color(cx, "radiance")? else {
         return Err(ep.err(cx, e.line, "radiance", "the area emitter needs `radiance`"));
     };
-    if let Some(m) = limits::light_value_error("radiance", l, limits::MAX_RADIANCE) {
-        return Err(ep.err(cx, e.line, "radiance", m));
-    }
+    let at = Origin::new(rl, "area.radiance");
+    let l = cx.b.emission(l, &at)?;
     ep.finish(cx);
-    Ok(Some(l).filter(|l| l.max_element() > 0.0))
+    Ok(l.map(|l| (l, at)))
 }
 
 /// Material index: the shape's BSDF, Mitsuba's default `diffuse` (0.5), or black for emitters.
@@ -109,7 +119,7 @@ fn shape_material(cx: &mut Cx, p: &mut Plugin, emits: bool) -> Result<u32, Scene
     }
 }
 
-fn file_mesh(cx: &mut Cx, p: &mut Plugin) -> Result<IndexedMesh, SceneError> {
+fn file_mesh(cx: &mut Cx, p: &mut Plugin) -> Result<(IndexedMesh, usize), SceneError> {
     let line = p.node.line;
     let Some((f, fl)) = p.string(cx, "filename")? else {
         return Err(p.err(cx, line, "filename", "missing `filename`"));
@@ -121,7 +131,7 @@ fn file_mesh(cx: &mut Cx, p: &mut Plugin) -> Result<IndexedMesh, SceneError> {
         crate::scene::obj::load_indexed(&path)
     };
     let mut m = m.map_err(|e| p.err(cx, fl, "filename", e))?;
-    cx.hash = crate::math::fnv1a(cx.hash, &m.bytes_hash.to_le_bytes());
+    cx.b.hash_mesh(m.bytes_hash);
     p.reject(cx, &["max_smooth_angle"], "normals are per-vertex or per-face")?;
     let face_normals = p.boolean(cx, "face_normals")?.unwrap_or(false);
     if face_normals {
@@ -130,7 +140,7 @@ fn file_mesh(cx: &mut Cx, p: &mut Plugin) -> Result<IndexedMesh, SceneError> {
         m.normals = Some(angle_weighted_normals(&m));
     }
     let _ = p.boolean(cx, "flip_tex_coords")?; // texture coordinates are not used
-    Ok(m)
+    Ok((m, fl))
 }
 
 /// Mitsuba 3's vertex normals: face normals weighted by the corner angle, normalised.
@@ -217,13 +227,22 @@ fn cylinder(cx: &Cx, p: &mut Plugin) -> Result<IndexedMesh, SceneError> {
     Ok(mesh(pos, Some(nrm), faces))
 }
 
-fn sphere(cx: &Cx, p: &mut Plugin, xf: Option<Xform>, flip: bool, material: u32) -> Result<Sphere, SceneError> {
+fn sphere(
+    cx: &mut Cx,
+    p: &mut Plugin,
+    id: usize,
+    xf: Option<Xform>,
+    flip: bool,
+    xf_at: &Origin,
+) -> Result<(), SceneError> {
+    let (cl, rl) = (p.line_of("center"), p.line_of("radius"));
     let c = p.point(cx, "center")?.unwrap_or([0.0; 3]);
     let r = p.float(cx, "radius")?.unwrap_or(1.0);
+    let (cat, rat) = (Origin::new(cl, "sphere.center"), Origin::new(rl, "sphere.radius"));
     if r.is_nan() || r <= 0.0 {
-        return Err(p.err(cx, p.node.line, "radius", "radius must be positive"));
+        return Err(cx.b.err(&rat, "radius must be positive"));
     }
-    let (center, radius) = match xf {
+    let (center, radius) = match &xf {
         None => (Vec3::from_array(c), r),
         Some(x) => {
             let m3 = DMat3::from_mat4(x.m);
@@ -239,51 +258,34 @@ fn sphere(cx: &Cx, p: &mut Plugin, xf: Option<Xform>, flip: bool, material: u32)
             (cc.as_vec3(), (r as f64 * s[0]) as f32)
         }
     };
-    Ok(Sphere { center, radius, inward: flip, material, emitter: NO_EMITTER })
+    // after a transform, what leaves the extent (or shrinks the radius to 0) is the transform's
+    let (cat, rat) = if xf.is_some() { (xf_at, xf_at) } else { (&cat, &rat) };
+    cx.b.sphere(id, (center, cat), (radius, rat), flip)
 }
 
-/// World-space triangles of a mesh; degenerate ones are skipped with a warning.
-fn triangles(cx: &mut Cx, line: usize, m: &IndexedMesh, xf: Option<&Xform>, flip: bool, mat: u32) -> Vec<Triangle> {
+/// A mesh's world-space triangles → the builder (which skips degenerate ones with a warning and
+/// refuses vertices outside the extent: at `raw_at` when the mesh itself is outside, else at
+/// `xf_at`, the transform).
+fn triangles(
+    cx: &mut Cx,
+    id: usize,
+    m: &IndexedMesh,
+    xf: Option<&Xform>,
+    flip: bool,
+    (raw_at, xf_at): (&Origin, &Origin),
+) -> Result<(), SceneError> {
     let nm = xf.map(|x| DMat3::from_mat4(x.m).inverse().transpose());
     let xp = |v: Vec3| xf.map_or(v, |x| x.m.transform_point3(v.as_dvec3()).as_vec3());
     let xn = |v: Vec3| nm.map_or(v, |n: DMat3| (n * v.as_dvec3()).as_vec3());
-    let mut out = Vec::with_capacity(m.faces.len());
-    let mut skipped = 0;
-    for f in &m.faces {
+    let normals = m.normals.as_ref().filter(|ns| ns.len() == m.positions.len());
+    for (k, f) in m.faces.iter().enumerate() {
         let f = if flip { [f[0], f[2], f[1]] } else { *f };
-        let p = f.map(|i| xp(m.positions[i as usize]));
-        let n = m.normals.as_ref().map(|ns| f.map(|i| if flip { -xn(ns[i as usize]) } else { xn(ns[i as usize]) }));
-        match make_triangle(p, n, mat) {
-            Some(t) => out.push(t),
-            None => skipped += 1,
-        }
+        let raw = f.map(|i| m.positions[i as usize]);
+        let n = normals.map(|ns| f.map(|i| if flip { -xn(ns[i as usize]) } else { xn(ns[i as usize]) }));
+        let blame = if raw.iter().any(|r| r.is_finite() && !limits::within_extent(*r)) { raw_at } else { xf_at };
+        cx.b.triangle(id, (raw.map(xp), raw), n, blame, Some(k))?;
     }
-    if skipped > 0 {
-        cx.warn(line, format!("shape: skipped {skipped} degenerate triangle(s)"));
-    }
-    out
-}
-
-/// The TOML loader's triangle (the same `ng` and area, degenerate ones `None`), except that
-/// shading normals of unit length to 5e-6 are kept as they are (a bit-exact round trip of
-/// exported normals; hits renormalise the interpolated normal).
-fn make_triangle(p: [Vec3; 3], n: Option<[Vec3; 3]>, material: u32) -> Option<Triangle> {
-    let mut t = crate::scene::file::make_triangle(p, None, material)?;
-    let ng = t.ng;
-    t.n = n.and_then(|ns| {
-        let ok = ns.iter().all(|v| v.is_finite() && v.length() > 1e-6);
-        ok.then(|| {
-            ns.map(|v| {
-                let v = if (v.length_squared() - 1.0).abs() <= 1e-5 { v } else { v.normalize() };
-                if v.dot(ng) < 0.0 {
-                    -v
-                } else {
-                    v
-                }
-            })
-        })
-    });
-    Some(t)
+    Ok(())
 }
 
 trait BlackDiffuse {

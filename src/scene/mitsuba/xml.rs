@@ -4,7 +4,8 @@
 //! `sampleCount`, ...) upgraded to Mitsuba 3's snake_case, as Mitsuba 3's own upgrade does.
 //!
 //! Invariants: every node keeps its 1-based source line; an unresolved `$name` or malformed XML is
-//! an error with the line, never a panic.
+//! an error with the line, never a panic; elements nest at most `MAX_NESTING` deep; line numbers
+//! cost a binary search each (linear-time loading).
 
 use std::collections::BTreeMap;
 
@@ -50,6 +51,11 @@ pub(super) fn snake(name: &str) -> String {
     out
 }
 
+/// The deepest element nesting accepted (`<scene>` is depth 1). Real scenes nest a handful
+/// (scene, shape, bsdf, twosided's bsdf, a parameter); the tree is built and read recursively, so
+/// without a limit 10,000 nested elements overflowed the stack.
+pub(super) const MAX_NESTING: usize = 64;
+
 /// A parsed document: the root `<scene>`, its version, and the substitution values in force.
 pub(super) type Parsed = (Node, String, BTreeMap<String, String>);
 
@@ -57,7 +63,10 @@ pub(super) type Parsed = (Node, String, BTreeMap<String, String>);
 pub(super) fn parse(src: &str, defines: &[(String, String)]) -> Result<Parsed, (usize, String)> {
     let doc = roxmltree::Document::parse(src).map_err(|e| (e.pos().row as usize, format!("malformed XML: {e}")))?;
     let root = doc.root_element();
-    let line = |n: roxmltree::Node| doc.text_pos_at(n.range().start).row as usize;
+    // line starts once, then a binary search per node: linear in the document (roxmltree's
+    // `text_pos_at` scans from the start, quadratic over every node)
+    let starts: Vec<usize> = std::iter::once(0).chain(src.match_indices('\n').map(|(i, _)| i + 1)).collect();
+    let line = |n: roxmltree::Node| starts.partition_point(|&s| s <= n.range().start);
     if root.tag_name().name() != "scene" {
         return Err((line(root), format!("the root element is `<{}>`, expected `<scene>`", root.tag_name().name())));
     }
@@ -77,8 +86,12 @@ pub(super) fn parse(src: &str, defines: &[(String, String)]) -> Result<Parsed, (
         n: roxmltree::Node,
         vars: &BTreeMap<String, String>,
         line: &dyn Fn(roxmltree::Node) -> usize,
+        depth: usize,
     ) -> Result<Node, (usize, String)> {
         let l = line(n);
+        if depth > MAX_NESTING {
+            return Err((l, format!("elements nested more than {MAX_NESTING} deep (a Mitsuba scene needs a handful)")));
+        }
         let mut attrs = Vec::new();
         for a in n.attributes() {
             let mut v = substitute(a.value(), vars).map_err(|m| (l, m))?;
@@ -87,11 +100,23 @@ pub(super) fn parse(src: &str, defines: &[(String, String)]) -> Result<Parsed, (
             }
             attrs.push((a.name().to_string(), v));
         }
-        let children =
-            n.children().filter(|c| c.is_element()).map(|c| build(c, vars, line)).collect::<Result<Vec<_>, _>>()?;
+        let children = n
+            .children()
+            .filter(|c| c.is_element())
+            .map(|c| build(c, vars, line, depth + 1))
+            .collect::<Result<Vec<_>, _>>()?;
         Ok(Node { tag: n.tag_name().name().to_string(), attrs, line: l, children })
     }
-    let node = build(root, &vars, &line)?;
+    // ids name one element each: a second one would silently replace the first
+    let mut ids: BTreeMap<&str, usize> = BTreeMap::new();
+    for n in root.descendants().filter(|n| n.is_element() && n.tag_name().name() != "ref") {
+        if let Some(id) = n.attribute("id") {
+            if let Some(first) = ids.insert(id, line(n)) {
+                return Err((line(n), format!("id `{id}` is defined twice (first on line {first})")));
+            }
+        }
+    }
+    let node = build(root, &vars, &line, 1)?;
     Ok((node, version, vars))
 }
 

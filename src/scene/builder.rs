@@ -1,0 +1,568 @@
+//! `SceneBuilder`: the one place a `Scene` is assembled and validated. Every scene format (the
+//! TOML file, Mitsuba XML) is a translator that hands the builder its camera, materials, shapes,
+//! lights and render options, each with its provenance (`Origin`: the line and key in the
+//! file); the builder checks them once, with the same words in every format:
+//!
+//! - the camera: position and target inside the extent (`limits`), a finite non-zero up that is
+//!   not parallel to the view, a vertical fov in (0, 180), a resolution in 1..=65536;
+//! - shapes: every finite vertex (after its transform) and every sphere's bounds inside the
+//!   extent, else the extent error naming the shape's key; degenerate triangles (zero area, or a
+//!   non-finite vertex) skipped with one warning per shape; an empty scene names the last shape
+//!   whose triangles were all dropped;
+//! - lights: radiance ≤ `MAX_RADIANCE`, intensity ≤ `MAX_INTENSITY`, point lights inside the
+//!   extent, each light's power finite; at least one light with positive power;
+//! - render options: the `param_limits` shared with the command line; ROIs inside the image.
+//!
+//! Invariants of the result: material 0 is black; triangles in the order given, then spheres;
+//! emitters in primitive order (emissive triangles, then emissive spheres); lights = the area
+//! emitters then the point lights, picked ∝ power (`light_power`).
+
+use super::limits::{extent_message, light_value_error, within_extent, MAX_INTENSITY, MAX_RADIANCE};
+use super::{
+    light_power, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere, Triangle,
+    NO_EMITTER,
+};
+use crate::math::{Rgb, Vec3, PI};
+use crate::param_limits as params;
+use crate::sampling::distribution::Distribution1D;
+
+/// A scene loading error with its location.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneError {
+    /// File name.
+    pub file: String,
+    /// 1-based line (0 when unknown).
+    pub line: usize,
+    /// The offending key (may be empty).
+    pub key: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl std::fmt::Display for SceneError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}:{}: ", self.file, self.line)?;
+        if !self.key.is_empty() {
+            write!(f, "key `{}`: ", self.key)?;
+        }
+        write!(f, "{}", self.message)
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+/// Where an element came from in the scene file: its line (1-based, 0 unknown) and key.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(super) struct Origin {
+    /// Line.
+    pub line: usize,
+    /// Key (`shape[2].u`, `rectangle.to_world`).
+    pub key: String,
+}
+
+impl Origin {
+    /// An origin.
+    pub fn new(line: usize, key: impl Into<String>) -> Origin {
+        Origin { line, key: key.into() }
+    }
+}
+
+/// How the camera looks: at a target with an up vector (TOML, a lone Mitsuba `lookat`), or along
+/// a frame taken from a matrix (forward, up, right).
+pub(super) enum View {
+    /// Target point and up vector.
+    LookAt { target: Vec3, up: Vec3 },
+    /// The columns of a camera matrix.
+    Frame { forward: Vec3, up: Vec3, right: Vec3 },
+}
+
+/// A camera as a format gives it, with the origin of each of its values.
+pub(super) struct CameraSpec {
+    /// Eye position.
+    pub position: (Vec3, Origin),
+    /// View; its origin names the target (or the matrix).
+    pub view: (View, Origin),
+    /// Origin of the up vector.
+    pub up_at: Origin,
+    /// Vertical field of view, degrees.
+    pub fov: (f32, Origin),
+    /// Width, height.
+    pub resolution: ([u32; 2], Origin),
+}
+
+/// One shape's common part: where it is, its material and emission, what it is (for messages).
+pub(super) struct ShapeIn {
+    /// The shape's origin (its line; the key prefix of the format, `shape[2]` or `shape.ply`).
+    pub at: Origin,
+    /// Material index (0 for emitters).
+    pub material: u32,
+    /// Area-light radiance (from `SceneBuilder::emission`) and its origin.
+    pub emission: Option<(Rgb, Origin)>,
+    /// Words after "in" in warnings (`ring.ply`, `shape `rectangle``).
+    pub what: String,
+    /// Keep shading normals of unit length to 1e-5 bit-exact (Mitsuba's exported meshes).
+    pub exact_normals: bool,
+}
+
+struct ShapeRec {
+    shape: ShapeIn,
+    skipped: usize,
+    flat: usize,
+    kept: usize,
+}
+
+/// The builder (see the module docs).
+pub(super) struct SceneBuilder {
+    file: String,
+    hash: u64,
+    warnings: Vec<String>,
+    camera: Option<Camera>,
+    /// Render defaults (set through the checked setters).
+    pub render: RenderDefaults,
+    materials: Vec<Material>,
+    triangles: Vec<Triangle>,
+    tri_shape: Vec<u32>,
+    spheres: Vec<Sphere>,
+    sph_shape: Vec<u32>,
+    shapes: Vec<ShapeRec>,
+    point_lights: Vec<(PointLight, Origin)>,
+    rois: Vec<Roi>,
+    forecast_target: Option<(Vec3, Vec3)>,
+    forecast_photons: Option<u64>,
+}
+
+impl SceneBuilder {
+    /// A builder for `file` whose text hashes to `hash`.
+    pub fn new(file: &str, hash: u64) -> SceneBuilder {
+        SceneBuilder {
+            file: file.to_string(),
+            hash,
+            warnings: Vec::new(),
+            camera: None,
+            render: RenderDefaults { method: "pt".into(), spp: None, time: None, seed: 0, max_depth: 64 },
+            materials: vec![Material::Black],
+            triangles: Vec::new(),
+            tri_shape: Vec::new(),
+            spheres: Vec::new(),
+            sph_shape: Vec::new(),
+            shapes: Vec::new(),
+            point_lights: Vec::new(),
+            rois: Vec::new(),
+            forecast_target: None,
+            forecast_photons: None,
+        }
+    }
+
+    /// An error at `at`.
+    pub fn err(&self, at: &Origin, message: impl Into<String>) -> SceneError {
+        SceneError { file: self.file.clone(), line: at.line, key: at.key.clone(), message: message.into() }
+    }
+
+    /// A warning at `at` (`file:line: key `k`: message`, as errors read).
+    pub fn warn(&mut self, at: &Origin, message: impl std::fmt::Display) {
+        let w = self.err(at, message.to_string()).to_string();
+        self.warnings.push(w);
+    }
+
+    /// Folds a mesh file's bytes hash into the scene hash.
+    pub fn hash_mesh(&mut self, bytes_hash: u64) {
+        self.hash = crate::math::fnv1a(self.hash, &bytes_hash.to_le_bytes());
+    }
+
+    /// Adds a material; returns its index.
+    pub fn material(&mut self, m: Material) -> u32 {
+        self.materials.push(m);
+        self.materials.len() as u32 - 1
+    }
+
+    /// The material at `i`.
+    pub fn material_at(&self, i: u32) -> Material {
+        self.materials[i as usize]
+    }
+
+    /// Checks and sets the camera.
+    pub fn camera(&mut self, c: CameraSpec) -> Result<(), SceneError> {
+        let (position, pat) = c.position;
+        if !within_extent(position) {
+            return Err(self.err(&pat, extent_message("camera position", position)));
+        }
+        let (fov, fat) = c.fov;
+        if !(fov.is_finite() && fov > 0.0 && fov < 180.0) {
+            return Err(self.err(&fat, format!("fov must give a vertical fov in (0, 180) degrees, got {fov}")));
+        }
+        let ([w, h], rat) = c.resolution;
+        if !(1..=65536).contains(&w) || !(1..=65536).contains(&h) {
+            return Err(self.err(&rat, "resolution must be in 1..=65536 per axis"));
+        }
+        let bad_up = |up: Vec3| !up.is_finite() || up.abs().max_element() == 0.0;
+        let camera = match c.view {
+            (View::LookAt { target, up }, tat) => {
+                if !within_extent(target) {
+                    return Err(self.err(&tat, extent_message("camera target", target)));
+                }
+                if bad_up(up) {
+                    return Err(self.err(&c.up_at, "up must be finite and non-zero"));
+                }
+                // scaled to max |component| 1, so that normalizing cannot overflow
+                let up = up / up.abs().max_element();
+                let fwd = target - position;
+                if fwd.length() < 1e-9 {
+                    return Err(self.err(&tat, "the camera target equals its position"));
+                }
+                if fwd.normalize().cross(up.normalize()).length() < 1e-6 {
+                    return Err(self.err(&c.up_at, "up is parallel to the view direction"));
+                }
+                Camera::new(position, target, up, fov, w, h)
+            }
+            (View::Frame { forward, up, right }, mat) => {
+                let unit = |v: Vec3| v.is_finite() && (v.length() - 1.0).abs() < 1e-3;
+                if !unit(forward) || !unit(right) || bad_up(up) || !unit(up) {
+                    return Err(self.err(&mat, "the camera's forward, up and right must be finite and non-zero"));
+                }
+                if forward.dot(up).abs() > 1e-4 || forward.dot(right).abs() > 1e-4 || up.dot(right).abs() > 1e-4 {
+                    return Err(self.err(&mat, "the camera transform must be rigid (no shear)"));
+                }
+                Camera { position, forward, right, up, fov_deg: fov, width: w, height: h }
+            }
+        };
+        self.camera = Some(camera);
+        Ok(())
+    }
+
+    /// A checked area-light radiance: `None` when black (the shape then emits nothing).
+    pub fn emission(&self, radiance: Rgb, at: &Origin) -> Result<Option<Rgb>, SceneError> {
+        if let Some(m) = light_value_error(&leaf(&at.key), radiance, MAX_RADIANCE) {
+            return Err(self.err(at, m));
+        }
+        Ok(Some(radiance).filter(|l| l.max_element() > 0.0))
+    }
+
+    /// Starts a shape; its triangles and sphere follow (`triangle`, `sphere`).
+    pub fn shape(&mut self, s: ShapeIn) -> usize {
+        self.shapes.push(ShapeRec { shape: s, skipped: 0, flat: 0, kept: 0 });
+        self.shapes.len() - 1
+    }
+
+    /// Adds a triangle of shape `s`: `p` after its transform, `raw` before. When the raw
+    /// vertices are finite, a vertex outside the extent (after the transform: finite or not) is
+    /// the extent error at `blame`; a degenerate triangle (zero area, a non-finite raw vertex) is
+    /// skipped, with one warning per shape at `build`. `face` numbers the face in messages.
+    pub fn triangle(
+        &mut self,
+        s: usize,
+        (p, raw): ([Vec3; 3], [Vec3; 3]),
+        n: Option<[Vec3; 3]>,
+        blame: &Origin,
+        face: Option<usize>,
+    ) -> Result<(), SceneError> {
+        let far = p.iter().find(|q| !within_extent(**q)).filter(|_| raw.iter().all(|r| r.is_finite()));
+        if let Some(q) = far {
+            let at = face.map_or(String::new(), |k| {
+                format!(" (face {} of {}, after the transform)", k + 1, self.shapes[s].shape.what)
+            });
+            return Err(self.err(blame, format!("{}{at}", extent_message("mesh vertex", *q))));
+        }
+        let rec = &mut self.shapes[s];
+        let Some(t) = make_triangle(p, n, rec.shape.material, rec.shape.exact_normals) else {
+            rec.skipped += 1;
+            return Ok(());
+        };
+        rec.flat += (n.is_some() && t.n.is_none()) as usize;
+        rec.kept += 1;
+        self.triangles.push(t);
+        self.tri_shape.push(s as u32);
+        Ok(())
+    }
+
+    /// Adds the analytic sphere of shape `s`: a positive finite radius, its bounds in the extent.
+    pub fn sphere(
+        &mut self,
+        s: usize,
+        (center, cat): (Vec3, &Origin),
+        (radius, rat): (f32, &Origin),
+        inward: bool,
+    ) -> Result<(), SceneError> {
+        if !within_extent(center) {
+            return Err(self.err(cat, extent_message("sphere center", center)));
+        }
+        if !(radius.is_finite() && radius > 0.0) {
+            return Err(self.err(rat, format!("radius must be positive and finite, got {radius}")));
+        }
+        let r = Vec3::splat(radius);
+        if !within_extent(center - r) || !within_extent(center + r) {
+            return Err(self.err(rat, extent_message("sphere bounds corner", center + r.copysign(center))));
+        }
+        let rec = &mut self.shapes[s];
+        rec.kept += 1;
+        let material = rec.shape.material;
+        self.spheres.push(Sphere { center, radius, inward, material, emitter: NO_EMITTER });
+        self.sph_shape.push(s as u32);
+        Ok(())
+    }
+
+    /// Adds a point light: its position in the extent, its intensity checked.
+    pub fn point_light(
+        &mut self,
+        (position, pat): (Vec3, &Origin),
+        (intensity, iat): (Rgb, &Origin),
+    ) -> Result<(), SceneError> {
+        if !within_extent(position) {
+            return Err(self.err(pat, extent_message("point light position", position)));
+        }
+        if let Some(m) = light_value_error(&leaf(&iat.key), intensity, MAX_INTENSITY) {
+            return Err(self.err(iat, m));
+        }
+        self.point_lights.push((PointLight { position, intensity }, iat.clone()));
+        Ok(())
+    }
+
+    /// The default method (one of `METHOD_NAMES`).
+    pub fn method(&mut self, m: &str, at: &Origin) -> Result<(), SceneError> {
+        if !super::METHOD_NAMES.contains(&m) {
+            return Err(self.err(at, format!("unknown method `{m}` ({})", super::METHOD_NAMES.join(", "))));
+        }
+        self.render.method = m.to_string();
+        Ok(())
+    }
+
+    /// The default spp (the limits of `--spp`).
+    pub fn spp(&mut self, n: u64, at: &Origin) -> Result<(), SceneError> {
+        params::SPP.check(n).map_err(|m| self.err(at, m))?;
+        self.render.spp = Some(n);
+        Ok(())
+    }
+
+    /// The default time budget, a duration (`30s`, `4m`; the limits of `--time`).
+    pub fn time(&mut self, t: &str, at: &Origin) -> Result<(), SceneError> {
+        let secs = parse_duration(t).and_then(|v| params::check_time(v).map(|()| v));
+        self.render.time = Some(secs.map_err(|m| self.err(at, m))?);
+        Ok(())
+    }
+
+    /// The path-vertex cap (the limits of `--max-depth`).
+    pub fn max_depth(&mut self, d: u64, at: &Origin) -> Result<(), SceneError> {
+        params::MAX_DEPTH.check(d).map_err(|m| self.err(at, m))?;
+        self.render.max_depth = u32::try_from(d).map_err(|_| self.err(at, format!("max_depth {d} is too large")))?;
+        Ok(())
+    }
+
+    /// Forecast photons to store (the limits of `--forecast-photons`).
+    pub fn forecast_photons(&mut self, n: u64, at: &Origin) -> Result<(), SceneError> {
+        params::FORECAST_PHOTONS.check(n).map_err(|m| self.err(at, m))?;
+        self.forecast_photons = Some(n);
+        Ok(())
+    }
+
+    /// The forecast target box: finite, min <= max.
+    pub fn forecast_target(&mut self, lo: Vec3, hi: Vec3, at: &Origin) -> Result<(), SceneError> {
+        if !lo.is_finite() || !hi.is_finite() || lo.cmpgt(hi).any() {
+            return Err(self.err(at, "the target box must be finite, min then max with min <= max"));
+        }
+        self.forecast_target = Some((lo, hi));
+        Ok(())
+    }
+
+    /// A region of interest, non-empty and inside the image (the camera comes first).
+    pub fn roi(&mut self, name: String, rect: [u32; 4], at: &Origin) -> Result<(), SceneError> {
+        let (cw, ch) = self.camera.as_ref().map_or((0, 0), |c| (c.width, c.height));
+        let [x, y, w, h] = rect;
+        let inside = |o: u32, len: u32, size: u32| o.checked_add(len).is_some_and(|e| e <= size);
+        if w == 0 || h == 0 || !inside(x, w, cw) || !inside(y, h, ch) {
+            return Err(self.err(at, format!("rect {rect:?} must be non-empty and inside the {cw}x{ch} image")));
+        }
+        self.rois.push(Roi { name, rect });
+        Ok(())
+    }
+
+    /// The shape warnings (degenerate triangles, flat-shaded ones), in shape order.
+    fn shape_warnings(&mut self) {
+        for i in 0..self.shapes.len() {
+            let r = &self.shapes[i];
+            let (at, what, skipped, flat) = (r.shape.at.clone(), r.shape.what.clone(), r.skipped, r.flat);
+            if skipped > 0 {
+                self.warn(&at, format!("skipped {skipped} degenerate triangle(s) in {what}"));
+            }
+            if flat > 0 {
+                self.warn(&at, format!("{flat} triangle(s) in {what} have NaN or zero vertex normals; shaded flat"));
+            }
+        }
+    }
+
+    /// Refuses a scene without primitives, at the last shape whose triangles were all dropped.
+    fn check_not_empty(&self, root: &Origin) -> Result<(), SceneError> {
+        if !self.triangles.is_empty() || !self.spheres.is_empty() {
+            return Ok(());
+        }
+        match self.shapes.iter().rev().find(|r| r.skipped > 0) {
+            Some(r) => {
+                let (n, what) = (r.skipped, &r.shape.what);
+                Err(self
+                    .err(&r.shape.at, format!("empty scene: no shapes (skipped {n} degenerate triangle(s) in {what})")))
+            }
+            None => Err(self.err(&Origin::new(root.line, "shape"), "empty scene: no shapes")),
+        }
+    }
+
+    /// One emitter per primitive of an emitting shape, in primitive order (triangles, then
+    /// spheres), with the origin of its radiance; sets each primitive's `emitter`.
+    fn emitters(&mut self) -> (Vec<Emitter>, Vec<Origin>) {
+        let (mut emitters, mut emitter_at) = (Vec::new(), Vec::new());
+        let ntri = self.triangles.len();
+        let prims: Vec<(usize, u32)> = (self.tri_shape.iter().copied().enumerate())
+            .chain(self.sph_shape.iter().enumerate().map(|(i, &s)| (i + ntri, s)))
+            .collect();
+        for (prim, s) in prims {
+            let Some((le, at)) = self.shapes[s as usize].shape.emission.clone() else { continue };
+            let e = emitters.len() as u32;
+            let area = if prim < ntri {
+                self.triangles[prim].emitter = e;
+                self.triangles[prim].area
+            } else {
+                let sp = &mut self.spheres[prim - ntri];
+                sp.emitter = e;
+                4.0 * PI * sp.radius * sp.radius
+            };
+            emitters.push(Emitter { prim: prim as u32, radiance: le, area });
+            emitter_at.push(at);
+        }
+        (emitters, emitter_at)
+    }
+
+    /// Validates what is left (a camera, a shape, a light) and assembles the scene; `root` is the
+    /// document's origin, `light_key` the format's key for "add a light".
+    pub fn build(mut self, root: &Origin, light_key: &str) -> Result<Scene, SceneError> {
+        let camera = self.camera.take().ok_or_else(|| self.err(root, "the scene has no camera"))?;
+        self.shape_warnings();
+        self.check_not_empty(root)?;
+        let (emitters, emitter_at) = self.emitters();
+        let (point_lights, light_at): (Vec<PointLight>, Vec<Origin>) = self.point_lights.drain(..).unzip();
+        let mut lights: Vec<LightRef> = (0..emitters.len() as u32).map(LightRef::Area).collect();
+        lights.extend((0..point_lights.len() as u32).map(LightRef::Point));
+        let powers: Vec<f32> = lights.iter().map(|&l| light_power(&emitters, &point_lights, l)).collect();
+        if let Some(i) = powers.iter().position(|p| !p.is_finite()) {
+            let at = match lights[i] {
+                LightRef::Area(e) => &emitter_at[e as usize],
+                LightRef::Point(p) => &light_at[p as usize],
+            };
+            return Err(self.err(at, "the light's power (radiance × area × π, or 4π × intensity) overflows f32"));
+        }
+        let light_pick = Distribution1D::new(&powers).ok_or_else(|| {
+            self.err(
+                &Origin::new(root.line, light_key),
+                "the scene has no light with positive power (an emitting shape or a point light)",
+            )
+        })?;
+        let bounds = bounds(&self.triangles, &self.spheres);
+        Ok(Scene {
+            path: self.file,
+            hash: self.hash,
+            camera,
+            render: self.render,
+            materials: self.materials,
+            triangles: self.triangles,
+            spheres: self.spheres,
+            emitters,
+            point_lights,
+            lights,
+            light_pick,
+            rois: self.rois,
+            forecast_target: self.forecast_target,
+            forecast_photons: self.forecast_photons,
+            bounds,
+            warnings: self.warnings,
+        })
+    }
+}
+
+/// The last part of a dotted key (`shape[2].emission` → `emission`).
+fn leaf(key: &str) -> String {
+    key.rsplit('.').next().unwrap_or(key).to_string()
+}
+
+/// Scene bounds (min, max) over triangles and spheres.
+fn bounds(triangles: &[Triangle], spheres: &[Sphere]) -> (Vec3, Vec3) {
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for t in triangles {
+        for p in t.p {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+    }
+    for s in spheres {
+        lo = lo.min(s.center - Vec3::splat(s.radius));
+        hi = hi.max(s.center + Vec3::splat(s.radius));
+    }
+    (lo, hi)
+}
+
+/// Builds a triangle, or `None` when degenerate (zero area or non-finite). Shading normals must
+/// be finite and non-zero (else the triangle is shaded flat); they are normalised (kept as they
+/// are when `exact` and of unit length to 1e-5) and flipped onto the geometric normal's side.
+pub(super) fn make_triangle(p: [Vec3; 3], n: Option<[Vec3; 3]>, material: u32, exact: bool) -> Option<Triangle> {
+    let c = (p[1] - p[0]).cross(p[2] - p[0]);
+    // scaled by the largest component first, so that |c|² cannot overflow (|c| up to 1e25)
+    let m = c.abs().max_element();
+    let len = if m > 0.0 { m * (c / m).length() } else { 0.0 };
+    if !(len.is_finite() && len > 1e-12) {
+        return None;
+    }
+    let ng = c / len;
+    let n = n.and_then(|ns| {
+        let ok = ns.iter().all(|v| v.is_finite() && v.length() > 1e-6);
+        ok.then(|| {
+            ns.map(|v| {
+                let v = if exact && (v.length_squared() - 1.0).abs() <= 1e-5 { v } else { v.normalize() };
+                if v.dot(ng) < 0.0 {
+                    -v
+                } else {
+                    v
+                }
+            })
+        })
+    });
+    Some(Triangle { p, n, ng, area: 0.5 * len, material, emitter: NO_EMITTER })
+}
+
+/// Parses a duration such as `500ms`, `30s`, `4m`, `1h` or `1m30s` into seconds.
+pub fn parse_duration(s: &str) -> Result<f64, String> {
+    let s = s.trim();
+    let mut total = 0.0;
+    let mut num = String::new();
+    let mut chars = s.chars().peekable();
+    let mut any = false;
+    while let Some(c) = chars.next() {
+        if c.is_ascii_digit() || c == '.' {
+            num.push(c);
+            continue;
+        }
+        let mut unit = c.to_string();
+        while let Some(&n) = chars.peek() {
+            if n.is_ascii_alphabetic() {
+                unit.push(n);
+                chars.next();
+            } else {
+                break;
+            }
+        }
+        let v: f64 = num.parse().map_err(|_| format!("bad duration `{s}` (expected e.g. 30s, 4m, 1h)"))?;
+        total += v * match unit.as_str() {
+            "ms" => 1e-3,
+            "s" => 1.0,
+            "m" | "min" => 60.0,
+            "h" => 3600.0,
+            _ => return Err(format!("bad duration unit `{unit}` in `{s}` (use ms, s, m, h)")),
+        };
+        num.clear();
+        any = true;
+    }
+    if !num.is_empty() {
+        // a bare number means seconds
+        total += num.parse::<f64>().map_err(|_| format!("bad duration `{s}`"))?;
+        any = true;
+    }
+    if !any || !total.is_finite() || total <= 0.0 {
+        return Err(format!("bad duration `{s}`: must be positive (e.g. 30s, 4m, 1h)"));
+    }
+    Ok(total)
+}
