@@ -173,6 +173,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
         SceneError { file: cx.file.clone(), line, key, message: msg }
     })?;
     let mut hash = fnv1a(0xcbf2_9ce4_8422_2325, src.as_bytes());
+    let mut mesh_files = Vec::new();
     let mut warnings = Vec::new();
 
     // camera
@@ -387,6 +388,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
                 let path = dir.join(f);
                 let mesh = super::load_mesh_file(&path, smooth).map_err(|m| cx.err(ss.clone(), &key("file"), m))?;
                 hash = fnv1a(hash, &mesh.bytes_hash.to_le_bytes());
+                mesh_files.push(path.clone());
                 let (sin, cos) = ry.to_radians().sin_cos();
                 let xf = |p: Vec3| {
                     let p = p * sc;
@@ -553,6 +555,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
     Ok(Scene {
         path: cx.file.clone(),
         hash,
+        mesh_files,
         camera,
         render,
         materials,

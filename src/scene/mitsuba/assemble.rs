@@ -135,6 +135,7 @@ pub(super) fn assemble(
     Ok(Scene {
         path: cx.file,
         hash: cx.hash,
+        mesh_files: cx.mesh_files,
         camera,
         render,
         materials: cx.materials,

@@ -122,6 +122,7 @@ fn file_mesh(cx: &mut Cx, p: &mut Plugin) -> Result<IndexedMesh, SceneError> {
     };
     let mut m = m.map_err(|e| p.err(cx, fl, "filename", e))?;
     cx.hash = crate::math::fnv1a(cx.hash, &m.bytes_hash.to_le_bytes());
+    cx.mesh_files.push(path);
     p.reject(cx, &["max_smooth_angle"], "normals are per-vertex or per-face")?;
     let face_normals = p.boolean(cx, "face_normals")?.unwrap_or(false);
     if face_normals {
