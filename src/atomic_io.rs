@@ -23,8 +23,8 @@
 //! ([`RealFs`] is the real thing). Nothing here panics; errors are `String`s naming the file.
 //!
 //! Also the guards around them: [`read_regular`] (every whole-file read of an input: a FIFO
-//! would block forever, `/dev/zero` would fill the memory), [`same_file`] and
-//! [`check_not_clobbering`] (an output path that names an input or another output).
+//! would block forever, `/dev/zero` would fill the memory) and [`OutputSet`], the one output
+//! guard of every command that writes (no output names an input or another output of the run).
 
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
@@ -255,30 +255,155 @@ pub fn read_regular(path: &Path) -> io::Result<Vec<u8>> {
     std::fs::read(path)
 }
 
-/// True when `a` and `b` name the same file: the same canonical path where both exist, else the
-/// same absolute path written out (a file not yet created has no canonical form).
-pub fn same_file(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(x), Ok(y)) => x == y,
-        (Err(_), Err(_)) => std::path::absolute(a).ok() == std::path::absolute(b).ok(),
-        _ => false, // one exists and the other does not
-    }
+/// A file's identity for [`OutputSet`]: the device and inode of an existing file (so hard links,
+/// symbolic links and `..` spellings agree), else its [`resolve`]d path.
+#[derive(Clone, Debug, PartialEq, Eq)]
+enum FileId {
+    Inode(u64, u64),
+    Path(PathBuf),
 }
 
-/// Refuses an output `out` (named by `flag` in the message) that is one of the `inputs` or of
-/// the command's other `outputs`: writing it would destroy that file.
-pub fn check_not_clobbering(flag: &str, out: &Path, inputs: &[&Path], outputs: &[PathBuf]) -> Result<(), String> {
-    if let Some(i) = inputs.iter().find(|i| same_file(out, i)) {
-        return Err(format!("{flag} `{}` is the input `{}`: writing it would destroy it", out.display(), i.display()));
+fn file_id(p: &Path) -> FileId {
+    #[cfg(unix)]
+    if let Ok(m) = std::fs::metadata(p) {
+        use std::os::unix::fs::MetadataExt;
+        return FileId::Inode(m.dev(), m.ino());
     }
-    if let Some(o) = outputs.iter().find(|o| same_file(out, o)) {
-        return Err(format!(
-            "{flag} `{}` is also the output `{}`: one would overwrite the other",
-            out.display(),
-            o.display()
-        ));
+    FileId::Path(resolve(p))
+}
+
+/// `p` made absolute with its symbolic links and `.`/`..` resolved: the longest existing
+/// ancestor is canonicalized, the components below it (which do not exist, so cannot be links)
+/// are applied lexically.
+pub fn resolve(p: &Path) -> PathBuf {
+    let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    let mut base = abs.clone();
+    let mut rest = Vec::new();
+    let canon = loop {
+        if let Ok(c) = base.canonicalize() {
+            break c;
+        }
+        match (base.file_name().map(|n| n.to_os_string()), base.parent()) {
+            (Some(name), Some(parent)) => {
+                rest.push(name);
+                base = parent.to_path_buf();
+            }
+            _ => break base, // a root that does not canonicalize: keep it as written
+        }
+    };
+    let mut out = canon;
+    for c in rest.iter().rev().map(Path::new).flat_map(|c| c.components()) {
+        match c {
+            std::path::Component::ParentDir => {
+                out.pop();
+            }
+            std::path::Component::CurDir => {}
+            other => out.push(other),
+        }
     }
-    Ok(())
+    out
+}
+
+/// True when `a` and `b` name the same file (see [`OutputSet`] for what "same" means).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    file_id(a) == file_id(b) || resolve(a) == resolve(b)
+}
+
+/// The output guard of one command run: every file it reads and every file (or directory) it
+/// writes, checked together before anything is written. [`OutputSet::check`] refuses
+/// * an output that is one of the inputs (the scene, its meshes, `--reference`, `--resume`, the
+///   images given to `diff`): writing it would destroy that input;
+/// * an output named twice (two outputs of the same run would overwrite each other);
+/// * an input inside an output directory (compare's `DIR/charts/`, …).
+///
+/// Two paths are the same file when they are the same existing file (device and inode: hard
+/// links, symbolic links and `..` spellings included) or resolve to the same absolute path
+/// ([`resolve`]: links in the existing part followed, `..` applied). The one exception is
+/// [`OutputSet::output_replacing`]: an output that supersedes its own input (a resumed render's
+/// checkpoint, written over the checkpoint it resumed, holds everything that one held).
+#[derive(Clone, Debug, Default)]
+pub struct OutputSet {
+    inputs: Vec<(String, PathBuf)>,
+    outputs: Vec<(String, PathBuf, Option<PathBuf>)>,
+    dirs: Vec<(String, PathBuf)>,
+}
+
+impl OutputSet {
+    /// An empty guard.
+    pub fn new() -> OutputSet {
+        OutputSet::default()
+    }
+
+    /// An input; `what` names it in messages (`the scene`, `the mesh`, `--reference`).
+    pub fn input(&mut self, what: &str, path: &Path) -> &mut Self {
+        self.inputs.push((what.to_string(), path.to_path_buf()));
+        self
+    }
+
+    /// An output file; `flag` names where it comes from (`--out`, `--checkpoint-path`).
+    pub fn output(&mut self, flag: &str, path: &Path) -> &mut Self {
+        self.outputs.push((flag.to_string(), path.to_path_buf(), None));
+        self
+    }
+
+    /// An output file that may replace the one input `replaces` (and nothing else).
+    pub fn output_replacing(&mut self, flag: &str, path: &Path, replaces: &Path) -> &mut Self {
+        self.outputs.push((flag.to_string(), path.to_path_buf(), Some(replaces.to_path_buf())));
+        self
+    }
+
+    /// A directory whose files the command writes: no input may lie inside it.
+    pub fn output_dir(&mut self, flag: &str, dir: &Path) -> &mut Self {
+        self.dirs.push((flag.to_string(), dir.to_path_buf()));
+        self
+    }
+
+    /// The outputs, in the order they were added.
+    pub fn outputs(&self) -> impl Iterator<Item = &Path> {
+        self.outputs.iter().map(|(_, p, _)| p.as_path())
+    }
+
+    /// The rules of [`OutputSet`]; the error names the output, where it comes from, and the file
+    /// it would destroy.
+    pub fn check(&self) -> Result<(), String> {
+        let inputs: Vec<(FileId, PathBuf)> = self.inputs.iter().map(|(_, p)| (file_id(p), resolve(p))).collect();
+        let mut seen: Vec<(FileId, PathBuf)> = Vec::new();
+        for (flag, out, replaces) in &self.outputs {
+            let (id, r) = (file_id(out), resolve(out));
+            let allowed = replaces.as_ref().map(|p| (file_id(p), resolve(p)));
+            for ((what, input), (iid, ir)) in self.inputs.iter().zip(&inputs) {
+                let same = *iid == id || *ir == r;
+                if same && allowed.as_ref().is_none_or(|(aid, ar)| aid != iid && ar != ir) {
+                    return Err(format!(
+                        "{flag} `{}` is {what} `{}`: writing it would destroy it (name another output)",
+                        out.display(),
+                        input.display()
+                    ));
+                }
+            }
+            if let Some(k) = seen.iter().position(|(sid, sr)| *sid == id || *sr == r) {
+                let (other_flag, other, _) = &self.outputs[k];
+                return Err(format!(
+                    "{flag} `{}` is also the output `{}` ({other_flag}): one would overwrite the other",
+                    out.display(),
+                    other.display()
+                ));
+            }
+            seen.push((id, r));
+        }
+        for (flag, dir) in &self.dirs {
+            let d = resolve(dir);
+            if let Some(((what, input), _)) = self.inputs.iter().zip(&inputs).find(|(_, (_, ir))| ir.starts_with(&d)) {
+                return Err(format!(
+                    "{what} `{}` lies in `{}`, which {flag} writes: it could be overwritten (move it or name \
+                     another output)",
+                    input.display(),
+                    dir.display()
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]
@@ -308,12 +433,40 @@ mod tests {
         std::fs::write(&scene, b"x").unwrap();
         let via_dots = dir.join("sub").join("..").join("scene.toml");
         assert!(same_file(&scene, &via_dots));
-        let e = check_not_clobbering("--checkpoint-path", &via_dots, &[&scene], &[]).unwrap_err();
+        let check = |out: &Path, outputs: &[&Path]| {
+            let mut g = OutputSet::new();
+            g.input("the scene", &scene);
+            outputs.iter().for_each(|o| {
+                g.output("--out", o);
+            });
+            g.output("--checkpoint-path", out);
+            g.check()
+        };
+        let e = check(&via_dots, &[]).unwrap_err();
         assert!(e.contains("--checkpoint-path") && e.contains("destroy"), "{e}");
-        let out = dir.join("r.exr"); // not yet written: compared as absolute paths
-        let e = check_not_clobbering("--checkpoint-path", &out, &[&scene], std::slice::from_ref(&out)).unwrap_err();
+        let out = dir.join("r.exr"); // not yet written: compared as resolved paths
+        let e = check(&dir.join("sub/../r.exr"), &[&out]).unwrap_err();
         assert!(e.contains("overwrite"), "{e}");
-        assert!(check_not_clobbering("--checkpoint-path", &dir.join("r.ckpt"), &[&scene], &[out]).is_ok());
+        check(&dir.join("r.ckpt"), &[&out]).unwrap();
+        // a hard link and a symbolic link to the scene are the scene
+        std::fs::hard_link(&scene, dir.join("hard.toml")).unwrap();
+        #[cfg(unix)]
+        std::os::unix::fs::symlink(&scene, dir.join("sub/link.toml")).unwrap();
+        assert!(check(&dir.join("hard.toml"), &[]).is_err());
+        #[cfg(unix)]
+        assert!(check(&dir.join("sub/link.toml"), &[]).is_err());
+        // an output may replace the one input it supersedes, and only that one
+        let ckpt = dir.join("r.ckpt");
+        std::fs::write(&ckpt, b"c").unwrap();
+        let mut g = OutputSet::new();
+        g.input("--resume", &ckpt).input("the scene", &scene).output_replacing("--checkpoint-path", &ckpt, &ckpt);
+        g.check().unwrap();
+        g.output_replacing("--out", &scene, &ckpt);
+        assert!(g.check().unwrap_err().contains("the scene"));
+        // an input inside an output directory
+        let mut g = OutputSet::new();
+        g.input("--reference", &dir.join("sub/ref.exr")).output_dir("compare --out", &dir.join("sub"));
+        assert!(g.check().unwrap_err().contains("--reference"));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -18,6 +18,9 @@
 //!   `<path>` and fsyncs the directory, so a crash leaves either the old or the new file.
 //! * [`Checkpoint::load`] never panics on a bad file: wrong magic, other version, short or
 //!   long file, checksum mismatch and undecodable payload are distinct errors naming the file.
+//! * [`Checkpoint::validate`] refuses a resume whose scene hash, seed, method, resolution or any
+//!   [`Checkpoint::job`] key (`-D` values, method options such as `max_depth`) differs, naming
+//!   every differing key with both values.
 //! * bitcode's format is only stable within a bitcode major version: bump
 //!   [`FORMAT_VERSION`] whenever the struct or the bitcode major version changes.
 
@@ -29,7 +32,7 @@ use std::path::{Path, PathBuf};
 /// First 8 bytes of every checkpoint file.
 pub const MAGIC: [u8; 8] = *b"FCSTCKPT";
 /// Version of the file layout and of the encoded struct.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 /// Header length in bytes.
 pub const HEADER_LEN: usize = 32;
 
@@ -56,6 +59,10 @@ pub struct Checkpoint {
     pub spp: u64,
     /// Render time accumulated so far, in seconds.
     pub elapsed_secs: f64,
+    /// Every other input that changes the image, as (key, value) pairs compared on resume: the
+    /// `-D NAME` values and each method option (`option KEY`, its serialized value; the
+    /// pipeline decides which, see `pipeline::checkpoints::job_keys`).
+    pub job: Vec<(String, String)>,
 }
 
 /// Why a checkpoint could not be saved or loaded. Every variant names the file.
@@ -148,6 +155,19 @@ impl std::error::Error for CheckpointError {
             _ => None,
         }
     }
+}
+
+/// Every key whose value differs between the checkpoint's `old` pairs and the requested `new`
+/// ones (a key on one side only counts, shown as `unset`), in key order.
+fn job_mismatches(old: &[(String, String)], new: &[(String, String)]) -> Vec<String> {
+    let map = |v: &[(String, String)]| v.iter().cloned().collect::<std::collections::BTreeMap<_, _>>();
+    let (old, new) = (map(old), map(new));
+    let keys: std::collections::BTreeSet<&String> = old.keys().chain(new.keys()).collect();
+    let show = |v: Option<&String>| v.map_or("unset".to_string(), |s| s.clone());
+    keys.into_iter()
+        .filter(|k| old.get(*k) != new.get(*k))
+        .map(|k| format!("{k} differs (checkpoint {}, requested {})", show(old.get(k)), show(new.get(k))))
+        .collect()
 }
 
 /// 64-bit checksum of `bytes`: 8-byte words mixed with a multiply-rotate, then a final
@@ -299,10 +319,17 @@ impl Checkpoint {
         Self::from_bytes(&bytes, path)
     }
 
-    /// Checks that this checkpoint belongs to the render described by the arguments;
-    /// the error lists every mismatch in words.
-    pub fn validate(&self, scene_hash: u64, seed: u64, method: &str, width: u32, height: u32) -> Result<(), String> {
-        let mut why = Vec::new();
+    /// Checks that this checkpoint belongs to the render described by the arguments (`job`: the
+    /// [`Checkpoint::job`] pairs of the requested render); the error lists every mismatch in words.
+    pub fn validate(
+        &self,
+        scene_hash: u64,
+        seed: u64,
+        method: &str,
+        (width, height): (u32, u32),
+        job: &[(String, String)],
+    ) -> Result<(), String> {
+        let mut why = job_mismatches(&self.job, job);
         if self.scene_hash != scene_hash {
             why.push(format!(
                 "scene changed (checkpoint scene hash {:016x}, current {:016x})",
@@ -355,6 +382,7 @@ mod tests {
                 .collect(),
             spp: 17 * 4,
             elapsed_secs: 12.5,
+            job: vec![("-D spp".into(), "4".into()), ("option max_depth".into(), "8".into())],
         }
     }
 
@@ -479,19 +507,26 @@ mod tests {
     #[test]
     fn validate_explains_mismatches() {
         let c = sample();
-        assert_eq!(c.validate(c.scene_hash, 42, "iws+cf", 4, 3), Ok(()));
-        let e = c.validate(1, 43, "pt", 8, 3).expect_err("must fail");
+        assert_eq!(c.validate(c.scene_hash, 42, "iws+cf", (4, 3), &c.job), Ok(()));
+        let e = c.validate(1, 43, "pt", (8, 3), &c.job).expect_err("must fail");
         for part in ["scene changed", "seed differs", "method differs", "resolution differs", "4x3", "8x3"] {
             assert!(e.contains(part), "{e}");
         }
         let mut bad = c.clone();
         bad.next_pass = 3;
-        let e = bad.validate(c.scene_hash, 42, "iws+cf", 4, 3).expect_err("must fail");
+        let e = bad.validate(c.scene_hash, 42, "iws+cf", (4, 3), &c.job).expect_err("must fail");
         assert!(e.contains("next_pass"), "{e}");
         let mut bad = c.clone();
         bad.film.pop();
-        assert!(bad.validate(c.scene_hash, 42, "iws+cf", 4, 3).is_err());
+        assert!(bad.validate(c.scene_hash, 42, "iws+cf", (4, 3), &c.job).is_err());
         assert!(Checkpoint::from_bytes(&bad.to_bytes(), Path::new("x")).is_err());
+        // another -D value, another max_depth, a -D given on one side only: each key named
+        let other = vec![("-D spp".to_string(), "8".to_string()), ("option max_depth".into(), "3".into())];
+        let e = c.validate(c.scene_hash, 42, "iws+cf", (4, 3), &other).expect_err("must fail");
+        assert!(e.contains("-D spp differs (checkpoint 4, requested 8)"), "{e}");
+        assert!(e.contains("option max_depth differs (checkpoint 8, requested 3)"), "{e}");
+        let e = c.validate(c.scene_hash, 42, "iws+cf", (4, 3), &other[1..]).expect_err("must fail");
+        assert!(e.contains("-D spp differs (checkpoint 4, requested unset)"), "{e}");
     }
 
     #[test]

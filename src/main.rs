@@ -124,6 +124,14 @@ fn render(
 }
 
 fn diff(a: &forecast::cli::DiffArgs) -> Result<(), String> {
+    if let Some(p) = &a.png {
+        let mut guard = forecast::atomic_io::OutputSet::new();
+        guard.input("the image A", &a.a).input("the image B", &a.b).output("--png", p);
+        a.half0.iter().chain(&a.half1).for_each(|h| {
+            guard.input("a --half0/--half1 image", h);
+        });
+        guard.check()?;
+    }
     let ia = image_io::read_exr(&a.a)?;
     let ib = image_io::read_exr(&a.b)?;
     image_io::check_same_size(&[(&a.a, &ia), (&a.b, &ib)])?;
@@ -222,6 +230,12 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs, opts: &forecast::scene::Load
     let r = &a.render;
     forecast::atomic_io::check_output_prefix(&r.out)?;
     let scene = forecast::scene::load_with(&r.scene, opts).map_err(|e| e.to_string())?;
+    let mut guard = forecast::atomic_io::OutputSet::new();
+    guard.input("the scene", &r.scene).output("--out", &image_io::with_ext(&r.out, "png"));
+    scene.mesh_files.iter().for_each(|m| {
+        guard.input("the scene's mesh", m);
+    });
+    guard.output("--out", &image_io::with_ext(&r.out, "json")).check()?;
     let world = accel::World::build(scene).map_err(|e| format!("{}: {e}", r.scene.display()))?;
     let cf_args = &r.method_args.cf;
     let seed = r.seed.unwrap_or(world.scene.render.seed);

@@ -1,6 +1,7 @@
 //! Checkpoint and resume, single process: a render killed after a checkpoint and resumed gives
 //! the same image as an uninterrupted render of the same passes (up to f64 summation order,
-//! bounded at relative 1e-6), and a stale checkpoint (other seed) is refused with a clear error.
+//! bounded at relative 1e-6), and a stale checkpoint (other seed, `-D` value, `--max-depth`) is
+//! refused with a clear error naming the key.
 
 mod common;
 use common::{assert_same_image, tmp_dir};
@@ -154,4 +155,54 @@ fn a_preprocess_over_the_time_budget_is_recorded() {
     let (o, json, _) = render_json("in-budget", &["--method", "iws-pm", "--photons", "20000", "--spp", "1"]);
     assert!(o.status.success());
     assert_eq!(json["preprocess_over_budget"], false, "{json}");
+}
+
+/// Renders `scene` with `first` and a checkpoint, then resumes it with `second`; returns the
+/// resume's (exit status, stderr).
+fn resume_with(name: &str, scene: &Path, first: &[&str], second: &[&str]) -> (bool, String) {
+    let d = tmp_dir(name);
+    let (a, b) = (d.join("a"), d.join("b"));
+    let base = ["render", scene.to_str().unwrap(), "--resolution", "16x16", "--seed", "1", "--threads", "1", "--quiet"];
+    let mut first_run = Command::new(bin());
+    first_run.args(base).args(["--spp", "2", "--checkpoint-every", "1h"]).args(first);
+    let st = first_run.arg("--out").arg(&a).status().unwrap();
+    assert!(st.success());
+    let o = Command::new(bin())
+        .args(base)
+        .args(["--spp", "4", "--resume", &format!("{}.ckpt", a.display())])
+        .args(second)
+        .arg("--out")
+        .arg(&b)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.code() != Some(101), "{err}");
+    assert!(!o.status.success() || b.with_extension("exr").exists());
+    (o.status.success(), err)
+}
+
+/// `-D` values change the scene (its hash covers the XML text, not the values): a resume with
+/// another value, or without one, is refused naming the key; the same value resumes.
+#[test]
+fn resume_with_another_define_is_refused() {
+    let xml = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/external/sms-ring/ring.xml");
+    let (ok, err) = resume_with("resume-d", &xml, &["-D", "spp=4"], &["-D", "spp=8"]);
+    assert!(
+        !ok && err.contains("cannot resume") && err.contains("-D spp differs (checkpoint 4, requested 8)"),
+        "{err}"
+    );
+    let (ok, err) = resume_with("resume-d-unset", &xml, &["-D", "spp=4"], &[]);
+    assert!(!ok && err.contains("-D spp differs (checkpoint 4, requested unset)"), "{err}");
+    let (ok, err) = resume_with("resume-d-same", &xml, &["-D", "spp=4"], &["-D", "spp=4"]);
+    assert!(ok, "{err}");
+}
+
+/// `--max-depth` (and every other method option) changes the image: refused, naming the key.
+#[test]
+fn resume_with_another_max_depth_is_refused() {
+    let (ok, err) = resume_with("resume-depth", &scene(), &["--max-depth", "8"], &["--max-depth", "3"]);
+    assert!(!ok && err.contains("option max_depth differs (checkpoint 8, requested 3)"), "{err}");
+    // the same options resume
+    let (ok, err) = resume_with("resume-depth-same", &scene(), &["--max-depth", "8"], &["--max-depth", "8"]);
+    assert!(ok, "{err}");
 }

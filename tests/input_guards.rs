@@ -224,3 +224,158 @@ fn options_that_do_not_apply_are_refused() {
     }
     let _ = std::fs::remove_dir_all(d);
 }
+
+/// Copies `scenes/ring.{toml,obj}` into `d`: a scene whose mesh is an input no output may name.
+fn ring_copy(d: &Path) -> (String, std::path::PathBuf) {
+    std::fs::copy(root().join("scenes/ring.toml"), d.join("ring.toml")).unwrap();
+    std::fs::copy(root().join("scenes/ring.obj"), d.join("ring.obj")).unwrap();
+    (s(&d.join("ring.toml")), d.join("ring.obj"))
+}
+
+/// `args` exits 1 with every one of `words` in its message, and `file` is byte for byte as before.
+fn refused(args: &[&str], file: &Path, words: &[&str]) {
+    let before = std::fs::read(file).unwrap();
+    let (code, err) = run(args);
+    assert_eq!(code, 1, "{args:?}: {err}");
+    for w in words {
+        assert!(err.contains(w), "{args:?}: `{w}` not in {err}");
+    }
+    assert_eq!(std::fs::read(file).unwrap(), before, "{args:?} changed {}", file.display());
+}
+
+/// Every file under `dir` (relative name → bytes).
+fn files_under(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+    let mut m = std::collections::BTreeMap::new();
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        if e.path().is_file() {
+            m.insert(e.file_name().to_string_lossy().into_owned(), std::fs::read(e.path()).unwrap());
+        }
+    }
+    m
+}
+
+#[test]
+fn export_never_writes_over_the_scene_or_its_meshes() {
+    let d = tmp_dir("guards-export");
+    let (toml, obj) = ring_copy(&d);
+    // `--out ring.obj`: the scene's own mesh
+    refused(&["export-mitsuba", &toml, "--out", &s(&obj)], &obj, &["--out", "the scene's mesh", "destroy"]);
+    // an input mesh where the export writes its own, OUT_meshes/shape_001.ply
+    let (code, err) = run(&["export-mitsuba", &toml, "--out", &s(&d.join("r.xml"))]);
+    assert_eq!(code, 0, "{err}");
+    std::fs::create_dir_all(d.join("q_meshes")).unwrap();
+    let ply = d.join("q_meshes/shape_001.ply");
+    std::fs::copy(d.join("r_meshes/shape_001.ply"), &ply).unwrap();
+    let q = std::fs::read_to_string(&toml).unwrap().replace("\"ring.obj\"", "\"q_meshes/shape_001.ply\"");
+    std::fs::write(d.join("q.toml"), q).unwrap();
+    let q_xml = d.join("q.xml");
+    refused(&["export-mitsuba", &s(&d.join("q.toml")), "--out", &s(&q_xml)], &ply, &["mesh", "destroy"]);
+    assert!(!q_xml.exists(), "nothing of a refused export is written");
+    let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
+fn a_failed_export_leaves_the_previous_export_whole() {
+    let d = tmp_dir("guards-export-set");
+    let (toml, _) = ring_copy(&d);
+    let xml = d.join("r.xml");
+    let (code, err) = run(&["export-mitsuba", &toml, "--out", &s(&xml)]);
+    assert_eq!(code, 0, "{err}");
+    let (meshes_before, xml_before) = (files_under(&d.join("r_meshes")), std::fs::read(&xml).unwrap());
+    // another scene (the ring moved: other mesh bytes) whose export fails at its last file, the
+    // XML, after the meshes' temporaries were written (as a full disk would)
+    let moved = std::fs::read_to_string(&toml)
+        .unwrap()
+        .replace("file     = \"ring.obj\"", "file     = \"ring.obj\"\ntranslate = [0.0, 0.5, 0.0]");
+    std::fs::write(d.join("moved.toml"), moved).unwrap();
+    std::fs::create_dir_all(d.join("r.xml.tmp")).unwrap();
+    let (code, err) = run(&["export-mitsuba", &s(&d.join("moved.toml")), "--out", &s(&xml)]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("r.xml.tmp"), "{err}");
+    assert_eq!(files_under(&d.join("r_meshes")), meshes_before, "the previous meshes changed (or .tmp left)");
+    assert_eq!(std::fs::read(&xml).unwrap(), xml_before);
+    // and the same export without the obstacle replaces the set
+    std::fs::remove_dir(d.join("r.xml.tmp")).unwrap();
+    let (code, err) = run(&["export-mitsuba", &s(&d.join("moved.toml")), "--out", &s(&xml)]);
+    assert_eq!(code, 0, "{err}");
+    assert_ne!(files_under(&d.join("r_meshes")), meshes_before);
+    let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
+fn a_checkpoint_never_replaces_a_mesh_or_a_snapshot() {
+    let d = tmp_dir("guards-ckpt-mesh");
+    let (toml, obj) = ring_copy(&d);
+    let prefix = s(&d.join("r"));
+    let base = ["render", &toml, "--resolution", "8x8", "--threads", "1", "--quiet", "--out", &prefix];
+    let mut args = base.to_vec();
+    args.extend(["--spp", "2", "--checkpoint-every", "1h", "--checkpoint-path", obj.to_str().unwrap()]);
+    refused(&args, &obj, &["--checkpoint-path", "the scene's mesh", "destroy"]);
+    // a --snapshots image: the guard sees it before it exists
+    let snap = format!("{prefix}.snap-1ms.exr");
+    let mut args = base.to_vec();
+    args.extend(["--time", "1s", "--snapshots", "1ms", "--checkpoint-every", "1h", "--checkpoint-path", &snap]);
+    let (code, err) = run(&args);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("--checkpoint-path") && err.contains("--snapshots") && err.contains("overwrite"), "{err}");
+    assert!(!Path::new(&snap).exists() && !d.join("r.exr").exists(), "a refused render wrote files");
+    let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
+fn diff_png_never_replaces_an_input_image() {
+    let d = tmp_dir("guards-diff");
+    let (a, b) = (d.join("a.exr"), d.join("b.exr"));
+    write_exr(&a, &Image::new(8, 8)).unwrap();
+    write_exr(&b, &Image::new(8, 8)).unwrap();
+    refused(&["diff", &s(&a), &s(&b), "--png", &s(&a)], &a, &["--png", "the image A", "destroy"]);
+    // also through `..` and onto B
+    let dotted = s(&d.join("x").join("..").join("b.exr"));
+    std::fs::create_dir_all(d.join("x")).unwrap();
+    refused(&["diff", &s(&a), &s(&b), "--png", &dotted], &b, &["the image B"]);
+    let (code, err) = run(&["diff", &s(&a), &s(&b), "--png", &s(&d.join("d.png"))]);
+    assert_eq!(code, 0, "{err}");
+    let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
+fn compare_never_overwrites_its_reference() {
+    let d = tmp_dir("guards-compare");
+    let runs = d.join("c/runs");
+    std::fs::create_dir_all(&runs).unwrap();
+    let reference = runs.join("pt_300ms_s0.exr");
+    write_exr(&reference, &Image::new(16, 16)).unwrap();
+    let out = s(&d.join("c"));
+    let args = ["compare", &scene(), "--methods", "pt", "--budgets", "300ms", "--seeds", "1", "--threads", "1"];
+    let mut args = args.to_vec();
+    args.extend(["--quiet", "--out", &out, "--reference", reference.to_str().unwrap()]);
+    refused(&args, &reference, &["--reference", "destroy"]);
+    // a reference inside the report's own directories
+    let crops = d.join("c/crops");
+    std::fs::create_dir_all(&crops).unwrap();
+    let in_crops = crops.join("ref.exr");
+    std::fs::copy(&reference, &in_crops).unwrap();
+    args.pop();
+    args.push(in_crops.to_str().unwrap());
+    refused(&args, &in_crops, &["--reference", "crops"]);
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// `pt-cf` builds the same forecast as `iws-cf`, so the up-front memory estimate holds it too:
+/// 4e9 forecast photons are refused at once (they used to be traced past `--time`, 33 MB/s).
+#[test]
+fn pt_cf_forecast_photons_are_held_to_the_memory_estimate() {
+    let d = tmp_dir("guards-ptcf-memory");
+    for method in ["iws-cf", "pt-cf"] {
+        let out = s(&d.join(method));
+        let args = ["render", &scene(), "--method", method, "--resolution", "16x16", "--time", "3s", "--threads", "1"];
+        let mut args = args.to_vec();
+        args.extend(["--quiet", "--forecast-photons", "4000000000", "--out", &out]);
+        let t = Instant::now();
+        let (code, err) = run(&args);
+        assert_eq!(code, 1, "{method}: {err}");
+        assert!(err.contains("GiB") && err.contains("preprocess product"), "{method}: {err}");
+        assert!(t.elapsed() < Duration::from_secs(10), "{method} took {:?}", t.elapsed());
+    }
+    let _ = std::fs::remove_dir_all(d);
+}

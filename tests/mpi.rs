@@ -249,3 +249,115 @@ fn snapshots_under_two_ranks_leave_the_image_unchanged() {
     assert_eq!(j["snapshots"].as_array().map(Vec::len), Some(1));
     assert!(j["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains("snapshot 1h not written")));
 }
+
+/// Waits for `child` at most `limit`; kills it past that. (status or None, stderr).
+fn wait_for(mut child: std::process::Child, limit: std::time::Duration) -> (Option<std::process::ExitStatus>, String) {
+    let mut pipe = child.stderr.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut err = String::new();
+        let _ = std::io::Read::read_to_string(&mut pipe, &mut err);
+        err
+    });
+    let t = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break Some(s);
+        }
+        if t.elapsed() > limit {
+            child.kill().ok();
+            child.wait().ok();
+            break None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    (status, reader.join().unwrap())
+}
+
+/// `mpirun -n 1 A : -n 1 B`: ranks started with another method (a hang before), resolution (a
+/// panic in a reduction), scene or seed (a mixed image, exit 0) are refused before any work:
+/// exit 1, the differing field named, nothing written.
+#[test]
+fn ranks_with_different_jobs_are_refused_naming_the_field() {
+    let d = tmp_dir("mpi-mpmd");
+    let ring = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/ring.toml").display().to_string();
+    let base = |scene: &str, res: &str, seed: &str, extra: &[&str]| -> Vec<String> {
+        let a = ["render", scene, "--spp", "2", "--resolution", res, "--seed", seed, "--quiet", "--threads", "1"];
+        a.iter().chain(extra).map(|s| s.to_string()).collect()
+    };
+    let cornell = scene();
+    let cases: [(&str, Vec<String>, &str); 4] = [
+        ("method", base(&cornell, "16x16", "1", &["--method", "iws"]), "--method differs"),
+        ("resolution", base(&cornell, "32x32", "1", &[]), "--resolution differs"),
+        ("scene", base(&ring, "16x16", "1", &[]), "the scene's content"),
+        ("seed", base(&cornell, "16x16", "2", &[]), "--seed differs"),
+    ];
+    for (name, other, field) in cases {
+        let out = d.join(name);
+        let mut cmd = Command::new("mpirun");
+        cmd.env("RAYON_NUM_THREADS", "1").args(["-n", "1"]).arg(bin()).args(base(&cornell, "16x16", "1", &[]));
+        cmd.arg("--out").arg(&out).args([":", "-n", "1"]).arg(bin()).args(&other).arg("--out").arg(&out);
+        let child = cmd.stdout(std::process::Stdio::null()).stderr(std::process::Stdio::piped()).spawn().unwrap();
+        let (status, err) = wait_for(child, std::time::Duration::from_secs(60));
+        let status = status.unwrap_or_else(|| panic!("{name}: the job hung; stderr: {err}"));
+        assert_eq!(status.code(), Some(1), "{name}: {err}");
+        assert!(err.contains("different jobs") && err.contains(field), "{name}: {err}");
+        assert_eq!(err.matches("error: ").count(), 1, "{name}: printed once: {err}");
+        assert!(!err.contains("panicked"), "{name}: {err}");
+        assert!(!out.with_extension("exr").exists(), "{name}: a refused job wrote an image");
+    }
+}
+
+/// The pid of the process whose environment has `PMI_RANK=rank` and whose command line holds
+/// `marker` (a unique output path), if it exists yet.
+fn rank_pid(rank: usize, marker: &str) -> Option<u32> {
+    for e in std::fs::read_dir("/proc").ok()?.flatten() {
+        let Ok(pid) = e.file_name().to_string_lossy().parse::<u32>() else { continue };
+        let cmdline = std::fs::read(e.path().join("cmdline")).unwrap_or_default();
+        let env = std::fs::read(e.path().join("environ")).unwrap_or_default();
+        let has = |hay: &[u8], needle: &[u8]| hay.windows(needle.len()).any(|w| w == needle);
+        if has(&cmdline, marker.as_bytes())
+            && has(&cmdline, bin().as_bytes())
+            && env.split(|&b| b == 0).any(|v| v == format!("PMI_RANK={rank}").as_bytes())
+        {
+            return Some(pid);
+        }
+    }
+    None
+}
+
+/// A rank stopped by SIGSTOP in a `--time 2s` render used to hold the job forever; the others'
+/// watchdog ends it through `MPI_Abort` with a message, 10 s + budget/4 past the budget.
+#[test]
+fn a_stopped_rank_ends_the_job_through_the_watchdog() {
+    let d = tmp_dir("mpi-sigstop");
+    let out = d.join("stopped");
+    let marker = out.display().to_string();
+    let child = Command::new("mpirun")
+        .args(["-n", "2"])
+        .env("RAYON_NUM_THREADS", "1")
+        .arg(bin())
+        .args(["render", &scene(), "--time", "2s", "--resolution", "32x32", "--threads", "1", "--quiet", "--out"])
+        .arg(&out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("mpirun not found: install MPICH (.ci/install-mpi.sh)");
+    let t = Instant::now();
+    let pid = loop {
+        if let Some(p) = rank_pid(1, &marker) {
+            break p;
+        }
+        assert!(t.elapsed().as_secs() < 20, "rank 1 never started");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    std::thread::sleep(std::time::Duration::from_millis(700)); // inside the pass loop
+    assert!(Command::new("kill").args(["-STOP", &pid.to_string()]).status().unwrap().success());
+    let (status, err) = wait_for(child, std::time::Duration::from_secs(60));
+    let wall = t.elapsed().as_secs_f64();
+    let _ = Command::new("kill").args(["-KILL", &pid.to_string()]).status(); // if still there
+    let status = status.unwrap_or_else(|| panic!("the job hung with a stopped rank; stderr: {err}"));
+    assert!(!status.success(), "{err}");
+    assert!(err.contains("stopped responding") && err.contains("MPI_Abort"), "{err}");
+    // budget 2 s + grace 10.5 s, the watchdog's 0.2 s tick, MPI's teardown
+    assert!(wall < 2.0 + 10.5 + 10.0, "took {wall:.1} s");
+}

@@ -171,3 +171,26 @@ fn a_render_that_cannot_write_its_json_keeps_the_old_images() {
     assert_eq!(after["r.png"], old["r.png"]);
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// The output guard's one allowed overlap: a resumed render writes its checkpoint (and its
+/// `PREFIX.*`) over the checkpoint it resumed from, which the new one supersedes.
+#[test]
+fn a_resumed_render_may_replace_the_checkpoint_it_resumed() {
+    let d = tmp_dir("outputs-resume-in-place");
+    let prefix = d.join("r");
+    let render = |spp: &str, resume: bool| {
+        let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_forecast"));
+        c.args(["render", root().join("scenes/cornell-box.toml").to_str().unwrap(), "--spp", spp]);
+        c.args(["--resolution", "8x8", "--threads", "1", "--quiet", "--checkpoint-every", "1h", "--out"]).arg(&prefix);
+        if resume {
+            c.arg("--resume").arg(prefix.with_extension("ckpt"));
+        }
+        c.output().unwrap()
+    };
+    assert!(render("2", false).status.success());
+    let o = render("4", true);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let ck = forecast::checkpoint::Checkpoint::load(&prefix.with_extension("ckpt")).unwrap();
+    assert_eq!(ck.passes_done, 4);
+    let _ = std::fs::remove_dir_all(d);
+}

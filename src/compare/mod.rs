@@ -25,13 +25,14 @@ pub mod report;
 mod single_run;
 pub mod stability;
 
+use crate::atomic_io::OutputSet;
 use crate::distributed::Cluster;
 use crate::image_io::{self, with_ext, Image};
 use crate::integrators::Method;
 use crate::metrics::{self, Rect, REL_MSE_EPS};
 use crate::pipeline::{self, RenderJob};
 use serde::Serialize;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// A named image region; `rect: None` is the whole image.
@@ -263,7 +264,7 @@ impl Ctx<'_> {
 
     /// The output prefix of (method, budget, seed index).
     fn prefix(&self, method: Method, budget: f64, k: u64) -> PathBuf {
-        self.runs_dir.join(format!("{}_{}_s{k}", method.name(), budget_label(budget)))
+        run_prefix(&self.runs_dir, method, budget, k)
     }
 
     /// A record of (method, budget, seed index) before measuring.
@@ -336,6 +337,51 @@ impl Ctx<'_> {
     }
 }
 
+/// `DIR/runs/METHOD_BUDGET_sK`: the output prefix of (method, budget, seed index).
+fn run_prefix(runs_dir: &Path, method: Method, budget: f64, k: u64) -> PathBuf {
+    runs_dir.join(format!("{}_{}_s{k}", method.name(), budget_label(budget)))
+}
+
+/// The comparison's output guard (`atomic_io::OutputSet`): its inputs (the scene, its meshes,
+/// `--reference`) against every file it writes: each run's `PREFIX.{exr,png,json}` (with
+/// `--single-run`, the largest budget's run and its snapshots), `results.json`, `report.md`,
+/// `report.html`, and the `charts/` and `crops/` directories.
+fn output_guard(cfg: &CompareConfig, scene: &crate::scene::Scene, runs_dir: &Path) -> OutputSet {
+    let mut g = OutputSet::new();
+    g.input("the scene", &cfg.base.scene).input("--reference", &cfg.reference);
+    scene.mesh_files.iter().for_each(|m| {
+        g.input("the scene's mesh", m);
+    });
+    let top = cfg.budgets.iter().copied().max_by(f64::total_cmp).unwrap_or(0.0);
+    let mut labels = Vec::new();
+    for &budget in &cfg.budgets {
+        let label = budget_label(budget);
+        if cfg.single_run && (labels.contains(&label) || (budget < top && label == budget_label(top))) {
+            continue; // one snapshot per label (`single_runs` dedups them the same way)
+        }
+        labels.push(label.clone());
+        for (method, k) in cfg.methods.iter().flat_map(|&m| (0..cfg.seeds).map(move |k| (m, k))) {
+            if cfg.single_run && budget < top {
+                let p = pipeline::snapshot_prefix(&run_prefix(runs_dir, method, top, k), &label);
+                g.output("compare --single-run", &with_ext(&p, "exr"))
+                    .output("compare --single-run", &with_ext(&p, "json"));
+            } else {
+                let p = run_prefix(runs_dir, method, budget, k);
+                ["exr", "png", "json"].iter().for_each(|e| {
+                    g.output("compare --out", &with_ext(&p, e));
+                });
+            }
+        }
+    }
+    for f in ["results.json", "report.md", "report.html"] {
+        g.output("compare --out", &cfg.out.join(f));
+    }
+    for d in ["charts", "crops"] {
+        g.output_dir("compare --out", &cfg.out.join(d));
+    }
+    g
+}
+
 /// One line per run on stderr.
 fn log_record(rec: &RunRecord) {
     let what = format!("compare: {} {} seed {}", rec.method, budget_label(rec.budget_s), rec.seed_index);
@@ -374,9 +420,10 @@ pub fn run_compare(cfg: &CompareConfig, cluster: &dyn Cluster) -> Result<Option<
         return Err(format!("compare: {flag} is a `render` option; compare's runs are time-boxed by --budgets"));
     }
     let scene = crate::scene::load_with(&cfg.base.scene, &cfg.base.load_options()).map_err(|e| e.to_string())?;
+    let runs_dir = cfg.out.join("runs");
+    output_guard(cfg, &scene, &runs_dir).check()?;
     let (reference, res) = agree_resolution(cfg, cluster)?;
     let regions = regions(&scene, res);
-    let runs_dir = cfg.out.join("runs");
     if cluster.rank() == 0 {
         std::fs::create_dir_all(&runs_dir).map_err(|e| format!("cannot create {}: {e}", runs_dir.display()))?;
     }

@@ -36,6 +36,23 @@ fn resume_prefix(p: &Path) -> PathBuf {
     PathBuf::from(s.strip_suffix(".ckpt").unwrap_or(&s).to_string())
 }
 
+/// The output guard (`atomic_io::OutputSet`) of a reference: the scene and its meshes against
+/// `PREFIX.{exr,png,json}` and each half's `PREFIX.half{k}.{exr,png,json,ckpt}`.
+fn reference_guard(base: &pipeline::RenderJob, scene: &crate::scene::Scene) -> crate::atomic_io::OutputSet {
+    let mut g = crate::atomic_io::OutputSet::new();
+    g.input("the scene", &base.scene);
+    scene.mesh_files.iter().for_each(|m| {
+        g.input("the scene's mesh", m);
+    });
+    for e in ["exr", "png", "json"] {
+        g.output("--out", &with_ext(&base.out, e));
+    }
+    for (k, e) in (0..2).flat_map(|k| ["exr", "png", "json", "ckpt"].map(|e| (k, e))) {
+        g.output("--out", &with_ext(&half_prefix(&base.out, k), e));
+    }
+    g
+}
+
 /// The files of a reference.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct ReferenceFiles {
@@ -104,6 +121,7 @@ pub fn run_reference(
     let base = pipeline::RenderJob { defines: opts.defines.clone(), ..args.job() };
     crate::atomic_io::check_output_prefix(&base.out)?;
     let scene = crate::scene::load_with(&base.scene, opts).map_err(|e| e.to_string())?;
+    reference_guard(&base, &scene).check()?; // each half's render checks its own resume too
     let plan = pipeline::RenderJob { method: Some(Method::Pt), ..base.clone() }.resolve(&scene)?;
     let (seed, time, spp) = (plan.seed, plan.time, plan.spp);
     let prefix = base.out.clone();

@@ -7,6 +7,8 @@
 //! * `mpi::MpiCluster` (only with the cargo feature `mpi`) wraps an MPI world
 //!   communicator. It also works as a singleton (size 1) when started without `mpirun`.
 //! * [`schedule`] holds the pure pass-ownership and time-box arithmetic.
+//! * [`job`]: the ranks' agreement on the job before any work ([`job::agree_job`]) and the
+//!   watchdog's limit ([`Cluster::watch`], armed by [`shared_deadline`] for a time box).
 //!
 //! Invariants every implementation keeps:
 //! * `rank() < size()` and `size() >= 1`.
@@ -17,6 +19,7 @@
 //! * Message sizes are unlimited: payloads whose element count exceeds `i32::MAX` are split
 //!   into chunks internally.
 
+pub mod job;
 pub mod local;
 #[cfg(feature = "mpi")]
 pub mod mpi;
@@ -51,6 +54,11 @@ pub trait Cluster {
     fn gather_bytes(&self, local: &[u8]) -> Option<Vec<Vec<u8>>>;
     /// Blocks until every rank has reached it.
     fn barrier(&self);
+    /// Arms (`Some((deadline, grace))`) or disarms (`None`) this rank's watchdog: a collective
+    /// still waiting at `max(deadline, entry) + grace` ends the whole job with a message (MPI:
+    /// `MPI_Abort`). Not collective. The default, for a single process, does nothing (nobody
+    /// else can be waited for).
+    fn watch(&self, _limit: Option<(Instant, std::time::Duration)>) {}
 }
 
 /// Starts the cluster: the MPI world when built with feature `mpi` (also works as a
@@ -181,7 +189,9 @@ pub fn agree_round(c: &dyn Cluster, go: bool, failure: Option<String>) -> Result
 ///
 /// Rank 0 computes the remaining time and broadcasts it; every rank sets its deadline to
 /// "now + remaining", so the ranks agree up to the broadcast latency. `None`, a NaN or an
-/// infinite budget gives [`Deadline::never`]. Collective: call on all ranks.
+/// infinite budget gives [`Deadline::never`]. Collective: call on all ranks. A finite budget
+/// also arms every rank's watchdog ([`Cluster::watch`], [`job::watchdog_limit`]); the caller
+/// disarms it when the render is over.
 pub fn shared_deadline(c: &dyn Cluster, local_start: Instant, budget_secs: Option<f64>) -> Deadline {
     let mut bytes = Vec::new();
     if c.rank() == 0 {
@@ -196,7 +206,11 @@ pub fn shared_deadline(c: &dyn Cluster, local_start: Instant, budget_secs: Optio
         Ok(b) => f64::from_le_bytes(b),
         Err(_) => f64::INFINITY, // cannot happen: rank 0 always sends 8 bytes
     };
-    Deadline::after_secs(Instant::now(), remaining)
+    let now = Instant::now();
+    if let Some(at) = std::time::Duration::try_from_secs_f64(remaining).ok().and_then(|d| now.checked_add(d)) {
+        c.watch(job::watchdog_limit(at, budget_secs));
+    }
+    Deadline::after_secs(now, remaining)
 }
 
 /// Checks every collective of `c` with known data; meant for `forecast mpi-selftest`.

@@ -12,6 +12,11 @@
 //!   `max_chunk_bytes` bytes (default 1 GiB), so any length works.
 //! * Reductions first agree on the slice length with one tiny all-reduce; a mismatch panics
 //!   on every rank with both lengths named, instead of deadlocking or reading out of bounds.
+//!   (The pipeline's `job::agree_job` refuses mismatched jobs before any of these.)
+//! * The watchdog: every collective marks this rank as waiting while it runs; a thread (started
+//!   by `init`, it calls nothing of MPI but `MPI_Abort`) checks the mark five times a second
+//!   against the limit armed by [`Cluster::watch`] (`job::watchdog_fires`), and past it prints
+//!   which rank gave up after how long and ends the whole job with `MPI_Abort` (exit 1).
 
 use ::mpi::collective::SystemOperation;
 use ::mpi::datatype::PartitionMut;
@@ -20,7 +25,72 @@ use ::mpi::topology::SimpleCommunicator;
 use ::mpi::traits::*;
 use ::mpi::Threading;
 
-use super::Cluster;
+use super::{job, Cluster};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// The watchdog's state, shared with its thread: since when this rank waits in a collective
+/// (milliseconds since `epoch`, plus 1; 0 = not waiting) and the armed limit.
+struct Watch {
+    epoch: Instant,
+    waiting_since_ms: AtomicU64,
+    limit: Mutex<Option<(Instant, Duration)>>,
+}
+
+/// Marks the rank as waiting in a collective while it lives.
+struct InCollective<'a>(&'a Watch);
+
+impl Drop for InCollective<'_> {
+    fn drop(&mut self) {
+        self.0.waiting_since_ms.store(0, Ordering::Relaxed);
+    }
+}
+
+impl Watch {
+    fn enter(&self) -> InCollective<'_> {
+        let ms = u64::try_from(self.epoch.elapsed().as_millis()).unwrap_or(u64::MAX - 1) + 1;
+        self.waiting_since_ms.store(ms, Ordering::Relaxed);
+        InCollective(self)
+    }
+
+    /// The check of one tick: `Some((waited, past the deadline))` when the limit is passed.
+    fn overdue(&self, now: Instant) -> Option<(Duration, Duration)> {
+        let since = self.waiting_since_ms.load(Ordering::Relaxed);
+        let limit = *self.limit.lock().unwrap_or_else(|e| e.into_inner());
+        let (deadline, grace) = limit.filter(|_| since > 0)?;
+        let entered = self.epoch + Duration::from_millis(since - 1);
+        job::watchdog_fires(now, entered, deadline, grace)
+            .then(|| (now.saturating_duration_since(entered), now.saturating_duration_since(deadline)))
+    }
+}
+
+/// Starts the watchdog thread of rank `rank` (a warning, and no watchdog, if it cannot start).
+fn start_watchdog(rank: usize) -> Arc<Watch> {
+    let watch = Arc::new(Watch { epoch: Instant::now(), waiting_since_ms: AtomicU64::new(0), limit: Mutex::new(None) });
+    let w = Arc::clone(&watch);
+    let spawned = std::thread::Builder::new().name("mpi-watchdog".into()).spawn(move || loop {
+        std::thread::sleep(Duration::from_millis(200));
+        if let Some((waited, past)) = w.overdue(Instant::now()) {
+            crate::errln!(
+                "error: rank {rank} waited {:.1} s in a collective, {:.1} s past the time budget: another rank \
+                 stopped responding (stopped, hung or lost); ending the job (MPI_Abort)",
+                waited.as_secs_f64(),
+                past.as_secs_f64()
+            );
+            // SAFETY: MPI_Abort on the world communicator, which outlives every rank's threads;
+            // MPICH accepts it from any thread and ends every process of the job.
+            unsafe {
+                ::mpi::ffi::MPI_Abort(::mpi::ffi::RSMPI_COMM_WORLD, 1);
+            }
+            std::process::exit(1);
+        }
+    });
+    if let Err(e) = spawned {
+        crate::errln!("warning: rank {rank}: cannot start the MPI watchdog ({e}); a stopped rank would hold the job");
+    }
+    watch
+}
 
 /// Default largest chunk of one MPI call, in bytes (1 GiB, well below `i32::MAX`).
 pub const DEFAULT_MAX_CHUNK_BYTES: usize = 1 << 30;
@@ -33,6 +103,7 @@ pub struct MpiCluster {
     size: usize,
     provided: Threading,
     max_chunk_bytes: usize,
+    watch: Arc<Watch>,
     _universe: Universe,
 }
 
@@ -55,7 +126,16 @@ impl MpiCluster {
         if size == 0 || rank >= size {
             return Err(format!("inconsistent MPI world: rank {rank}, size {size}"));
         }
-        Ok(MpiCluster { world, rank, size, provided, max_chunk_bytes: DEFAULT_MAX_CHUNK_BYTES, _universe: universe })
+        let watch = start_watchdog(rank);
+        Ok(MpiCluster {
+            world,
+            rank,
+            size,
+            provided,
+            max_chunk_bytes: DEFAULT_MAX_CHUNK_BYTES,
+            watch,
+            _universe: universe,
+        })
     }
 
     /// The thread level MPI actually provides.
@@ -125,6 +205,7 @@ impl Cluster for MpiCluster {
     }
 
     fn broadcast_bytes(&self, bytes: &mut Vec<u8>) {
+        let _waiting = self.watch.enter();
         let root = self.world.process_at_rank(0);
         let mut len = bytes.len() as u64;
         root.broadcast_into(&mut len);
@@ -140,6 +221,7 @@ impl Cluster for MpiCluster {
     }
 
     fn reduce_sum(&self, local: &[f64]) -> Option<Vec<f64>> {
+        let _waiting = self.watch.enter();
         self.check_same_len("reduce_sum", local.len());
         let root = self.world.process_at_rank(0);
         let ce = self.chunk_f64();
@@ -158,6 +240,7 @@ impl Cluster for MpiCluster {
     }
 
     fn all_reduce_sum(&self, local: &[f64]) -> Vec<f64> {
+        let _waiting = self.watch.enter();
         self.check_same_len("all_reduce_sum", local.len());
         let ce = self.chunk_f64();
         let mut out = vec![0.0f64; local.len()];
@@ -168,12 +251,14 @@ impl Cluster for MpiCluster {
     }
 
     fn all_reduce_max(&self, local: f64) -> f64 {
+        let _waiting = self.watch.enter();
         let mut out = 0.0f64;
         self.world.all_reduce_into(&local, &mut out, SystemOperation::max());
         out
     }
 
     fn gather_bytes(&self, local: &[u8]) -> Option<Vec<Vec<u8>>> {
+        let _waiting = self.watch.enter();
         // Every rank learns every length, so all take the same path below.
         let mine = local.len() as u64;
         let mut lens = vec![0u64; self.size];
@@ -213,6 +298,11 @@ impl Cluster for MpiCluster {
     }
 
     fn barrier(&self) {
+        let _waiting = self.watch.enter();
         self.world.barrier();
+    }
+
+    fn watch(&self, limit: Option<(Instant, Duration)>) {
+        *self.watch.limit.lock().unwrap_or_else(|e| e.into_inner()) = limit;
     }
 }

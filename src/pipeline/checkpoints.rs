@@ -2,9 +2,13 @@
 //! sums and writes the checkpoint and the current `PREFIX.{exr,png,json}` as one
 //! `atomic_io::FileSet`; `image_files` adds `PREFIX.{exr,png}` to such a set.
 //!
+//! A checkpoint records `identity::job_keys` (the `-D` values and the method's options) beside the scene
+//! hash, seed, method and resolution; `--resume` refuses a render whose keys differ.
+//!
 //! Invariants: the checkpoint is added to the set last, so once it is visible its images and
 //! JSON are too; a failed write is a warning (the previous set stays, the next interval retries).
 
+use super::identity::job_keys;
 use super::{counter_sums, secs, Passes, Run, Timings, Totals};
 use crate::atomic_io::FileSet;
 use crate::checkpoint::Checkpoint;
@@ -69,6 +73,7 @@ impl Run<'_> {
             spp: passes_done,
             elapsed_secs: secs(self.started) + self.resumed.checkpoint.as_ref().map_or(0.0, |r| r.elapsed_secs),
             film: total.data.clone(),
+            job: job_keys(self.job, self.plan),
         }
     }
 

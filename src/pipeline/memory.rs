@@ -13,7 +13,7 @@ impl Plan {
     /// rank, plus on rank 0 the reduced sums and the final copy (and with checkpoints or a resume
     /// the checkpoint's film, its clone and its encoding), plus the images (mean, variance, EXR,
     /// PNG: ≈ 64 bytes per pixel). Preprocess product: stored photons (`iws-pm`, ≈ 64 bytes each)
-    /// or forecast photons (`iws-cf`, ≈ 128 bytes with their clusters and maps), three copies on
+    /// or forecast photons (`iws-cf`, `pt-cf`, ≈ 128 bytes with their clusters and maps), three copies on
     /// rank 0 (built, encoded, decoded) and one on every other rank of the node.
     pub fn memory_estimate(&self, scene: &Scene, checkpoints: bool) -> (u64, String) {
         let pixels = self.resolution.0 as u64 * self.resolution.1 as u64;
@@ -22,7 +22,8 @@ impl Plan {
         let copies = if checkpoints { 6 } else { 3 };
         let product = match self.method {
             Method::IwsPm => self.args.pm.photons.saturating_mul(64),
-            Method::IwsCf => {
+            // pt-cf builds the same forecast from the same options (`--forecast-photons`)
+            Method::IwsCf | Method::PtCf => {
                 self.args.cf.forecast_photons.or(scene.forecast_photons).unwrap_or(200_000).saturating_mul(128)
             }
             _ => 0,

@@ -1,5 +1,6 @@
 //! The render pipeline, top to bottom, and the only place the stages meet:
-//! scene → [`RenderJob::resolve`] → BVH → [`preprocess`] (rank 0, broadcast) → [`agree_resume`]
+//! scene → [`RenderJob::resolve`] (and the output guard, `RenderJob::output_set`) → BVH →
+//! the ranks' job check (`distributed::job::agree_job`) → [`preprocess`] (rank 0, broadcast) → [`agree_resume`]
 //! → [`run_passes`] (interleaved passes, checkpoints) → [`reduce`] → images + [`RenderReport`].
 //!
 //! Ranks: rank r renders passes r, r+N, … in rounds of N passes; all ranks agree once per round
@@ -20,7 +21,7 @@
 //! no rank is left waiting in a collective.
 
 use crate::accel::World;
-use crate::atomic_io::FileSet;
+use crate::atomic_io::{FileSet, OutputSet};
 use crate::checkpoint::Checkpoint;
 use crate::distributed::schedule::{Deadline, PassTimer};
 use crate::distributed::{self, Cluster};
@@ -34,11 +35,13 @@ use crate::render::{render_pass, PassCounters, PixelSampler};
 use crate::scene::Scene;
 
 mod checkpoints;
+mod identity;
 mod memory;
 mod report;
 mod snapshots;
 
 pub use checkpoints::{image_files, image_from_film, write_images};
+pub use identity::{job_fields, job_keys};
 pub use report::{RankStats, Rays, RenderReport, RenderResult, Timings};
 pub use snapshots::{check_snapshots, snapshot_label, snapshot_prefix, SnapshotReport};
 
@@ -103,12 +106,37 @@ pub struct Plan {
 }
 
 impl RenderJob {
-    /// An explicit `--checkpoint-path` must name neither the scene file nor one of the render's
-    /// outputs (`PREFIX.exr`, `.png`, `.json`): each checkpoint would replace that file.
-    fn check_checkpoint_path(&self) -> Result<(), String> {
-        let Some(ckpt) = &self.checkpoint_path else { return Ok(()) };
-        let outputs: Vec<PathBuf> = ["exr", "png", "json"].iter().map(|e| with_ext(&self.out, e)).collect();
-        crate::atomic_io::check_not_clobbering("--checkpoint-path", ckpt, &[&self.scene], &outputs)
+    /// The render's output guard: its inputs (the scene file, `scene`'s meshes, `--resume`) and
+    /// every file it may write (`PREFIX.{exr,png,json}`, the checkpoint, each snapshot's
+    /// `PREFIX.snap-LABEL.{exr,json}`). The checkpoint may replace the one it resumed from.
+    pub fn output_set(&self, scene: &Scene) -> OutputSet {
+        let mut g = OutputSet::new();
+        g.input("the scene", &self.scene);
+        scene.mesh_files.iter().for_each(|m| {
+            g.input("the scene's mesh", m);
+        });
+        if let Some(r) = &self.resume {
+            g.input("--resume", r);
+        }
+        for ext in ["exr", "png", "json"] {
+            g.output("--out", &with_ext(&self.out, ext));
+        }
+        for label in self.snapshots.iter().map(|&t| snapshot_label(t)) {
+            let p = snapshot_prefix(&self.out, &label);
+            g.output("--snapshots", &with_ext(&p, "exr")).output("--snapshots", &with_ext(&p, "json"));
+        }
+        let ckpt = self.checkpoint_path.clone().unwrap_or_else(|| with_ext(&self.out, "ckpt"));
+        let flag = if self.checkpoint_path.is_some() { "--checkpoint-path" } else { "the checkpoint" };
+        match (&self.resume, self.checkpoint_every.is_some() || self.checkpoint_path.is_some()) {
+            (Some(r), true) => {
+                g.output_replacing(flag, &ckpt, r);
+            }
+            (None, true) => {
+                g.output(flag, &ckpt);
+            }
+            (_, false) => {}
+        }
+        g
     }
 
     /// How `scene` is loaded (the job's `-D` values).
@@ -172,13 +200,29 @@ fn secs(t: Instant) -> f64 {
     t.elapsed().as_secs_f64()
 }
 
+/// Disarms the cluster's watchdog when the render is over, however it ends.
+struct Disarm<'a>(&'a dyn Cluster);
+
+impl Drop for Disarm<'_> {
+    fn drop(&mut self) {
+        self.0.watch(None);
+    }
+}
+
 /// Runs a render on every rank of `cluster`; returns `Some` on rank 0. Every error is agreed
 /// across ranks (see the module docs): all ranks return it, rank 0's names the failing ranks.
 pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Result<Option<RenderResult>, String> {
+    // the watchdog holds the setup to `--time` (the shared deadline re-arms it with the plan's)
+    let _disarm = Disarm(cluster);
+    if let Some(at) =
+        job.time.and_then(|t| std::time::Duration::try_from_secs_f64(t).ok()).and_then(|d| started.checked_add(d))
+    {
+        cluster.watch(distributed::job::watchdog_limit(at, job.time));
+    }
     let setup = crate::atomic_io::check_output_prefix(&job.out)
-        .and_then(|()| job.check_checkpoint_path())
         .and_then(|()| Ok((thread_pool(job.threads)?, load(job, cluster.rank())?)));
     let (pool, (world, plan, mut timings)) = distributed::agree(cluster, setup)?;
+    distributed::job::agree_job(cluster, &job_fields(job, &world.scene, &plan))?;
     let deadline = distributed::shared_deadline(cluster, started, plan.time);
     let mut pre = preprocess(&world, &plan, cluster, &PhaseBar::new(job.progress && cluster.rank() == 0))?;
     timings.preprocess_s = pre.stats.preprocess_s;
@@ -252,6 +296,7 @@ fn preprocess_over_budget(plan: &Plan, timings: &Timings, started: Instant, rank
 fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), String> {
     let t_load = Instant::now();
     let mut scene = crate::scene::load_with(&job.scene, &job.load_options()).map_err(|e| e.to_string())?;
+    job.output_set(&scene).check()?; // before anything is written
     let limitations = crate::scene::scene_warnings(&scene);
     scene.warnings.extend(limitations);
     let load_s = secs(t_load);
@@ -314,7 +359,7 @@ fn agree_resume(job: &RenderJob, world: &World, plan: &Plan, cluster: &dyn Clust
     let (w, h) = plan.resolution;
     let loaded = match (&job.resume, cluster.rank()) {
         (Some(p), 0) => Checkpoint::load(p).map_err(|e| e.to_string()).and_then(|c| {
-            c.validate(world.scene.hash, plan.seed, &plan.checkpoint_label(), w, h)
+            c.validate(world.scene.hash, plan.seed, &plan.checkpoint_label(), (w, h), &job_keys(job, plan))
                 .map_err(|e| format!("{}: cannot resume: {e}", p.display()))
                 .map(|()| Some(c))
         }),

@@ -115,6 +115,7 @@ struct ShapeRec {
 pub(super) struct SceneBuilder {
     file: String,
     hash: u64,
+    mesh_files: Vec<std::path::PathBuf>,
     warnings: Vec<String>,
     camera: Option<Camera>,
     /// Render defaults (set through the checked setters).
@@ -137,6 +138,7 @@ impl SceneBuilder {
         SceneBuilder {
             file: file.to_string(),
             hash,
+            mesh_files: Vec::new(),
             warnings: Vec::new(),
             camera: None,
             render: RenderDefaults { method: "pt".into(), spp: None, time: None, seed: 0, max_depth: 64 },
@@ -164,8 +166,10 @@ impl SceneBuilder {
         self.warnings.push(w);
     }
 
-    /// Folds a mesh file's bytes hash into the scene hash.
-    pub fn hash_mesh(&mut self, bytes_hash: u64) {
+    /// Records a mesh file read (an input no output may name) and folds its bytes hash into the
+    /// scene hash.
+    pub fn mesh_file(&mut self, path: &std::path::Path, bytes_hash: u64) {
+        self.mesh_files.push(path.to_path_buf());
         self.hash = crate::math::fnv1a(self.hash, &bytes_hash.to_le_bytes());
     }
 
@@ -456,6 +460,7 @@ impl SceneBuilder {
         Ok(Scene {
             path: self.file,
             hash: self.hash,
+            mesh_files: self.mesh_files,
             camera,
             render: self.render,
             materials: self.materials,

@@ -9,6 +9,10 @@
 //! into `<default name="forecast_*">` values that Mitsuba ignores. So the scene loaded back is
 //! the same `Scene` (apart from `path`, `hash`, `warnings`) and renders bit-identically.
 //!
+//! Writing: the XML and its meshes are one `atomic_io::FileSet` (all replaced or none), checked
+//! first by the output guard (`atomic_io::OutputSet`): no file of the set may be the scene or one
+//! of its meshes (`--out ring.obj`, or an input mesh at `OUT_meshes/shape_NNN.ply`).
+//!
 //! Mapping: diffuse → `twosided` `diffuse`; mirror → `twosided` `conductor` (`material` none,
 //! `specular_reflectance`); glass → `dielectric` (`int_ior` = ior, `ext_ior` = 1); glossy →
 //! Mitsuba 0.6's `phong` (the same modified Phong; Mitsuba 3 has none: a warning); emitters carry
@@ -49,7 +53,6 @@ pub fn export_mitsuba(scene_path: &Path, out: &Path) -> Result<ExportReport, Str
             scene_path.display()
         ));
     }
-    crate::atomic_io::check_not_clobbering("--out", out, &[scene_path], &[])?;
     let scene = super::file::load(scene_path).map_err(|e| e.to_string())?;
     let src = std::fs::read_to_string(scene_path).map_err(|e| format!("{}: {e}", scene_path.display()))?;
     let doc: Doc = toml::from_str(&src).map_err(|e| format!("{}: {e}", scene_path.display()))?;
@@ -66,7 +69,8 @@ pub fn export_mitsuba(scene_path: &Path, out: &Path) -> Result<ExportReport, Str
     for (i, m) in scene.materials.iter().enumerate().skip(1) {
         let _ = writeln!(x, "{}", bsdf(m, Some(&names[i - 1]), &mut rep.warnings));
     }
-    rep.meshes = triangle_runs(&mut x, &scene, &names, &mesh_dir, &mesh_dir_name)?;
+    let meshes = triangle_runs(&mut x, &scene, &names, &mesh_dir, &mesh_dir_name);
+    rep.meshes = meshes.iter().map(|(p, _)| p.clone()).collect();
     for s in &scene.spheres {
         let le = (s.emitter != super::NO_EMITTER).then(|| scene.emitters[s.emitter as usize].radiance);
         let _ = writeln!(x, "    <shape type=\"sphere\">");
@@ -89,18 +93,48 @@ pub fn export_mitsuba(scene_path: &Path, out: &Path) -> Result<ExportReport, Str
         );
     }
     let _ = writeln!(x, "</scene>");
-    std::fs::write(out, x).map_err(|e| format!("{}: {e}", out.display()))?;
+    write_export(scene_path, &scene, out, x, meshes, &mesh_dir)?;
     Ok(rep)
 }
 
-/// Writes runs of triangles with equal material, emission and smoothness as PLY shapes.
+/// Writes the XML and its meshes as one set (`atomic_io::FileSet`: a failure leaves the previous
+/// export whole), after the output guard: no file of the set may name the scene or its meshes.
+fn write_export(
+    scene_path: &Path,
+    scene: &Scene,
+    out: &Path,
+    xml: String,
+    meshes: Vec<(PathBuf, Vec<u8>)>,
+    mesh_dir: &Path,
+) -> Result<(), String> {
+    let mut guard = crate::atomic_io::OutputSet::new();
+    guard.input("the scene", scene_path);
+    scene.mesh_files.iter().for_each(|m| {
+        guard.input("the scene's mesh", m);
+    });
+    guard.output("--out", out);
+    meshes.iter().for_each(|(p, _)| {
+        guard.output("the exported mesh", p);
+    });
+    guard.check()?;
+    if !meshes.is_empty() {
+        std::fs::create_dir_all(mesh_dir).map_err(|e| format!("cannot create {}: {e}", mesh_dir.display()))?;
+    }
+    let mut set = crate::atomic_io::FileSet::new();
+    meshes.into_iter().for_each(|(p, b)| set.add(p, b));
+    set.add(out.to_path_buf(), xml.into_bytes()); // last: once the XML is new, its meshes are too
+    set.commit()
+}
+
+/// Runs of triangles with equal material, emission and smoothness as PLY shapes: their XML goes
+/// to `x`, their files (path, bytes) are returned.
 fn triangle_runs(
     x: &mut String,
     scene: &Scene,
     names: &[String],
     dir: &Path,
     dir_name: &str,
-) -> Result<Vec<PathBuf>, String> {
+) -> Vec<(PathBuf, Vec<u8>)> {
     let tris = &scene.triangles;
     let key = |t: &Triangle| (t.material, radiance(scene, t), t.n.is_some());
     let mut meshes = Vec::new();
@@ -109,10 +143,7 @@ fn triangle_runs(
         let end = (start..tris.len()).find(|&j| key(&tris[j]) != key(&tris[start])).unwrap_or(tris.len());
         let run = &tris[start..end];
         let k = meshes.len();
-        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-        let path = dir.join(format!("shape_{k:03}.ply"));
-        std::fs::write(&path, write_binary(&run_mesh(run))).map_err(|e| format!("{}: {e}", path.display()))?;
-        meshes.push(path);
+        meshes.push((dir.join(format!("shape_{k:03}.ply")), write_binary(&run_mesh(run))));
         let file = format!("{dir_name}/shape_{k:03}.ply");
         let _ = writeln!(x, "    <shape type=\"ply\">\n        <string name=\"filename\" value=\"{}\"/>", esc(&file));
         let _ = writeln!(x, "        <boolean name=\"face_normals\" value=\"{}\"/>", run[0].n.is_none());
@@ -120,7 +151,7 @@ fn triangle_runs(
         let _ = writeln!(x, "    </shape>");
         start = end;
     }
-    Ok(meshes)
+    meshes
 }
 
 fn radiance(scene: &Scene, t: &Triangle) -> Option<Rgb> {

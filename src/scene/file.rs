@@ -351,7 +351,7 @@ fn mesh(
     }
     let path = dir.join(f);
     let mesh = super::load_mesh_file(&path, smooth).map_err(|m| cx.err(ss.clone(), &key("file"), m))?;
-    b.hash_mesh(mesh.bytes_hash);
+    b.mesh_file(&path, mesh.bytes_hash);
     let (sin, cos) = ry.to_radians().sin_cos();
     let rot = |p: Vec3| Vec3::new(cos * p.x + sin * p.z, p.y, -sin * p.x + cos * p.z);
     let xf = |p: Vec3| rot(p * sc) + v3(t);

@@ -197,6 +197,9 @@ pub struct Scene {
     pub path: String,
     /// FNV-1a hash of the scene file text and its meshes (checkpoint validation).
     pub hash: u64,
+    /// The mesh files read (OBJ, PLY), in scene order: inputs no output may name
+    /// (`atomic_io::OutputSet`).
+    pub mesh_files: Vec<std::path::PathBuf>,
     /// Camera.
     pub camera: Camera,
     /// Render defaults.

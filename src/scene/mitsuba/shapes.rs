@@ -131,7 +131,7 @@ fn file_mesh(cx: &mut Cx, p: &mut Plugin) -> Result<(IndexedMesh, usize), SceneE
         crate::scene::obj::load_indexed(&path)
     };
     let mut m = m.map_err(|e| p.err(cx, fl, "filename", e))?;
-    cx.b.hash_mesh(m.bytes_hash);
+    cx.b.mesh_file(&path, m.bytes_hash);
     p.reject(cx, &["max_smooth_angle"], "normals are per-vertex or per-face")?;
     let face_normals = p.boolean(cx, "face_normals")?.unwrap_or(false);
     if face_normals {
