@@ -68,7 +68,7 @@ fi
 mkdir -p "$out"
 name="$(basename "${scene%.*}")"
 if [[ "$scene" == *.xml ]]; then
-  xml="$scene" # already Mitsuba XML: its own integrator and film are replaced below
+  xml="$scene" # already Mitsuba XML (it must load in Mitsuba 3 as it is): integrator and film are replaced
 else
   xml="$out/$name.xml"
   "$FORECAST" export-mitsuba "$scene" --out "$xml" >/dev/null
@@ -99,7 +99,8 @@ os.close(fd)
 tree.write(tmp)
 import mitsuba as mi, drjit as dr
 mi.set_variant(variant)
-mi.Thread.thread().file_resolver().prepend(os.path.dirname(os.path.abspath(xml)))
+(mi.file_resolver() if hasattr(mi, 'file_resolver') else mi.Thread.thread().file_resolver()).prepend(
+    os.path.dirname(os.path.abspath(xml)))
 dr.set_thread_count(threads)
 t0 = time.perf_counter()
 try:
@@ -136,8 +137,10 @@ echo "bench-vs-mitsuba: $scene at ${w}x${h}, ${budget} s each, $runs runs, $thre
 printf '%-4s %12s %14s %12s %14s %7s\n' run "forecast spp" "forecast S/s" "mitsuba spp" "mitsuba S/s" ratio
 sum_f=0; sum_m=0; sum_r=0
 for ((i = 1; i <= runs; i++)); do
-  read -r fspp fsec < <(forecast_run "$i")
-  read -r mspp msec < <(mitsuba_run "$i")
+  fres="$(forecast_run "$i")" # a failed run stops the script (set -e)
+  mres="$(mitsuba_run "$i")"
+  read -r fspp fsec <<<"$fres"
+  read -r mspp msec <<<"$mres"
   line="$(awk -v a="$fspp" -v b="$fsec" -v c="$mspp" -v d="$msec" -v px="$((w * h))" -v i="$i" 'BEGIN {
     f = a * px / b; m = c * px / d; printf "%-4d %12d %14.4g %12d %14.4g %7.3f %g %g %g\n", i, a, f, c, m, f / m, f, m, f / m }')"
   read -r _ _ _ _ _ _ f m r <<<"$line"
