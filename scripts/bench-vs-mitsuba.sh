@@ -1,0 +1,153 @@
+#!/usr/bin/env bash
+# Samples per second of `forecast --method pt` against Mitsuba 3 `path`, equal wall-clock budget
+# (issue 33). A benchmark, not a CI test: run it on a quiet machine; it is not in scripts/test.sh.
+#
+#   scripts/bench-vs-mitsuba.sh [SCENE] [RESOLUTION] [BUDGET_S] [RUNS]
+#   e.g. scripts/bench-vs-mitsuba.sh scenes/ring.toml 256x256 60 3
+# Defaults: scenes/cornell-box.toml 640x640 60 3.
+#
+# Environment:
+#   THREADS       worker threads of both renderers (default: all cores, `nproc`)
+#   MAX_DEPTH     forecast `--max-depth` (path vertices, default 64); Mitsuba gets max_depth =
+#                 MAX_DEPTH + 1 (it counts path segments: a path whose last scattering vertex is
+#                 vertex MAX_DEPTH ends with segment MAX_DEPTH + 1, by NEE or by the BSDF ray)
+#   RR_DEPTH      Mitsuba rr_depth (default 5 = forecast's transport::roulette::RR_FROM_VERTEX:
+#                 both roulette from the 5th surface vertex on, survival min(max β·η², 0.95))
+#   VARIANT       Mitsuba variant (default llvm_ad_rgb; scalar_rgb needs no LLVM)
+#   MITSUBA_VENV  virtual environment (default out/mitsuba-venv; created with pip if missing)
+#   FORECAST      forecast binary (default: cargo build --release, target/release/forecast)
+#   OUT           work folder (default out/bench-vs-mitsuba)
+#
+# Timing. forecast: `render --time BUDGET` (whole passes; loading, BVH and probe inside the
+# budget), samples = passes·W·H over its JSON `timings.total_s`. Mitsuba: from just before
+# `load_file` (scene load, BVH and LLVM JIT inside the budget) it renders chunks of spp (the first
+# chunk 1 spp, then chunks sized to ~1 s, each kernel compiled once) until the next chunk would
+# pass the budget; samples = spp·W·H over the elapsed time. Both counts are whole samples per
+# pixel. The ratio printed is forecast / Mitsuba, per run and averaged over RUNS.
+set -euo pipefail
+
+root="$(cd "$(dirname "$0")/.." && pwd)"
+cd "$root"
+scene="${1:-scenes/cornell-box.toml}"
+res="${2:-640x640}"
+budget="${3:-60}"
+runs="${4:-3}"
+threads="${THREADS:-$(nproc)}"
+max_depth="${MAX_DEPTH:-64}"
+rr_depth="${RR_DEPTH:-5}"
+variant="${VARIANT:-llvm_ad_rgb}"
+venv="${MITSUBA_VENV:-$root/out/mitsuba-venv}"
+out="${OUT:-$root/out/bench-vs-mitsuba}"
+[[ "$res" =~ ^([0-9]+)x([0-9]+)$ ]] || { echo "bench-vs-mitsuba: resolution must be WxH, got $res" >&2; exit 2; }
+w="${BASH_REMATCH[1]}"; h="${BASH_REMATCH[2]}"
+[[ "$budget" =~ ^[0-9]+([.][0-9]+)?$ ]] || { echo "bench-vs-mitsuba: budget is seconds, got $budget" >&2; exit 2; }
+[[ "$runs" =~ ^[1-9][0-9]*$ ]] || { echo "bench-vs-mitsuba: runs must be a positive integer, got $runs" >&2; exit 2; }
+[[ -f "$scene" ]] || { echo "bench-vs-mitsuba: no scene $scene" >&2; exit 2; }
+
+# --- Mitsuba 3 in a local virtual environment -------------------------------------------------
+if ! "$venv/bin/python" -c 'import mitsuba' 2>/dev/null; then
+  echo "bench-vs-mitsuba: installing Mitsuba 3 into $venv (pip)"
+  python3 -m venv "$venv"
+  "$venv/bin/pip" install --quiet mitsuba numpy
+fi
+if [[ "$variant" == llvm* ]] && ! ldconfig -p | grep -q 'libLLVM'; then
+  if [[ "$(id -u)" == 0 ]] && command -v apt-get >/dev/null; then
+    echo "bench-vs-mitsuba: Mitsuba's llvm variants need LLVM: apt-get install -y libllvm19"
+    apt-get install -y -q libllvm19 >/dev/null
+  else
+    echo "bench-vs-mitsuba: $variant needs LLVM: run 'apt-get install libllvm19' as root (or VARIANT=scalar_rgb)" >&2
+    exit 2
+  fi
+fi
+
+# --- forecast and the exported scene -----------------------------------------------------------
+if [[ -z "${FORECAST:-}" ]]; then
+  cargo build --release --quiet
+  FORECAST="$root/target/release/forecast"
+fi
+mkdir -p "$out"
+name="$(basename "${scene%.*}")"
+if [[ "$scene" == *.xml ]]; then
+  xml="$scene" # already Mitsuba XML (it must load in Mitsuba 3 as it is): integrator and film are replaced
+else
+  xml="$out/$name.xml"
+  "$FORECAST" export-mitsuba "$scene" --out "$xml" >/dev/null
+fi
+
+mitsuba_run() { # SEED -> "spp seconds"
+  "$venv/bin/python" - "$xml" "$w" "$h" "$budget" "$threads" "$((max_depth + 1))" "$rr_depth" "$variant" "$1" "$out" <<'EOF'
+import sys, time, os, tempfile, xml.etree.ElementTree as ET
+xml, w, h, budget, threads, max_depth, rr_depth, variant, seed, out = sys.argv[1:]
+w, h, budget, threads, seed = int(w), int(h), float(budget), int(threads), int(seed)
+# The film resolution and the integrator are set in a copy under OUT; the scene's folder goes on
+# Mitsuba's file resolver for its relative mesh paths.
+tree = ET.parse(xml)
+root = tree.getroot()
+for it in root.findall('integrator'):
+    root.remove(it)
+integ = ET.Element('integrator', type='path')
+ET.SubElement(integ, 'integer', name='max_depth', value=max_depth)
+ET.SubElement(integ, 'integer', name='rr_depth', value=rr_depth)
+root.insert(0, integ)
+for film in root.iter('film'):
+    for k, v in (('width', w), ('height', h)):
+        for e in [e for e in film if e.get('name') == k]:
+            film.remove(e)
+        ET.SubElement(film, 'integer', name=k, value=str(v))
+fd, tmp = tempfile.mkstemp(suffix='.xml', dir=out)
+os.close(fd)
+tree.write(tmp)
+import mitsuba as mi, drjit as dr
+mi.set_variant(variant)
+(mi.file_resolver() if hasattr(mi, 'file_resolver') else mi.Thread.thread().file_resolver()).prepend(
+    os.path.dirname(os.path.abspath(xml)))
+dr.set_thread_count(threads)
+t0 = time.perf_counter()
+try:
+    scene = mi.load_file(tmp)
+finally:
+    os.remove(tmp)
+def chunk_s(n, first):
+    t = time.perf_counter()
+    img = mi.render(scene, spp=n, seed=seed * 1000003 + first)
+    dr.eval(img)
+    dr.sync_thread()
+    return time.perf_counter() - t
+chunk_s(1, 0)  # the first sample per pixel carries the JIT
+per_spp = chunk_s(1, 1)
+spp = 2
+chunk = max(1, int(1.0 / per_spp))  # one kernel size from here on: compiled once
+while budget - (time.perf_counter() - t0) >= chunk * per_spp:
+    per_spp = chunk_s(chunk, spp) / chunk
+    spp += chunk
+print(spp, time.perf_counter() - t0)
+EOF
+}
+
+forecast_run() { # SEED -> "spp seconds"
+  local prefix="$out/forecast-$name-$1"
+  "$FORECAST" render "$scene" --method pt --time "${budget}s" --resolution "$res" --threads "$threads" \
+    --max-depth "$max_depth" --seed "$1" --out "$prefix" --quiet 2>/dev/null
+  "$venv/bin/python" -c 'import json, sys; j = json.load(open(sys.argv[1])); print(j["passes"], j["timings"]["total_s"])' \
+    "$prefix.json"
+}
+
+echo "bench-vs-mitsuba: $scene at ${w}x${h}, ${budget} s each, $runs runs, $threads threads," \
+  "forecast pt --max-depth $max_depth vs Mitsuba $variant path max_depth=$((max_depth + 1)) rr_depth=$rr_depth"
+printf '%-4s %12s %14s %12s %14s %7s\n' run "forecast spp" "forecast S/s" "mitsuba spp" "mitsuba S/s" ratio
+sum_f=0; sum_m=0; sum_r=0
+for ((i = 1; i <= runs; i++)); do
+  fres="$(forecast_run "$i")" # a failed run stops the script (set -e)
+  mres="$(mitsuba_run "$i")"
+  read -r fspp fsec <<<"$fres"
+  read -r mspp msec <<<"$mres"
+  line="$(awk -v a="$fspp" -v b="$fsec" -v c="$mspp" -v d="$msec" -v px="$((w * h))" -v i="$i" 'BEGIN {
+    f = a * px / b; m = c * px / d; printf "%-4d %12d %14.4g %12d %14.4g %7.3f %g %g %g\n", i, a, f, c, m, f / m, f, m, f / m }')"
+  read -r _ _ _ _ _ _ f m r <<<"$line"
+  echo "${line% * * *}"
+  sum_f="$(awk -v s="$sum_f" -v x="$f" 'BEGIN { print s + x }')"
+  sum_m="$(awk -v s="$sum_m" -v x="$m" 'BEGIN { print s + x }')"
+  sum_r="$(awk -v s="$sum_r" -v x="$r" 'BEGIN { print s + x }')"
+done
+awk -v f="$sum_f" -v m="$sum_m" -v r="$sum_r" -v n="$runs" 'BEGIN {
+  printf "mean %12s %14.4g %12s %14.4g %7.3f  (ratio of the means %.3f)\n", "", f / n, "", m / n, r / n, f / m }'
