@@ -239,7 +239,7 @@ fn point(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
         (None, Some(x)) => (x.m.w_axis.truncate().as_vec3(), Origin::new(xl, "point.to_world")),
         (None, None) => (Vec3::ZERO, Origin::new(n.line, "point.position")),
     };
-    let intensity = p.color(cx, "intensity")?.unwrap_or(Vec3::ONE);
+    let intensity = p.emission(cx, "intensity")?.unwrap_or(Vec3::ONE);
     cx.b.point_light((position, &pat), (intensity, &Origin::new(il, "point.intensity")))?;
     p.finish(cx);
     Ok(())

@@ -152,6 +152,16 @@ impl<'a> Plugin<'a> {
         }
     }
 
+    /// An emitter's colour (`radiance`, `intensity`): as [`Plugin::color`], except that a uniform
+    /// `<spectrum value="v"/>` is Mitsuba 3's equal-energy spectrum in its RGB variants,
+    /// v·`UNIFORM_EMISSION_RGB` (docs/mitsuba.md, the SMS ring). A uniform spectrum of a BSDF,
+    /// `<rgb>` and `<float>` stay as written, as in Mitsuba.
+    pub fn emission(&mut self, cx: &Cx, name: &str) -> Result<Option<Rgb>, SceneError> {
+        let uniform = self.find(name).is_some_and(|n| n.tag == "spectrum");
+        let e = Rgb::from_array(super::presets::UNIFORM_EMISSION_RGB);
+        Ok(self.color(cx, name)?.map(|c| if uniform { c * e } else { c }))
+    }
+
     /// A `<point>`/`<vector>` parameter (`x`, `y`, `z` or `value`).
     pub fn point(&mut self, cx: &Cx, name: &str) -> Result<Option<[f32; 3]>, SceneError> {
         let Some(n) = self.find(name) else { return Ok(None) };

@@ -15,7 +15,6 @@
 /// read back with `mi.traverse`; the `point` emitter's `intensity` gets the same). Its luminance
 /// is 1, its channel mean 1.0207: read as grey, a scene lit so renders 2% darker in image mean
 /// (the SMS ring: docs/mitsuba.md).
-#[allow(dead_code)] // applied by the emitter readers once wired in: docs/mitsuba.md, "The fix"
 pub(super) const UNIFORM_EMISSION_RGB: [f32; 3] = [1.204_793_9, 0.948_291, 0.908_916_06];
 
 /// Dielectric IOR by Mitsuba's preset name.

@@ -81,7 +81,7 @@ fn emitter(cx: &mut Cx, p: &mut Plugin) -> Result<Option<(Rgb, Origin)>, SceneEr
     }
     let mut ep = Plugin::new(e);
     let rl = ep.line_of("radiance");
-    let Some(l) = ep.color(cx, "radiance")? else {
+    let Some(l) = ep.emission(cx, "radiance")? else {
         return Err(ep.err(cx, e.line, "radiance", "the area emitter needs `radiance`"));
     };
     let at = Origin::new(rl, "area.radiance");
