@@ -32,8 +32,8 @@ fn film_of(scene: &str, method: Method, filter: Option<&str>, name: &str) -> Fil
     j.args.pt.path_filter = filter.map(str::to_string);
     if filter.is_none() {
         // what a filter implies (the split's extra rays are unfiltered): the filtered renders
-        // keep the default split of 16, which `PtArgs::split` must turn off
-        j.args.pt.emission_split = 1;
+        // keep the default split of 16, which `MethodArgs::emission_split` must turn off
+        j.args.settings.emission_split = 1;
     }
     j.args.cf.forecast_photons = Some(20_000);
     render_film(&j)
