@@ -44,7 +44,8 @@ pub enum SplitRule {
 }
 
 /// The energy rule: `clamp(⌈s0·ρ/ρ_max⌉, 1, s0)` continuations at diffuse depth 0 in a cluster
-/// of energy density `density` (the split rule of `iws-cf` and `pt-cf`); 1 where the densities are not usable, never 0 (a zero split would drop the light).
+/// of energy density `density` (the split rule of `iws-cf` and `pt-cf`); 1 where the densities
+/// are not usable, never 0 (a zero split would drop the light).
 #[inline]
 pub fn energy_split(s0: u32, density: f32, max: f32) -> usize {
     let s0 = s0.max(1) as f32;
@@ -71,8 +72,8 @@ pub enum TableKind {
     DualSpread,
 }
 
-/// `(radius, alpha)` of `--table dual-spread`: a tent two bins wide each way, half of T2 on the
-/// f·cos fill (screened on the crop cameras: README, the `--table` option).
+/// `(radius, alpha)` of the default `DualSpread` table: a tent two bins wide each way, half of T2
+/// on the f·cos fill (screened on the crop cameras: `results/rejected/table.md`).
 pub const SPREAD: (f32, f32) = (2.0, 0.5);
 
 /// CF parameters (defaults: spec §5).

@@ -273,9 +273,16 @@ impl MethodArgs {
     }
 
     /// Refuses what `method` does not take: a flag of another method given on the command line
-    /// ([`MethodArgs::foreign_flag`]).
+    /// ([`MethodArgs::foreign_flag`]), and (API callers too) a `--path-filter`, which only the
+    /// methods of `pt`'s group implement.
     pub fn check_for(&self, method: Method) -> Result<(), String> {
-        Self::foreign_flag(method, &self.explicit).map_or(Ok(()), Err)
+        if let Some(e) = Self::foreign_flag(method, &self.explicit) {
+            return Err(e);
+        }
+        if self.pt.path_filter.is_some() && !method.groups().contains(&"pt") {
+            return Err(format!("--path-filter belongs to {}, not {}", Method::owners("pt"), method.name()));
+        }
+        Ok(())
     }
 
     /// The emission split in use: `--emission-split`, or 1 under `--path-filter` (the split's
