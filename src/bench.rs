@@ -88,7 +88,7 @@ pub fn run(world: &World, resolution: (u32, u32), repeats: usize) -> Result<Benc
     let (w, h) = resolution;
     let camera = world.scene.camera.with_resolution(w, h);
     let mut args = MethodArgs::default();
-    args.pt.max_depth = Some(world.scene.render.max_depth);
+    args.settings.max_depth = Some(world.scene.render.max_depth);
     let integ = Method::Pt.build(world, &args, &Method::Pt.preprocess(world, &args, 7)?)?;
     let mut rays_per_sample = (0.0, 0.0);
     for r in 0..repeats {
@@ -127,11 +127,11 @@ pub fn profile_method(
     spp: u64,
 ) -> Result<crate::profile::PhaseProfile, String> {
     let mut args = MethodArgs::default();
-    args.pt.max_depth = Some(world.scene.render.max_depth);
+    args.settings.max_depth = Some(world.scene.render.max_depth);
     let product = method.preprocess(world, &args, 7)?;
     let mut integ = method.build(world, &args, &product)?;
     let camera = world.scene.camera.with_resolution(w, h);
-    let pixels = PixelSampler::new(world, &camera, args.pt.split(), integ.prefix_cap());
+    let pixels = PixelSampler::new(world, &camera, args.emission_split(), integ.prefix_cap());
     let mut profile = crate::profile::Profile::default();
     for pass in 0..spp.max(1) {
         integ.begin_pass(world, 7, pass);

@@ -3,12 +3,19 @@
 //! [--seed S] [--threads N] [--out PREFIX] [--quiet]`. Each method's flags come from its own
 //! file (`integrators::MethodArgs`, flattened here); lists are typed (`--methods`, `--budgets`,
 //! `--only` split by clap).
+//!
+//! A flag of another method is a usage error (exit 2) naming the methods it belongs to
+//! ([`check_foreign_flags`], from clap's `ArgMatches::value_source`): at parse time when
+//! `--method` names the method, else once the pipeline knows it (the scene's `render.method`),
+//! from the explicit flags [`Cli::parse_checked`] records in `MethodArgs::explicit`.
 
 use crate::compare::stability::StabilityConfig;
 use crate::compare::CompareConfig;
 use crate::integrators::{Method, MethodArgs};
 use crate::pipeline::RenderJob;
-use clap::{Args, Parser, Subcommand};
+use clap::error::ErrorKind;
+use clap::parser::ValueSource;
+use clap::{ArgMatches, Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -22,6 +29,50 @@ pub struct Cli {
     /// Mitsuba XML scenes: set `<default>` parameter NAME (`$NAME`), as Mitsuba's `-D`.
     #[arg(short = 'D', value_name = "NAME=VALUE", global = true, value_parser = crate::scene::parse_define)]
     pub define: Vec<(String, String)>,
+}
+
+impl Cli {
+    /// Parses the command line as [`Parser::try_parse`] does, then records in `render`'s
+    /// `MethodArgs::explicit` the method options given explicitly and, when `--method` names the
+    /// method, refuses a flag of another one ([`check_foreign_flags`]).
+    pub fn parse_checked() -> Result<Cli, clap::Error> {
+        let matches = Cli::command().try_get_matches()?;
+        let mut cli = Cli::from_arg_matches(&matches)?;
+        if let (Command::Render(a), Some(("render", sub))) = (&mut cli.command, matches.subcommand()) {
+            a.method_args.explicit = explicit_method_flags(sub);
+            if let Some(m) = a.method {
+                check_foreign_flags(m, sub)?;
+            }
+        }
+        Ok(cli)
+    }
+}
+
+/// The ids of the method options that `matches` (a `render` command line) got from the command
+/// line itself (not from a default).
+pub fn explicit_method_flags(matches: &ArgMatches) -> Vec<String> {
+    let ids = MethodArgs::group_flags().into_iter().flat_map(|(_, flags)| flags).map(|(id, _)| id);
+    ids.filter(|id| matches.value_source(id) == Some(ValueSource::CommandLine)).collect()
+}
+
+/// Refuses, as a usage error (exit 2), a flag given in `matches` that the method `resolved`
+/// does not take: `--clusters belongs to iws-cf/pt-cf, not pt`. Runs wherever the method is
+/// known: at parse time for `--method M`, after the scene (or `auto`) resolves it otherwise.
+pub fn check_foreign_flags(resolved: Method, matches: &ArgMatches) -> Result<(), clap::Error> {
+    match MethodArgs::foreign_flag(resolved, &explicit_method_flags(matches)) {
+        Some(msg) => Err(render_usage_error(msg)),
+        None => Ok(()),
+    }
+}
+
+/// `message` as a usage error of `forecast render` (clap's format and exit status 2).
+pub fn render_usage_error(message: String) -> clap::Error {
+    let mut cmd = Cli::command();
+    cmd.build();
+    match cmd.find_subcommand_mut("render") {
+        Some(render) => render.error(ErrorKind::ArgumentConflict, message),
+        None => cmd.error(ErrorKind::ArgumentConflict, message),
+    }
 }
 
 /// Subcommands.
@@ -106,7 +157,8 @@ pub struct RenderArgs {
     /// earlier than --time, to PREFIX.snap-LABEL.{exr,json} (`render` only).
     #[arg(long, value_delimiter = ',', value_parser = parse_secs)]
     pub snapshots: Vec<f64>,
-    /// Every method's parameters (flags from each method's file).
+    /// The render settings and every method's options (flags from each method's file; a flag
+    /// of another method than the one rendering is refused).
     #[command(flatten)]
     pub method_args: MethodArgs,
 }

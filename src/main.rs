@@ -1,21 +1,22 @@
 //! The `forecast` binary: parses the command line and dispatches; nothing else.
 
-use clap::Parser;
 use forecast::cli::{Cli, Command};
 use forecast::{accel, bench, compare, distributed, errln, image_io, metrics, outln, output, pipeline, scenegen};
 use std::process::ExitCode;
 use std::time::Instant;
 
-/// Why the command failed: the message, and whether this process prints it (under `mpirun` the
-/// ranks agree on every error and only rank 0 prints it, once).
+/// Why the command failed: the message, whether this process prints it (under `mpirun` the
+/// ranks agree on every error and only rank 0 prints it, once), and whether it is a usage error
+/// (exit 2, in clap's format).
 struct Failure {
     message: String,
     print: bool,
+    usage: bool,
 }
 
 impl From<String> for Failure {
     fn from(message: String) -> Failure {
-        Failure { message, print: true }
+        Failure { message, print: true, usage: false }
     }
 }
 
@@ -24,14 +25,14 @@ impl From<String> for Failure {
 fn on_cluster(f: impl FnOnce(&dyn distributed::Cluster) -> Result<(), String>) -> Result<(), Failure> {
     let cluster = distributed::try_init()?;
     let print = cluster.rank() == 0;
-    f(cluster.as_ref()).map_err(|message| Failure { message, print })
+    f(cluster.as_ref()).map_err(|message| Failure { message, print, usage: false })
 }
 
 /// Parses the command line with `try_parse`, so that `--help`/`--version` text that cannot be
 /// written (a full stdout) is an error (exit 1), and a usage error exits 2 (`output::EXIT_USAGE`).
 fn parse() -> Result<Cli, ExitCode> {
     use std::io::Write;
-    let e = match Cli::try_parse() {
+    let e = match Cli::parse_checked() {
         Ok(cli) => return Ok(cli),
         Err(e) => e,
     };
@@ -54,7 +55,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
     let started = Instant::now();
     let opts = forecast::scene::LoadOptions { defines: cli.define };
     match cli.command {
-        Command::Render(a) => on_cluster(|c| render(&a, &opts, c, started)),
+        Command::Render(a) => on_cluster(|c| render(&a, &opts, c, started)).map_err(|f| foreign_flag_usage(&a, f)),
         Command::Diff(a) => Ok(diff(&a)?),
         Command::Bench(a) => Ok(bench_cmd(&a, &opts)?),
         Command::ExportMitsuba { scene, out } => {
@@ -96,6 +97,17 @@ fn run(cli: Cli) -> Result<(), Failure> {
             r
         }),
     }
+}
+
+/// A render's failure because a flag belongs to another method than the one the scene (or
+/// `auto`) chose is a usage error (exit 2), as it is at parse time for `--method M`.
+fn foreign_flag_usage(a: &forecast::cli::RenderArgs, f: Failure) -> Failure {
+    let explicit = &a.method_args.explicit;
+    let foreign = forecast::integrators::Method::ALL
+        .iter()
+        .filter_map(|&m| forecast::integrators::MethodArgs::foreign_flag(m, explicit))
+        .any(|e| f.message.ends_with(&e));
+    Failure { usage: foreign, ..f }
 }
 
 fn render(
@@ -238,12 +250,13 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs, opts: &forecast::scene::Load
     guard.output("--out", &image_io::with_ext(&r.out, "json")).check()?;
     let world = accel::World::build(scene).map_err(|e| format!("{}: {e}", r.scene.display()))?;
     let cf_args = &r.method_args.cf;
+    let cf_opts = r.method_args.forecast_options();
     let seed = r.seed.unwrap_or(world.scene.render.seed);
     let target = cf_args.target_photons(&world);
     let pool = pipeline::thread_pool(r.threads)?;
     let phases = forecast::progress::PhaseBar::new(!r.quiet);
     let (cf, untargeted) = pool.install(|| {
-        let cf = build_forecast(&world, target, cf_args.options(), seed, &phases);
+        let cf = build_forecast(&world, target, cf_opts, seed, &phases);
         let n = a.compare_paths;
         let untargeted = (n > 0).then(|| {
             let (pts, paths) = forecast::transport::particle::collect_caustic_vertices(
@@ -292,6 +305,13 @@ fn main() -> ExitCode {
     };
     match run(cli) {
         Ok(()) => ExitCode::from(output::EXIT_OK),
+        Err(f) if f.usage => {
+            if f.print {
+                let text = forecast::cli::render_usage_error(f.message).render().to_string();
+                let _ = std::io::Write::write_all(&mut std::io::stderr().lock(), text.as_bytes());
+            }
+            ExitCode::from(output::EXIT_USAGE)
+        }
         Err(f) => {
             if f.print {
                 errln!("error: {}", f.message);

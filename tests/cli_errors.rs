@@ -6,7 +6,9 @@
 //! * `diff` of images of different sizes names both files and sizes;
 //! * `--out dir/` (no file name) is refused before any work and writes no hidden `dir/.exr`;
 //! * `bench --repeats 0`, `--threads 0`, `--threads 100000` (at once, not after 35 s of thread
-//!   creation), `stability --only nonexistent` (lists the valid cases).
+//!   creation), `stability --only nonexistent` (lists the valid cases);
+//! * a flag of another method (`--method pt --clusters 5`, or the scene's method) exits 2 naming
+//!   the methods it belongs to; the JSON `options` hold only the chosen method's.
 
 mod common;
 
@@ -145,6 +147,68 @@ fn usage_errors_exit_2_and_other_errors_exit_1() {
     assert!(err.starts_with("error: ") && err.contains("missing.toml"), "{err}");
 }
 
+/// A flag of another method is a usage error (exit 2, before any work) naming the methods it
+/// belongs to, whether `--method` names the method or the scene's `render.method` does
+/// (`cornell-box.toml`: `pt`); the method's own flags and the render settings are accepted.
+#[test]
+fn a_flag_of_another_method_exits_2_naming_its_method() {
+    let d = tmp_dir("cli-foreign");
+    let prefix = d.join("x").display().to_string();
+    let sc = scene();
+    let cases: &[(&[&str], &str)] = &[
+        (&["--method", "pt", "--clusters", "5"], "--clusters belongs to iws-cf/pt-cf, not pt"),
+        (&["--clusters", "5"], "--clusters belongs to iws-cf/pt-cf, not pt"),
+        (&["--method", "iws", "--guide-fraction", "0.5"], "--guide-fraction belongs to pt-cf, not iws"),
+        (&["--method", "pt-cf", "--variant", "baj08"], "--variant belongs to iws-cf, not pt-cf"),
+        (&["--method", "iws-pm", "--split", "4"], "--split belongs to iws-cf/pt-cf, not iws-pm"),
+        (&["--method", "iws-cf", "--photons", "10"], "--photons belongs to iws-pm, not iws-cf"),
+        (&["--vpl-paths", "8"], "--vpl-paths belongs to iws/iws-pm/iws-cf, not pt"),
+    ];
+    for (opts, want) in cases {
+        let t = Instant::now();
+        let args = [&["render", sc.as_str(), "--resolution", "8x8", "--quiet", "--out", &prefix][..], opts].concat();
+        let (code, _, err) = run(&args);
+        assert_eq!(code, 2, "{opts:?}: {err}");
+        assert!(err.starts_with("error: ") && err.contains(want), "{opts:?}: expected `{want}` in: {err}");
+        assert!(err.contains("Usage: forecast render"), "{opts:?}: clap's usage format: {err}");
+        assert!(t.elapsed() < Duration::from_secs(10), "{opts:?} refused only after {:?}", t.elapsed());
+        assert_eq!(std::fs::read_dir(&d).unwrap().count(), 0, "{opts:?} wrote files into {}", d.display());
+    }
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// The report's `options` are the render settings and the chosen method's groups only: `pt`
+/// records `--path-filter` and no CF option; `iws-cf` its IWS and CF groups and `--variant`
+/// (with `baj08`'s `direct = vpl` applied), and neither `pt-cf`'s nor `iws-pm`'s options.
+#[test]
+fn the_json_records_only_the_chosen_methods_options() {
+    let d = tmp_dir("cli-options");
+    let sc = scene();
+    let keys = |method: &str, extra: &[&str]| -> serde_json::Map<String, serde_json::Value> {
+        let prefix = d.join(method).display().to_string();
+        let base = ["render", sc.as_str(), "--method", method, "--resolution", "4x4", "--spp", "1"];
+        let args = [&base[..], &["--threads", "1", "--quiet", "--out", &prefix], extra].concat();
+        let (code, _, err) = run(&args);
+        assert_eq!(code, 0, "{method}: {err}");
+        let text = std::fs::read_to_string(format!("{prefix}.json")).expect("report written");
+        let j: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+        j["options"].as_object().expect("options is an object").clone()
+    };
+    let pt = keys("pt", &[]);
+    let mut names: Vec<&str> = pt.keys().map(String::as_str).collect();
+    names.sort_unstable();
+    assert_eq!(names, ["emission_split", "max_depth", "path_filter"], "{pt:?}");
+    let cf = keys("iws-cf", &["--variant", "baj08", "--forecast-photons", "2000", "--clusters", "4"]);
+    for k in ["max_depth", "emission_split", "vpl_paths", "direct", "clusters", "split", "table_depth", "variant"] {
+        assert!(cf.contains_key(k), "iws-cf options lack `{k}`: {cf:?}");
+    }
+    for k in ["guide_fraction", "guide_min_share", "photons", "gather", "path_filter"] {
+        assert!(!cf.contains_key(k), "iws-cf options hold another method's `{k}`: {cf:?}");
+    }
+    assert_eq!((cf["variant"].as_str(), cf["direct"].as_str(), cf["clusters"].as_u64()), (Some("baj08"), Some("vpl"), Some(4)));
+    let _ = std::fs::remove_dir_all(d);
+}
+
 /// Every option the scene format would refuse is refused on the command line too, by the one
 /// validation (`forecast::param_limits`), before any work: no file is written, in well under the
 /// time of a render.
@@ -163,7 +227,7 @@ fn invalid_render_options_are_refused_before_any_work() {
         (&["--max-depth", "1"], "--max-depth 1: max_depth must be at least 2"),
         (&["--max-depth", "0"], "--max-depth 0: max_depth must be at least 2"),
         (&["--method", "iws-cf", "--split", "4294967295"], "--split 4294967295: split must be between 1 and 1024"),
-        (&["--vpl-paths", "4294967295"], "--vpl-paths 4294967295: vpl paths must be between 1 and 65536"),
+        (&["--method", "iws", "--vpl-paths", "4294967295"], "--vpl-paths 4294967295: vpl paths must be between 1 and 65536"),
     ];
     let sc = scene();
     for (opts, want) in cases {

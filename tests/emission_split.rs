@@ -48,7 +48,7 @@ fn world(path: &str) -> World {
 /// Small preprocesses (as `tests/pt_cf.rs`; the photon map as `tests/furnace.rs`).
 fn opts() -> MethodArgs {
     let mut o = MethodArgs::default();
-    (o.pt.max_depth, o.cf.forecast_photons, o.cf.clusters, o.pm.photons) = (Some(64), Some(20_000), 16, 20_000);
+    (o.settings.max_depth, o.cf.forecast_photons, o.cf.clusters, o.pm.photons) = (Some(64), Some(20_000), 16, 20_000);
     o
 }
 
@@ -208,7 +208,7 @@ fn extra_rays_follow_the_integrators_prefix_cap() {
     use forecast::transport::dirac::prefix_emission;
     let w = World::build(forecast::scene::load_str(MIRROR_CORRIDOR, "corridor.toml", Path::new(".")).unwrap()).unwrap();
     let mut o = opts();
-    o.pt.max_depth = Some(100);
+    o.settings.max_depth = Some(100);
     let pt = Method::Pt.build(&w, &o, &[]).unwrap();
     let iws = Method::Iws.build(&w, &o, &[]).unwrap();
     assert_eq!((pt.prefix_cap(), iws.prefix_cap()), (100, 64));

@@ -1,6 +1,7 @@
 //! Correctness tests of `iws-cf` (Caustic Forecasting, spec §8): agreement with `pt` by a
-//! Šidák-corrected per-pixel Welch z-test (family-wise α = 1e-3) for the dual table, the single
-//! table and k-means; the glass furnace (L = 1 exactly); degenerate preprocesses (no Dirac
+//! Šidák-corrected per-pixel Welch z-test (family-wise α = 1e-3) for the default (dual-spread
+//! table, energy split rule) and the paper's `--variant baj08` (dual table, rank rule, emitter
+//! VPLs); the glass furnace (L = 1 exactly); degenerate preprocesses (no Dirac
 //! objects, all photons missing, a single cluster, max-rank 0); the serialization round trip.
 //! Negative controls show that the same statistics reject a 3% error.
 //! The table samplers' χ² and the estimator-level unbiasedness tests live next to the tables
@@ -9,9 +10,8 @@
 mod common;
 use common::{assert_agrees, assert_furnace_is_one, max_z, render_passes as render};
 use forecast::accel::World;
-use forecast::forecast::cluster::ClusteringMethod;
-use forecast::forecast::estimator::{CausticForecast, TableKind};
-use forecast::integrators::iws::VplSelect;
+use forecast::forecast::estimator::{CausticForecast, SplitRule, TableKind};
+use forecast::integrators::iws_forecast::Variant;
 use forecast::integrators::{Integrator, Method, MethodArgs};
 use forecast::render::film::Film;
 use forecast::stats::z_test_threshold;
@@ -23,7 +23,7 @@ fn world(path: &str) -> World {
 
 fn opts() -> MethodArgs {
     let mut o = MethodArgs::default();
-    (o.pt.max_depth, o.iws.vpl_paths, o.cf.forecast_photons, o.cf.clusters) = (Some(64), 64, Some(20_000), 16);
+    (o.settings.max_depth, o.iws.vpl_paths, o.cf.forecast_photons, o.cf.clusters) = (Some(64), 64, Some(20_000), 16);
     o
 }
 
@@ -51,30 +51,10 @@ fn agrees_with_pt(o: &MethodArgs, label: &str) -> CausticForecast {
 
 #[test]
 fn default_dual_spread_table_agrees_with_pt() {
-    assert_eq!(opts().cf.table, TableKind::DualSpread);
+    let d = opts().forecast_options();
+    assert_eq!((d.table, d.split_rule, d.s0), (TableKind::DualSpread, SplitRule::Energy, 16), "the defaults");
     let p = agrees_with_pt(&opts(), "iws-cf dual-spread/vq");
     assert!(p.stats.stored >= 20_000 && p.stats.clusters_kept > 0 && p.radius > 0.0);
-}
-
-#[test]
-fn paper_dual_table_agrees_with_pt() {
-    let mut o = opts();
-    o.cf.table = TableKind::Dual;
-    agrees_with_pt(&o, "iws-cf dual");
-}
-
-#[test]
-fn single_table_agrees_with_pt() {
-    let mut o = opts();
-    o.cf.table = TableKind::Single;
-    agrees_with_pt(&o, "iws-cf single");
-}
-
-#[test]
-fn dual_defensive_table_agrees_with_pt() {
-    let mut o = opts();
-    o.cf.table = TableKind::DualDefensive;
-    agrees_with_pt(&o, "iws-cf dual-defensive");
 }
 
 #[test]
@@ -85,41 +65,21 @@ fn paper_emitter_vpls_agree_with_pt() {
 }
 
 #[test]
-fn full_gather_agrees_with_pt() {
-    let mut o = opts();
-    o.iws.vpl_select = forecast::integrators::iws::VplSelect::All;
-    agrees_with_pt(&o, "iws-cf --vpl-select all");
-}
-
-#[test]
-fn light_tree_agrees_with_pt() {
-    let mut o = opts();
-    o.iws.vpl_select = forecast::integrators::iws::VplSelect::Tree;
-    agrees_with_pt(&o, "iws-cf --vpl-select tree");
-}
-
-#[test]
 fn ris_one_survivor_many_candidates_agrees_with_pt() {
     let mut o = opts();
     (o.iws.ris_candidates, o.iws.ris_survivors) = (64, 1);
     agrees_with_pt(&o, "iws-cf RIS M=64 K=1");
 }
 
+/// `--variant baj08`: the paper's dual table, rank rule (S = S0 >> rank, S0 = 4 as BAJ08) and
+/// emitter VPLs together.
 #[test]
-fn mixture_table_agrees_with_pt() {
+fn variant_baj08_agrees_with_pt() {
     let mut o = opts();
-    o.cf.table = TableKind::Mixture;
-    agrees_with_pt(&o, "iws-cf mixture");
-}
-
-/// The paper's rank rule (S = S0 >> rank, S0 = 4 as BAJ08); the default is the energy rule.
-#[test]
-fn paper_rank_split_rule_agrees_with_pt() {
-    use forecast::forecast::estimator::SplitRule;
-    assert_eq!((opts().cf.split_rule, opts().cf.split), (SplitRule::Energy, 16), "the defaults");
-    let mut o = opts();
-    (o.cf.split_rule, o.cf.split) = (SplitRule::Rank, 4);
-    agrees_with_pt(&o, "iws-cf split-rule rank");
+    (o.iwscf.variant, o.cf.split) = (Some(Variant::Baj08), 4);
+    let f = o.forecast_options();
+    assert_eq!((f.table, f.split_rule, f.s0), (TableKind::Dual, SplitRule::Rank, 4));
+    agrees_with_pt(&o, "iws-cf --variant baj08");
 }
 
 /// The default energy rule: S = clamp(⌈S0·ρ_c/ρ_max⌉, 1, S0) at depth 0 (the densest cluster
@@ -139,48 +99,6 @@ fn energy_split_follows_the_density() {
     assert!(s.contains(&16) && s.contains(&1), "{s:?}");
 }
 
-/// `--split-rule share`: S0·4 >> rank in the clusters whose caustic share is ≥ ½, S0 >> rank in
-/// the others (both kinds occur on this `cornell-box`), and the image agrees with `pt`.
-#[test]
-fn share_split_rule_agrees_with_pt() {
-    use forecast::forecast::estimator::{SplitRule, SHARE_BOOST, SPLIT_MIN_SHARE};
-    let mut o = opts();
-    (o.cf.split_rule, o.cf.split) = (SplitRule::Share, 4);
-    let w = world("scenes/cornell-box.toml");
-    let cf = CausticForecast::from_bytes(&Method::IwsCf.preprocess(&w, &o, 17).unwrap()).unwrap();
-    let dominated = cf.shares.iter().filter(|s| s.share() >= SPLIT_MIN_SHARE).count();
-    assert!(dominated > 0 && dominated < cf.shares.len(), "{:?}", cf.shares);
-    for (c, sh) in cf.shares.iter().enumerate() {
-        let s0 = if sh.share() >= SPLIT_MIN_SHARE { o.cf.split * SHARE_BOOST } else { o.cf.split };
-        assert_eq!(cf.split_for(c, 0), (s0 >> cf.clustering.clusters[c].rank).max(1) as usize, "cluster {c}");
-        assert_eq!(cf.split_for(c, 1), 1);
-    }
-    agrees_with_pt(&o, "iws-cf split-rule share");
-}
-
-/// `--table-min-share ½`: tables only in the clusters whose caustic share is ≥ ½ (one BSDF
-/// sample in the others; both kinds occur on this `cornell-box`), and the image agrees with `pt`.
-#[test]
-fn table_min_share_agrees_with_pt() {
-    let mut o = opts();
-    o.cf.table_min_share = 0.5;
-    let w = world("scenes/cornell-box.toml");
-    let cf = CausticForecast::from_bytes(&Method::IwsCf.preprocess(&w, &o, 17).unwrap()).unwrap();
-    let used = (0..cf.shares.len()).filter(|&c| cf.tables_used_in(c)).count();
-    assert!(used > 0 && used < cf.shares.len(), "{:?}", cf.shares);
-    for (c, sh) in cf.shares.iter().enumerate() {
-        assert_eq!(cf.tables_used_in(c), sh.share() >= 0.5, "cluster {c}: share {}", sh.share());
-    }
-    agrees_with_pt(&o, "iws-cf table-min-share 0.5");
-}
-
-#[test]
-fn kmeans_agrees_with_pt() {
-    let mut o = opts();
-    o.cf.clustering = ClusteringMethod::KMeans;
-    agrees_with_pt(&o, "iws-cf kmeans");
-}
-
 #[test]
 fn single_cluster_and_max_rank_zero_agree_with_pt() {
     let mut o = opts();
@@ -196,12 +114,8 @@ fn single_cluster_and_max_rank_zero_agree_with_pt() {
 #[test]
 fn glass_furnace_is_exactly_one() {
     let mut o = opts();
-    for (select, table) in [
-        (VplSelect::Ris, TableKind::Dual),
-        (VplSelect::All, TableKind::Mixture),
-        (VplSelect::Tree, TableKind::DualSpread),
-    ] {
-        (o.iws.vpl_select, o.cf.table) = (select, table);
+    for variant in [None, Some(Variant::Baj08)] {
+        o.iwscf.variant = variant;
         glass_furnace(&o);
     }
 }
@@ -212,7 +126,7 @@ fn glass_furnace(o: &MethodArgs) {
     let (mut cf, product) = iws_cf(&w, o);
     assert!(product.stats.stored > 1000, "the white ball must receive caustic light");
     let img = render(&w, cf.as_mut(), 16, 16, 512, 5);
-    assert_furnace_is_one(&img, &format!("glass furnace {:?}/{:?}", o.iws.vpl_select, o.cf.table));
+    assert_furnace_is_one(&img, &format!("glass furnace {:?}", o.iwscf.variant));
 }
 
 #[test]

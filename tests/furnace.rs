@@ -57,7 +57,7 @@ fn render(scene: &str, method: Method, spp: u64, seed: u64) -> Vec<Film> {
     let world =
         World::build(forecast::scene::load(&root().join("tests/scenes").join(scene)).unwrap()).expect("BVH builds");
     let mut args = MethodArgs::default();
-    args.pt.max_depth = Some(world.scene.render.max_depth);
+    args.settings.max_depth = Some(world.scene.render.max_depth);
     // no caustic paths exist here: keep the photon searches (PATH_FACTOR × target paths) short
     (args.pm.photons, args.cf.forecast_photons) = (100, Some(100));
     let product = method.preprocess(&world, &args, seed).unwrap();

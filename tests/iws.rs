@@ -11,7 +11,7 @@ use common::{max_z, render_passes as render, scaled};
 use forecast::accel::World;
 use forecast::bsdf::ShadingPoint;
 use forecast::integrators::iws::Iws;
-use forecast::integrators::iws::{DirectLight, VplSelect};
+use forecast::integrators::iws::DirectLight;
 use forecast::integrators::ShadingQuery;
 use forecast::integrators::{BsdfCaustics, Context, Integrator, Method, MethodArgs, NoCaustics};
 use forecast::math::{Rgb, Vec3};
@@ -28,7 +28,7 @@ fn world(path: &str) -> World {
 
 fn params(vpl_paths: u32, bound: Option<f32>) -> MethodArgs {
     let mut a = MethodArgs::default();
-    (a.iws.vpl_paths, a.iws.bound, a.iws.vpl_subset, a.pt.max_depth) = (vpl_paths, bound, 16, Some(64));
+    (a.iws.vpl_paths, a.iws.bound, a.settings.max_depth) = (vpl_paths, bound, Some(64));
     a
 }
 
@@ -121,23 +121,19 @@ fn pt(world: &World, w: u32, h: u32, spp: u64) -> Film {
 fn iws_agrees_with_pt_without_dirac_surfaces() {
     let w = world("tests/scenes/cornell-nodirac.toml");
     let reference = pt(&w, 24, 24, 8192);
-    // RIS (a few shadow rays) has more variance per sample than the full gather: more passes
-    for (select, direct, spp) in [
-        (VplSelect::All, DirectLight::Nee, 256),
-        (VplSelect::Ris, DirectLight::Nee, 4096),
-        (VplSelect::Ris, DirectLight::Vpl, 4096),
-    ] {
+    // RIS (a few shadow rays per vertex) needs many passes
+    for (direct, spp) in [(DirectLight::Nee, 4096), (DirectLight::Vpl, 4096)] {
         let mut a = params(64, None);
-        (a.iws.vpl_select, a.iws.direct) = (select, direct);
+        a.iws.direct = direct;
         let mut iws = Iws::new(&w, &a, Box::new(NoCaustics));
         let img = render(&w, &mut iws, 24, 24, spp, 3);
         let (z, n) = max_z(&img, &reference, None);
         let thr = z_test_threshold(1e-3, n);
-        eprintln!("iws {select:?} {direct:?} vs pt (no Dirac): max|z| = {z:.2}, threshold {thr:.2} over {n} tests");
-        assert!(z < thr, "iws {select:?} {direct:?} disagrees with pt: max|z| {z} ≥ {thr}");
+        eprintln!("iws {direct:?} vs pt (no Dirac): max|z| = {z:.2}, threshold {thr:.2} over {n} tests");
+        assert!(z < thr, "iws {direct:?} disagrees with pt: max|z| {z} ≥ {thr}");
         // negative control: a 3% darker image is rejected by the same test
         let (z3, _) = max_z(&scaled(&img, 0.97), &reference, None);
-        assert!(z3 > thr, "{select:?}: the agreement test cannot detect a 3% error (max|z| {z3})");
+        assert!(z3 > thr, "{direct:?}: the agreement test cannot detect a 3% error (max|z| {z3})");
     }
 }
 
@@ -238,10 +234,10 @@ fn pm_bias_falls_with_photon_count() {
     assert!(b50 - b1m > 5.0 * sd, "bias did not fall from 50k to 1M photons: B² {b50} → {b1m} (5 sd = {})", 5.0 * sd);
 }
 
-/// Per shading point: (full gather, mean and standard error of `n` gather estimates of `iws`).
-fn gather_stats(w: &World, full: &mut Iws, est: &mut Iws, n: u64) -> Vec<(f64, f64, f64)> {
-    full.begin_pass(w, 5, 0);
-    est.begin_pass(w, 5, 0); // the same seed and pass: the same point lights
+/// Per shading point: (exact point-light sum, mean and standard error of `n` gather estimates
+/// of `est`).
+fn gather_stats(w: &World, est: &mut Iws, n: u64) -> Vec<(f64, f64, f64)> {
+    est.begin_pass(w, 5, 0);
     let cam = w.scene.camera.with_resolution(8, 8);
     let mut out = Vec::new();
     for (i, (px, py)) in (0..8).flat_map(|y| (0..8).map(move |x| (x, y))).enumerate() {
@@ -254,7 +250,7 @@ fn gather_stats(w: &World, full: &mut Iws, est: &mut Iws, n: u64) -> Vec<(f64, f
         let x = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
         let q = ShadingQuery { x: &x, m, wo: -dir, depth: 0 };
         let mut ctx = Context::new(Rng::keyed(3, stream::MISC, 0, i as u64));
-        let exact = full.gather(w, &q, &mut ctx).y as f64; // depth 0: every VPL, deterministic
+        let exact = est.gather_exact(w, &q).y as f64; // every point light, deterministic
         let (mut s1, mut s2) = (0.0f64, 0.0f64);
         for _ in 0..n {
             let v = est.gather(w, &q, &mut ctx).y as f64;
@@ -269,70 +265,32 @@ fn gather_stats(w: &World, full: &mut Iws, est: &mut Iws, n: u64) -> Vec<(f64, f
 
 /// RIS selection of the IWS gather equals the full gather in expectation at every shading point
 /// (z-test per point, Šidák α = 1e-3): all VPLs as candidates with K = 1 (the exact `p̂/Σp̂`
-/// selection) and the finite-M, shared-candidate default; and the light tree with K = 2.
-/// Negative control: the same test rejects the full gather scaled by 0.97.
+/// selection), the finite-M, shared-candidate default and M = 1. Negative control: the same
+/// test rejects the full gather scaled by 0.97.
 #[test]
 fn ris_gather_equals_full_gather_in_expectation() {
     let w = world("scenes/cornell-box.toml");
     // the point-light gather alone: `--direct vpl`, so the emitters are point lights too and
     // the full gather is deterministic (with NEE it would hold a random light sample)
-    let mut a = params(64, None);
-    (a.iws.vpl_select, a.iws.direct) = (VplSelect::All, DirectLight::Vpl);
-    let mut full = Iws::new(&w, &a, Box::new(NoCaustics));
-    // M = 1 is a plain power-proportional pick: noisier, so more draws to resolve 3%; the light
-    // tree (`--vpl-select tree`, K traversals; per point noisier than RIS here, so more draws)
-    let cases = [
-        (VplSelect::Ris, 0, 1, 4000),
-        (VplSelect::Ris, 8, 2, 4000),
-        (VplSelect::Ris, 1, 1, 40_000),
-        (VplSelect::Tree, 0, 2, 16_000),
-    ];
-    for (select, m, k, n) in cases {
+    // M = 1 is a plain power-proportional pick: noisier, so more draws to resolve 3%
+    for (m, k, n) in [(0, 1, 4000), (8, 2, 4000), (1, 1, 40_000)] {
         let mut r = params(64, None);
-        (r.iws.vpl_select, r.iws.ris_candidates, r.iws.ris_survivors, r.iws.tree_samples) = (select, m, k, k);
+        (r.iws.ris_candidates, r.iws.ris_survivors) = (m, k);
         r.iws.direct = DirectLight::Vpl;
         let mut ris = Iws::new(&w, &r, Box::new(NoCaustics));
-        let st = gather_stats(&w, &mut full, &mut ris, n);
+        let st = gather_stats(&w, &mut ris, n);
         assert!(st.len() >= 20, "too few shading points ({})", st.len());
         let thr = z_test_threshold(1e-3, st.len());
         let z = |scale: f64| {
             st.iter().filter(|s| s.2 > 0.0).map(|&(e, mu, se)| ((mu - scale * e) / se).abs()).fold(0.0, f64::max)
         };
         let (z1, z97) = (z(1.0), z(0.97));
-        eprintln!("{select:?} M={m} K={k}: max|z| = {z1:.2} (threshold {thr:.2}); vs 0.97×full {z97:.2}");
-        assert!(z1 < thr, "{select:?} M={m} K={k} differs from the full gather: max|z| {z1}");
-        assert!(z97 > thr, "{select:?} M={m} K={k}: the test cannot detect a 3% error (max|z| {z97})");
+        eprintln!("M={m} K={k}: max|z| = {z1:.2} (threshold {thr:.2}); vs 0.97×full {z97:.2}");
+        assert!(z1 < thr, "M={m} K={k} differs from the full gather: max|z| {z1}");
+        assert!(z97 > thr, "M={m} K={k}: the test cannot detect a 3% error (max|z| {z97})");
         // points with zero variance must match exactly (e.g. unlit points)
         for &(e, mu, se) in &st {
             assert!(se > 0.0 || (mu - e).abs() <= 1e-4 * e.abs().max(1e-6), "zero-variance point: {mu} vs {e}");
         }
-    }
-}
-
-#[test]
-fn furnaces_with_the_full_gather() {
-    // the default is RIS; the furnace tests above cover it. The full gather, one b each:
-    for (scene, o, expected) in [("tests/scenes/furnace-point.toml", Vec3::new(0.2, -0.1, 0.3), 1.0f32)] {
-        let w = world(scene);
-        let mut a = params(64, Some(SWEEP[1]));
-        a.iws.vpl_select = VplSelect::All;
-        let mut iws = Iws::new(&w, &a, Box::new(NoCaustics));
-        let (passes, per_pass) = (100u64, 300u64);
-        let mut means = Vec::new();
-        for pass in 0..passes {
-            iws.begin_pass(&w, 7, pass);
-            let mut sum = 0.0f64;
-            for i in 0..per_pass {
-                let mut ctx = Context::new(Rng::keyed(7, stream::MISC, pass, i));
-                let d = sample_uniform_sphere(ctx.rng.next_2d());
-                sum += (iws.radiance(&w, o, d, &mut ctx).y - expected) as f64;
-            }
-            means.push(sum / per_pass as f64);
-        }
-        let m = means.iter().sum::<f64>() / passes as f64;
-        let var = means.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (passes - 1) as f64;
-        let se = (var / passes as f64).sqrt();
-        eprintln!("{scene} full gather: mean error {m:.5} ± {se:.5}");
-        assert!(m.abs() < 5.0 * se + TRUNC_TOL, "{scene} full gather: error {m} > 5σ");
     }
 }

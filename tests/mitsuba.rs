@@ -22,7 +22,7 @@ fn world(s: Scene) -> World {
 /// Method options: cap 64, `vpl` IWS paths per pass, `photons` for iws-pm and iws-cf.
 fn opts(vpl: u32, photons: u64) -> MethodArgs {
     let mut o = MethodArgs::default();
-    (o.pt.max_depth, o.iws.vpl_paths, o.pm.photons, o.cf.forecast_photons) = (Some(64), vpl, photons, Some(photons));
+    (o.settings.max_depth, o.iws.vpl_paths, o.pm.photons, o.cf.forecast_photons) = (Some(64), vpl, photons, Some(photons));
     o
 }
 

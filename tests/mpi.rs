@@ -211,9 +211,9 @@ fn pt_cf_two_ranks_equal_one_process() {
         "20000",
         "--guide-fraction",
         "0.3",
-        "--guide-split",
+        "--split",
         "4",
-        "--guide-depth",
+        "--table-depth",
         "2",
     ];
     let st = Command::new(bin()).args(["render", &scene()]).args(common).arg("--out").arg(&one).status().unwrap();

@@ -32,8 +32,8 @@ fn film_of(scene: &str, method: Method, filter: Option<&str>, name: &str) -> Fil
     j.args.pt.path_filter = filter.map(str::to_string);
     if filter.is_none() {
         // what a filter implies (the split's extra rays are unfiltered): the filtered renders
-        // keep the default split of 16, which `PtArgs::split` must turn off
-        j.args.pt.emission_split = 1;
+        // keep the default split of 16, which `MethodArgs::emission_split` must turn off
+        j.args.settings.emission_split = 1;
     }
     j.args.cf.forecast_photons = Some(20_000);
     render_film(&j)
@@ -102,8 +102,8 @@ fn other_methods_and_bad_patterns_are_refused() {
         (out.status.code(), String::from_utf8_lossy(&out.stderr).to_string())
     };
     let (code, err) = run(&["--method", "iws-cf", "--path-filter", "DSL"]);
-    assert_eq!(code, Some(1), "{err}");
-    assert!(err.contains("--path-filter") && err.contains("iws-cf"), "{err}");
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("--path-filter belongs to pt/pt-cf, not iws-cf"), "{err}");
     let (code, err) = run(&["--method", "pt", "--path-filter", "DXL"]);
     assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("`X` is not D, S or L"), "{err}");
@@ -112,7 +112,7 @@ fn other_methods_and_bad_patterns_are_refused() {
     assert!(err.contains("warning: --path-filter DSL,DD*: only these path classes"), "{err}");
     for m in ["iws", "iws-pm"] {
         let (code, err) = run(&["--method", m, "--path-filter", "DSL"]);
-        assert!(code == Some(1) && err.contains("does not support it"), "{m}: {err}");
+        assert!(code == Some(2) && err.contains(&format!("--path-filter belongs to pt/pt-cf, not {m}")), "{m}: {err}");
     }
 }
 

@@ -3,7 +3,7 @@
 //! a strongly guided variant with splitting and deeper guiding) and on `ring`; the glass furnace
 //! (L = 1 exactly, with caustic light so the tables are used); bit-for-bit `pt` at c = 1 and on a
 //! scene without Dirac objects (no forecasters, so every vertex is a `pt` vertex); parameter errors.
-//! The split counts per cluster are checked against the energy rule (default) and the rank rule.
+//! The split counts per cluster are checked against the energy rule.
 //! Each agreement test checks that guiding really happened (lookups inside clusters), and negative
 //! controls show the statistics reject a 3% error. The mixture sampler's χ² is in
 //! `tests/selection.rs`; `tests/furnace.rs` runs `pt-cf` through `Method::ALL`.
@@ -11,9 +11,8 @@
 mod common;
 use common::{assert_agrees, assert_furnace_is_one, max_z, render_passes as render, render_profiled};
 use forecast::accel::World;
-use forecast::forecast::estimator::{CausticForecast, SplitRule};
+use forecast::forecast::estimator::CausticForecast;
 use forecast::integrators::caustic_share::{caustic_shares, CausticShare};
-use forecast::integrators::pt_cf::GuideRule;
 use forecast::integrators::{Integrator, Method, MethodArgs};
 use forecast::profile::Profile;
 use forecast::render::film::Film;
@@ -27,7 +26,7 @@ fn world(path: &str) -> World {
 /// Small preprocess (20k forecasters, 16 clusters), as `tests/forecast.rs`.
 fn opts() -> MethodArgs {
     let mut o = MethodArgs::default();
-    (o.pt.max_depth, o.cf.forecast_photons, o.cf.clusters) = (Some(64), Some(20_000), 16);
+    (o.settings.max_depth, o.cf.forecast_photons, o.cf.clusters) = (Some(64), Some(20_000), 16);
     o
 }
 
@@ -65,21 +64,19 @@ fn defaults_agree_with_pt_on_cornell_box() {
     agrees_with_pt(&world("scenes/cornell-box.toml"), &opts(), 16, (4096, 1024), "pt-cf cornell-box");
 }
 
-/// The paper's rank rule for the split (`--guide-split-rule rank`, S0 = 4: `4 >> rank`
-/// continuations in every kept cluster), strong guiding everywhere, three guided depths.
+/// Strong guiding (c = 0.1) in every cluster with any caustic light (`--guide-min-share 0`),
+/// splitting by the energy rule (S0 = 4) and three guided depths.
 #[test]
 fn strong_guiding_with_splitting_agrees_with_pt_on_cornell_box() {
     let w = world("scenes/cornell-box.toml");
     let mut o = opts();
-    (o.ptcf.guide_fraction, o.ptcf.guide_split, o.ptcf.guide_depth) = (0.1, 4, 3);
-    (o.ptcf.guide_rule, o.ptcf.guide_split_rule) = (GuideRule::Fixed, SplitRule::Rank);
+    (o.ptcf.guide_fraction, o.ptcf.guide_min_share, o.cf.split, o.cf.table_depth) = (0.1, 0.0, 4, 3);
     let bytes = Method::PtCf.preprocess(&w, &o, 17).unwrap();
     let cf = CausticForecast::from_bytes(&bytes).unwrap();
-    let want: Vec<u64> =
-        cf.shares.iter().enumerate().map(|(c, _)| (4u64 >> cf.clustering.clusters[c].rank).max(1)).collect();
+    let (want, _) = energy_counts(&cf, &o);
     assert_eq!(split_per_cluster(Method::PtCf.build(&w, &o, &bytes).unwrap().as_ref()), want);
     assert!(want.contains(&4) && want.contains(&1), "{want:?}");
-    agrees_with_pt(&w, &o, 16, (4096, 512), "pt-cf fixed c=0.1 S0=4 D=3");
+    agrees_with_pt(&w, &o, 16, (4096, 512), "pt-cf c=0.1 min share 0 S0=4 D=3");
 }
 
 /// The continuations at diffuse depth 0 per kept cluster, from the stats.
@@ -97,7 +94,7 @@ fn energy_counts(cf: &CausticForecast, o: &MethodArgs) -> (Vec<u64>, Vec<usize>)
     let guided: Vec<usize> =
         (0..cf.shares.len()).filter(|&c| cf.shares[c].share() >= min && cf.shares[c].share() > 0.0).collect();
     let max = guided.iter().map(|&c| k[c].density).fold(0.0f32, f32::max);
-    let s0 = o.ptcf.guide_split as f32;
+    let s0 = o.cf.split as f32;
     let n = (0..cf.shares.len()).map(|c| {
         if guided.contains(&c) {
             (s0 * k[c].density / max).ceil().clamp(1.0, s0) as u64
@@ -108,7 +105,7 @@ fn energy_counts(cf: &CausticForecast, o: &MethodArgs) -> (Vec<u64>, Vec<usize>)
     (n.collect(), guided)
 }
 
-/// The default split (`--guide-split-rule energy`, S0 = 16) per kept cluster, against
+/// The default split (the energy rule, `--split 16`) per kept cluster, against
 /// [`energy_counts`]: the densest guided cluster gets 16, some others fewer, the unguided 1. (On
 /// this scene the densest kept cluster is also the most caustic one, so it is guided; the unit
 /// test `split_counts_follow_the_guided_clusters` covers an unguided densest cluster.) The
@@ -117,7 +114,7 @@ fn energy_counts(cf: &CausticForecast, o: &MethodArgs) -> (Vec<u64>, Vec<usize>)
 fn energy_guide_split_follows_the_density() {
     let w = world("scenes/cornell-box.toml");
     let o = opts();
-    assert_eq!((o.ptcf.guide_split_rule, o.ptcf.guide_split), (SplitRule::Energy, 16), "the defaults");
+    assert_eq!(o.cf.split, 16, "the default");
     let bytes = Method::PtCf.preprocess(&w, &o, 17).unwrap();
     let cf = CausticForecast::from_bytes(&bytes).unwrap();
     let (want, guided) = energy_counts(&cf, &o);
@@ -127,8 +124,8 @@ fn energy_guide_split_follows_the_density() {
     assert!(want.contains(&16) && want.iter().any(|&n| n > 1 && n < 16), "{want:?}");
 }
 
-/// `--guide-rule share` with every cluster that has any caustic light guided (c_k = max(c, 1 − s_k)
-/// from 0.2 up): the per-cluster mixtures are as unbiased as the fixed one.
+/// Every cluster that has any caustic light guided (c_k = max(c, 1 − s_k) from 0.2 up): the
+/// per-cluster mixtures are unbiased.
 #[test]
 fn share_rule_guiding_every_cluster_agrees_with_pt_on_cornell_box() {
     let mut o = opts();
@@ -199,7 +196,7 @@ fn agrees_with_pt_on_ring() {
 fn glass_furnace_is_exactly_one() {
     let w = world("tests/scenes/glass-furnace-white.toml");
     let mut o = opts();
-    o.ptcf.guide_depth = 4;
+    o.cf.table_depth = 4;
     let mut g = build(&w, Method::PtCf, &o);
     let (img, profile) = render_profiled(&w, g.as_mut(), (16, 16), 512, 5);
     let (lookups, inside) = guide_stats(g.as_ref(), &profile);
@@ -211,7 +208,7 @@ fn glass_furnace_is_exactly_one() {
 fn guide_fraction_one_is_pt_bit_for_bit() {
     let w = world("scenes/cornell-box.toml");
     let mut o = opts();
-    (o.ptcf.guide_fraction, o.ptcf.guide_split, o.ptcf.guide_depth) = (1.0, 4, 8);
+    (o.ptcf.guide_fraction, o.cf.split, o.cf.table_depth) = (1.0, 4, 8);
     let mut g = build(&w, Method::PtCf, &o);
     let (a, profile) = render_profiled(&w, g.as_mut(), (16, 16), 64, 9);
     let mut p = Method::Pt.build(&w, &o, &[]).unwrap();
@@ -228,7 +225,7 @@ fn guide_fraction_one_is_pt_bit_for_bit() {
 fn no_dirac_objects_means_pt_exactly() {
     let w = world("tests/scenes/cornell-nodirac.toml");
     let mut o = opts();
-    (o.ptcf.guide_fraction, o.ptcf.guide_depth) = (0.2, 8);
+    (o.ptcf.guide_fraction, o.cf.table_depth) = (0.2, 8);
     let mut g = build(&w, Method::PtCf, &o);
     let (img, profile) = render_profiled(&w, g.as_mut(), (12, 12), 256, 3);
     let (lookups, inside) = guide_stats(g.as_ref(), &profile);
@@ -253,10 +250,6 @@ fn bad_guide_fraction_is_a_clear_error() {
         let e = Method::PtCf.build(&w, &o, &bytes).err().expect("must be refused");
         assert!(e.contains("--guide-fraction"), "{e}");
     }
-    let mut o = opts();
-    o.ptcf.guide_split_rule = SplitRule::Share;
-    let e = Method::PtCf.build(&w, &o, &Method::PtCf.preprocess(&w, &o, 1).unwrap()).err().expect("share refused");
-    assert!(e.contains("--guide-split-rule"), "{e}");
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_forecast"))
         .args(["render", "scenes/cornell-box.toml", "--method", "pt-cf", "--guide-fraction", "0"])
         .output()

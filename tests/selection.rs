@@ -8,7 +8,7 @@
 //! N_TESTS statistical tests of this file, Šidák-corrected; seeds are fixed, so outcomes are
 //! deterministic. Negative controls show each harness can fail.
 //!
-//! Micro-benchmark (not a test): `cargo test --release --test selection -- --ignored --nocapture`.
+//! The timings of these samplers are a bench, not a test: `cargo bench --bench selection`.
 
 use forecast::bsdf::{self, Mode, ShadingPoint};
 use forecast::forecast::direction_table::{
@@ -353,7 +353,7 @@ fn cases() -> Vec<Case> {
     vec![
         mk("lambert dual", lambert(), flat, dir(30.0, 0.0), &miss, TableMode::Dual, Splat::None, w),
         mk("phong dual", phong(), flat, dir(45.0, 20.0), &miss, TableMode::Dual, Splat::None, w),
-        mk("phong single", phong(), flat, dir(60.0, 0.0), &hit, TableMode::Single { alpha: 0.1 }, Splat::None, w),
+        mk("phong T1 only", phong(), flat, dir(60.0, 0.0), &hit, TableMode::Dual, Splat::None, w).t1_only(),
         mk("lambert splat", lambert(), flat, dir(10.0, 0.0), &hit, TableMode::Dual, Splat::Tent { radius: 1.5 }, w),
         mk("lambert hit", lambert(), flat, dir(30.0, 0.0), &hit, TableMode::Dual, Splat::None, w),
         mk("lambert tilted", lambert(), tilted, dir(50.0, 270.0), &miss, TableMode::Dual, Splat::None, w),
@@ -361,6 +361,12 @@ fn cases() -> Vec<Case> {
 }
 
 impl Case {
+    /// The case with one table (T2 dropped): the mixture's single-table path.
+    fn t1_only(mut self) -> Case {
+        self.t.t2 = None;
+        self
+    }
+
     fn mix(&self) -> DefensiveMixture<'_> {
         DefensiveMixture::new(&self.m, &self.sp, self.wo, &self.t, self.frame, self.c)
     }
@@ -549,79 +555,5 @@ fn splatted_tables_match_their_pdf() {
             check(&format!("splatted table #{k}"), &r);
             k += 1;
         }
-    }
-}
-
-// ---------------------------------------------------------------------------------------------
-// Micro-benchmark
-// ---------------------------------------------------------------------------------------------
-
-#[test]
-#[ignore = "micro-benchmark: cargo test --release --test selection -- --ignored --nocapture"]
-fn bench_selection_and_mixture() {
-    use std::time::Instant;
-    // 75 VPLs on a box's walls, a Lambertian shading point on the floor; p̂ = lum(f·min(G,b)·Φ).
-    let mut r = Rng::keyed(1, stream::MISC, 0, 0);
-    let vpls: Vec<(Vec3, Vec3, Rgb)> = (0..75)
-        .map(|i| {
-            let p = Vec3::new(2.0 * r.next_f32() - 1.0, 2.0 * r.next_f32() - 1.0, 2.0 * r.next_f32());
-            let n = if i % 2 == 0 { -Vec3::Z } else { Vec3::X };
-            (p, n, Rgb::new(r.next_f32(), r.next_f32(), r.next_f32()))
-        })
-        .collect();
-    let phi: Vec<f32> = vpls.iter().map(|v| luminance(v.2)).collect();
-    let (x, nx, rho, b) = (Vec3::new(0.1, 0.2, 0.0), Vec3::Z, Rgb::splat(0.7 / PI), 10.0f32);
-    let target = |i: usize| {
-        let (p, n, pw) = vpls[i];
-        let d = p - x;
-        let r2 = d.length_squared();
-        let w = d / r2.sqrt();
-        let g = (nx.dot(w).max(0.0) * n.dot(-w).abs() / r2).min(b);
-        let c = rho * pw * g;
-        (luminance(c), c)
-    };
-    let sel = LightSelector::new(&phi).unwrap();
-    // ns per call: the minimum over 7 runs of 100k calls (the least disturbed by other processes).
-    let time = |f: &mut dyn FnMut()| {
-        (0..7)
-            .map(|_| {
-                let t0 = Instant::now();
-                for _ in 0..100_000 {
-                    f();
-                }
-                t0.elapsed().as_nanos() as f64 / 1e5
-            })
-            .fold(f64::INFINITY, f64::min)
-    };
-    for (m, k) in [(4u32, 1u32), (8, 1), (16, 1), (0, 1), (8, 4)] {
-        let p = RisParams::new(m, k, true).unwrap();
-        let mut rng = Rng::keyed(2, stream::MISC, 0, 0);
-        let (mut acc, mut calls) = (0.0f64, 0u64);
-        let ns = time(&mut || {
-            calls += 1;
-            sel.select(&p, &mut rng, target, |s| acc += luminance(s.value * s.weight) as f64);
-        });
-        println!("RIS n=75 M={m} K={k}: {ns:.1} ns/selection (mean estimate {:.4})", acc / calls as f64);
-    }
-    let (mut acc, mut calls) = (0.0f64, 0u64);
-    let ns = time(&mut || {
-        calls += 1;
-        let mut sum = Rgb::ZERO;
-        for i in 0..75 {
-            sum += target(std::hint::black_box(i)).1;
-        }
-        acc += luminance(sum) as f64;
-    });
-    println!("full sum of the 75 unshadowed terms (no rays): {ns:.1} ns (value {:.4})", acc / calls as f64);
-    for c in cases().iter().take(3) {
-        let mix = c.mix();
-        let mut rng = Rng::keyed(3, stream::MISC, 0, 0);
-        let mut acc = 0.0f32;
-        let ns = time(&mut || acc += mix.sample(&mut rng).map_or(0.0, |s| s.pdf_w));
-        let ns_b = time(&mut || {
-            let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
-            acc += bsdf::sample(&c.m, &c.sp, c.wo, u, Mode::Radiance).map_or(0.0, |s| s.pdf_w);
-        });
-        println!("mixture {}: {ns:.1} ns/sample (bsdf::sample alone {ns_b:.1} ns) [{acc:.1}]", c.name);
     }
 }

@@ -2,18 +2,18 @@
 //! "6-D clustering", "Cluster statistics", "Ranking", spec §7.1–7.2).
 //!
 //! Feature: `z = ((p − o)/D, w_n·n)` with `D` the bbox diagonal of the (finite) caustic points, `o` the
-//! bbox minimum (a translation, for f32 precision) and `w_n = 1/sqrt(k)`. Two methods:
-//! - FSCL vector quantisation (Ahalt et al. 1990): `c = argmin_j u_j‖z − w_j‖²`, `w_c += η_t(z − w_c)`,
-//!   `u_c += 1`, `η_t = η_0 (η_1/η_0)^{t/T}`, E = 10 shuffled epochs; final labels by the plain nearest
-//!   codeword;
-//! - k-means (Lloyd) with k-means++ seeding, until assignments are stable or `KMEANS_MAX_ITERS`.
+//! bbox minimum (a translation, for f32 precision) and `w_n = 1/sqrt(k)`. FSCL vector quantisation
+//! (Ahalt et al. 1990; BAJ08's choice): `c = argmin_j u_j‖z − w_j‖²`, `w_c += η_t(z − w_c)`,
+//! `u_c += 1`, `η_t = η_0 (η_1/η_0)^{t/T}`, E = 10 shuffled epochs; final labels by the plain nearest
+//! codeword. (k-means, `--clustering kmeans`, measured no better and was retired:
+//! `results/rejected/clustering.md`.)
 //!
 //! Per cluster: `E_c = Σ lum(Φ)`, mean normal `n̄_c`, `A_c = 2π·mean‖Π_c(p − μ_c)‖²` (floored),
 //! `ρ_c = E_c/A_c`, `R_c` = 90th-percentile member distance to `μ_c`. Clusters are sorted by density
 //! (descending) and ranked with the exclusive-prefix rule `rank_j = ⌊−log2(1 − F_{j−1})⌋`.
 //!
-//! Invariants: results are a pure function of (points, k, method, seed) — identical for any rayon
-//! thread count (parallel steps are element-wise or reduce fixed chunks in a fixed order). Empty
+//! Invariants: results are a pure function of (points, k, seed) — identical for any rayon
+//! thread count (parallel steps are element-wise). Empty
 //! clusters are dropped, so `clusters.len() ≤ min(k, #valid points)`; ranks are non-decreasing along
 //! `clusters`; non-finite points get the label [`NO_CLUSTER`]. Nothing panics on empty input.
 
@@ -33,23 +33,8 @@ pub const FSCL_EPOCHS: usize = 10;
 pub const FSCL_ETA0: f64 = 0.05;
 /// FSCL final learning rate η_1.
 pub const FSCL_ETA1: f64 = 5e-4;
-/// Lloyd iteration cap for k-means.
-pub const KMEANS_MAX_ITERS: usize = 100;
 /// Area floor relative to D: `A_min = π (AREA_FLOOR_REL · D)²`.
 pub const AREA_FLOOR_REL: f32 = 1e-4;
-/// Chunk size of the fixed-order parallel reductions (independent of the thread count).
-const CHUNK: usize = 8192;
-
-/// Clustering algorithm.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bitcode::Encode, bitcode::Decode, serde::Serialize)]
-pub enum ClusteringMethod {
-    /// Frequency-sensitive competitive learning vector quantisation (BAJ08's choice).
-    #[default]
-    Vq,
-    /// Lloyd k-means with k-means++ seeding.
-    #[serde(rename = "kmeans")]
-    KMeans,
-}
 
 /// One cluster and its statistics.
 #[derive(Clone, Debug, PartialEq, bitcode::Encode, bitcode::Decode)]
@@ -176,8 +161,8 @@ pub fn ranks_from_powers(powers: &[f64]) -> Vec<u32> {
         .collect()
 }
 
-/// Clusters caustic points into at most `k` clusters with `method`, deterministically from `seed`.
-pub fn cluster_points(points: &[CausticPoint], k: usize, method: ClusteringMethod, seed: u64) -> Clustering {
+/// Clusters caustic points into at most `k` clusters (FSCL), deterministically from `seed`.
+pub fn cluster_points(points: &[CausticPoint], k: usize, seed: u64) -> Clustering {
     let valid: Vec<u32> = (0..points.len() as u32)
         .filter(|&i| {
             let p = &points[i as usize];
@@ -205,10 +190,7 @@ pub fn cluster_points(points: &[CausticPoint], k: usize, method: ClusteringMetho
     let origin = lo.to_array();
     let feats: Vec<[f32; 6]> =
         valid.par_iter().map(|&i| feature(&points[i as usize], origin, 1.0 / diag, wn)).collect();
-    let codes = match method {
-        ClusteringMethod::Vq => fscl(&feats, k, seed),
-        ClusteringMethod::KMeans => kmeans(&feats, k, seed),
-    };
+    let codes = fscl(&feats, k, seed);
     let assign: Vec<u32> = feats.par_iter().map(|z| nearest_code(z, &codes)).collect();
     build_clustering(points, &valid, &feats, &assign, k, FeatureSpace { origin, diag, wn })
 }
@@ -259,73 +241,6 @@ fn fscl(feats: &[[f32; 6]], k: usize, seed: u64) -> Vec<[f32; 6]> {
             }
             wins[c] += 1.0;
             eta *= ratio;
-        }
-    }
-    codes
-}
-
-/// k-means++ seeding followed by Lloyd iterations (spec §3).
-fn kmeans(feats: &[[f32; 6]], k: usize, seed: u64) -> Vec<[f32; 6]> {
-    let n = feats.len();
-    let mut rng = Rng::keyed(seed, stream::CLUSTER, 100, 0);
-    let mut codes = Vec::with_capacity(k);
-    codes.push(feats[rng.below(n as u32) as usize]);
-    let mut dmin: Vec<f32> = feats.par_iter().map(|z| d6(z, &codes[0])).collect();
-    while codes.len() < k {
-        // D² sampling; serial f64 sum keeps it independent of the thread count.
-        let total: f64 = dmin.iter().map(|&x| x as f64).sum();
-        let pick = if total > 0.0 {
-            let target = rng.next_f32() as f64 * total;
-            let mut acc = 0.0f64;
-            let mut pick = n - 1;
-            for (i, &x) in dmin.iter().enumerate() {
-                acc += x as f64;
-                if acc > target && x > 0.0 {
-                    pick = i;
-                    break;
-                }
-            }
-            pick
-        } else {
-            rng.below(n as u32) as usize
-        };
-        let c = feats[pick];
-        codes.push(c);
-        dmin.par_iter_mut().zip(feats.par_iter()).for_each(|(m, z)| *m = m.min(d6(z, &c)));
-    }
-    let mut assign: Vec<u32> = vec![u32::MAX; n];
-    for _ in 0..KMEANS_MAX_ITERS {
-        let new: Vec<u32> = feats.par_iter().map(|z| nearest_code(z, &codes)).collect();
-        if new == assign {
-            break;
-        }
-        assign = new;
-        // Fixed-chunk partial sums reduced in chunk order: deterministic for any thread count.
-        let partial: Vec<Vec<[f64; 7]>> = feats
-            .par_chunks(CHUNK)
-            .zip(assign.par_chunks(CHUNK))
-            .map(|(fs, ls)| {
-                let mut acc = vec![[0.0f64; 7]; k];
-                for (z, &l) in fs.iter().zip(ls) {
-                    let a = &mut acc[l as usize];
-                    for t in 0..6 {
-                        a[t] += z[t] as f64;
-                    }
-                    a[6] += 1.0;
-                }
-                acc
-            })
-            .collect();
-        for j in 0..k {
-            let mut s = [0.0f64; 7];
-            for p in &partial {
-                for t in 0..7 {
-                    s[t] += p[j][t];
-                }
-            }
-            if s[6] > 0.0 {
-                codes[j] = std::array::from_fn(|t| (s[t] / s[6]) as f32);
-            } // an empty cluster keeps its codeword (and is dropped at the end if still empty)
         }
     }
     codes
@@ -449,13 +364,13 @@ mod tests {
 
     #[test]
     fn two_blobs_are_split_and_ranked_by_density() {
-        for method in [ClusteringMethod::Vq, ClusteringMethod::KMeans] {
+        {
             let mut pts = blob(Vec3::ZERO, 0.2, 500, 1.0, 1); // dense
             pts.extend(blob(Vec3::new(5.0, 0.0, 0.0), 1.0, 500, 1.0, 2)); // 25× sparser
-            let c = cluster_points(&pts, 2, method, 7);
+            let c = cluster_points(&pts, 2, 7);
             assert_eq!(c.clusters.len(), 2);
-            assert!(pts[..500].iter().enumerate().all(|(i, _)| c.labels[i] == 0), "{method:?}");
-            assert!((500..1000).all(|i| c.labels[i] == 1), "{method:?}");
+            assert!(pts[..500].iter().enumerate().all(|(i, _)| c.labels[i] == 0));
+            assert!((500..1000).all(|i| c.labels[i] == 1));
             assert_eq!(c.clusters[0].rank, 0);
             assert_eq!(c.clusters[1].rank, 1); // F = 0.5 → rank 1
                                                // Uniform square of side s: E|Π(p−μ)|² = s²/6 → A = 2π s²/6.
@@ -475,11 +390,11 @@ mod tests {
             pts.push(pt(Vec3::new(r.next_f32(), 0.0, r.next_f32()), Vec3::Y, 1.0));
             pts.push(pt(Vec3::new(0.0, r.next_f32(), r.next_f32()), Vec3::X, 1.0));
         }
-        for method in [ClusteringMethod::Vq, ClusteringMethod::KMeans] {
-            let c = cluster_points(&pts, 16, method, 11);
+        {
+            let c = cluster_points(&pts, 16, 11);
             for cl in &c.clusters {
                 let floor = cl.members.iter().filter(|&&m| pts[m as usize].n[1] > 0.5).count();
-                assert!(floor == 0 || floor == cl.count(), "{method:?}: mixed cluster {floor}/{}", cl.count());
+                assert!(floor == 0 || floor == cl.count(), "mixed cluster {floor}/{}", cl.count());
             }
             assert!(c.clusters.len() >= 8);
         }
@@ -489,15 +404,15 @@ mod tests {
     fn deterministic_and_thread_count_independent() {
         let mut pts = blob(Vec3::ZERO, 1.0, 20_000, 1.0, 4);
         pts.extend(blob(Vec3::new(0.3, 0.0, 0.0), 0.1, 5000, 2.0, 5));
-        for method in [ClusteringMethod::Vq, ClusteringMethod::KMeans] {
-            let a = cluster_points(&pts, 32, method, 9);
+        {
+            let a = cluster_points(&pts, 32, 9);
             let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
             let four = rayon::ThreadPoolBuilder::new().num_threads(4).build().unwrap();
-            let b = one.install(|| cluster_points(&pts, 32, method, 9));
-            let c = four.install(|| cluster_points(&pts, 32, method, 9));
+            let b = one.install(|| cluster_points(&pts, 32, 9));
+            let c = four.install(|| cluster_points(&pts, 32, 9));
             assert_eq!(a, b);
             assert_eq!(a, c);
-            let d = cluster_points(&pts, 32, method, 10);
+            let d = cluster_points(&pts, 32, 10);
             assert_ne!(a, d, "seed must matter");
             // Ranks are non-decreasing and labels are consistent with member lists.
             assert!(a.clusters.windows(2).all(|w| w[0].rank <= w[1].rank));
@@ -508,12 +423,12 @@ mod tests {
 
     #[test]
     fn degenerate_inputs() {
-        for method in [ClusteringMethod::Vq, ClusteringMethod::KMeans] {
-            let c = cluster_points(&[], 8, method, 1);
+        {
+            let c = cluster_points(&[], 8, 1);
             assert!(c.clusters.is_empty() && c.labels.is_empty());
             // k > n, all points identical.
             let pts = vec![pt(Vec3::ONE, Vec3::Y, 1.0); 5];
-            let c = cluster_points(&pts, 64, method, 1);
+            let c = cluster_points(&pts, 64, 1);
             let total: usize = c.clusters.iter().map(|c| c.count()).sum();
             assert_eq!(total, 5);
             assert!(c.clusters.iter().all(|c| c.area > 0.0 && c.density.is_finite()));
@@ -522,11 +437,11 @@ mod tests {
             let mut pts = blob(Vec3::ZERO, 1.0, 50, 1.0, 6);
             pts[3].p[0] = f32::NAN;
             pts[4].n = [0.0; 3];
-            let c = cluster_points(&pts, 4, method, 1);
+            let c = cluster_points(&pts, 4, 1);
             assert_eq!(c.labels[3], NO_CLUSTER);
             assert_eq!(c.labels[4], NO_CLUSTER);
             assert_eq!(c.clusters.iter().map(|c| c.count()).sum::<usize>(), 48);
-            assert!(cluster_points(&pts, 0, method, 1).clusters.is_empty());
+            assert!(cluster_points(&pts, 0, 1).clusters.is_empty());
         }
     }
 }

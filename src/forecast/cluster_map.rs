@@ -135,7 +135,7 @@ impl ClusterMap {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::forecast::cluster::{cluster_points, ClusteringMethod};
+    use crate::forecast::cluster::cluster_points;
     use crate::sampling::rng::{stream, Rng};
 
     fn scene(n: usize) -> Vec<CausticPoint> {
@@ -170,7 +170,7 @@ mod tests {
     #[test]
     fn query_matches_brute_force_and_rules() {
         let pts = scene(6000);
-        let cl = cluster_points(&pts, 12, ClusteringMethod::Vq, 3);
+        let cl = cluster_points(&pts, 12, 3);
         let max_rank = 3;
         let map = ClusterMap::build(&pts, &cl, max_rank, 32, 0.05);
         assert_eq!(map.n_clusters(), cl.n_kept(max_rank));
@@ -203,7 +203,7 @@ mod tests {
         let empty = ClusterMap::build(&[], &Clustering::default(), 6, 32, 0.1);
         assert_eq!(empty.query(Vec3::ZERO, Vec3::Y), None);
         let pts = scene(3000);
-        let cl = cluster_points(&pts, 8, ClusteringMethod::KMeans, 1);
+        let cl = cluster_points(&pts, 8, 1);
         let map = ClusterMap::build(&pts, &cl, 6, 32, 0.05);
         let bytes = bitcode::encode(&map);
         let back: ClusterMap = bitcode::decode(&bytes).unwrap();

@@ -1,4 +1,4 @@
-//! Jensen-95 directional sampling tables and the CF dual-table / single-table estimators ([BAJ08 §3.2]
+//! Jensen-95 directional sampling tables and the CF dual-table estimators ([BAJ08 §3.2]
 //! "Caustic Forecast Importance Sampling"; spec §4, §7.3, §7.7, §10).
 //!
 //! A table is a piecewise-constant pdf over `N_PHI × N_MU = 32 × 16` bins uniform in φ ∈ [0, 2π) and
@@ -14,10 +14,10 @@
 //!   `(1−α)·s_i/S + α·v_i/V` where `s` is the forecasters spread by a tent of `radius` bins
 //!   (`splat.rs`): a caustic seen through glass that the photons covered with gaps puts T2's
 //!   samples into the gaps next to the photons instead of over the whole hemisphere;
-//! - `Single { alpha }`: one defensive table `w' = (1−α)w/W + α v/V` with `v > 0` everywhere.
+//! (The single defensive table and the defensive T1, `--table single|dual-defensive`, measured
+//! no better and were retired: `results/rejected/table.md`.)
 //!
-//! Invariants: every bin where the integrand may be non-zero has pdf > 0 in exactly one dual table
-//! (or in the single table); sampled directions have μ ∈ (0, 1] (never on the horizon) and a pdf
+//! Invariants: every bin where the integrand may be non-zero has pdf > 0 in exactly one dual table; sampled directions have μ ∈ (0, 1] (never on the horizon) and a pdf
 //! equal to `pdf_w` of the same direction; the number of samples never depends on the samples.
 //! Construction never panics: NaN/negative weights count as 0, a table with no weight is `None`.
 
@@ -193,13 +193,6 @@ impl DirectionTable {
 pub enum TableMode {
     /// CF dual table: T1 (photons) + T2 (f·cos on the empty bins), estimates summed.
     Dual,
-    /// Dual table whose T1 is itself defensive on its own bins: `(1−α) w/W + α v/V₁` over
-    /// Ω₁ = {w > 0}, so a bin holding only weak photons keeps an f·cos share (fewer fireflies);
-    /// T2 as in `Dual`. Still a partition of the hemisphere, so still unbiased.
-    DualDefensive {
-        /// Share of the f·cos fill inside T1 (clamped to [0, 1]).
-        alpha: f32,
-    },
     /// Dual table whose T2 (still exactly the empty bins) follows the forecasters spread over
     /// their neighbouring bins: `(1−α) s/S + α v/V` on Ω₂ (`s` = tent splat of half-width
     /// `radius` bins). T1 is `Dual`'s, so the partition and the unbiasedness are unchanged.
@@ -207,11 +200,6 @@ pub enum TableMode {
         /// Tent half-width in bins (`splat::Splat::Tent`).
         radius: f32,
         /// Share of the f·cos fill in T2 (clamped to [1e-3, 1]).
-        alpha: f32,
-    },
-    /// One defensive mixture `(1−α) w/W + α v/V`.
-    Single {
-        /// Mixture weight of the f·cos fill (clamped to [1e-4, 1]).
         alpha: f32,
     },
 }
@@ -223,16 +211,16 @@ pub struct TableSample {
     pub dir: Vec3,
     /// `1 / (S · pdf_w(dir))` of the table it came from: the contribution is `weight · g(dir)`.
     pub weight: f32,
-    /// 0 for T1 (or the single table), 1 for T2.
+    /// 0 for T1, 1 for T2.
     pub table: u8,
 }
 
 /// The tables of one shading point.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ForecastTables {
-    /// T1 (photon table) or the single defensive table.
+    /// T1 (photon table).
     pub t1: Option<DirectionTable>,
-    /// T2 (dual fill on empty bins); always `None` in single mode.
+    /// T2 (dual fill on empty bins).
     pub t2: Option<DirectionTable>,
 }
 
@@ -273,53 +261,21 @@ impl ForecastTables {
     ) -> Self {
         let photons: Vec<(Vec3, f32)> = photons.into_iter().collect();
         let w = splat_histogram(photons.iter().copied(), splat);
-        match mode {
-            TableMode::Dual | TableMode::DualDefensive { .. } | TableMode::DualSpread { .. } => {
-                // T1 skipped if k = 0 / zero total (from_weights → None).
-                let t1 = match mode {
-                    TableMode::DualDefensive { alpha } if alpha > 0.0 => {
-                        let alpha = alpha.min(1.0);
-                        let v1 = fill_values((0..N_BINS).filter(|&i| w[i] > 0.0), &brdf_cos);
-                        let (big_w, big_v): (f32, f32) = (w.iter().sum(), v1.iter().sum());
-                        let mut m = [0.0f32; N_BINS];
-                        if big_w > 0.0 && big_v > 0.0 {
-                            for i in 0..N_BINS {
-                                if w[i] > 0.0 {
-                                    m[i] = (1.0 - alpha) * w[i] / big_w + alpha * v1[i] / big_v;
-                                }
-                            }
-                        }
-                        DirectionTable::from_weights(&m)
-                    }
-                    _ => DirectionTable::from_weights(&w),
-                };
-                let empty = (0..N_BINS).filter(|&i| !(w[i] > 0.0));
-                // T2 on exactly Ω_2 = {w_i = 0}; skipped if Ω_2 = ∅.
-                let t2 = if empty.clone().next().is_some() {
-                    let mut v = fill_values(empty.clone(), &brdf_cos);
-                    if let TableMode::DualSpread { radius, alpha } = mode {
-                        let spread = splat_histogram(photons.iter().copied(), Splat::Tent { radius });
-                        blend_spread(&mut v, &spread, empty, alpha);
-                    }
-                    DirectionTable::from_weights(&v)
-                } else {
-                    None
-                };
-                ForecastTables { t1, t2 }
+        // T1 skipped if k = 0 / zero total (from_weights → None).
+        let t1 = DirectionTable::from_weights(&w);
+        let empty = (0..N_BINS).filter(|&i| !(w[i] > 0.0));
+        // T2 on exactly Ω_2 = {w_i = 0}; skipped if Ω_2 = ∅.
+        let t2 = if empty.clone().next().is_some() {
+            let mut v = fill_values(empty.clone(), &brdf_cos);
+            if let TableMode::DualSpread { radius, alpha } = mode {
+                let spread = splat_histogram(photons.iter().copied(), Splat::Tent { radius });
+                blend_spread(&mut v, &spread, empty, alpha);
             }
-            TableMode::Single { alpha } => {
-                let alpha = if alpha.is_finite() { alpha.clamp(1e-4, 1.0) } else { 0.1 };
-                let v = fill_values(0..N_BINS, &brdf_cos);
-                let big_v: f32 = v.iter().sum();
-                let big_w: f32 = w.iter().sum();
-                let mut m = [0.0f32; N_BINS];
-                for i in 0..N_BINS {
-                    // spec §4: w' = (1−α) w/W + α v/V (just v/V when no photon landed).
-                    m[i] = if big_w > 0.0 { (1.0 - alpha) * w[i] / big_w + alpha * v[i] / big_v } else { v[i] / big_v };
-                }
-                ForecastTables { t1: DirectionTable::from_weights(&m), t2: None }
-            }
-        }
+            DirectionTable::from_weights(&v)
+        } else {
+            None
+        };
+        ForecastTables { t1, t2 }
     }
 
     /// Number of directions [`Self::for_each_sample`] produces for `s` samples per table.

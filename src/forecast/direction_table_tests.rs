@@ -149,8 +149,8 @@ fn degenerate_tables() {
     assert_eq!(t.n_samples(3), 3);
     // Below-horizon / NaN / negative photons are ignored.
     let bad = vec![(Vec3::new(0.0, 0.0, -1.0), 1.0), (Vec3::Z, f32::NAN), (Vec3::Z, -1.0)];
-    let t = ForecastTables::build(bad, |_| f32::NAN, TableMode::Single { alpha: f32::NAN });
-    assert!(t.t1.is_some());
+    let t = ForecastTables::build(bad, |_| f32::NAN, TableMode::Dual);
+    assert!(t.t1.is_none() && t.t2.is_some());
 }
 
 #[test]
@@ -163,10 +163,6 @@ fn chi2_of_all_table_samplers() {
         let d = ForecastTables::build(set.iter().copied(), lambert, TableMode::Dual);
         tables.push((name, d.t1.unwrap()));
         tables.push((name, d.t2.unwrap()));
-        let s = ForecastTables::build(set.iter().copied(), lambert, TableMode::Single { alpha: 0.1 });
-        tables.push((name, s.t1.unwrap()));
-        let dd = ForecastTables::build(set.iter().copied(), lambert, TableMode::DualDefensive { alpha: 0.25 });
-        tables.push((name, dd.t1.unwrap()));
         let ds = ForecastTables::build(set.iter().copied(), lambert, TableMode::DualSpread { radius: 2.0, alpha: 0.5 });
         tables.push((name, ds.t2.unwrap()));
     }
@@ -232,12 +228,6 @@ fn estimators_are_unbiased_where_photons_miss_the_cone() {
         let (m, se) = mean_se(n / s, 11 + s as u64, |r| dual.estimate(s, r, g));
         assert!((m - t).abs() < 4.0 * se, "dual S={s}: {m} vs {t} ± {se}");
     }
-    let single = ForecastTables::build(photons.iter().copied(), lambert, TableMode::Single { alpha: 0.1 });
-    let (m, se) = mean_se(n, 13, |r| single.estimate(1, r, g));
-    assert!((m - t).abs() < 4.0 * se, "single: {m} vs {t} ± {se}");
-    let dd = ForecastTables::build(photons.iter().copied(), lambert, TableMode::DualDefensive { alpha: 0.25 });
-    let (m, se) = mean_se(n, 17, |r| dd.estimate(1, r, g));
-    assert!((m - t).abs() < 4.0 * se, "dual-defensive: {m} vs {t} ± {se}");
     let ds = ForecastTables::build(photons.iter().copied(), lambert, TableMode::DualSpread { radius: 2.0, alpha: 0.5 });
     let (m, se) = mean_se(n, 19, |r| ds.estimate(1, r, g));
     assert!((m - t).abs() < 4.0 * se, "dual-spread: {m} vs {t} ± {se}");

@@ -2,8 +2,8 @@
 //! maps, search radius) and the CF estimator Ĺ_c at a non-specular point [BAJ08 §3.2; spec §4].
 //!
 //! At x: query the cluster map. Outside a kept cluster: S_cos = 1 BSDF sample. Inside: gather
-//! up to n forecasters within r, build the 32×16 table (weights lum(Φ)·f·μ, or lum(Φ)·f with
-//! `PhotonWeight::Flux`) and its dual on the empty bins, sample each S(rank, d) times and SUM
+//! up to n forecasters within r, build the 32×16 table (weights lum(Φ)·f·μ, the paper's) and its
+//! dual on the empty bins, sample each S(rank, d) times and SUM
 //! the two estimates. The caller's `g(ωi)` returns the integrand f·cos·1[first hit Dirac]·L̂;
 //! any table is a valid pdf, so the estimate is unbiased whatever the photons are.
 //!
@@ -14,11 +14,10 @@
 //! no image.
 
 use super::caustic_point::CausticPoint;
-use super::cluster::{cluster_points, Clustering, ClusteringMethod};
+use super::cluster::{cluster_points, Clustering};
 use super::cluster_map::{ClusterMap, DEFAULT_REPRESENTATIVES};
 use super::direction_table::{ForecastTables, TableMode};
 use super::forecast_map::{search_radius, ForecastMaps};
-use super::mixture::{DefensiveMixture, MixtureWeights};
 use super::share::CausticShare;
 pub use super::table_cache::TableCache;
 use super::table_cache::{cell_of, normal_key, CellSizes};
@@ -30,19 +29,9 @@ use crate::transport::context::{Context, ShadingQuery};
 use std::sync::Arc;
 use std::time::Instant;
 
-/// Photon weight in the T1 table.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
-pub enum PhotonWeight {
-    /// BAJ08: lum(Φ)·f·cosθ ("modulated with the BRDF and the cosine").
-    #[default]
-    Paper,
-    /// lum(Φ)·f: proportional to the integrand, since Φ already holds the projected area.
-    Flux,
-}
-
-/// Splitting rule at diffuse depth 0 (`iws-cf`'s `--split-rule`; `Energy` and `Rank` are also
-/// `pt-cf`'s `--guide-split-rule`); 1 sample per table deeper. All are functions of the point's
-/// cluster and the depth only, so the estimator stays unbiased.
+/// Splitting rule of `iws-cf` at diffuse depth 0 (`Energy`, the default; `Rank` with `--variant
+/// baj08`); 1 sample per table deeper. Both are functions of the point's cluster and the depth
+/// only, so the estimator stays unbiased.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
 pub enum SplitRule {
     /// The paper's rank rule `S = max(1, S0 >> rank)`.
@@ -52,21 +41,11 @@ pub enum SplitRule {
     /// `cornell-box`'s 64 with densities 0.06–3.5, and splits their chains as the brightest).
     #[default]
     Energy,
-    /// The rank rule, with S0 multiplied by [`SHARE_BOOST`] in the clusters whose caustic share
-    /// `s ≥` [`SPLIT_MIN_SHARE`] (`forecast::share`): more chains where the caustic dominates the
-    /// point's indirect light.
-    Share,
 }
 
-/// Smallest caustic share at which `--split-rule share` multiplies S0 by [`SHARE_BOOST`] (as
-/// `pt-cf`'s `--guide-min-share` default).
-pub const SPLIT_MIN_SHARE: f32 = 0.5;
-/// The factor on S0 of `--split-rule share` in caustic-dominated clusters.
-pub const SHARE_BOOST: u32 = 4;
-
 /// The energy rule: `clamp(⌈s0·ρ/ρ_max⌉, 1, s0)` continuations at diffuse depth 0 in a cluster
-/// of energy density `density` (`iws-cf`'s `--split-rule energy`, `pt-cf`'s `--guide-split-rule
-/// energy`); 1 where the densities are not usable, never 0 (a zero split would drop the light).
+/// of energy density `density` (the split rule of `iws-cf` and `pt-cf`); 1 where the densities
+/// are not usable, never 0 (a zero split would drop the light).
 #[inline]
 pub fn energy_split(s0: u32, density: f32, max: f32) -> usize {
     let s0 = s0.max(1) as f32;
@@ -76,53 +55,38 @@ pub fn energy_split(s0: u32, density: f32, max: f32) -> usize {
 }
 
 /// The paper's rank rule: `max(1, s0 >> rank)` continuations at diffuse depth 0 in a cluster of
-/// rank `rank` (`iws-cf`'s `--split`, `pt-cf`'s `--guide-split`).
+/// rank `rank` (`iws-cf --variant baj08`).
 #[inline]
 pub fn rank_split(s0: u32, rank: u32) -> usize {
     (s0 >> rank.min(31)).max(1) as usize
 }
 
-/// Table layout (`--table`).
+/// Table layout (`iws-cf`: `DualSpread`, or `Dual` with `--variant baj08`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
 pub enum TableKind {
     /// CF dual table (T1 + T2 on the empty bins, summed) [BAJ08].
     Dual,
-    /// Dual table with a defensive f·cos share (α = 0.25) inside T1's own bins.
-    DualDefensive,
     /// Dual table whose T2 follows the forecasters spread by [`SPREAD`] = (tent half-width in
     /// bins, f·cos share) over the empty bins next to them (`TableMode::DualSpread`).
     #[default]
     DualSpread,
-    /// One defensive table (α = 0.1), for the ablation.
-    Single,
-    /// The dual table's T1 and T2 inside a defensive mixture with the BSDF
-    /// (`forecast::mixture`, one-sample MIS with the mixture pdf, weights [`MIXTURE_WEIGHTS`]):
-    /// no sample is worth more than `1/c_B` BSDF samples.
-    Mixture,
 }
 
-/// `(radius, alpha)` of `--table dual-spread`: a tent two bins wide each way, half of T2 on the
-/// f·cos fill (screened on the crop cameras: README, the `--table` option).
+/// `(radius, alpha)` of the default `DualSpread` table: a tent two bins wide each way, half of T2
+/// on the f·cos fill (screened on the crop cameras: `results/rejected/table.md`).
 pub const SPREAD: (f32, f32) = (2.0, 0.5);
-
-/// `(c_B, c_1, c_2)` of `--table mixture`.
-pub const MIXTURE_WEIGHTS: (f32, f32, f32) = (0.2, 0.4, 0.4);
 
 /// CF parameters (defaults: spec §5).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, bitcode::Encode, bitcode::Decode)]
 pub struct ForecastOptions {
     /// Codebook size k.
     pub clusters: usize,
-    /// Clustering algorithm.
-    pub clustering: ClusteringMethod,
     /// Clusters with rank > max_rank are culled.
     pub max_rank: u32,
     /// Forecasters gathered per table (n).
     pub gather: usize,
     /// Table layout.
     pub table: TableKind,
-    /// Photon weight.
-    pub photon_weight: PhotonWeight,
     /// Splitting at diffuse depth 0 for rank 0 (S = max(1, S0 >> rank)).
     pub s0: u32,
     /// Splitting rule.
@@ -135,26 +99,19 @@ pub struct ForecastOptions {
     /// (S_cos = 1, spec §4). The dual table doubles the samples per vertex, so tables at every
     /// depth make the recursion branch; the choice depends on d only, so it stays unbiased.
     pub table_depth: u32,
-    /// Photon tables only in kept clusters whose caustic share s = E_c/(E_c + E_d) is at least
-    /// this (`forecast::share`); elsewhere one BSDF sample, as outside the kept clusters. A
-    /// function of the point's cluster, so unbiased; 0 uses the tables in every kept cluster.
-    pub table_min_share: f32,
 }
 
 impl Default for ForecastOptions {
     fn default() -> Self {
         ForecastOptions {
             clusters: 64,
-            clustering: ClusteringMethod::Vq,
             max_rank: 6,
             gather: 128,
             table: TableKind::DualSpread,
-            photon_weight: PhotonWeight::Paper,
             s0: 16,
             split_rule: SplitRule::Energy,
             cache_cell: 1.0,
             table_depth: 1,
-            table_min_share: 0.0,
         }
     }
 }
@@ -228,7 +185,7 @@ impl CausticForecast {
     ) -> Self {
         let t = Instant::now();
         let phase = phases.phase("clustering", None);
-        let clustering = cluster_points(&points, opts.clusters, opts.clustering, seed);
+        let clustering = cluster_points(&points, opts.clusters, seed);
         phase.finish();
         stats.clustering_s = t.elapsed().as_secs_f64();
         let t = Instant::now();
@@ -269,12 +226,6 @@ impl CausticForecast {
                 energy_split(self.opts.s0, cl.density, self.clustering.clusters[0].density)
             }
             SplitRule::Energy => 1,
-            SplitRule::Share if depth == 0 => {
-                let s = self.shares.get(c).map_or(0.0, |s| s.share());
-                let boost = if s >= SPLIT_MIN_SHARE { SHARE_BOOST } else { 1 };
-                rank_split(self.opts.s0.saturating_mul(boost), cl.rank)
-            }
-            SplitRule::Share => 1,
         }
     }
 
@@ -295,17 +246,15 @@ impl CausticForecast {
             (local.z > 0.0).then(|| (local, weight(cp, local)))
         });
         let mode = match self.opts.table {
-            TableKind::Dual | TableKind::Mixture => TableMode::Dual,
-            TableKind::DualDefensive => TableMode::DualDefensive { alpha: 0.25 },
+            TableKind::Dual => TableMode::Dual,
             TableKind::DualSpread => TableMode::DualSpread { radius: SPREAD.0, alpha: SPREAD.1 },
-            TableKind::Single => TableMode::Single { alpha: 0.1 },
         };
         ForecastTables::build(photons, brdf_cos, mode)
     }
 
     /// The tables of a cacheable point in cluster `c`: a pure function of `c`, its cell in
     /// that cluster's grid and its normal (`table_cache.rs`). Cached tables are weighted by
-    /// lum(Φ)·cos (or lum(Φ)) and the cosine: independent of ωo, they serve every flat non-Dirac
+    /// lum(Φ)·cos and the cosine: independent of ωo, they serve every flat non-Dirac
     /// BSDF (exact for Lambert).
     fn cached_tables(
         &self,
@@ -320,10 +269,7 @@ impl CausticForecast {
             return t;
         }
         let t0 = Instant::now();
-        let w = |cp: &CausticPoint, l: Vec3| match self.opts.photon_weight {
-            PhotonWeight::Paper => cp.energy() * l.z,
-            PhotonWeight::Flux => cp.energy(),
-        };
+        let w = |cp: &CausticPoint, l: Vec3| cp.energy() * l.z;
         let tables = Arc::new(self.build_tables((c, centre, &Frame::from_normal(ng)), &mut ctx.knn, w, |l| l.z));
         ctx.profile.cf.tables_built += 1;
         ctx.profile.cf.cdf_ns += t0.elapsed().as_nanos() as u64;
@@ -337,10 +283,7 @@ impl CausticForecast {
         let t0 = Instant::now();
         let w = |cp: &CausticPoint, l: Vec3| {
             let f = luminance(bsdf::eval(m, sp, wo, cp.wi()));
-            match self.opts.photon_weight {
-                PhotonWeight::Paper => cp.energy() * f * l.z,
-                PhotonWeight::Flux => cp.energy() * f,
-            }
+            cp.energy() * f * l.z
         };
         let brdf_cos = |l: Vec3| luminance(bsdf::eval(m, sp, wo, frame.to_world(l))) * l.z;
         let t = self.build_tables((c, sp.p, frame), &mut ctx.knn, w, brdf_cos);
@@ -396,12 +339,6 @@ impl CausticForecast {
         (tables, frame)
     }
 
-    /// Whether `iws-cf` samples the tables of kept cluster `c` (`table_min_share`).
-    pub fn tables_used_in(&self, c: usize) -> bool {
-        let min = self.opts.table_min_share;
-        min <= 0.0 || self.shares.get(c).is_some_and(|s| s.share() >= min)
-    }
-
     /// Ĺ_c at `q`. `g(ωi, w, ctx)` returns one sample's contribution: the integrand
     /// f·|cos|·1[first hit Dirac]·L̂ (world ωi) times its estimator weight `w` (1/pdf, over the
     /// sample count), so that a roulette inside `g` sees the sample's whole weight.
@@ -416,7 +353,7 @@ impl CausticForecast {
         ctx.profile.cf.queries += 1;
         let (sp, m, wo) = (q.x, q.m, q.wo);
         let found = if q.depth >= self.opts.table_depth { None } else { self.cluster_at(q, ctx) };
-        let found = found.filter(|&c| self.tables_used_in(c)).map(|c| (c, self.tables_in(c, q, ctx, cache)));
+        let found = found.map(|c| (c, self.tables_in(c, q, ctx, cache)));
         let Some((c, (tables, frame))) = found else {
             // outside valid clusters: one BSDF (cosine for Lambert) sample
             ctx.profile.cf.samples += 1;
@@ -429,21 +366,6 @@ impl CausticForecast {
         };
         ctx.profile.cf.inside += 1;
         let s = self.split_for(c, q.depth);
-        if self.opts.table == TableKind::Mixture {
-            // as many samples as the dual table would draw, each from the mixture, averaged
-            let (cb, c1, c2) = MIXTURE_WEIGHTS;
-            let w = MixtureWeights::new(cb, c1, c2).expect("constant weights are valid");
-            let mix = DefensiveMixture::new(m, sp, wo, &tables, frame, w);
-            let n = tables.n_samples(s).max(1);
-            ctx.profile.cf.samples += n as u64;
-            let mut sum = Rgb::ZERO;
-            for _ in 0..n {
-                if let Some(ms) = mix.sample(&mut ctx.rng).filter(|ms| ms.pdf_w > 0.0) {
-                    sum += g(ms.wi, 1.0 / (n as f32 * ms.pdf_w), ctx);
-                }
-            }
-            return sum;
-        }
         let mut samples = Vec::with_capacity(2 * s);
         tables.for_each_sample(s, &mut ctx.rng, |ts| samples.push(ts));
         ctx.profile.cf.samples += samples.len() as u64;

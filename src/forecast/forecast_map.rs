@@ -125,7 +125,7 @@ impl ForecastMaps {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::forecast::cluster::{cluster_points, ClusteringMethod};
+    use crate::forecast::cluster::cluster_points;
     use crate::math::PI;
     use crate::sampling::rng::{stream, Rng};
 
@@ -146,7 +146,7 @@ mod tests {
     #[test]
     fn maps_match_brute_force_definition_and_gather() {
         let pts = scene(8000);
-        let cl = cluster_points(&pts, 16, ClusteringMethod::Vq, 5);
+        let cl = cluster_points(&pts, 16, 5);
         let max_rank = 4;
         let r = search_radius(&cl, max_rank, 64).unwrap();
         // 8000 points on two unit squares: ρ̄ ≈ 4000 per unit area → r ≈ sqrt(64/(π·4000)) ≈ 0.071.
@@ -190,7 +190,7 @@ mod tests {
         let m = ForecastMaps::build(&[], &Clustering::default(), 6, 0.1);
         assert!(m.is_empty());
         let pts = scene(2000);
-        let cl = cluster_points(&pts, 8, ClusteringMethod::KMeans, 2);
+        let cl = cluster_points(&pts, 8, 2);
         let r = search_radius(&cl, 6, 32).unwrap();
         let maps = ForecastMaps::build(&pts, &cl, 6, r);
         let bytes = bitcode::encode(&maps);

@@ -1,8 +1,8 @@
 //! The caustic share of a kept cluster: its indirect irradiance split into the part the forecast
 //! tables aim at (light through Dirac vertices, `E_c`) and the rest (`E_d`). `pt-cf` guides by it
-//! (`c_k = max(c, 1 − s)`, unguided below `--guide-min-share`) and `iws-cf` can split by it
-//! (`--split-rule share`) or leave its tables out below it (`--table-min-share`). Measured in the
-//! preprocess (`integrators::caustic_share`), broadcast with the CF product.
+//! (`c_k = max(c, 1 − s)`, unguided below `--guide-min-share`). Measured in the preprocess
+//! (`integrators::caustic_share`), broadcast with the CF product. (`iws-cf`'s uses of it,
+//! `--split-rule share` and `--table-min-share`, were retired: `results/rejected/`.)
 //!
 //! Invariants: any value only steers pdfs and sample counts that are functions of the vertex, so
 //! no value can bias an image; `share()` is in [0, 1], 0 when nothing was measured.
@@ -33,8 +33,7 @@ impl CausticShare {
     }
 }
 
-/// `v` if it is a share in [0, 1] (NaN is not): the check of `--guide-min-share` and
-/// `--table-min-share`.
+/// `v` if it is a share in [0, 1] (NaN is not): the check of `--guide-min-share`.
 pub fn min_share(v: f32) -> Result<f32, String> {
     if (0.0..=1.0).contains(&v) {
         Ok(v)

@@ -121,7 +121,7 @@ fn cell_may_contain(map: &ClusterMap, guided: &KdTree, o: Vec3, h: f32, reach: f
 mod tests {
     use super::*;
     use crate::forecast::caustic_point::CausticPoint;
-    use crate::forecast::cluster::{cluster_points, ClusteringMethod};
+    use crate::forecast::cluster::cluster_points;
     use crate::sampling::rng::{stream, Rng};
 
     /// Caustic points in blobs on a floor and a wall, spread so that the reach stays small.
@@ -148,7 +148,7 @@ mod tests {
     #[test]
     fn grid_never_rejects_a_point_the_map_accepts_for_the_subset() {
         let pts = points(12_000);
-        let cl = cluster_points(&pts, 24, ClusteringMethod::Vq, 5);
+        let cl = cluster_points(&pts, 24, 5);
         let map = ClusterMap::build(&pts, &cl, 63, 32, 0.05);
         let n = map.n_clusters();
         assert!(n >= 12, "{n} clusters");

@@ -172,7 +172,7 @@ impl TableCache {
 mod tests {
     use super::*;
     use crate::forecast::caustic_point::CausticPoint;
-    use crate::forecast::cluster::{cluster_points, ClusteringMethod};
+    use crate::forecast::cluster::cluster_points;
     use crate::sampling::rng::{stream, Rng};
 
     /// A dense 0.1 m caustic and a faint 4 m blob: the dense cluster's cells are much smaller.
@@ -187,7 +187,7 @@ mod tests {
                 CausticPoint::new(Vec3::new(off + s * a, 0.0, s * b), Vec3::Y, Vec3::Y, Vec3::splat(1.0))
             })
             .collect();
-        let cl = cluster_points(&pts, 2, ClusteringMethod::Vq, 1);
+        let cl = cluster_points(&pts, 2, 1);
         let r = crate::forecast::forecast_map::search_radius(&cl, 6, 128).unwrap();
         let cells = CellSizes::new(&cl, 6, (r, 128, 1.0));
         let (lo, hi) = cells.range();

@@ -41,7 +41,6 @@ use crate::transport::direct;
 use crate::transport::particle::MAX_VERTICES;
 use crate::transport::roulette::{q_recursion, roulette};
 use crate::transport::light_select::{LightSelector, RisParams, MAX_CANDIDATES, MAX_SURVIVORS};
-use crate::transport::light_tree::{LightTree, TreeLight, TreeQuery};
 use std::time::Instant;
 
 /// IWS parameters (shared by `iws`, `iws-pm` and `iws-cf`).
@@ -53,23 +52,12 @@ pub struct IwsArgs {
     /// IWS light paths per pass N.
     #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..))]
     pub vpl_paths: u32,
-    /// IWS VPLs evaluated at diffuse depth >= 1 (unbiased uniform subset; 0 = all); `--vpl-select all` only.
-    #[arg(long, default_value_t = 16)]
-    pub vpl_subset: u32,
-    /// IWS point-light selection at each non-specular vertex: `all` (every VPL at depth 0, the
-    /// uniform subset deeper), `ris` (resampled importance sampling, a few shadow rays) or
-    /// `tree` (a light tree, one traversal and shadow ray per `--tree-samples`).
-    #[arg(long, value_enum, default_value_t = VplSelect::Ris)]
-    pub vpl_select: VplSelect,
     /// RIS candidates M per reservoir, drawn ∝ VPL power (0 = every VPL once).
     #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=(MAX_CANDIDATES as i64)))]
     pub ris_candidates: u32,
     /// RIS survivors K (shadow rays per vertex), from one shared candidate set.
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=(MAX_SURVIVORS as i64)))]
     pub ris_survivors: u32,
-    /// Light-tree traversals (shadow rays) per vertex with `--vpl-select tree`.
-    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=(MAX_SURVIVORS as i64)))]
-    pub tree_samples: u32,
     /// IWS direct light from the emitters: `nee` (one light sample and shadow ray per vertex,
     /// unclamped) or `vpl` (the paper: the light paths' first vertices as clamped point lights).
     #[arg(long, value_enum, default_value_t = DirectLight::Nee)]
@@ -87,19 +75,6 @@ pub enum DirectLight {
     /// [KK04, BAJ08]: the light paths' emitter vertices are point lights clamped by `b` like the
     /// others, and the compensation ray recovers the clamped emission when it hits an emitter.
     Vpl,
-}
-
-/// How the IWS gather chooses its point lights.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum VplSelect {
-    /// Every VPL at depth 0, an unbiased uniform subset (`--vpl-subset`) deeper.
-    All,
-    /// RIS (Talbot 2005) with target `Σ_rgb |f|·min(G,b)·Φ` (no visibility) from candidates ∝ `Σ_rgb Φ`.
-    Ris,
-    /// A light tree (Conty Estevez & Kulla 2018) over the pass's VPLs: per node the bound
-    /// `Φ·min(b, c_x·c_y/d²)`, the exact target at single lights (`transport::light_tree`).
-    Tree,
 }
 
 impl IwsArgs {
@@ -149,25 +124,13 @@ pub struct Iws {
     /// The clamp bound in use.
     b: f32,
     vpls: Vec<Vpl>,
-    /// The pass's RIS source (∝ VPL power); `None` with `--vpl-select all` or no lights.
+    /// The pass's RIS source (∝ VPL power); `None` when no point light has power.
     selector: Option<LightSelector>,
-    /// The pass's light tree; `None` unless `--vpl-select tree` (or no lights).
-    tree: Option<LightTree>,
     ris: RisParams,
     caustics: Box<dyn CausticEstimator>,
     passes: u64,
     vpls_total: u64,
     vpl_trace_ns: u64,
-}
-
-/// A non-Dirac material's colour for the light tree: albedo (+ specular); > 0 in every channel
-/// in which its BSDF can be.
-fn reflectance(m: &Material) -> Rgb {
-    match *m {
-        Material::Diffuse { albedo } => albedo,
-        Material::Glossy { albedo, specular, .. } => albedo + specular,
-        _ => Rgb::ONE,
-    }
 }
 
 /// The spec §2 default bound `b = κ·π·N/A_D` with `κ = 0.25` (one clamped Lambertian VPL adds
@@ -182,7 +145,7 @@ pub fn default_bound(world: &World, vpl_paths: u32) -> f32 {
 }
 
 impl Iws {
-    /// An IWS integrator with `args.iws` and the cap `args.pt`, and caustic term `caustics`.
+    /// An IWS integrator with `args.iws` and the cap `args.settings`, and caustic term `caustics`.
     /// A negative or NaN `bound` is replaced by the default.
     pub fn new(world: &World, args: &MethodArgs, caustics: Box<dyn CausticEstimator>) -> Iws {
         let params = args.iws;
@@ -190,7 +153,7 @@ impl Iws {
             Some(b) if b >= 0.0 => b,
             _ => default_bound(world, params.vpl_paths.max(1)),
         };
-        let max_depth = match args.pt.cap() {
+        let max_depth = match args.settings.cap() {
             0 => MAX_VERTICES,
             c => c,
         };
@@ -203,23 +166,12 @@ impl Iws {
             b,
             vpls: Vec::new(),
             selector: None,
-            tree: None,
             ris,
             caustics,
             passes: 0,
             vpls_total: 0,
             vpl_trace_ns: 0,
         }
-    }
-
-    /// One VPL's bounded, shadowed contribution at `x` (spec §2 `VPL_b` term, before the weight).
-    #[inline]
-    fn vpl_term(&self, world: &World, x: &ShadingPoint, m: &Material, wo: Vec3, v: &Vpl) -> Rgb {
-        let c = self.unshadowed(x, m, wo, v);
-        if c == Rgb::ZERO || !world.visible(x.p, x.ng, v.p, v.ng) {
-            return Rgb::ZERO; // Dirac surfaces are opaque to VPL shadow rays (spec §1)
-        }
-        c
     }
 
     /// One VPL's bounded contribution `Φ·f·min(G,b)·f_y` without visibility (the RIS target).
@@ -269,8 +221,7 @@ impl Iws {
     }
 
     /// One unbiased estimate of the direct light (NEE, with `--direct nee`) plus `VPL_b(x, ω_o)`
-    /// (public for the estimator-level tests): RIS with `--vpl-select ris`, else all VPLs at
-    /// depth 0 and a uniform subset (weight `N_v/m`) deeper.
+    /// (public for the estimator-level tests), the point lights chosen by RIS.
     pub fn gather(&self, world: &World, q: &ShadingQuery, ctx: &mut Context) -> Rgb {
         let (x, m, wo) = (q.x, q.m, q.wo);
         let n = self.vpls.len();
@@ -293,33 +244,21 @@ impl Iws {
         l
     }
 
-    /// `VPL_b`: RIS, every VPL at depth 0, or an unbiased uniform subset deeper (`--vpl-select`).
-    fn gather_vpls(&self, world: &World, q: &ShadingQuery, ctx: &mut Context) -> Rgb {
+    /// The exact point-light sum `Σ_v Φ·f·min(G,b)·f_y·V` over the pass's point lights, without
+    /// NEE: the value the RIS gather estimates (the reference of its tests; one shadow ray per
+    /// point light, so never used to render).
+    pub fn gather_exact(&self, world: &World, q: &ShadingQuery) -> Rgb {
         let (x, m, wo) = (q.x, q.m, q.wo);
-        let n = self.vpls.len();
-        let m_sub = self.params.vpl_subset as usize;
-        if let Some(sel) = &self.selector {
-            return self.gather_ris(world, q, sel, ctx);
+        let lit = |v: &&Vpl| world.visible(x.p, x.ng, v.p, v.ng);
+        self.vpls.iter().map(|v| (v, self.unshadowed(x, m, wo, v))).filter(|(v, c)| *c != Rgb::ZERO && lit(v)).fold(Rgb::ZERO, |a, (_, c)| a + c)
+    }
+
+    /// `VPL_b` by RIS; 0 when no point light has power (then none contributes).
+    fn gather_vpls(&self, world: &World, q: &ShadingQuery, ctx: &mut Context) -> Rgb {
+        match &self.selector {
+            Some(sel) => self.gather_ris(world, q, sel, ctx),
+            None => Rgb::ZERO,
         }
-        if let Some(tree) = &self.tree {
-            return self.gather_tree(world, q, tree, ctx);
-        }
-        let mut l = Rgb::ZERO;
-        if q.depth == 0 || m_sub == 0 || m_sub >= n {
-            for v in &self.vpls {
-                l += self.vpl_term(world, x, m, wo, v);
-            }
-            ctx.profile.gather_shadow_rays += n as u64;
-        } else {
-            // spec §2 "Cost control": unbiased uniform subset with replacement
-            for _ in 0..m_sub {
-                let v = &self.vpls[ctx.rng.below(n as u32) as usize];
-                l += self.vpl_term(world, x, m, wo, v);
-            }
-            l *= n as f32 / m_sub as f32;
-            ctx.profile.gather_shadow_rays += m_sub as u64;
-        }
-        l
     }
 
     /// `VPL_b` by RIS: `K` survivors of `M` power-proportional candidates, target
@@ -334,28 +273,6 @@ impl Iws {
             (c.x.max(0.0) + c.y.max(0.0) + c.z.max(0.0), c)
         };
         sel.select(&self.ris, &mut ctx.rng, target, |s| {
-            rays += 1;
-            let v = &self.vpls[s.index];
-            if world.visible(x.p, x.ng, v.p, v.ng) {
-                l += s.value * s.weight;
-            }
-        });
-        ctx.profile.gather_shadow_rays += rays;
-        l
-    }
-
-    /// `VPL_b` by the light tree: `K` traversals, one shadow ray each, weight `1/(K·P(y))`.
-    fn gather_tree(&self, world: &World, q: &ShadingQuery, tree: &LightTree, ctx: &mut Context) -> Rgb {
-        let (x, m, wo) = (q.x, q.m, q.wo);
-        let mut l = Rgb::ZERO;
-        let mut rays = 0u64;
-        let target = |i: usize| {
-            let c = self.unshadowed(x, m, wo, &self.vpls[i]);
-            (c.x.max(0.0) + c.y.max(0.0) + c.z.max(0.0), c)
-        };
-        let k = self.params.tree_samples.clamp(1, MAX_SURVIVORS);
-        let tq = TreeQuery { x: x.p, nx: x.ng, tint: reflectance(m), b: self.b };
-        tree.select(&tq, k, &mut ctx.rng, target, |s| {
             rays += 1;
             let v = &self.vpls[s.index];
             if world.visible(x.p, x.ng, v.p, v.ng) {
@@ -401,7 +318,7 @@ impl Iws {
         if r2 <= 0.0 {
             return Rgb::ZERO;
         }
-        let g = cos_x * hit.ng.dot(bs.wi).abs() / r2; // the same G as in vpl_term
+        let g = cos_x * hit.ng.dot(bs.wi).abs() / r2; // the same G as in `unshadowed`
         if g.is_nan() || g <= self.b {
             return Rgb::ZERO;
         }
@@ -452,24 +369,7 @@ impl Integrator for Iws {
             self.vpls.retain(|v| matches!(v.kind, VplKind::Surface(_)));
         }
         let power = |v: &Vpl| v.power.x.max(0.0) + v.power.y.max(0.0) + v.power.z.max(0.0);
-        (self.selector, self.tree) = match self.params.vpl_select {
-            VplSelect::All => (None, None),
-            VplSelect::Ris => (LightSelector::new(&self.vpls.iter().map(power).collect::<Vec<_>>()), None),
-            VplSelect::Tree => {
-                let lights: Vec<TreeLight> = self
-                    .vpls
-                    .iter()
-                    .map(|v| TreeLight {
-                        p: v.p,
-                        n: v.ng,
-                        power: v.power.max(Rgb::ZERO) * if let VplKind::Surface(my) = v.kind { reflectance(&my) } else { Rgb::ONE },
-                        clamped: !matches!(v.kind, VplKind::Point),
-                        omni: matches!(v.kind, VplKind::Point),
-                    })
-                    .collect();
-                (None, LightTree::new(&lights))
-            }
-        };
+        self.selector = LightSelector::new(&self.vpls.iter().map(power).collect::<Vec<_>>());
         self.passes += 1;
         self.vpls_total += self.vpls.len() as u64;
         self.vpl_trace_ns += t0.elapsed().as_nanos() as u64;
@@ -503,11 +403,8 @@ impl Integrator for Iws {
             "b": self.b,
             "b_default": self.params.bound.is_none(),
             "vpl_paths_per_pass": self.params.vpl_paths,
-            "vpl_subset_deeper": self.params.vpl_subset,
-            "vpl_select": self.params.vpl_select,
             "direct": self.params.direct,
             "ris": self.ris,
-            "tree_samples": self.params.tree_samples,
             "profile_per_sample": profile.per_sample(),
             "point_lights_per_pass": self.vpls_total as f64 / passes,
             "compensation_rays_per_sample": profile.compensation_rays as f64 / samples,

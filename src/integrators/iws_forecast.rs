@@ -9,84 +9,82 @@
 //! keeps a sample only if its first hit is Dirac, follows the chain and evaluates the full
 //! estimator `L̂` at its end (spec §1, §4).
 //!
+//! Options: the CF group [`CfArgs`] (shared with `pt-cf`) and `--variant baj08` ([`IwsCfArgs`]:
+//! the paper's dual table, rank rule and emitter VPLs together, for its ablations).
+//!
 //! CLI: `forecast render scenes/cornell-box.toml --method iws-cf --time 4m`.
 
 use super::caustic_share::caustic_shares;
 use super::caustics::{caustic_chain, CausticEstimator, Recurse, ShadingQuery};
-use super::iws::Iws;
+use super::iws::{DirectLight, Iws};
 use super::{Context, Integrator, MethodArgs, MethodSpec};
 use crate::profile::{CfCounts, Profile};
 use crate::progress::{Hidden, Phases};
 use crate::accel::World;
 use crate::bsdf;
 use crate::forecast::caustic_point::CausticPoint;
-use crate::forecast::cluster::ClusteringMethod;
-use crate::forecast::estimator::{
-    CausticForecast, ForecastOptions, PhotonWeight, PreprocessStats, SplitRule, TableCache,
-    TableKind,
-};
+use crate::forecast::estimator::{CausticForecast, ForecastOptions, PreprocessStats, SplitRule, TableCache, TableKind};
 use crate::math::{Rgb, Vec3};
 use crate::sampling::rng::stream;
 use crate::transport::particle::{self, Emission, MAX_VERTICES};
-use clap::builder::{PossibleValuesParser, TypedValueParser};
-use serde::ser::SerializeMap;
 use std::time::Instant;
 
 /// Default forecast photons to store when neither the CLI nor the scene sets it (the paper's
 /// Cornell box count).
 pub const DEFAULT_FORECAST_PHOTONS: u64 = 200_000;
 
-/// `iws-cf` parameters (the CLI's names; [`CfArgs::options`] maps them onto the domain's
-/// [`ForecastOptions`]). Serialized as `forecast_photons` and `forecast` (the options).
-#[derive(clap::Args, Clone, Debug, PartialEq)]
+/// The Caustic Forecasting preprocess and table options, one group shared by `iws-cf` and
+/// `pt-cf` (the CLI's names; [`MethodArgs::forecast_options`] maps them, with `iws-cf`'s
+/// `--variant`, onto the domain's [`ForecastOptions`]).
+#[derive(clap::Args, Clone, Debug, PartialEq, serde::Serialize)]
 pub struct CfArgs {
-    /// iws-cf: forecast photons to store (default: the scene's `[forecast] photons`, else 200k).
+    /// iws-cf, pt-cf: forecast photons to store (default: the scene's `[forecast] photons`, else
+    /// 200k; with `--time`, about 5% of the budget).
     #[arg(long)]
     pub forecast_photons: Option<u64>,
-    /// iws-cf: clustering algorithm.
-    #[arg(long, default_value = "vq", value_parser = choice(&[("vq", ClusteringMethod::Vq), ("kmeans", ClusteringMethod::KMeans)]))]
-    pub clustering: ClusteringMethod,
-    /// iws-cf: codebook size k (clusters).
+    /// iws-cf, pt-cf: codebook size k (clusters).
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
     pub clusters: u32,
-    /// iws-cf: clusters with rank above this are culled (cosine sampling only).
+    /// iws-cf, pt-cf: clusters with rank above this are culled (their points take BSDF samples).
     #[arg(long, default_value_t = 6)]
     pub max_rank: u32,
-    /// iws-cf: forecasters gathered per table (n).
+    /// iws-cf, pt-cf: forecasters gathered per table (n).
     #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(1..))]
     pub forecasters: u32,
-    /// iws-cf / pt-cf: direction tables: dual-spread (default: T2 follows the spread forecasters),
-    /// dual (BAJ08), dual-defensive, single (ablation) or mixture (defensive BSDF mixture).
-    #[arg(long, default_value = "dual-spread", value_parser = choice(&[
-        ("dual", TableKind::Dual), ("dual-defensive", TableKind::DualDefensive), ("dual-spread", TableKind::DualSpread),
-        ("single", TableKind::Single), ("mixture", TableKind::Mixture),
-    ]))]
-    pub table: TableKind,
-    /// iws-cf: photon weight in the table: lum(Φ)·f·cos (paper) or lum(Φ)·f (flux).
-    #[arg(long, default_value = "paper", value_parser = choice(&[("paper", PhotonWeight::Paper), ("flux", PhotonWeight::Flux)]))]
-    pub photon_weight: PhotonWeight,
-    /// iws-cf: splitting factor S0 at diffuse depth 0: the most samples per table (energy rule:
-    /// S = clamp(ceil(S0·ρ_c/ρ_max), 1, S0); rank rule: S = max(1, S0 >> rank)); 1 at depth >= 1.
+    /// iws-cf, pt-cf: the most samples S0 per table (iws-cf) or continuations (pt-cf) at diffuse
+    /// depth 0, by the energy rule S = clamp(ceil(S0·ρ_c/ρ_max), 1, S0); 1 deeper.
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
     pub split: u32,
-    /// iws-cf: splitting rule at depth 0: the cluster's energy density (default), the paper's
-    /// rank rule, or the rank rule boosted where the caustic share is >= 1/2.
-    #[arg(long, default_value = "energy", value_parser = choice(&[("energy", SplitRule::Energy), ("rank", SplitRule::Rank), ("share", SplitRule::Share)]))]
-    pub split_rule: SplitRule,
-    /// iws-cf: table-cache cell edge as a fraction of the search radius (0 = build per point).
-    #[arg(long, default_value_t = 1.0, value_parser = parse_table_cache)]
-    pub table_cache: f32,
-    /// iws-cf: use the photon tables at diffuse depths below this (deeper: one BSDF sample).
+    /// iws-cf, pt-cf: the tables are used at diffuse depths below this (deeper: BSDF sampling;
+    /// 0 = never, so pt-cf is pt).
     #[arg(long, default_value_t = 1)]
     pub table_depth: u32,
-    /// iws-cf: photon tables only in kept clusters whose caustic share is at least this (0 = all;
-    /// elsewhere one BSDF sample, as outside the kept clusters).
-    #[arg(long, default_value_t = 0.0, value_parser = crate::forecast::share::parse_min_share)]
-    pub table_min_share: f32,
+    /// iws-cf, pt-cf: table-cache cell edge as a fraction of the search radius (0 = build per point).
+    #[arg(long, default_value_t = 1.0, value_parser = parse_table_cache)]
+    pub table_cache: f32,
     /// The run's time budget (set by the pipeline from `--time`, not a flag): without an explicit
     /// `--forecast-photons` the preprocess then costs about [`PREPROCESS_SHARE`] of it.
     #[arg(skip)]
+    #[serde(skip)]
     pub time_budget_s: Option<f64>,
+}
+
+/// `iws-cf`'s own options.
+#[derive(clap::Args, Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct IwsCfArgs {
+    /// iws-cf: the paper's own choices together, for its ablations: `baj08` = the dual table
+    /// (no spread), the rank splitting rule S = max(1, S0 >> rank) and the emitters' light as
+    /// clamped point lights (`--direct vpl`).
+    #[arg(long, value_enum, conflicts_with = "direct")]
+    pub variant: Option<Variant>,
+}
+
+/// A named set of `iws-cf` choices (`--variant`).
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Variant {
+    /// [BAJ08] as published: `TableKind::Dual`, `SplitRule::Rank`, `DirectLight::Vpl`.
+    Baj08,
 }
 
 /// Share of the `--time` budget the CF preprocess aims at (issue #11).
@@ -95,14 +93,6 @@ pub const PREPROCESS_SHARE: f64 = 0.05;
 pub const PILOT_PHOTONS: u64 = 5_000;
 /// Fewest photons the budget rule picks (the tables need some forecasters to be useful).
 pub const MIN_BUDGET_PHOTONS: u64 = 10_000;
-
-/// A clap parser for a domain enum from its (name, value) table (the enums stay free of clap).
-pub(crate) fn choice<T: Clone + Send + Sync + 'static>(
-    table: &'static [(&'static str, T)],
-) -> impl TypedValueParser<Value = T> {
-    PossibleValuesParser::new(table.iter().map(|(n, _)| *n))
-        .map(move |s| table.iter().find(|(n, _)| *n == s).map_or_else(|| table[0].1.clone(), |(_, v)| v.clone()))
-}
 
 /// `--table-cache F`: a finite F ≥ 0 (NaN, negative and infinite cells are refused).
 fn parse_table_cache(s: &str) -> Result<f32, String> {
@@ -114,24 +104,39 @@ fn parse_table_cache(s: &str) -> Result<f32, String> {
     }
 }
 
-impl CfArgs {
-    /// The domain options these arguments select.
-    pub fn options(&self) -> ForecastOptions {
+impl MethodArgs {
+    /// The domain options of the CF preprocess and tables: the shared group's, with `iws-cf`'s
+    /// `--variant`'s table and split rule.
+    pub fn forecast_options(&self) -> ForecastOptions {
+        let c = &self.cf;
+        let baj08 = self.iwscf.variant == Some(Variant::Baj08);
         ForecastOptions {
-            clusters: self.clusters as usize,
-            clustering: self.clustering,
-            max_rank: self.max_rank,
-            gather: self.forecasters as usize,
-            table: self.table,
-            photon_weight: self.photon_weight,
-            s0: self.split,
-            split_rule: self.split_rule,
-            cache_cell: self.table_cache.max(0.0),
-            table_depth: self.table_depth,
-            table_min_share: self.table_min_share,
+            clusters: c.clusters as usize,
+            max_rank: c.max_rank,
+            gather: c.forecasters as usize,
+            table: if baj08 { TableKind::Dual } else { TableKind::DualSpread },
+            s0: c.split,
+            split_rule: if baj08 { SplitRule::Rank } else { SplitRule::Energy },
+            cache_cell: c.table_cache.max(0.0),
+            table_depth: c.table_depth,
         }
     }
+}
 
+impl MethodArgs {
+    /// These arguments with `--variant`'s choices outside the CF group applied (`baj08`: the
+    /// emitters' light as clamped point lights, `--direct vpl`): what `iws-cf` renders with and
+    /// the report records.
+    pub fn with_variant(&self) -> MethodArgs {
+        let mut a = self.clone();
+        if a.iwscf.variant == Some(Variant::Baj08) {
+            a.iws.direct = DirectLight::Vpl;
+        }
+        a
+    }
+}
+
+impl CfArgs {
     /// The limits of `crate::param_limits` (the scene's `forecast.photons` has the same).
     pub fn validate(&self) -> Result<(), String> {
         let photons = self.forecast_photons.map_or(Ok(()), |n| {
@@ -146,15 +151,6 @@ impl CfArgs {
     }
 }
 
-impl serde::Serialize for CfArgs {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let mut m = s.serialize_map(Some(2))?;
-        m.serialize_entry("forecast_photons", &self.forecast_photons)?;
-        m.serialize_entry("forecast", &self.options())?;
-        m.end()
-    }
-}
-
 /// The `iws-cf` method: IWS with Caustic Forecasting as `Ĺ_c`.
 pub struct IwsCf;
 
@@ -164,7 +160,7 @@ impl MethodSpec for IwsCf {
         Ok(preprocess_forecast(world, args, seed, phases))
     }
     fn build(world: &World, args: &MethodArgs, cf: CausticForecast) -> Result<Box<dyn Integrator>, String> {
-        Ok(Box::new(Iws::new(world, args, Box::new(ForecastCaustics::new(cf)))))
+        Ok(Box::new(Iws::new(world, &args.with_variant(), Box::new(ForecastCaustics::new(cf)))))
     }
 }
 
@@ -209,7 +205,7 @@ pub fn preprocess_forecast(world: &World, args: &MethodArgs, seed: u64, phases: 
         (None, Some(t)) if t.is_finite() && t > 0.0 && cap > PILOT_PHOTONS => {
             let phase = phases.phase("pilot", None);
             let t0 = Instant::now();
-            let pilot = build_forecast(world, PILOT_PHOTONS, args.cf.options(), seed ^ 0x0050_494c_4f54, &Hidden);
+            let pilot = build_forecast(world, PILOT_PHOTONS, args.forecast_options(), seed ^ 0x0050_494c_4f54, &Hidden);
             let cost = t0.elapsed().as_secs_f64() / pilot.stats.stored.max(1) as f64;
             phase.finish();
             let want = (PREPROCESS_SHARE * t / cost.max(1e-12)).max(MIN_BUDGET_PHOTONS as f64);
@@ -218,10 +214,10 @@ pub fn preprocess_forecast(world: &World, args: &MethodArgs, seed: u64, phases: 
         (None, _) if world.scene.forecast_photons.is_some() => (cap, "scene", 0.0),
         (None, _) => (cap, "default", 0.0),
     };
-    let mut cf = build_forecast(world, n, args.cf.options(), seed, phases);
+    let mut cf = build_forecast(world, n, args.forecast_options(), seed, phases);
     let t0 = Instant::now();
     let phase = phases.phase("caustic shares", None);
-    cf.shares = caustic_shares(world, &cf, args.pt.cap(), seed);
+    cf.shares = caustic_shares(world, &cf, args.settings.cap(), seed);
     phase.finish();
     cf.stats.shares_s = t0.elapsed().as_secs_f64();
     cf.stats.photons_requested = n;

@@ -2,8 +2,12 @@
 //! below is the only list of methods and the only place a method's name is written.
 //!
 //! A method is one file plus one line in that table. Its file owns
-//! - its parameters: a `#[derive(clap::Args, serde::Serialize)]` group, flattened into the
-//!   command line (`--method` and every flag) and into the JSON report's `options`;
+//! - its options: a `#[derive(clap::Args, serde::Serialize)]` group, flattened into the command
+//!   line; its registry line names the groups it takes (its own, and shared ones such as the
+//!   IWS or the Caustic Forecasting group). A flag of another method's group is refused
+//!   ([`MethodArgs::foreign_flag`]: `--clusters belongs to iws-cf/pt-cf, not pt`), and the JSON
+//!   report's `options` hold only the method's groups ([`MethodOptions`]). `--max-depth` and
+//!   `--emission-split` are render settings, not a method's (`settings`);
 //! - its one-off preprocess product ([`MethodSpec::Product`], `()` when there is none), built on
 //!   rank 0, reporting its phases to a [`Phases`] passed down by the pipeline (display only);
 //!   [`Method::preprocess`] encodes it with bitcode and [`Method::build`] decodes the
@@ -18,6 +22,7 @@
 pub mod caustic_share;
 pub mod caustics;
 pub mod path_class;
+pub mod settings;
 pub mod vpl;
 
 pub use caustics::{BsdfCaustics, CausticEstimator, NoCaustics, Recurse, ShadingQuery};
@@ -27,6 +32,7 @@ use crate::math::{Rgb, Vec3};
 use crate::profile::Profile;
 use crate::progress::{Hidden, Phases};
 pub use crate::transport::context::Context;
+pub use settings::RenderSettings;
 
 /// One estimate along a camera ray, split at the ray's first non-Dirac vertex so that the
 /// pixel sampler can average the first part over several cheap rays (`render`,
@@ -83,15 +89,18 @@ pub trait MethodSpec {
     fn build(world: &World, args: &MethodArgs, product: Self::Product) -> Result<Box<dyn Integrator>, String>;
 }
 
-/// Parameters of a method that has none of its own.
-#[derive(clap::Args, Clone, Debug, Default, PartialEq, serde::Serialize)]
-pub struct NoArgs {}
-
-/// The registry: `Variant = "name", field: ArgsType => module::SpecType;` per method. It
-/// declares the module, the [`Method`] enum (the CLI/JSON name), the [`MethodArgs`] group and
-/// the dispatch of [`Method::preprocess`] and [`Method::build`].
+/// The registry. `groups`: every option group, `field: Type` (a `#[derive(clap::Args,
+/// serde::Serialize)]` struct in its method's file); `methods`: `Variant = "name", [groups] =>
+/// module::SpecType;` per method, the groups whose options it takes. It declares the modules,
+/// the [`Method`] enum (the CLI/JSON name), the [`MethodArgs`] groups, which flags belong to
+/// which methods ([`MethodArgs::foreign_flag`]), the report's [`MethodOptions`] and the
+/// dispatch of [`Method::preprocess`] and [`Method::build`]. A new method gets all of it from
+/// its line.
 macro_rules! methods {
-    ($( $(#[$doc:meta])* $variant:ident = $name:literal, $field:ident: $args:ty => $module:ident :: $spec:ident; )*) => {
+    (
+        groups { $( $(#[$gdoc:meta])* $group:ident: $gty:ty, )* }
+        methods { $( $(#[$doc:meta])* $variant:ident = $name:literal, [$($uses:ident),*] => $module:ident :: $spec:ident; )* }
+    ) => {
         $( pub mod $module; )*
 
         /// The rendering methods (`--method`).
@@ -100,14 +109,33 @@ macro_rules! methods {
             $( $(#[$doc])* #[value(name = $name)] #[serde(rename = $name)] $variant, )*
         }
 
-        /// Every method's parameters, one flattened group per method (CLI flags and JSON keys).
-        #[derive(clap::Args, Clone, Debug, serde::Serialize)]
+        /// The render settings and every method's option groups (CLI flags), and which flags
+        /// the command line gave explicitly (for [`MethodArgs::foreign_flag`]).
+        #[derive(clap::Args, Clone, Debug)]
         pub struct MethodArgs {
+            /// Settings every method reads (`--max-depth`, `--emission-split`).
+            #[command(flatten)]
+            pub settings: RenderSettings,
             $(
-                #[allow(missing_docs)]
+                $(#[$gdoc])*
                 #[command(flatten)]
+                pub $group: $gty,
+            )*
+            /// The ids of the method options given explicitly on the command line (set by
+            /// `cli` from clap's `ArgMatches::value_source`; empty for API callers, e.g.
+            /// `compare`, which hands one set of flags to several methods).
+            #[arg(skip)]
+            pub explicit: Vec<String>,
+        }
+
+        /// The options a report records: the render settings and the chosen method's groups.
+        #[derive(Clone, Debug, serde::Serialize)]
+        pub struct MethodOptions {
+            #[serde(flatten)]
+            settings: RenderSettings,
+            $(
                 #[serde(flatten)]
-                pub $field: $args,
+                $group: Option<$gty>,
             )*
         }
 
@@ -119,6 +147,13 @@ macro_rules! methods {
             pub fn name(self) -> &'static str {
                 match self {
                     $( Method::$variant => $name, )*
+                }
+            }
+
+            /// The option groups (fields of [`MethodArgs`]) this method takes.
+            pub fn groups(self) -> &'static [&'static str] {
+                match self {
+                    $( Method::$variant => &[$(stringify!($uses)),*], )*
                 }
             }
 
@@ -149,20 +184,61 @@ macro_rules! methods {
                 }
             }
         }
+
+        impl MethodArgs {
+            /// Every option group: its field name and its flags as `(arg id, --long)`.
+            pub fn group_flags() -> Vec<(&'static str, Vec<(String, String)>)> {
+                vec![$( (stringify!($group), flags_of::<$gty>()), )*]
+            }
+
+            /// The options a report records for `method`: the settings and its groups only, with
+            /// `--variant`'s choices applied ([`MethodArgs::with_variant`]).
+            pub fn options_for(&self, method: Method) -> MethodOptions {
+                let (uses, a) = (method.groups(), self.with_variant());
+                MethodOptions {
+                    settings: a.settings,
+                    $( $group: uses.contains(&stringify!($group)).then(|| a.$group.clone()), )*
+                }
+            }
+        }
     };
 }
 
 methods! {
-    /// Path tracing with NEE and MIS: the unbiased reference.
-    Pt = "pt", pt: path::PtArgs => path::PathTracer;
-    /// Instant radiosity with bias compensation (Le + L_d); L_c left out by design.
-    Iws = "iws", iws: iws::IwsArgs => iws::Iws;
-    /// IWS with a caustic photon map for L_c (biased baseline).
-    IwsPm = "iws-pm", pm: photon_map::PmArgs => photon_map::IwsPm;
-    /// IWS with Caustic Forecasting for L_c (BAJ08): unbiased.
-    IwsCf = "iws-cf", cf: iws_forecast::CfArgs => iws_forecast::IwsCf;
-    /// Path tracing whose continuation is drawn from a defensive mixture of the BSDF and the CF tables: unbiased.
-    PtCf = "pt-cf", ptcf: pt_cf::PtCfArgs => pt_cf::PtCf;
+    groups {
+        /// `pt`'s `--path-filter` (shared with `pt-cf`).
+        pt: path::PtArgs,
+        /// The IWS options (`iws`, `iws-pm`, `iws-cf`).
+        iws: iws::IwsArgs,
+        /// The photon map's (`iws-pm`).
+        pm: photon_map::PmArgs,
+        /// The Caustic Forecasting preprocess and tables (`iws-cf`, `pt-cf`).
+        cf: iws_forecast::CfArgs,
+        /// `iws-cf`'s own (`--variant`).
+        iwscf: iws_forecast::IwsCfArgs,
+        /// `pt-cf`'s own (`--guide-*`).
+        ptcf: pt_cf::PtCfArgs,
+    }
+    methods {
+        /// Path tracing with NEE and MIS: the unbiased reference.
+        Pt = "pt", [pt] => path::PathTracer;
+        /// Instant radiosity with bias compensation (Le + L_d); L_c left out by design.
+        Iws = "iws", [iws] => iws::Iws;
+        /// IWS with a caustic photon map for L_c (biased baseline).
+        IwsPm = "iws-pm", [iws, pm] => photon_map::IwsPm;
+        /// IWS with Caustic Forecasting for L_c (BAJ08): unbiased.
+        IwsCf = "iws-cf", [iws, cf, iwscf] => iws_forecast::IwsCf;
+        /// Path tracing whose continuation is drawn from a defensive mixture of the BSDF and the CF tables: unbiased.
+        PtCf = "pt-cf", [pt, cf, ptcf] => pt_cf::PtCf;
+    }
+}
+
+/// The flags of one option group, `(arg id, --long)`, from its clap definition.
+fn flags_of<T: clap::Args>() -> Vec<(String, String)> {
+    T::augment_args(clap::Command::new("group"))
+        .get_arguments()
+        .filter_map(|a| Some((a.get_id().to_string(), format!("--{}", a.get_long()?))))
+        .collect()
 }
 
 impl Method {
@@ -170,22 +246,58 @@ impl Method {
     pub fn from_name(s: &str) -> Option<Method> {
         <Method as clap::ValueEnum>::from_str(s, true).ok()
     }
+
+    /// The methods that take option group `group`, as `a/b` (e.g. `iws-cf/pt-cf`).
+    fn owners(group: &str) -> String {
+        Method::ALL.iter().filter(|m| m.groups().contains(&group)).map(|m| m.name()).collect::<Vec<_>>().join("/")
+    }
 }
 
 impl MethodArgs {
-    /// Refuses what `method` does not implement: `--path-filter` is the path tracers' alone.
+    /// The first flag in `explicit` that `method` does not take, as the error naming the methods
+    /// it belongs to: `--clusters belongs to iws-cf/pt-cf, not pt`. `None` when every explicit
+    /// flag is the method's (or a render setting).
+    pub fn foreign_flag(method: Method, explicit: &[String]) -> Option<String> {
+        let uses = method.groups();
+        for (group, flags) in Self::group_flags() {
+            if uses.contains(&group) {
+                continue;
+            }
+            for (id, long) in flags {
+                if explicit.contains(&id) {
+                    return Some(format!("{long} belongs to {}, not {}", Method::owners(group), method.name()));
+                }
+            }
+        }
+        None
+    }
+
+    /// Refuses what `method` does not take: a flag of another method given on the command line
+    /// ([`MethodArgs::foreign_flag`]), and (API callers too) a `--path-filter`, which only the
+    /// methods of `pt`'s group implement.
     pub fn check_for(&self, method: Method) -> Result<(), String> {
-        if !matches!(method, Method::Pt | Method::PtCf) && self.pt.path_filter.is_some() {
-            return Err(format!(
-                "--path-filter is a diagnostic of `pt` and `pt-cf` only; `{}` does not support it",
-                method.name()
-            ));
+        if let Some(e) = Self::foreign_flag(method, &self.explicit) {
+            return Err(e);
+        }
+        if self.pt.path_filter.is_some() && !method.groups().contains(&"pt") {
+            return Err(format!("--path-filter belongs to {}, not {}", Method::owners("pt"), method.name()));
         }
         Ok(())
     }
 
+    /// The emission split in use: `--emission-split`, or 1 under `--path-filter` (the split's
+    /// extra rays add emission of classes `L` and `SL` that no filter sees).
+    pub fn emission_split(&self) -> u32 {
+        if self.pt.path_filter.is_some() {
+            1
+        } else {
+            self.settings.emission_split
+        }
+    }
+
     /// Every group's own `validate` (each method file owns its limits), before any work.
     pub fn validate(&self) -> Result<(), String> {
+        self.settings.validate()?;
         self.pt.validate()?;
         self.iws.validate()?;
         self.pm.validate()?;

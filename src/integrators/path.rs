@@ -22,56 +22,28 @@ use crate::math::{Rgb, Vec3};
 use crate::sampling::power_heuristic;
 use crate::scene::NO_EMITTER;
 use crate::transport::direct;
-use crate::transport::particle::MAX_VERTICES;
 use crate::transport::roulette::Throughput;
 
-const MAX_SPLIT: i64 = crate::render::MAX_EMISSION_SPLIT as i64;
-
-/// Parameters shared by every method: the path-length safety cap and the pixel sampler's
-/// emission split (`render::pixel`); and `--path-filter`, the path tracers' diagnostic.
+/// `pt`'s options (shared with `pt-cf`): `--path-filter`, the path tracers' diagnostic. The
+/// vertex cap and the emission split are render settings (`integrators::settings`).
 #[derive(clap::Args, Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PtArgs {
-    /// Safety cap on path vertices (default: the scene's `render.max_depth`, 64).
-    #[arg(long)]
-    pub max_depth: Option<u32>,
-    /// Camera rays per pixel sample in the pixels where a light source has an edge (found by a
-    /// probe): they average the emission seen directly or through mirrors and glass, one of them
-    /// carries the rest of the estimate (unbiased; 1 = off; default by measurement, README).
-    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=MAX_SPLIT))]
-    pub emission_split: u32,
-    /// pt and pt-cf only, a biased diagnostic: keep only light paths of these classes, e.g.
-    /// `DSL,DD*` (D a non-Dirac vertex, S a Dirac chain, L the light, `*` a prefix;
-    /// `integrators::path_class`). Turns emission splitting off (one camera ray per sample).
+    /// A biased diagnostic: keep only light paths of these classes, e.g. `DSL,DD*` (D a
+    /// non-Dirac vertex, S a Dirac chain, L the light, `*` a prefix; `integrators::path_class`).
+    /// Turns emission splitting off (one camera ray per sample).
     #[arg(long, value_name = "CLASSES", value_parser = super::path_class::check_filter)]
     pub path_filter: Option<String>,
 }
 
 impl PtArgs {
-    /// The cap in use (the pipeline resolves `None` to the scene's; direct callers get 64).
-    pub fn cap(&self) -> u32 {
-        self.max_depth.unwrap_or(MAX_VERTICES)
-    }
-
-    /// The emission split in use: `--emission-split`, or 1 under `--path-filter` (the split's
-    /// extra rays add emission of classes `L` and `SL` that no filter sees).
-    pub fn split(&self) -> u32 {
-        if self.path_filter.is_some() {
-            1
-        } else {
-            self.emission_split
-        }
-    }
-
     /// `--path-filter`, parsed (`None` when not given).
     pub fn filter(&self) -> Result<Option<PathFilter>, String> {
         self.path_filter.as_deref().map(PathFilter::parse).transpose().map_err(|e| format!("--path-filter: {e}"))
     }
 
-    /// The limits of `crate::param_limits` (the scene's `render.max_depth` has the same) and a
-    /// `--path-filter` that parses.
+    /// A `--path-filter` that parses.
     pub fn validate(&self) -> Result<(), String> {
-        self.filter()?;
-        self.max_depth.map_or(Ok(()), |d| crate::param_limits::MAX_DEPTH.check_flag("--max-depth", d.into()))
+        self.filter().map(|_| ())
     }
 }
 
@@ -81,7 +53,7 @@ impl MethodSpec for PathTracer {
         Ok(())
     }
     fn build(_: &World, args: &MethodArgs, _: ()) -> Result<Box<dyn Integrator>, String> {
-        Ok(Box::new(PathTracer { max_depth: args.pt.cap(), filter: args.pt.filter()? }))
+        Ok(Box::new(PathTracer { max_depth: args.settings.cap(), filter: args.pt.filter()? }))
     }
 }
 

@@ -3,13 +3,13 @@
 //!
 //! Estimator. Exactly `pt` (NEE + power-heuristic MIS for area lights, Dirac chains followed by
 //! BSDF sampling, Russian roulette from the 5th vertex, `transport::roulette::Throughput`) except at the guided
-//! vertices: non-Dirac hits at diffuse depth `d < --guide-depth` that lie inside a *guided* kept
+//! vertices: non-Dirac hits at diffuse depth `d < --table-depth` that lie inside a *guided* kept
 //! cluster `k` (`CausticForecast::cluster_at`, then `tables_in`: forecast map → dual tables,
 //! through the shared `TableCache`). There the continuation direction is drawn from the defensive
 //! mixture `q(ω) = c_k·p_BSDF(ω) + (1−c_k)·p_CF(ω)` (`forecast::mixture`, `p_CF` = ½T1 + ½T2),
 //! weighted by `f·|cos|/q`, so no sample is worth more than `1/c_k` BSDF samples.
 //!
-//! Per-cluster guiding (`--guide-rule share`). With the caustic share `s = E_c/(E_c + E_d)` of a
+//! Per-cluster guiding. With the caustic share `s = E_c/(E_c + E_d)` of a
 //! cluster's indirect irradiance ([`CausticShare`](crate::forecast::share::CausticShare): `E_c` from its forecast photons, `E_d` from a
 //! cosine `pt` gather in the preprocess), the mixture's second moment `E_d²/c + E_c²/(1−c)` (tables
 //! matching the caustic, the BSDF the rest) is smallest at `c = 1 − s`; so `c_k = max(c, 1 − s)`
@@ -19,9 +19,13 @@
 //! MIS against NEE uses the pdf really used: NEE's weight is `h(p_light, n·q(ω_l))` and a mixture-sampled emitter hit's is
 //! `h(n·q, p_light)` (power heuristic `h`, `n` the split count), which sum to 1 per direction.
 //! Splitting: at `d = 0` inside a guided cluster `k`, `n = clamp(⌈S0·ρ_k/ρ_max⌉, 1, S0)`
-//! continuations are drawn and averaged (`--guide-split-rule energy`, the default, `--guide-split
-//! S0`; `ρ_k` the cluster's energy density, `ρ_max` the densest guided cluster's), or the paper's
-//! `n = max(1, S0 >> rank)` (`rank`); `n` depends only on the vertex's cluster, so it stays unbiased.
+//! continuations are drawn and averaged (`--split S0`; `ρ_k` the cluster's energy density, `ρ_max`
+//! the densest guided cluster's); `n` depends only on the vertex's cluster, so it stays unbiased.
+//! (`--guide-rule fixed` and `--guide-split-rule rank` measured no better and were retired:
+//! `results/rejected/`.)
+//!
+//! Options: the CF group (`iws_forecast::CfArgs`, shared with `iws-cf`: photons, clusters,
+//! `--split`, `--table-depth`, …), `--path-filter` (`pt`'s) and [`PtCfArgs`].
 //!
 //! Invariants: the tables are a pdf only (any photons give an unbiased image); `c = 1` never
 //! looks a table up and draws exactly `pt`'s random numbers, so it is `pt` bit for bit; outside
@@ -42,7 +46,7 @@ use crate::accel::{offset_origin, World};
 use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
 use crate::forecast::cluster::Cluster;
 use crate::forecast::direction_table::ForecastTables;
-use crate::forecast::estimator::{energy_split, rank_split, CausticForecast, SplitRule, TableCache};
+use crate::forecast::estimator::{energy_split, CausticForecast, TableCache};
 use crate::forecast::mixture::{DefensiveMixture, MixtureWeights};
 use crate::forecast::share::{min_share, parse_min_share};
 use crate::forecast::subset_grid::SubsetGrid;
@@ -54,42 +58,17 @@ use crate::transport::direct;
 use crate::transport::roulette::Throughput;
 use std::sync::Arc;
 
-/// `pt-cf` parameters (the CF preprocess options are `iws-cf`'s: `--forecast-photons`,
-/// `--clusters`, `--max-rank`, `--forecasters`, `--table`, `--table-cache`, …).
+/// `pt-cf`'s own options (the CF preprocess and table options are the group shared with
+/// `iws-cf`: `--forecast-photons`, `--clusters`, `--split`, `--table-depth`, …).
 #[derive(clap::Args, Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PtCfArgs {
-    /// pt-cf: BSDF share c of q = c·p_BSDF + (1−c)·p_CF at guided vertices, 0 < c ≤ 1 (1 = pt).
+    /// pt-cf: BSDF share c of q = c·p_BSDF + (1−c)·p_CF at guided vertices, 0 < c ≤ 1 (1 = pt);
+    /// per cluster c_k = max(c, 1 − s_k) from its caustic share s_k.
     #[arg(long, default_value_t = 0.3, value_parser = parse_guide_fraction)]
     pub guide_fraction: f32,
-    /// pt-cf: the tables guide vertices at diffuse depths below this (0 = pt).
-    #[arg(long, default_value_t = 1)]
-    pub guide_depth: u32,
-    /// pt-cf: the most continuations S0 at a guided vertex of diffuse depth 0 (1 deeper); see
-    /// --guide-split-rule.
-    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=64))]
-    pub guide_split: u32,
-    /// pt-cf: splitting at diffuse depth 0. `rank`: S = max(1, S0 >> rank); `energy`:
-    /// S = clamp(⌈S0·ρ_k/ρ_max⌉, 1, S0), ρ_max the densest guided cluster's energy density.
-    #[arg(long, default_value = "energy", value_parser = super::iws_forecast::choice(&[("energy", SplitRule::Energy), ("rank", SplitRule::Rank)]))]
-    pub guide_split_rule: SplitRule,
-    /// pt-cf: per-cluster guiding. `share`: c_k = max(c, 1 − s_k) from the cluster's caustic
-    /// share s_k of indirect irradiance, and no guiding where s_k < --guide-min-share;
-    /// `fixed`: c in every kept cluster.
-    #[arg(long, default_value = "share", value_parser = super::iws_forecast::choice(&[("share", GuideRule::Share), ("fixed", GuideRule::Fixed)]))]
-    pub guide_rule: GuideRule,
-    /// pt-cf: clusters whose caustic share s_k is below this are not guided (`--guide-rule share`).
+    /// pt-cf: clusters whose caustic share s_k of indirect irradiance is below this are not guided.
     #[arg(long, default_value_t = 0.5, value_parser = parse_min_share)]
     pub guide_min_share: f32,
-}
-
-/// How the BSDF share of a guided vertex is chosen (`--guide-rule`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
-pub enum GuideRule {
-    /// `c_k = max(c, 1 − s_k)` per kept cluster, unguided below `--guide-min-share`.
-    #[default]
-    Share,
-    /// `c` at every vertex of a kept cluster.
-    Fixed,
 }
 
 fn parse_guide_fraction(s: &str) -> Result<f32, String> {
@@ -118,26 +97,23 @@ impl MethodSpec for PtCf {
         let per_cluster: Vec<Option<MixtureWeights>> = g
             .shares
             .iter()
-            .map(|sh| match p.guide_rule {
-                GuideRule::Fixed => Some(weights),
-                GuideRule::Share => {
-                    let s = sh.share();
-                    (s >= p.guide_min_share && s > 0.0).then(|| MixtureWeights::guide_fraction(c.max(1.0 - s)).ok()).flatten()
-                }
+            .map(|sh| {
+                let s = sh.share();
+                (s >= p.guide_min_share && s > 0.0).then(|| MixtureWeights::guide_fraction(c.max(1.0 - s)).ok()).flatten()
             })
             .collect();
         let guided: Vec<usize> = (0..n_kept).filter(|&c| per_cluster[c].is_some()).collect();
-        let split = split_counts(&g.clustering.clusters[..n_kept], &guided, p)?;
+        let split = split_counts(&g.clustering.clusters[..n_kept], &guided, args.cf.split);
         let guided_grid = SubsetGrid::build(&g.cluster_map, &guided);
         Ok(Box::new(GuidedPathTracer {
-            max_depth: args.pt.cap(),
+            max_depth: args.settings.cap(),
             weights,
             per_cluster,
             guided,
             guided_grid,
-            guide_depth: if c >= 1.0 { 0 } else { p.guide_depth },
+            guide_depth: if c >= 1.0 { 0 } else { args.cf.table_depth },
             split,
-            split_rule: (p.guide_split_rule, p.guide_split),
+            split_s0: args.cf.split,
             cf: g,
             cache: TableCache::default(),
             filter: args.pt.filter()?,
@@ -145,24 +121,16 @@ impl MethodSpec for PtCf {
     }
 }
 
-/// Continuations at diffuse depth 0 in each kept cluster under `--guide-split-rule` (a function
-/// of the cluster only, so unbiased): the energy rule against the densest guided cluster, or the
-/// rank rule; 1 in the unguided clusters (their vertices are `pt` vertices).
-fn split_counts(clusters: &[Cluster], guided: &[usize], p: &PtCfArgs) -> Result<Vec<usize>, String> {
+/// Continuations at diffuse depth 0 in each kept cluster by the energy rule against the densest
+/// guided cluster (a function of the cluster only, so unbiased); 1 in the unguided clusters
+/// (their vertices are `pt` vertices).
+fn split_counts(clusters: &[Cluster], guided: &[usize], s0: u32) -> Vec<usize> {
     let max = guided.iter().map(|&c| clusters[c].density).fold(0.0f32, f32::max);
-    let s0 = p.guide_split.max(1);
-    let energy = match p.guide_split_rule {
-        SplitRule::Energy => true,
-        SplitRule::Rank => false,
-        SplitRule::Share => {
-            return Err("--guide-split-rule: `share` is iws-cf's --split-rule; pt-cf takes energy or rank".into())
-        }
-    };
     let mut n = vec![1; clusters.len()];
     for &c in guided {
-        n[c] = if energy { energy_split(s0, clusters[c].density, max) } else { rank_split(s0, clusters[c].rank) };
+        n[c] = energy_split(s0.max(1), clusters[c].density, max);
     }
-    Ok(n)
+    n
 }
 
 /// The guided path tracer; owns the product and the table cache shared by all worker threads.
@@ -180,8 +148,8 @@ pub struct GuidedPathTracer {
     guide_depth: u32,
     /// Continuations at a guided vertex of diffuse depth 0, per kept cluster (1 deeper).
     split: Vec<usize>,
-    /// `--guide-split-rule` and `--guide-split` (reported).
-    split_rule: (SplitRule, u32),
+    /// `--split` (reported).
+    split_s0: u32,
     cf: CausticForecast,
     cache: TableCache,
     /// `--path-filter` (a diagnostic; `None`: the unbiased estimate).
@@ -365,8 +333,7 @@ impl Integrator for GuidedPathTracer {
             "guide": {
                 "fraction_bsdf": self.weights.bsdf,
                 "depth": self.guide_depth,
-                "split_s0": self.split_rule.1,
-                "split_rule": self.split_rule.0,
+                "split_s0": self.split_s0,
                 "split_per_cluster": self.split,
                 "lookups": c.queries,
                 "fraction_inside_clusters": c.fraction_inside(),
@@ -397,18 +364,12 @@ mod tests {
         Cluster { centroid: z, normal: z, feature: [0.0; 6], power: density, area: 1.0, density, radius: 0.0, rank, members: vec![0] }
     }
 
-    /// ρ_max is the densest *guided* cluster's (the densest kept cluster is unguided here), the
-    /// unguided get 1, and the rank rule is S0 >> rank in the guided ones.
+    /// ρ_max is the densest *guided* cluster's (the densest kept cluster is unguided here), and
+    /// the unguided get 1.
     #[test]
     fn split_counts_follow_the_guided_clusters() {
         let k = [cluster(4.0, 0), cluster(2.0, 0), cluster(1.0, 1), cluster(0.01, 2)];
         let guided = [1, 2, 3];
-        let mut p = crate::integrators::MethodArgs::default().ptcf;
-        (p.guide_split_rule, p.guide_split) = (SplitRule::Energy, 16);
-        assert_eq!(split_counts(&k, &guided, &p), Ok(vec![1, 16, 8, 1]));
-        (p.guide_split_rule, p.guide_split) = (SplitRule::Rank, 4);
-        assert_eq!(split_counts(&k, &guided, &p), Ok(vec![1, 4, 2, 1]));
-        p.guide_split_rule = SplitRule::Share;
-        assert!(split_counts(&k, &guided, &p).is_err());
+        assert_eq!(split_counts(&k, &guided, 16), vec![1, 16, 8, 1]);
     }
 }

@@ -13,13 +13,13 @@ use crate::scene::Scene;
 
 /// The inputs besides the scene hash, seed, method and resolution that change the image, as the
 /// checkpoint records and `--resume` compares them (`Checkpoint::job`): each `-D NAME` value, and
-/// every method option, generically: the plan's serialized `MethodArgs` flattened to
+/// every method option, generically: the serialized options of the plan's method (`MethodArgs::options_for`) flattened to
 /// `option KEY` = JSON value (so `--max-depth` is `option max_depth`). Left out: the time budget
 /// (`time_budget_s`: a resume may extend `--time`, and every pass stays an unbiased sample).
 pub fn job_keys(job: &RenderJob, plan: &Plan) -> Vec<(String, String)> {
     let mut keys: Vec<(String, String)> = job.defines.iter().map(|(k, v)| (format!("-D {k}"), v.clone())).collect();
     let mut options = Vec::new();
-    flatten("", &serde_json::to_value(&plan.args).unwrap_or_default(), &mut options);
+    flatten("", &serde_json::to_value(plan.args.options_for(plan.method)).unwrap_or_default(), &mut options);
     keys.extend(options.into_iter().filter(|(k, _)| k != "time_budget_s").map(|(k, v)| (format!("option {k}"), v)));
     keys
 }
@@ -44,7 +44,7 @@ fn flatten(prefix: &str, value: &serde_json::Value, out: &mut Vec<(String, Strin
 pub fn job_fields(job: &RenderJob, scene: &Scene, plan: &Plan) -> Vec<JobField> {
     let hash = |s: &str| format!("{:016x}", crate::checkpoint::checksum(s.as_bytes()));
     let defines: Vec<String> = job.defines.iter().map(|(k, v)| format!("{k}={v}")).collect();
-    let options = serde_json::to_string(&plan.args).unwrap_or_default();
+    let options = serde_json::to_string(&plan.args.options_for(plan.method)).unwrap_or_default();
     let (w, h) = plan.resolution;
     vec![
         ("the scene's content (file and meshes)", format!("{:016x}", scene.hash)),

@@ -158,7 +158,7 @@ impl RenderJob {
             params::THREADS.check_flag("--threads", n as u64)?;
         }
         let mut args = self.args.clone();
-        args.pt.max_depth = args.pt.max_depth.or(Some(r.max_depth));
+        args.settings.max_depth = args.settings.max_depth.or(Some(r.max_depth));
         let time = self.time.or(if self.spp.is_some() { None } else { r.time });
         args.cf.time_budget_s = time; // the CF preprocess scales its photon count to the budget
         let spp = if time.is_some() { None } else { Some(self.spp.or(r.spp).unwrap_or(16)) };
@@ -408,7 +408,7 @@ fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) ->
     let (first_pass, total) = (run.resumed.first_pass, run.plan.spp.map(|s| s.max(run.resumed.first_pass)));
     let (w, h) = run.plan.resolution;
     let camera = run.world.scene.camera.with_resolution(w, h);
-    let (k, cap) = (run.plan.args.pt.split(), integrator.prefix_cap());
+    let (k, cap) = (run.plan.args.emission_split(), integrator.prefix_cap());
     let pixels = run.pool.install(|| PixelSampler::new(run.world, &camera, k, cap));
     let progress = Progress::new(run.job.progress && rank == 0, total.map(|t| t - first_pass), run.plan.time);
     let mut p = Passes {
@@ -554,7 +554,7 @@ impl Run<'_> {
             rays: t.rays,
             timings,
             method_stats,
-            options: self.plan.args.clone(),
+            options: self.plan.args.options_for(self.plan.method),
             per_rank: t.per_rank,
             warnings: self.world.scene.warnings.iter().chain(&p.warnings).cloned().collect(),
             preprocess_over_budget: p.preprocess_over_budget,

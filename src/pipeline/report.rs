@@ -2,7 +2,7 @@
 //! `RenderReport` written as `PREFIX.json` (every key a field; nothing is read back from text).
 
 use super::snapshots::SnapshotReport;
-use crate::integrators::{Method, MethodArgs};
+use crate::integrators::{Method, MethodOptions};
 use crate::render::film::Film;
 use serde::{Deserialize, Serialize};
 
@@ -100,8 +100,8 @@ pub struct RenderReport {
     pub bytes_broadcast: usize,
     /// The integrator's own figures.
     pub method_stats: serde_json::Value,
-    /// The method parameters in use.
-    pub options: MethodArgs,
+    /// The render settings and the method's own options in use.
+    pub options: MethodOptions,
     /// Every rank's figures (`None` if one could not be read).
     pub per_rank: Vec<Option<RankStats>>,
     /// Scene warnings, then the run's (the preprocess over the time budget, failed checkpoints).

@@ -37,8 +37,8 @@ use crate::transport::particle::MAX_VERTICES;
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// The most camera rays per pixel sample (`--emission-split`).
-pub const MAX_EMISSION_SPLIT: u32 = 64;
+/// The most camera rays per pixel sample (`--emission-split`), owned by the render settings.
+pub use crate::integrators::settings::MAX_EMISSION_SPLIT;
 
 /// What the probe found, for the JSON report.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]

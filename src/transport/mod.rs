@@ -8,6 +8,5 @@ pub mod context;
 pub mod dirac;
 pub mod direct;
 pub mod light_select;
-pub mod light_tree;
 pub mod particle;
 pub mod roulette;

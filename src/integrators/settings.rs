@@ -1,0 +1,37 @@
+//! The render settings every method reads: the path-vertex safety cap (`--max-depth`) and the
+//! pixel sampler's emission split (`--emission-split`, `render::pixel`). They are not a method's
+//! options: every method accepts them, and the JSON report records them for every method.
+//!
+//! Invariants: `max_depth` is `None` only before the pipeline resolves it against the scene's
+//! `render.max_depth` (direct callers get [`MAX_VERTICES`]); `1 <= emission_split <=
+//! MAX_EMISSION_SPLIT` (clap checks the flag; the pixel sampler clamps API values).
+
+use crate::transport::particle::MAX_VERTICES;
+
+/// The most camera rays per pixel sample (`--emission-split`; `render::pixel` clamps to it).
+pub const MAX_EMISSION_SPLIT: u32 = 64;
+
+/// Settings shared by every method (not a method's options).
+#[derive(clap::Args, Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct RenderSettings {
+    /// Safety cap on path vertices (default: the scene's `render.max_depth`, 64).
+    #[arg(long)]
+    pub max_depth: Option<u32>,
+    /// Camera rays per pixel sample in the pixels where a light source has an edge (found by a
+    /// probe): they average the emission seen directly or through mirrors and glass, one of them
+    /// carries the rest of the estimate (unbiased; 1 = off; default by measurement).
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=MAX_EMISSION_SPLIT as i64))]
+    pub emission_split: u32,
+}
+
+impl RenderSettings {
+    /// The cap in use (the pipeline resolves `None` to the scene's; direct callers get 64).
+    pub fn cap(&self) -> u32 {
+        self.max_depth.unwrap_or(MAX_VERTICES)
+    }
+
+    /// The limits of `crate::param_limits` (the scene's `render.max_depth` has the same).
+    pub fn validate(&self) -> Result<(), String> {
+        self.max_depth.map_or(Ok(()), |d| crate::param_limits::MAX_DEPTH.check_flag("--max-depth", d.into()))
+    }
+}
