@@ -11,7 +11,6 @@
 //!   `--checkpoint-every`); `--resume PREFIX` (or `PREFIX.ckpt`) continues both halves, adding
 //!   passes for the new budget. Under MPI both halves are collective renders; rank 0 writes.
 
-use crate::cli::RenderArgs;
 use crate::distributed::Cluster;
 use crate::image_io::with_ext;
 use crate::integrators::Method;
@@ -84,27 +83,26 @@ pub struct ReferenceReport {
     pub halves: [RenderReport; 2],
 }
 
-/// Renders the reference on every rank of `cluster`; returns rank 0's summary (also written to
-/// `PREFIX.json`).
+/// Renders the reference of `base` (the `reference` command's settings, as a render job: its
+/// method must be `pt` or unset) on every rank of `cluster`; returns rank 0's summary (also
+/// written to `PREFIX.json`).
 pub fn run_reference(
-    args: &RenderArgs,
-    opts: &crate::scene::LoadOptions,
+    base: &pipeline::RenderJob,
     cluster: &dyn Cluster,
     started: Instant,
 ) -> Result<Option<ReferenceReport>, String> {
-    if args.method.is_some_and(|m| m != Method::Pt) {
+    if base.method.is_some_and(|m| m != Method::Pt.into()) {
         return Err("reference: only `--method pt` (the unbiased reference) is supported".into());
     }
-    if args.method_args.pt.path_filter.is_some() {
+    if base.args.pt.path_filter.is_some() {
         return Err("reference: --path-filter is a `render` diagnostic (a reference is unbiased)".into());
     }
-    if !args.snapshots.is_empty() {
+    if !base.snapshots.is_empty() {
         return Err("reference: --snapshots is a `render` option (the reference is two half renders)".into());
     }
-    let base = pipeline::RenderJob { defines: opts.defines.clone(), ..args.job() };
     crate::atomic_io::check_output_prefix(&base.out)?;
-    let scene = crate::scene::load_with(&base.scene, opts).map_err(|e| e.to_string())?;
-    let plan = pipeline::RenderJob { method: Some(Method::Pt), ..base.clone() }.resolve(&scene)?;
+    let scene = crate::scene::load_with(&base.scene, &base.load_options()).map_err(|e| e.to_string())?;
+    let plan = pipeline::RenderJob { method: Some(Method::Pt.into()), ..base.clone() }.resolve(&scene)?;
     let (seed, time, spp) = (plan.seed, plan.time, plan.spp);
     let prefix = base.out.clone();
     let resume = base.resume.as_deref().map(resume_prefix);
@@ -120,7 +118,7 @@ pub fn run_reference(
             }
         }
         let job = pipeline::RenderJob {
-            method: Some(Method::Pt),
+            method: Some(Method::Pt.into()),
             spp: spp.map(|s| s.div_ceil(2)),
             time: time.map(|t| t * (k + 1) as f64 / 2.0),
             seed: Some(half_seed(seed, k)),

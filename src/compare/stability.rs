@@ -200,7 +200,7 @@ struct RunSpec<'a> {
 fn job(scene: &Path, run: RunSpec, cfg: &StabilityConfig, out: PathBuf) -> RenderJob {
     RenderJob {
         scene: scene.to_path_buf(),
-        method: Some(run.method),
+        method: Some(run.method.into()),
         args: run.args.clone(),
         spp: None,
         time: Some(run.time),

@@ -204,13 +204,15 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
     let camera = Camera::new(v3(c.position), v3(c.look_at), up, c.fov, c.resolution[0], c.resolution[1]);
 
     // render defaults
-    let mut render = RenderDefaults { method: "pt".into(), spp: None, time: None, seed: 0, max_depth: 64 };
+    let mut render =
+        RenderDefaults { method: super::AUTO_METHOD.into(), spp: None, time: None, seed: 0, max_depth: 64 };
     if let Some(r) = &doc.render {
         let rs = r.span();
         let r = r.get_ref();
         if let Some(m) = &r.method {
-            if !super::METHOD_NAMES.contains(&m.as_str()) {
+            if !super::is_method_name(m) {
                 let all = super::METHOD_NAMES.join(", ");
+                let all = format!("{}, {all}", super::AUTO_METHOD);
                 return Err(cx.err(rs, "render.method", format!("unknown method `{m}` ({all})")));
             }
             render.method = m.clone();

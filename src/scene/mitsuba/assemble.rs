@@ -35,8 +35,9 @@ pub(super) fn forecast_defaults(
         let num = |v: &str| v.trim().parse::<u64>().map_err(|_| bad(k, format!("`{v}` is not a non-negative integer")));
         match k.as_str() {
             "forecast_method" => {
-                if !crate::scene::METHOD_NAMES.contains(&v.as_str()) {
-                    return Err(bad(k, format!("unknown method `{v}` ({})", crate::scene::METHOD_NAMES.join(", "))));
+                if !crate::scene::is_method_name(v) {
+                    let all = crate::scene::METHOD_NAMES.join(", ");
+                    return Err(bad(k, format!("unknown method `{v}` ({}, {all})", crate::scene::AUTO_METHOD)));
                 }
                 render.method = v.clone();
             }

@@ -80,7 +80,8 @@ pub fn load_str(src: &str, file: &str, dir: &Path, defines: &[(String, String)])
     };
     let (root, _version, vars) = xml::parse(src, defines).map_err(|(l, m)| cx.err(l, "", m))?;
     let mut camera = None;
-    let mut render = RenderDefaults { method: "pt".into(), spp: None, time: None, seed: 0, max_depth: 64 };
+    let mut render =
+        RenderDefaults { method: crate::scene::AUTO_METHOD.into(), spp: None, time: None, seed: 0, max_depth: 64 };
     let mut shapes = Vec::new();
     let mut point_lights = Vec::new();
     for n in &root.children {
