@@ -11,7 +11,7 @@
 
 use crate::compare::stability::StabilityConfig;
 use crate::compare::CompareConfig;
-use crate::integrators::{Method, MethodArgs};
+use crate::integrators::{Method, MethodArgs, MethodChoice};
 use crate::pipeline::RenderJob;
 use clap::error::ErrorKind;
 use clap::parser::ValueSource;
@@ -117,9 +117,10 @@ pub enum Command {
 pub struct RenderArgs {
     /// Scene file (TOML, or Mitsuba XML by the `.xml` extension).
     pub scene: PathBuf,
-    /// Rendering method (default: the scene's `render.method`).
-    #[arg(long, value_enum)]
-    pub method: Option<Method>,
+    /// Rendering method; `auto` picks one from what the scene contains (default: the scene's
+    /// `render.method`, else `auto`).
+    #[arg(long, value_parser = crate::integrators::auto::value_parser())]
+    pub method: Option<MethodChoice>,
     /// Samples per pixel (one per pass).
     #[arg(long, conflicts_with = "time")]
     pub spp: Option<u64>,

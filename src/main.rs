@@ -72,7 +72,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
         }
         Command::ForecastMap(a) => Ok(forecast_map(&a, &opts)?),
         Command::Reference(a) => on_cluster(|c| {
-            if let Some(r) = compare::reference::run_reference(&a, &opts, c, started)? {
+            let job = pipeline::RenderJob { defines: opts.defines.clone(), ..a.job() };
+            if let Some(r) = compare::reference::run_reference(&job, c, started)? {
                 errln!("reference: {} spp -> {}.{{exr,json}} + .half0/.half1", r.spp, a.out.display());
             }
             Ok(())

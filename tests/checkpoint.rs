@@ -23,7 +23,19 @@ fn killed_render_resumes_to_the_uninterrupted_image() {
     let spp = "600";
     let full = d.join("full");
     let st = Command::new(bin())
-        .args(["render", scene().to_str().unwrap(), "--spp", spp, "--resolution", "48x48", "--seed", "3", "--quiet"])
+        .args([
+            "render",
+            scene().to_str().unwrap(),
+            "--method",
+            "pt",
+            "--spp",
+            spp,
+            "--resolution",
+            "48x48",
+            "--seed",
+            "3",
+            "--quiet",
+        ])
         .arg("--out")
         .arg(&full)
         .status()
@@ -34,7 +46,19 @@ fn killed_render_resumes_to_the_uninterrupted_image() {
     let part = d.join("part");
     let ckpt = PathBuf::from(format!("{}.ckpt", part.display()));
     let mut child = Command::new(bin())
-        .args(["render", scene().to_str().unwrap(), "--spp", spp, "--resolution", "48x48", "--seed", "3", "--quiet"])
+        .args([
+            "render",
+            scene().to_str().unwrap(),
+            "--method",
+            "pt",
+            "--spp",
+            spp,
+            "--resolution",
+            "48x48",
+            "--seed",
+            "3",
+            "--quiet",
+        ])
         .args(["--checkpoint-every", "50ms", "--threads", "1"])
         .arg("--out")
         .arg(&part)
@@ -60,7 +84,19 @@ fn killed_render_resumes_to_the_uninterrupted_image() {
     assert!(Path::new(&format!("{}.exr", part.display())).exists());
 
     let st = Command::new(bin())
-        .args(["render", scene().to_str().unwrap(), "--spp", spp, "--resolution", "48x48", "--seed", "3", "--quiet"])
+        .args([
+            "render",
+            scene().to_str().unwrap(),
+            "--method",
+            "pt",
+            "--spp",
+            spp,
+            "--resolution",
+            "48x48",
+            "--seed",
+            "3",
+            "--quiet",
+        ])
         .arg("--resume")
         .arg(&ckpt)
         .arg("--out")
@@ -79,7 +115,19 @@ fn resume_with_another_seed_is_refused() {
     let d = tmp_dir("seed");
     let out = d.join("a");
     let st = Command::new(bin())
-        .args(["render", scene().to_str().unwrap(), "--spp", "4", "--resolution", "16x16", "--seed", "1", "--quiet"])
+        .args([
+            "render",
+            scene().to_str().unwrap(),
+            "--method",
+            "pt",
+            "--spp",
+            "4",
+            "--resolution",
+            "16x16",
+            "--seed",
+            "1",
+            "--quiet",
+        ])
         .args(["--checkpoint-every", "1ms"])
         .arg("--out")
         .arg(&out)
@@ -87,7 +135,19 @@ fn resume_with_another_seed_is_refused() {
         .unwrap();
     assert!(st.success());
     let o = Command::new(bin())
-        .args(["render", scene().to_str().unwrap(), "--spp", "8", "--resolution", "16x16", "--seed", "2", "--quiet"])
+        .args([
+            "render",
+            scene().to_str().unwrap(),
+            "--method",
+            "pt",
+            "--spp",
+            "8",
+            "--resolution",
+            "16x16",
+            "--seed",
+            "2",
+            "--quiet",
+        ])
         .arg("--resume")
         .arg(format!("{}.ckpt", out.display()))
         .arg("--out")
@@ -103,7 +163,17 @@ fn render_json(name: &str, args: &[&str]) -> (std::process::Output, serde_json::
     let d = tmp_dir(name);
     let out = d.join("r");
     let o = Command::new(bin())
-        .args(["render", scene().to_str().unwrap(), "--resolution", "16x16", "--seed", "2", "--quiet"])
+        .args([
+            "render",
+            scene().to_str().unwrap(),
+            "--method",
+            "pt",
+            "--resolution",
+            "16x16",
+            "--seed",
+            "2",
+            "--quiet",
+        ])
         .args(args)
         .arg("--out")
         .arg(&out)

@@ -97,7 +97,8 @@ fn an_output_prefix_without_a_file_name_is_refused() {
     let d = tmp_dir("cli-out-dir");
     let prefix = format!("{}/", d.display());
     let t = Instant::now();
-    let (code, _, err) = run(&["render", &scene(), "--spp", "1", "--resolution", "8x8", "--out", &prefix, "--quiet"]);
+    let (code, _, err) =
+        run(&["render", &scene(), "--method", "pt", "--spp", "1", "--resolution", "8x8", "--out", &prefix, "--quiet"]);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("no file name"), "{err}");
     assert!(t.elapsed() < Duration::from_secs(20), "refused only after {:?}", t.elapsed());
@@ -117,7 +118,19 @@ fn bench_refuses_zero_repeats() {
 fn thread_counts_are_checked_up_front() {
     for n in ["0", "100000"] {
         let t = Instant::now();
-        let (code, _, err) = run(&["render", &scene(), "--spp", "1", "--resolution", "8x8", "--threads", n, "--quiet"]);
+        let (code, _, err) = run(&[
+            "render",
+            &scene(),
+            "--method",
+            "pt",
+            "--spp",
+            "1",
+            "--resolution",
+            "8x8",
+            "--threads",
+            n,
+            "--quiet",
+        ]);
         assert_eq!(code, 1, "--threads {n}: {err}");
         assert!(err.contains("--threads") && err.contains("4096"), "{err}");
         assert!(t.elapsed() < Duration::from_secs(10), "--threads {n} refused only after {:?}", t.elapsed());
@@ -138,7 +151,7 @@ fn stability_only_with_an_unknown_case_lists_the_cases() {
 fn usage_errors_exit_2_and_other_errors_exit_1() {
     let (code, _, err) = run(&["render"]);
     assert_eq!(code, 2, "missing SCENE: {err}");
-    let (code, _, err) = run(&["render", &scene(), "--spp", "many"]);
+    let (code, _, err) = run(&["render", &scene(), "--method", "pt", "--spp", "many"]);
     assert_eq!(code, 2, "malformed value: {err}");
     let (code, _, err) = run(&["no-such-command"]);
     assert_eq!(code, 2, "{err}");
@@ -263,11 +276,13 @@ fn the_scene_format_refuses_the_same_values_with_the_same_words() {
 fn spp_zero_leaves_an_existing_set_untouched() {
     let d = tmp_dir("cli-spp0");
     let prefix = d.join("keep").display().to_string();
-    let (code, _, err) = run(&["render", &scene(), "--spp", "2", "--resolution", "8x8", "--quiet", "--out", &prefix]);
+    let (code, _, err) =
+        run(&["render", &scene(), "--method", "pt", "--spp", "2", "--resolution", "8x8", "--quiet", "--out", &prefix]);
     assert_eq!(code, 0, "{err}");
     let read = |ext: &str| std::fs::read(format!("{prefix}.{ext}")).unwrap();
     let before: Vec<Vec<u8>> = ["exr", "png", "json"].iter().map(|e| read(e)).collect();
-    let (code, _, err) = run(&["render", &scene(), "--spp", "0", "--resolution", "8x8", "--quiet", "--out", &prefix]);
+    let (code, _, err) =
+        run(&["render", &scene(), "--method", "pt", "--spp", "0", "--resolution", "8x8", "--quiet", "--out", &prefix]);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("--spp 0"), "{err}");
     let after: Vec<Vec<u8>> = ["exr", "png", "json"].iter().map(|e| read(e)).collect();

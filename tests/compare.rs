@@ -150,8 +150,7 @@ fn reference_halves_and_compare_end_to_end() {
     ]) else {
         panic!("not a reference command")
     };
-    let rep =
-        compare::reference::run_reference(&ra, &Default::default(), &Local::new(), Instant::now()).unwrap().unwrap();
+    let rep = compare::reference::run_reference(&ra.job(), &Local::new(), Instant::now()).unwrap().unwrap();
     assert_eq!(rep.spp, 64);
     let read = |s: &str| image_io::read_exr(&d.join(s)).unwrap();
     let (mean, h0, h1) = (read("ref.exr"), read("ref.half0.exr"), read("ref.half1.exr"));

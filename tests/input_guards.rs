@@ -74,9 +74,23 @@ fn fifo_and_device_inputs_are_refused_at_once() {
     let cases: [Vec<String>; 4] = [
         vec!["diff".into(), s(&img), s(&fifo)],
         vec!["diff".into(), s(&img), "/dev/zero".into()],
-        ["render", &scene(), "--spp", "1", "--resolution", "8x8", "--quiet", "--out", &out, "--resume", "/dev/zero"]
-            .map(String::from)
-            .to_vec(),
+        [
+            "render",
+            &scene(),
+            "--method",
+            "pt",
+            "--spp",
+            "1",
+            "--resolution",
+            "8x8",
+            "--quiet",
+            "--out",
+            &out,
+            "--resume",
+            "/dev/zero",
+        ]
+        .map(String::from)
+        .to_vec(),
         ["compare", &scene(), "--methods", "pt", "--budgets", "1s", "--seeds", "1", "--out", &out, "--reference"]
             .iter()
             .map(|a| a.to_string())
@@ -102,7 +116,8 @@ fn outputs_never_overwrite_inputs_or_each_other() {
     let before = std::fs::read(&victim).unwrap();
     let prefix = s(&d.join("r"));
     let render = |ckpt: &str| {
-        let a = ["render", &s(&victim), "--spp", "2", "--resolution", "8x8", "--quiet", "--out", &prefix];
+        let a =
+            ["render", &s(&victim), "--method", "pt", "--spp", "2", "--resolution", "8x8", "--quiet", "--out", &prefix];
         let mut args: Vec<&str> = a.to_vec();
         args.extend(["--checkpoint-every", "1ms", "--checkpoint-path", ckpt]);
         run(&args)

@@ -76,6 +76,8 @@ fn time_box_ends_within_budget_plus_one_pass() {
         &[
             "render",
             &scene(),
+            "--method",
+            "pt",
             "--time",
             "5s",
             "--resolution",
@@ -109,7 +111,8 @@ fn checkpoint_and_resume_across_ranks() {
     let ckpt = format!("{}.ckpt", part.display());
     // the same 12-pass render, with `extra` options, written to `out`
     let render12 = |extra: &[&str], out: &Path| {
-        let common = ["render", &scene(), "--spp", "12", "--resolution", "32x32", "--seed", "5", "--quiet"];
+        let common =
+            ["render", &scene(), "--method", "pt", "--spp", "12", "--resolution", "32x32", "--seed", "5", "--quiet"];
         mpirun(2, &[&common[..], extra, &["--out", out.to_str().unwrap()][..]].concat());
     };
     render12(&[], &full);
@@ -138,7 +141,19 @@ fn an_error_on_rank_0_ends_every_rank_and_is_printed_once() {
         .args(["-n", "2"])
         .env("RAYON_NUM_THREADS", "1")
         .arg(bin())
-        .args(["render", &scene(), "--time", "4s", "--checkpoint-every", "1s", "--resolution", "32x32", "--quiet"])
+        .args([
+            "render",
+            &scene(),
+            "--method",
+            "pt",
+            "--time",
+            "4s",
+            "--checkpoint-every",
+            "1s",
+            "--resolution",
+            "32x32",
+            "--quiet",
+        ])
         .arg("--out")
         .arg(&out)
         .stdout(std::process::Stdio::null())
@@ -178,7 +193,19 @@ fn a_failed_checkpoint_under_two_ranks_warns_and_completes() {
     let out = d.join("ok");
     // 256 passes = 128 agreed rounds: far longer than the 1-ms interval on any machine (8 passes
     // once finished inside 1 ms, leaving only the final checkpoint to fail)
-    let args = ["render", &scene(), "--spp", "256", "--resolution", "16x16", "--quiet", "--checkpoint-every", "1ms"];
+    let args = [
+        "render",
+        &scene(),
+        "--method",
+        "pt",
+        "--spp",
+        "256",
+        "--resolution",
+        "16x16",
+        "--quiet",
+        "--checkpoint-every",
+        "1ms",
+    ];
     let o = mpirun(
         2,
         &[&args[..], &["--checkpoint-path", ckpt.to_str().unwrap(), "--out", out.to_str().unwrap()]].concat(),
@@ -231,7 +258,8 @@ fn pt_cf_two_ranks_equal_one_process() {
 fn snapshots_under_two_ranks_leave_the_image_unchanged() {
     let d = tmp_dir("snapshots");
     let (plain, snapped) = (d.join("plain"), d.join("snapped"));
-    let common = ["render", &scene(), "--spp", "40", "--resolution", "32x32", "--seed", "3", "--quiet"];
+    let common =
+        ["render", &scene(), "--method", "pt", "--spp", "40", "--resolution", "32x32", "--seed", "3", "--quiet"];
     mpirun(2, &[&common[..], &["--out", plain.to_str().unwrap()][..]].concat());
     // 1ms is due at the first round boundary (loading alone takes longer); 1h never comes
     let snaps = ["--snapshots", "1ms,1h", "--out", snapped.to_str().unwrap()];

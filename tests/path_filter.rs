@@ -145,7 +145,7 @@ fn filtered_images_never_mix_with_unbiased_ones() {
     let (code, err) =
         cmd(&["reference", "scenes/cornell-box.toml", "--time", "1s", "--path-filter", "DSL", "--out", &out("ref")]);
     assert!(code == Some(1) && err.contains("reference: --path-filter"), "{err}");
-    let base = ["render", "scenes/cornell-box.toml", "--resolution", "8x8", "--seed", "1", "--quiet"];
+    let base = ["render", "scenes/cornell-box.toml", "--method", "pt", "--resolution", "8x8", "--seed", "1", "--quiet"];
     let (code, err) = cmd(&[&base[..], &["--spp", "4", "--checkpoint-every", "1ms", "--out", &out("a")]].concat());
     assert_eq!(code, Some(0), "{err}");
     let ckpt = out("a") + ".ckpt";

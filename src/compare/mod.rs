@@ -246,7 +246,7 @@ impl Ctx<'_> {
     /// The job of one render: `method` with `seed` under a `budget`, snapshots at `snapshots`.
     fn job(&self, method: Method, budget: f64, seed: u64, prefix: PathBuf, snapshots: Vec<f64>) -> RenderJob {
         RenderJob {
-            method: Some(method),
+            method: Some(method.into()),
             time: Some(budget),
             spp: None,
             seed: Some(seed),

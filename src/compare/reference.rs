@@ -11,7 +11,6 @@
 //!   `--checkpoint-every`); `--resume PREFIX` (or `PREFIX.ckpt`) continues both halves, adding
 //!   passes for the new budget. Under MPI both halves are collective renders; rank 0 writes.
 
-use crate::cli::RenderArgs;
 use crate::distributed::Cluster;
 use crate::image_io::with_ext;
 use crate::integrators::Method;
@@ -101,29 +100,27 @@ pub struct ReferenceReport {
     pub halves: [RenderReport; 2],
 }
 
-/// Renders the reference on every rank of `cluster`; returns rank 0's summary (also written to
-/// `PREFIX.json`).
+/// Renders the reference of `base` (the `reference` command's settings, as a render job: its
+/// method must be `pt` or unset) on every rank of `cluster`; returns rank 0's summary (also
+/// written to `PREFIX.json`).
 pub fn run_reference(
-    args: &RenderArgs,
-    opts: &crate::scene::LoadOptions,
+    base: &pipeline::RenderJob,
     cluster: &dyn Cluster,
     started: Instant,
 ) -> Result<Option<ReferenceReport>, String> {
-    if args.method.is_some_and(|m| m != Method::Pt) {
+    if base.method.is_some_and(|m| m != Method::Pt.into()) {
         return Err("reference: only `--method pt` (the unbiased reference) is supported".into());
     }
-    if args.method_args.pt.path_filter.is_some() {
+    if base.args.pt.path_filter.is_some() {
         return Err("reference: --path-filter is a `render` diagnostic (a reference is unbiased)".into());
     }
-    if !args.snapshots.is_empty() {
+    if !base.snapshots.is_empty() {
         return Err("reference: --snapshots is a `render` option (the reference is two half renders)".into());
     }
-    let base = pipeline::RenderJob { defines: opts.defines.clone(), ..args.job() };
     crate::atomic_io::check_output_prefix(&base.out)?;
-    let scene = crate::scene::load_with(&base.scene, opts).map_err(|e| e.to_string())?;
-    reference_guard(&base, &scene).check()?; // each half's render checks its own resume too
-    let plan = pipeline::RenderJob { method: Some(Method::Pt), ..base.clone() }.resolve(&scene)?;
-    let (seed, time, spp) = (plan.seed, plan.time, plan.spp);
+    let scene = crate::scene::load_with(&base.scene, &base.load_options()).map_err(|e| e.to_string())?;
+    reference_guard(base, &scene).check()?; // each half's render checks its own resume too
+    let plan = pipeline::RenderJob { method: Some(Method::Pt.into()), ..base.clone() }.resolve(&scene)?;
     let prefix = base.out.clone();
     let resume = base.resume.as_deref().map(resume_prefix);
     if let Some(dir) = prefix.parent().filter(|d| !d.as_os_str().is_empty() && cluster.rank() == 0) {
@@ -131,35 +128,61 @@ pub fn run_reference(
     }
     let mut results = Vec::new();
     for k in 0..2u64 {
-        let resume_k = resume.as_ref().map(|r| with_ext(&half_prefix(r, k), "ckpt"));
-        if let Some(r) = &resume_k {
-            if cluster.rank() == 0 && !r.exists() {
-                return Err(format!("{}: cannot resume the reference: half checkpoint missing", r.display()));
-            }
-        }
-        let job = pipeline::RenderJob {
-            method: Some(Method::Pt),
-            spp: spp.map(|s| s.div_ceil(2)),
-            time: time.map(|t| t * (k + 1) as f64 / 2.0),
-            seed: Some(half_seed(seed, k)),
-            out: half_prefix(&prefix, k),
-            checkpoint_every: Some(base.checkpoint_every.unwrap_or(f64::INFINITY)),
-            resume: resume_k,
-            checkpoint_path: None,
-            ..base.clone()
-        };
+        let job = half_job(base, &plan, k, resume.as_deref(), cluster.rank())?;
         results.push(pipeline::render(&job, cluster, started)?);
     }
     let (Some(h1), Some(h0)) = (results.pop().flatten(), results.pop().flatten()) else { return Ok(None) };
+    write_mean(&prefix, h0, h1, &plan, started).map(Some)
+}
+
+/// The render job of half `k`: `pt` with the half's seed, half the passes (or the first or
+/// whole time budget), always checkpointed; resuming from `resume`'s half checkpoint, which
+/// must exist (checked on rank 0).
+fn half_job(
+    base: &pipeline::RenderJob,
+    plan: &pipeline::Plan,
+    k: u64,
+    resume: Option<&Path>,
+    rank: usize,
+) -> Result<pipeline::RenderJob, String> {
+    let resume_k = resume.map(|r| with_ext(&half_prefix(r, k), "ckpt"));
+    if let Some(r) = &resume_k {
+        if rank == 0 && !r.exists() {
+            return Err(format!("{}: cannot resume the reference: half checkpoint missing", r.display()));
+        }
+    }
+    Ok(pipeline::RenderJob {
+        method: Some(Method::Pt.into()),
+        spp: plan.spp.map(|s| s.div_ceil(2)),
+        time: plan.time.map(|t| t * (k + 1) as f64 / 2.0),
+        seed: Some(half_seed(plan.seed, k)),
+        out: half_prefix(&base.out, k),
+        checkpoint_every: Some(base.checkpoint_every.unwrap_or(f64::INFINITY)),
+        resume: resume_k,
+        checkpoint_path: None,
+        ..base.clone()
+    })
+}
+
+/// Rank 0: the pooled mean of the two halves (`PREFIX.exr`, `.png`) and the summary
+/// (`PREFIX.json`), written as one set.
+fn write_mean(
+    prefix: &Path,
+    h0: pipeline::RenderResult,
+    h1: pipeline::RenderResult,
+    plan: &pipeline::Plan,
+    started: Instant,
+) -> Result<ReferenceReport, String> {
+    let (seed, time) = (plan.seed, plan.time);
     let mut film = h0.film.clone();
     if film.data.len() != h1.film.data.len() {
         return Err(format!("{}: the two halves have different sizes", prefix.display()));
     }
     film.merge(&h1.film);
     let mut outputs = crate::atomic_io::FileSet::new(); // mean EXR, PNG and JSON as one set
-    let mean = pipeline::image_files(&prefix, &film, &mut outputs)?;
+    let mean = pipeline::image_files(prefix, &film, &mut outputs)?;
     let nonfinite_pixels = mean.pixels.iter().filter(|p| p.iter().any(|v| !v.is_finite())).count();
-    let half = |k: u64, ext: &str| with_ext(&half_prefix(&prefix, k), ext);
+    let half = |k: u64, ext: &str| with_ext(&half_prefix(prefix, k), ext);
     let report = ReferenceReport {
         kind: "reference",
         method: Method::Pt,
@@ -171,7 +194,7 @@ pub fn run_reference(
         time_budget_s: time,
         total_s: started.elapsed().as_secs_f64(),
         files: ReferenceFiles {
-            mean: with_ext(&prefix, "exr"),
+            mean: with_ext(prefix, "exr"),
             half0: half(0, "exr"),
             half1: half(1, "exr"),
             checkpoints: [half(0, "ckpt"), half(1, "ckpt")],
@@ -183,7 +206,7 @@ pub fn run_reference(
         halves: [h0.report, h1.report],
     };
     let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
-    outputs.add(with_ext(&prefix, "json"), text.into_bytes());
+    outputs.add(with_ext(prefix, "json"), text.into_bytes());
     outputs.commit()?;
-    Ok(Some(report))
+    Ok(report)
 }

@@ -189,6 +189,24 @@ fn series(o: &CompareOutcome, region: &str, xf: fn(&RunRecord) -> f64) -> Vec<Se
         .collect()
 }
 
+/// A table: its header and rows.
+type Table = (Vec<String>, Vec<Vec<String>>);
+/// A chart drawn: region, kind (`time` or `spp`), path without extension.
+type ChartEntry = (String, &'static str, String);
+/// A region's crops: region, then (PNG path, label) per image.
+type CropRow = (String, Vec<(String, String)>);
+
+/// What `report.md` and `report.html` show, built once for both.
+struct Sections {
+    header: String,
+    single: Option<String>,
+    charts: Vec<ChartEntry>,
+    crops: Vec<CropRow>,
+    summary: Table,
+    runs: Table,
+    notes: Vec<String>,
+}
+
 /// Writes every artifact of the comparison into `dir`.
 pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -> Result<(), String> {
     for sub in ["charts", "crops"] {
@@ -199,8 +217,28 @@ pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -
     atomic_write(&dir.join("results.json"), json.as_bytes())?;
     let (methods, budgets) = axes(o);
     let mut notes = Vec::new();
+    let charts = write_charts(dir, o, &mut notes);
+    let top = budgets.last().copied();
+    let mut crops = Vec::new();
+    for reg in &o.regions {
+        crops.push(write_crops(dir, o, reg, reference, &methods, top, &mut notes)?);
+    }
+    let sections = Sections {
+        header: report_header(o),
+        single: single_run_line(o, &budgets),
+        charts,
+        crops,
+        summary: summary_table(o, &methods, &budgets),
+        runs: runs_table(o),
+        notes,
+    };
+    atomic_write(&dir.join("report.md"), report_md(o, &sections).as_bytes())?;
+    atomic_write(&dir.join("report.html"), html_page("Time-boxed comparison", &report_html(o, &sections)).as_bytes())
+}
 
-    // Charts.
+/// The relMSE charts (against wall time and against spp) of every region; a chart that cannot
+/// be drawn becomes a note.
+fn write_charts(dir: &Path, o: &CompareOutcome, notes: &mut Vec<String>) -> Vec<ChartEntry> {
     let mut charts = Vec::new();
     for reg in &o.regions {
         let rn = safe_name(&reg.name);
@@ -226,57 +264,61 @@ pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -
             }
         }
     }
+    charts
+}
 
-    // Crops of the largest budget, first seed.
-    let top = budgets.last().copied();
-    let mut crops: Vec<(String, Vec<(String, String)>)> = Vec::new();
-    for reg in &o.regions {
-        let rn = safe_name(&reg.name);
-        let cut = |img: &Image| -> Result<Image, String> {
-            let c = match reg.rect {
-                Some((x, y, w, h)) => img.crop(x, y, w, h)?,
-                None => img.clone(),
-            };
-            Ok(upscale(&c, CROP_MIN_HEIGHT.div_ceil(c.height.max(1))))
+/// The crops of one region at the largest budget `top`, first seed: the reference, then each
+/// method, each upscaled; and their side-by-side strip. A run whose image cannot be read becomes
+/// a note.
+fn write_crops(
+    dir: &Path,
+    o: &CompareOutcome,
+    reg: &super::Region,
+    reference: &Image,
+    methods: &[String],
+    top: Option<f64>,
+    notes: &mut Vec<String>,
+) -> Result<CropRow, String> {
+    let rn = safe_name(&reg.name);
+    let cut = |img: &Image| -> Result<Image, String> {
+        let c = match reg.rect {
+            Some((x, y, w, h)) => img.crop(x, y, w, h)?,
+            None => img.clone(),
         };
-        let mut row = Vec::new();
-        let mut imgs = Vec::new();
-        let rc = cut(reference)?;
-        let p = format!("crops/{rn}-reference.png");
-        image_io::write_png_srgb(&dir.join(&p), &rc, CROP_EXPOSURE)?;
-        row.push((p, "reference".to_string()));
-        imgs.push(rc);
-        for m in &methods {
-            let Some(run) = top.and_then(|b| ok_runs(&o.runs, m, b).min_by_key(|r| r.seed_index)) else { continue };
-            let exr = crate::image_io::with_ext(&run.prefix, "exr");
-            let c = match image_io::read_exr(&exr).and_then(|i| cut(&i)) {
-                Ok(c) => c,
-                Err(e) => {
-                    notes.push(format!("crop not made: {}: {e}", exr.display()));
-                    continue;
-                }
-            };
-            let p = format!("crops/{rn}-{}.png", safe_name(m));
-            image_io::write_png_srgb(&dir.join(&p), &c, CROP_EXPOSURE)?;
-            let rel = region_rel(run, &reg.name).map_or("–".into(), fmt_e);
-            row.push((
-                p,
-                format!(
-                    "{m} · {} budget · {:.1} s · {} spp · relMSE {rel}",
-                    budget_label(run.budget_s),
-                    run.wall_s,
-                    run.spp
-                ),
-            ));
-            imgs.push(c);
-        }
-        if let Some(strip) = hstack(&imgs, 4) {
-            image_io::write_png_srgb(&dir.join(format!("strip-{rn}.png")), &strip, CROP_EXPOSURE)?;
-        }
-        crops.push((reg.name.clone(), row));
+        Ok(upscale(&c, CROP_MIN_HEIGHT.div_ceil(c.height.max(1))))
+    };
+    let mut row = Vec::new();
+    let mut imgs = Vec::new();
+    let rc = cut(reference)?;
+    let p = format!("crops/{rn}-reference.png");
+    image_io::write_png_srgb(&dir.join(&p), &rc, CROP_EXPOSURE)?;
+    row.push((p, "reference".to_string()));
+    imgs.push(rc);
+    for m in methods {
+        let Some(run) = top.and_then(|b| ok_runs(&o.runs, m, b).min_by_key(|r| r.seed_index)) else { continue };
+        let exr = crate::image_io::with_ext(&run.prefix, "exr");
+        let c = match image_io::read_exr(&exr).and_then(|i| cut(&i)) {
+            Ok(c) => c,
+            Err(e) => {
+                notes.push(format!("crop not made: {}: {e}", exr.display()));
+                continue;
+            }
+        };
+        let p = format!("crops/{rn}-{}.png", safe_name(m));
+        image_io::write_png_srgb(&dir.join(&p), &c, CROP_EXPOSURE)?;
+        let rel = region_rel(run, &reg.name).map_or("–".into(), fmt_e);
+        let (budget, wall, spp) = (budget_label(run.budget_s), run.wall_s, run.spp);
+        row.push((p, format!("{m} · {budget} budget · {wall:.1} s · {spp} spp · relMSE {rel}")));
+        imgs.push(c);
     }
+    if let Some(strip) = hstack(&imgs, 4) {
+        image_io::write_png_srgb(&dir.join(format!("strip-{rn}.png")), &strip, CROP_EXPOSURE)?;
+    }
+    Ok((reg.name.clone(), row))
+}
 
-    // Tables.
+/// The summary table: one row per (method, budget), means and ranges over seeds.
+fn summary_table(o: &CompareOutcome, methods: &[String], budgets: &[f64]) -> Table {
     let mut sum_h: Vec<String> =
         ["method", "budget", "runs measured", "mean spp", "mean wall s", "preprocess share"].map(String::from).to_vec();
     for reg in &o.regions {
@@ -284,21 +326,17 @@ pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -
         sum_h.push(format!("relMSE {} (min–max)", reg.name));
     }
     let mut sum_rows = Vec::new();
-    for m in &methods {
-        for &b in &budgets {
+    for m in methods {
+        for &b in budgets {
             let runs: Vec<&RunRecord> = ok_runs(&o.runs, m, b).collect();
             let all: Vec<&RunRecord> = o.runs.iter().filter(|r| &r.method == m && r.budget_s == b).collect();
             let zero = all.iter().filter(|r| r.error.is_none() && r.spp == 0).count();
             let a = |f: fn(&RunRecord) -> f64| aggregate(runs.iter().map(|r| f(r))).map_or(f64::NAN, |a| a.mean);
+            let zeros = if zero > 0 { format!(" ({zero} with 0 spp)") } else { String::new() };
             let mut row = vec![
                 m.clone(),
                 budget_label(b),
-                format!(
-                    "{}/{}{}",
-                    runs.len(),
-                    all.len(),
-                    if zero > 0 { format!(" ({zero} with 0 spp)") } else { String::new() }
-                ),
+                format!("{}/{}{zeros}", runs.len(), all.len()),
                 fmt_f(a(|r| r.spp as f64), 1),
                 fmt_f(a(|r| r.wall_s), 2),
                 fmt_f(a(|r| r.preprocess_share), 3),
@@ -312,6 +350,11 @@ pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -
             sum_rows.push(row);
         }
     }
+    (sum_h, sum_rows)
+}
+
+/// The table of every run with its status and per-region RMSE and relMSE.
+fn runs_table(o: &CompareOutcome) -> Table {
     let mut run_h: Vec<String> =
         ["method", "budget", "seed", "status", "spp", "wall s", "preprocess s", "preprocess share", "non-finite"]
             .map(String::from)
@@ -320,35 +363,39 @@ pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -
         run_h.push(format!("RMSE {}", reg.name));
         run_h.push(format!("relMSE {}", reg.name));
     }
-    let run_rows: Vec<Vec<String>> = o
-        .runs
-        .iter()
-        .map(|r| {
-            let mut row = vec![
-                r.method.clone(),
-                budget_label(r.budget_s),
-                r.seed.to_string(),
-                match &r.error {
-                    Some(e) => format!("FAILED: {e}"),
-                    None if r.spp == 0 => "0 spp: no pass fit in the budget (left out of means and charts)".into(),
-                    None if r.from_snapshot => "ok (snapshot)".into(),
-                    None => "ok".into(),
-                },
-                r.spp.to_string(),
-                format!("{:.3}", r.wall_s),
-                format!("{:.3}", r.preprocess_s),
-                format!("{:.3}", r.preprocess_share),
-                r.nonfinite_samples.to_string(),
-            ];
-            for reg in &o.regions {
-                match r.regions.iter().find(|e| e.region == reg.name) {
-                    Some(e) => row.extend([fmt_e(e.rmse), fmt_e(e.rel_mse)]),
-                    None => row.extend(["–".into(), "–".into()]),
-                }
-            }
-            row
-        })
-        .collect();
+    let run_rows = o.runs.iter().map(|r| run_row(o, r)).collect();
+    (run_h, run_rows)
+}
+
+/// One row of [`runs_table`].
+fn run_row(o: &CompareOutcome, r: &RunRecord) -> Vec<String> {
+    let mut row = vec![
+        r.method.clone(),
+        budget_label(r.budget_s),
+        r.seed.to_string(),
+        match &r.error {
+            Some(e) => format!("FAILED: {e}"),
+            None if r.spp == 0 => "0 spp: no pass fit in the budget (left out of means and charts)".into(),
+            None if r.from_snapshot => "ok (snapshot)".into(),
+            None => "ok".into(),
+        },
+        r.spp.to_string(),
+        format!("{:.3}", r.wall_s),
+        format!("{:.3}", r.preprocess_s),
+        format!("{:.3}", r.preprocess_share),
+        r.nonfinite_samples.to_string(),
+    ];
+    for reg in &o.regions {
+        match r.regions.iter().find(|e| e.region == reg.name) {
+            Some(e) => row.extend([fmt_e(e.rmse), fmt_e(e.rel_mse)]),
+            None => row.extend(["–".into(), "–".into()]),
+        }
+    }
+    row
+}
+
+/// The line under the title: scene, reference, size, regions and the metric.
+fn report_header(o: &CompareOutcome) -> String {
     let reg_desc: Vec<String> = o
         .regions
         .iter()
@@ -357,7 +404,7 @@ pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -
             None => format!("{} = whole image", r.name),
         })
         .collect();
-    let header = format!(
+    format!(
         "Scene `{}`, reference `{}`, {}x{} pixels. Regions (x,y,w,h at this resolution): {}. \
          relMSE = mean of (I−R)²/(R²+0.01); budgets include scene loading and preprocess.",
         o.scene,
@@ -365,9 +412,12 @@ pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -
         o.resolution.0,
         o.resolution.1,
         reg_desc.join("; ")
-    );
+    )
+}
 
-    let single = o.single_run.then(|| {
+/// With `--single-run`, the note that the smaller budgets are snapshots of one run.
+fn single_run_line(o: &CompareOutcome, budgets: &[f64]) -> Option<String> {
+    o.single_run.then(|| {
         format!(
             "Single run (--single-run): each (method, seed) was rendered once, at the largest budget ({}); \
              the rows of smaller budgets were measured from snapshots of that run (`render --snapshots`), \
@@ -375,41 +425,46 @@ pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -
              boundary the snapshot was taken at.",
             budgets.last().map_or_else(|| "–".into(), |&b| budget_label(b))
         )
-    });
+    })
+}
 
-    // report.md
-    let mut md = format!("# Time-boxed comparison\n\n{header}\n\n");
-    if let Some(line) = &single {
+/// `report.md`.
+fn report_md(o: &CompareOutcome, s: &Sections) -> String {
+    let mut md = format!("# Time-boxed comparison\n\n{}\n\n", s.header);
+    if let Some(line) = &s.single {
         let _ = writeln!(md, "**{line}**\n");
     }
     for w in &o.warnings {
         let _ = writeln!(md, "> **warning:** {w}\n");
     }
-    let _ = write!(md, "## Summary (over seeds)\n\n{}\n## Charts\n\n", table_md(&sum_h, &sum_rows));
-    for (reg, kind, base) in &charts {
+    let _ = write!(md, "## Summary (over seeds)\n\n{}\n## Charts\n\n", table_md(&s.summary.0, &s.summary.1));
+    for (reg, kind, base) in &s.charts {
         let _ = writeln!(md, "![relMSE vs {kind}, {reg}]({base}.svg)\n");
     }
     md.push_str("## Crops (largest budget, first seed)\n\n");
-    for (reg, row) in &crops {
+    for (reg, row) in &s.crops {
         let _ = writeln!(md, "### {reg}\n\n![strip {reg}](strip-{}.png)\n", safe_name(reg));
         let _ = writeln!(md, "Left to right: {}\n", row.iter().map(|(_, l)| l.as_str()).collect::<Vec<_>>().join("; "));
     }
-    let _ = write!(md, "## All runs\n\n{}\n", table_md(&run_h, &run_rows));
-    for n in &notes {
+    let _ = write!(md, "## All runs\n\n{}\n", table_md(&s.runs.0, &s.runs.1));
+    for n in &s.notes {
         let _ = writeln!(md, "- note: {n}");
     }
-    atomic_write(&dir.join("report.md"), md.as_bytes())?;
+    md
+}
 
-    // report.html
-    let mut body = format!("<p>{}</p>\n", esc(&header));
-    if let Some(line) = &single {
+/// The body of `report.html`.
+fn report_html(o: &CompareOutcome, s: &Sections) -> String {
+    let mut body = format!("<p>{}</p>\n", esc(&s.header));
+    if let Some(line) = &s.single {
         let _ = writeln!(body, "<p><b>{}</b></p>", esc(line));
     }
     for w in &o.warnings {
         let _ = writeln!(body, "<p class=\"bad\"><b>warning:</b> {}</p>", esc(w));
     }
-    let _ = write!(body, "<h2>Summary (over seeds)</h2>\n{}<h2>Charts</h2>\n<div>", table_html(&sum_h, &sum_rows));
-    for (reg, kind, base) in &charts {
+    let summary = table_html(&s.summary.0, &s.summary.1);
+    let _ = write!(body, "<h2>Summary (over seeds)</h2>\n{summary}<h2>Charts</h2>\n<div>");
+    for (reg, kind, base) in &s.charts {
         let _ = write!(
             body,
             "<a href=\"{base}.svg\"><img class=\"chart\" src=\"{base}.png\" alt=\"relMSE vs {kind}, {}\"></a>",
@@ -417,7 +472,7 @@ pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -
         );
     }
     body.push_str("</div>\n<h2>Crops (largest budget, first seed)</h2>\n");
-    for (reg, row) in &crops {
+    for (reg, row) in &s.crops {
         let _ = write!(body, "<h3>{}</h3>\n<div>", esc(reg));
         for (p, label) in row {
             let _ = write!(
@@ -428,9 +483,9 @@ pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -
         }
         body.push_str("</div>\n");
     }
-    let _ = write!(body, "<h2>All runs</h2>\n{}", table_html(&run_h, &run_rows));
-    for n in &notes {
+    let _ = write!(body, "<h2>All runs</h2>\n{}", table_html(&s.runs.0, &s.runs.1));
+    for n in &s.notes {
         let _ = writeln!(body, "<p class=\"bad\">note: {}</p>", esc(n));
     }
-    atomic_write(&dir.join("report.html"), html_page("Time-boxed comparison", &body).as_bytes())
+    body
 }

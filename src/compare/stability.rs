@@ -200,7 +200,7 @@ struct RunSpec<'a> {
 fn job(scene: &Path, run: RunSpec, cfg: &StabilityConfig, out: PathBuf) -> RenderJob {
     RenderJob {
         scene: scene.to_path_buf(),
-        method: Some(run.method),
+        method: Some(run.method.into()),
         args: run.args.clone(),
         spp: None,
         time: Some(run.time),
@@ -234,88 +234,17 @@ pub fn run_suite(cfg: &StabilityConfig) -> Result<Vec<StabilityRecord>, String> 
     for case in CASES.iter().filter(|c| cfg.only.is_empty() || cfg.only.iter().any(|o| o == c.name)) {
         let scene_path = cfg.scenes.join(case.file);
         if !refs.iter().any(|(f, _)| f == case.file) {
-            let prefix = cfg.out.join("refs").join(case.file.trim_end_matches(".toml"));
-            let spec = RunSpec { method: Method::Pt, args: &base, time: cfg.reference_time, seed: 0x05EE_D4EF };
-            let j = job(&scene_path, spec, cfg, prefix);
-            let img = match guarded_render(&j) {
-                Ok(r) => Some(pipeline::image_from_film(&r.film)),
-                Err((e, _)) => {
-                    crate::errln!("stability: reference of {} failed: {e}", case.file);
-                    None
-                }
-            };
-            refs.push((case.file.to_string(), img));
+            refs.push((case.file.to_string(), case_reference(case, &scene_path, &base, cfg)));
         }
         let reference = refs.iter().find(|(f, _)| f == case.file).and_then(|(_, i)| i.as_ref());
-        let mut opts = base.clone();
-        if let Some(f) = case.bound_factor {
-            match crate::scene::load(&scene_path) {
-                Ok(s) => match crate::accel::World::build(s) {
-                    Ok(world) => {
-                        let b = crate::integrators::iws::default_bound(&world, opts.iws.vpl_paths) as f64 * f;
-                        opts.iws.bound = Some(b as f32);
-                    }
-                    Err(e) => crate::errln!("stability: {}: {e}", case.name),
-                },
-                Err(e) => crate::errln!("stability: {}: {e}", case.name),
-            }
-        }
+        let opts = case_args(case, &scene_path, &base);
         for &m in &cfg.methods {
             let prefix = runs_dir.join(format!("{}_{}", case.name, m.name()));
             let t = Instant::now();
             let spec = RunSpec { method: m, args: &opts, time: cfg.time_per_run, seed: 1 };
-            let r = guarded_render(&job(&scene_path, spec, cfg, prefix));
-            let wall = t.elapsed().as_secs_f64();
-            let rec = match r {
-                Ok(r) => {
-                    let img = pipeline::image_from_film(&r.film);
-                    let warnings = r.report.warnings.clone();
-                    let cmp = reference.filter(|rf| rf.same_size(&img));
-                    StabilityRecord {
-                        case: case.name.into(),
-                        method: m.name().into(),
-                        finished: true,
-                        panicked: false,
-                        error: None,
-                        wall_s: r.report.timings.total_s,
-                        spp: r.report.spp,
-                        nonfinite_samples: r.report.nonfinite_samples,
-                        image_finite: img.pixels.iter().all(|p| p.iter().all(|v| v.is_finite())),
-                        expected_warnings_ok: case
-                            .expect_warnings
-                            .iter()
-                            .all(|e| warnings.iter().any(|w| w.contains(e))),
-                        warnings,
-                        b: r.report.method_stats.get("b").and_then(|b| b.as_f64()),
-                        rel_mse: cmp.and_then(|rf| metrics::rel_mse(&img, rf, REL_MSE_EPS, None).ok()),
-                        mean_rel_diff: cmp.map(|rf| {
-                            let (a, b) = (lum(img.mean()), lum(rf.mean()));
-                            if b > 0.0 {
-                                a / b - 1.0
-                            } else if a == 0.0 {
-                                0.0
-                            } else {
-                                f64::INFINITY
-                            }
-                        }),
-                    }
-                }
-                Err((e, panicked)) => StabilityRecord {
-                    case: case.name.into(),
-                    method: m.name().into(),
-                    finished: false,
-                    panicked,
-                    error: Some(e),
-                    wall_s: wall,
-                    spp: 0,
-                    nonfinite_samples: 0,
-                    image_finite: false,
-                    warnings: Vec::new(),
-                    expected_warnings_ok: false,
-                    b: None,
-                    rel_mse: None,
-                    mean_rel_diff: None,
-                },
+            let rec = match guarded_render(&job(&scene_path, spec, cfg, prefix)) {
+                Ok(r) => finished_record(case, m, &r, reference),
+                Err((e, panicked)) => failed_record(case, m, e, panicked, t.elapsed().as_secs_f64()),
             };
             crate::errln!(
                 "stability: {:<15} {:<7} {} ({} spp, {:.2} s)",
@@ -331,8 +260,133 @@ pub fn run_suite(cfg: &StabilityConfig) -> Result<Vec<StabilityRecord>, String> 
     Ok(out)
 }
 
+/// The `pt` reference of a case's scene (`None`, reported, when it fails).
+fn case_reference(case: &Case, scene_path: &Path, base: &MethodArgs, cfg: &StabilityConfig) -> Option<Image> {
+    let prefix = cfg.out.join("refs").join(case.file.trim_end_matches(".toml"));
+    let spec = RunSpec { method: Method::Pt, args: base, time: cfg.reference_time, seed: 0x05EE_D4EF };
+    match guarded_render(&job(scene_path, spec, cfg, prefix)) {
+        Ok(r) => Some(pipeline::image_from_film(&r.film)),
+        Err((e, _)) => {
+            crate::errln!("stability: reference of {} failed: {e}", case.file);
+            None
+        }
+    }
+}
+
+/// The suite's parameters with the case's IWS bound, if it sets one (`bound_factor` × the
+/// scene's default bound; a scene that does not load keeps the default, reported).
+fn case_args(case: &Case, scene_path: &Path, base: &MethodArgs) -> MethodArgs {
+    let mut opts = base.clone();
+    if let Some(f) = case.bound_factor {
+        match crate::scene::load(scene_path) {
+            Ok(s) => match crate::accel::World::build(s) {
+                Ok(world) => {
+                    let b = crate::integrators::iws::default_bound(&world, opts.iws.vpl_paths) as f64 * f;
+                    opts.iws.bound = Some(b as f32);
+                }
+                Err(e) => crate::errln!("stability: {}: {e}", case.name),
+            },
+            Err(e) => crate::errln!("stability: {}: {e}", case.name),
+        }
+    }
+    opts
+}
+
+/// The record of a run that finished, measured against the case's reference when it has one
+/// of the same size.
+fn finished_record(case: &Case, m: Method, r: &RenderResult, reference: Option<&Image>) -> StabilityRecord {
+    let img = pipeline::image_from_film(&r.film);
+    let warnings = r.report.warnings.clone();
+    let cmp = reference.filter(|rf| rf.same_size(&img));
+    StabilityRecord {
+        case: case.name.into(),
+        method: m.name().into(),
+        finished: true,
+        panicked: false,
+        error: None,
+        wall_s: r.report.timings.total_s,
+        spp: r.report.spp,
+        nonfinite_samples: r.report.nonfinite_samples,
+        image_finite: img.pixels.iter().all(|p| p.iter().all(|v| v.is_finite())),
+        expected_warnings_ok: case.expect_warnings.iter().all(|e| warnings.iter().any(|w| w.contains(e))),
+        warnings,
+        b: r.report.method_stats.get("b").and_then(|b| b.as_f64()),
+        rel_mse: cmp.and_then(|rf| metrics::rel_mse(&img, rf, REL_MSE_EPS, None).ok()),
+        mean_rel_diff: cmp.map(|rf| mean_rel_diff(&img, rf)),
+    }
+}
+
+/// Relative difference of the mean luminance of `img` against `rf` (0 when both are black).
+fn mean_rel_diff(img: &Image, rf: &Image) -> f64 {
+    let (a, b) = (lum(img.mean()), lum(rf.mean()));
+    if b > 0.0 {
+        a / b - 1.0
+    } else if a == 0.0 {
+        0.0
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The record of a run that failed or panicked after `wall` seconds.
+fn failed_record(case: &Case, m: Method, error: String, panicked: bool, wall: f64) -> StabilityRecord {
+    StabilityRecord {
+        case: case.name.into(),
+        method: m.name().into(),
+        finished: false,
+        panicked,
+        error: Some(error),
+        wall_s: wall,
+        spp: 0,
+        nonfinite_samples: 0,
+        image_finite: false,
+        warnings: Vec::new(),
+        expected_warnings_ok: false,
+        b: None,
+        rel_mse: None,
+        mean_rel_diff: None,
+    }
+}
+
 fn opt_e(v: Option<f64>) -> String {
     v.map_or("–".into(), |v| format!("{v:.3e}"))
+}
+
+/// One row of the runs table.
+fn run_row(r: &StabilityRecord) -> Vec<String> {
+    vec![
+        r.case.clone(),
+        r.method.clone(),
+        if r.ok() {
+            "ok".into()
+        } else if r.panicked {
+            "PANIC".into()
+        } else {
+            "FAILED".into()
+        },
+        if r.image_finite { "yes".into() } else { "NO".into() },
+        r.nonfinite_samples.to_string(),
+        if r.expected_warnings_ok { "yes".into() } else { "MISSING".into() },
+        r.spp.to_string(),
+        format!("{:.2}", r.wall_s),
+        opt_e(r.b),
+        opt_e(r.rel_mse),
+        r.mean_rel_diff.map_or("–".into(), |d| format!("{:+.1}%", 100.0 * d)),
+        r.error.clone().unwrap_or_default(),
+    ]
+}
+
+/// One row of the cases table: the case and every distinct warning its runs emitted.
+fn case_row(c: &Case, recs: &[StabilityRecord]) -> Vec<String> {
+    let mut ws: Vec<String> = Vec::new();
+    for r in recs.iter().filter(|r| r.case == c.name) {
+        for w in &r.warnings {
+            if !ws.contains(w) {
+                ws.push(w.clone());
+            }
+        }
+    }
+    vec![c.name.into(), c.file.into(), c.what.into(), ws.join(" / ")]
 }
 
 /// Writes `stability.json`, `stability.md` and `stability.html` into `dir`.
@@ -356,31 +410,7 @@ pub fn write_stability_report(dir: &Path, cfg: &StabilityConfig, recs: &[Stabili
     ]
     .map(String::from)
     .to_vec();
-    let rows: Vec<Vec<String>> = recs
-        .iter()
-        .map(|r| {
-            vec![
-                r.case.clone(),
-                r.method.clone(),
-                if r.ok() {
-                    "ok".into()
-                } else if r.panicked {
-                    "PANIC".into()
-                } else {
-                    "FAILED".into()
-                },
-                if r.image_finite { "yes".into() } else { "NO".into() },
-                r.nonfinite_samples.to_string(),
-                if r.expected_warnings_ok { "yes".into() } else { "MISSING".into() },
-                r.spp.to_string(),
-                format!("{:.2}", r.wall_s),
-                opt_e(r.b),
-                opt_e(r.rel_mse),
-                r.mean_rel_diff.map_or("–".into(), |d| format!("{:+.1}%", 100.0 * d)),
-                r.error.clone().unwrap_or_default(),
-            ]
-        })
-        .collect();
+    let rows: Vec<Vec<String>> = recs.iter().map(run_row).collect();
     let n_ok = recs.iter().filter(|r| r.ok()).count();
     let summary = format!(
         "{n_ok} of {} runs ok. Time box {:.2} s per run; each scene's reference is a {:.2} s `pt` render with an \
@@ -390,21 +420,8 @@ pub fn write_stability_report(dir: &Path, cfg: &StabilityConfig, recs: &[Stabili
         cfg.reference_time,
         cfg.resolution.map_or("the scenes' own (64x64)".into(), |(w, h)| format!("{w}x{h}"))
     );
-    let case_rows: Vec<Vec<String>> = CASES
-        .iter()
-        .filter(|c| recs.iter().any(|r| r.case == c.name))
-        .map(|c| {
-            let mut ws: Vec<String> = Vec::new();
-            for r in recs.iter().filter(|r| r.case == c.name) {
-                for w in &r.warnings {
-                    if !ws.contains(w) {
-                        ws.push(w.clone());
-                    }
-                }
-            }
-            vec![c.name.into(), c.file.into(), c.what.into(), ws.join(" / ")]
-        })
-        .collect();
+    let case_rows: Vec<Vec<String>> =
+        CASES.iter().filter(|c| recs.iter().any(|r| r.case == c.name)).map(|c| case_row(c, recs)).collect();
     let case_h: Vec<String> = ["case", "scene", "what", "warnings emitted"].map(String::from).to_vec();
     let mut md = format!("# Stability suite\n\n{summary}\n\n## Runs\n\n{}\n## Cases\n\n", table_md(&headers, &rows));
     md.push_str(&table_md(&case_h, &case_rows));

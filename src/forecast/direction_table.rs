@@ -24,6 +24,8 @@
 // `!(x > 0.0)`-style tests are deliberate: they are true for NaN (degenerate input is rejected).
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::bins::dir_in_bin;
+pub use super::bins::{bin_center, bin_of, BIN_SOLID_ANGLE, N_BINS, N_MU, N_PHI};
 use super::splat::blend_spread;
 pub use super::splat::{splat_histogram, Splat};
 use crate::math::{Vec3, PI};
@@ -31,54 +33,10 @@ use crate::sampling::alias::quantised_columns;
 use crate::sampling::rng::Rng;
 use std::ops::{Add, Mul};
 
-/// Azimuth bins.
-pub const N_PHI: usize = 32;
-/// Cos-zenith bins.
-pub const N_MU: usize = 16;
-/// Total bins.
-pub const N_BINS: usize = N_PHI * N_MU;
-/// Solid angle of every bin, ΔΩ = 2π/(N_φ N_μ).
-pub const BIN_SOLID_ANGLE: f32 = 2.0 * PI / N_BINS as f32;
 /// Smallest probability of a bin with positive weight (see `DirectionTable::from_weights`).
 pub const MIN_BIN_PMF: f64 = 1.0 / 65536.0;
 /// Relative floor of the T2 / defensive fill values (spec §4 ⚠ sharp lobes).
 pub const FILL_FLOOR_REL: f32 = 1e-3;
-
-/// Bin of a local direction (z = normal), or `None` below/on the horizon or for non-finite input.
-#[inline]
-pub fn bin_of(local: Vec3) -> Option<usize> {
-    let len = local.length();
-    if !(len > 0.0) || !len.is_finite() {
-        return None;
-    }
-    let mu = local.z / len;
-    if !(mu > 0.0) {
-        return None;
-    }
-    let mut phi = local.y.atan2(local.x);
-    if phi < 0.0 {
-        phi += 2.0 * PI;
-    }
-    let j = ((phi * (N_PHI as f32 / (2.0 * PI))) as usize).min(N_PHI - 1);
-    let l = ((mu * N_MU as f32) as usize).min(N_MU - 1);
-    Some(l * N_PHI + j)
-}
-
-/// Local direction at (φ, μ) fractions `(j + a)/N_PHI`, `(l + b)/N_MU` of bin `i`.
-#[inline]
-fn dir_in_bin(i: usize, a: f32, b: f32) -> Vec3 {
-    let (l, j) = (i / N_PHI, i % N_PHI);
-    let phi = 2.0 * PI * (j as f32 + a) / N_PHI as f32;
-    let mu = ((l as f32 + b) / N_MU as f32).min(1.0);
-    let s = (1.0 - mu * mu).max(0.0).sqrt();
-    Vec3::new(s * phi.cos(), s * phi.sin(), mu)
-}
-
-/// Centre direction (φ_c, μ_c) of bin `i` (used for the representative f·cosθ, spec §7.7).
-#[inline]
-pub fn bin_center(i: usize) -> Vec3 {
-    dir_in_bin(i.min(N_BINS - 1), 0.5, 0.5)
-}
 
 /// Cosine-weighted hemisphere sample (the fallback outside kept clusters, spec §4); pdf = μ/π.
 #[inline]

@@ -3,6 +3,7 @@
 //!
 //! Built once per run on rank 0 and broadcast as one bitcode buffer; never refreshed per pass.
 
+pub mod bins;
 pub mod caustic_point;
 pub mod cluster;
 pub mod cluster_map;

@@ -1,15 +1,15 @@
 //! Forecaster splatting (issue #11 item 6): how a forecaster's weight is spread over the
-//! 32×16 direction bins of [`super::direction_table`] when a table is built. Every spread adds
+//! 32×16 direction bins of [`super::bins`] when a table is built. Every spread adds
 //! exactly the forecaster's weight, so the tables stay valid pdfs and the estimator unbiased.
 
-use super::direction_table::{bin_of, N_BINS, N_MU, N_PHI};
+use super::bins::{bin_of, N_BINS, N_MU, N_PHI};
 use crate::math::{Vec3, PI};
 
 /// How a forecaster's weight is spread over the bins when a table is built (issue #11 item 6).
 /// Any spread keeps the tables valid pdfs (and the dual partition), so every choice is unbiased.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Splat {
-    /// All of it into its own bin (the paper; bit-identical to [`super::direction_table::ForecastTables::build`]).
+    /// All of it into its own bin (the paper; bit-identical to `direction_table::ForecastTables::build`).
     #[default]
     None,
     /// A separable tent of half-width `radius` bins (clamped to [1, 8]; 1 = bilinear between the

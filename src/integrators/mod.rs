@@ -19,12 +19,14 @@
 //! explicit [`Context`]; `begin_pass` refreshes per-pass data (IWS point lights) from random
 //! streams keyed by (seed, pass).
 
+pub mod auto;
 pub mod caustic_share;
 pub mod caustics;
 pub mod path_class;
 pub mod settings;
 pub mod vpl;
 
+pub use auto::MethodChoice;
 pub use caustics::{BsdfCaustics, CausticEstimator, NoCaustics, Recurse, ShadingQuery};
 
 use crate::accel::World;

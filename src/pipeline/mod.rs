@@ -26,7 +26,7 @@ use crate::checkpoint::Checkpoint;
 use crate::distributed::schedule::{Deadline, PassTimer};
 use crate::distributed::{self, Cluster};
 use crate::image_io::{with_ext, Image};
-use crate::integrators::{Integrator, Method, MethodArgs};
+use crate::integrators::{Integrator, Method, MethodArgs, MethodChoice};
 use crate::param_limits as params;
 use crate::progress::{PhaseBar, Progress};
 use crate::render::film::Film;
@@ -55,8 +55,9 @@ use std::time::Instant;
 pub struct RenderJob {
     /// Scene file.
     pub scene: PathBuf,
-    /// Method (`None`: the scene's default).
-    pub method: Option<Method>,
+    /// Method or `auto` (`None`: the scene's `[render] method`, else `auto`; see
+    /// `integrators::auto`).
+    pub method: Option<MethodChoice>,
     /// Every method's parameters.
     pub args: MethodArgs,
     /// Samples per pixel (one per pass).
@@ -93,6 +94,8 @@ pub struct RenderJob {
 pub struct Plan {
     /// Method.
     pub method: Method,
+    /// Why this method: named by `--method` or the scene, or `auto`'s rule.
+    pub method_reason: String,
     /// Seed.
     pub seed: u64,
     /// Method parameters (`max_depth` resolved).
@@ -147,11 +150,7 @@ impl RenderJob {
     /// Fills the job's `None`s from the scene's `[render]` defaults.
     pub fn resolve(&self, scene: &Scene) -> Result<Plan, String> {
         let r = &scene.render;
-        let method = match self.method {
-            Some(m) => m,
-            None => Method::from_name(&r.method)
-                .ok_or_else(|| format!("{}: method `{}` is not available", scene.path, r.method))?,
-        };
+        let (method, method_reason) = crate::integrators::auto::resolve(self.method, scene)?;
         // the command line's own values first, with the limits the scene format applies too
         self.args.validate()?;
         if let Some(n) = self.threads {
@@ -163,7 +162,8 @@ impl RenderJob {
         args.cf.time_budget_s = time; // the CF preprocess scales its photon count to the budget
         let spp = if time.is_some() { None } else { Some(self.spp.or(r.spp).unwrap_or(16)) };
         let resolution = self.resolution.unwrap_or((scene.camera.width, scene.camera.height));
-        let plan = Plan { method, seed: self.seed.unwrap_or(r.seed), args, time, spp, resolution };
+        let seed = self.seed.unwrap_or(r.seed);
+        let plan = Plan { method, method_reason, seed, args, time, spp, resolution };
         plan.validate()?;
         check_snapshots(&self.snapshots, time)?;
         let gathers = self.checkpoint_every.is_some() || self.resume.is_some() || !self.snapshots.is_empty();
@@ -306,6 +306,9 @@ fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), String> 
         }
     }
     let plan = job.resolve(&scene)?;
+    if rank == 0 && job.progress {
+        crate::errln!("method: {} ({})", plan.method.name(), plan.method_reason);
+    }
     if let Some(f) = &plan.args.pt.path_filter {
         let w =
             format!("--path-filter {f}: only these path classes are rendered (a biased diagnostic, no emission split)");
@@ -538,6 +541,7 @@ impl Run<'_> {
         let render_s = timings.render_s.max(1e-9);
         RenderReport {
             method: self.plan.method,
+            method_reason: self.plan.method_reason.clone(),
             scene: self.world.scene.path.clone(),
             resolution: [w, h],
             spp: (t.film_samples / ((w as f64) * (h as f64))).round() as u64,

@@ -68,6 +68,8 @@ pub struct RankStats {
 pub struct RenderReport {
     /// Method.
     pub method: Method,
+    /// Why this method: named by `--method` or the scene, or `auto`'s rule and its evidence.
+    pub method_reason: String,
     /// Scene file.
     pub scene: String,
     /// Image size.

@@ -141,7 +141,7 @@ impl SceneBuilder {
             mesh_files: Vec::new(),
             warnings: Vec::new(),
             camera: None,
-            render: RenderDefaults { method: "pt".into(), spp: None, time: None, seed: 0, max_depth: 64 },
+            render: RenderDefaults { method: super::AUTO_METHOD.into(), spp: None, time: None, seed: 0, max_depth: 64 },
             materials: vec![Material::Black],
             triangles: Vec::new(),
             tri_shape: Vec::new(),
@@ -320,10 +320,11 @@ impl SceneBuilder {
         Ok(())
     }
 
-    /// The default method (one of `METHOD_NAMES`).
+    /// The default method (`auto` or one of `METHOD_NAMES`).
     pub fn method(&mut self, m: &str, at: &Origin) -> Result<(), SceneError> {
-        if !super::METHOD_NAMES.contains(&m) {
-            return Err(self.err(at, format!("unknown method `{m}` ({})", super::METHOD_NAMES.join(", "))));
+        if !super::is_method_name(m) {
+            let all = super::METHOD_NAMES.join(", ");
+            return Err(self.err(at, format!("unknown method `{m}` ({}, {all})", super::AUTO_METHOD)));
         }
         self.render.method = m.to_string();
         Ok(())

@@ -69,6 +69,15 @@ pub fn load_with(path: &std::path::Path, opts: &LoadOptions) -> Result<Scene, Sc
 /// (`tests/bad_scenes.rs` checks that the two lists agree).
 pub const METHOD_NAMES: [&str; 5] = ["pt", "iws", "iws-pm", "iws-cf", "pt-cf"];
 
+/// `[render] method = "auto"`, also the default of a scene that names no method:
+/// `integrators::auto` picks the method from what the scene contains.
+pub const AUTO_METHOD: &str = "auto";
+
+/// True for a name a scene may give as its method: [`AUTO_METHOD`] or one of [`METHOD_NAMES`].
+pub fn is_method_name(s: &str) -> bool {
+    s == AUTO_METHOD || METHOD_NAMES.contains(&s)
+}
+
 /// Parses one `-D NAME=VALUE` (NAME non-empty, alphanumeric or `_`), as clap's value parser.
 pub fn parse_define(s: &str) -> Result<(String, String), String> {
     let (k, v) = s.split_once('=').ok_or_else(|| format!("`{s}`: expected NAME=VALUE"))?;

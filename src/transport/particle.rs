@@ -25,7 +25,7 @@ use crate::sampling::rng::Rng;
 use crate::sampling::warp::{
     cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_sphere, uniform_sphere_pdf,
 };
-use crate::scene::{LightRef, Material, NO_EMITTER};
+use crate::scene::{LightRef, Material, Scene, NO_EMITTER};
 
 /// Safety cap on vertices per light path (documented truncation; RR does the real work).
 pub const MAX_VERTICES: u32 = 64;
@@ -166,55 +166,82 @@ pub fn trace_path(
     counts: &mut TraceCounts,
 ) {
     let LightPaths { emission, n_paths, seed, stream_id, pass } = *paths;
-    let s = &world.scene;
     counts.paths += 1;
-    if s.lights.is_empty() || n_paths == 0 {
+    if world.scene.lights.is_empty() || n_paths == 0 {
         return;
     }
     let mut rng = Rng::keyed(seed, stream_id, pass, index);
     let inv_n = 1.0 / n_paths as f32;
+    let Some(start) = launch(&world.scene, emission, inv_n, &mut rng, visitor, counts) else {
+        return;
+    };
+    follow(world, start, inv_n, &mut rng, visitor, counts);
+}
+
+/// The first segment of a light path: the ray leaving the light and its throughput β1.
+struct Launch {
+    origin: Vec3,
+    dir: Vec3,
+    beta: Rgb,
+}
+
+/// Picks a light (`P_ℓ ∝ power`), reports its vertex, and samples the first direction; `None`
+/// when the path carries nothing. Spec §2: `W0 = 1/(N·P_ℓ·p_A)`; `β1 = Le·cosθ0/(P_ℓ·p_A·p_σ)`
+/// (area), `I/(P_ℓ·p_σ)` (point).
+fn launch(
+    s: &Scene,
+    emission: Emission,
+    inv_n: f32,
+    rng: &mut Rng,
+    visitor: &mut dyn ParticleVisitor,
+    counts: &mut TraceCounts,
+) -> Option<Launch> {
     let (li, pmf, _) = s.light_pick.sample(rng.next_f32());
     if pmf <= 0.0 {
-        return;
+        return None;
     }
     let u_pos = rng.next_2d();
     let u_dir = rng.next_2d();
-    // spec §2: W0 = 1/(N·P_ℓ·p_A); β1 = Le·cosθ0/(P_ℓ·p_A·p_σ) (area), I/(P_ℓ·p_σ) (point)
-    let (y0, n0, mut beta) = match s.lights[li] {
+    match s.lights[li] {
         LightRef::Area(e) => {
             let (y, n, pdf_a) = s.sample_emitter_point(e, u_pos);
             if pdf_a <= 0.0 {
-                return;
+                return None;
             }
             let le = s.emitters[e as usize].radiance;
             visitor.emitter(&EmitterVertex { p: y, n, weight: inv_n / (pmf * pdf_a), emission: le, point: false });
             counts.emitter_vertices += 1;
-            let Some((w, pdf_w)) = emission.sample_dir(y, n, false, u_dir) else {
-                return;
-            };
+            let (w, pdf_w) = emission.sample_dir(y, n, false, u_dir)?;
             let cos0 = n.dot(w);
             if cos0 <= 0.0 {
-                return;
+                return None;
             }
-            (offset_origin(y, n, w), w, le * (cos0 / (pmf * pdf_a * pdf_w)))
+            Some(Launch { origin: offset_origin(y, n, w), dir: w, beta: le * (cos0 / (pmf * pdf_a * pdf_w)) })
         }
         LightRef::Point(i) => {
             let pl = &s.point_lights[i as usize];
-            visitor.emitter(&EmitterVertex {
-                p: pl.position,
-                n: Vec3::ZERO,
-                weight: inv_n / pmf,
-                emission: pl.intensity,
-                point: true,
-            });
+            let (p, intensity) = (pl.position, pl.intensity);
+            visitor.emitter(&EmitterVertex { p, n: Vec3::ZERO, weight: inv_n / pmf, emission: intensity, point: true });
             counts.emitter_vertices += 1;
-            let Some((w, pdf_w)) = emission.sample_dir(pl.position, Vec3::Z, true, u_dir) else {
-                return;
-            };
-            (pl.position, w, pl.intensity / (pmf * pdf_w))
+            let (w, pdf_w) = emission.sample_dir(p, Vec3::Z, true, u_dir)?;
+            Some(Launch { origin: p, dir: w, beta: intensity / (pmf * pdf_w) })
         }
-    };
-    let (mut o, mut d) = (y0, n0);
+    }
+}
+
+/// Follows a launched path through the scene: reports every non-specular hit, bounces by BSDF
+/// sampling with Russian roulette, and stops at an emitter (black), on a miss, when the visitor
+/// says so, or at the [`MAX_VERTICES`] cap (counted).
+fn follow(
+    world: &World,
+    start: Launch,
+    inv_n: f32,
+    rng: &mut Rng,
+    visitor: &mut dyn ParticleVisitor,
+    counts: &mut TraceCounts,
+) {
+    let s = &world.scene;
+    let Launch { origin: mut o, dir: mut d, mut beta } = start;
     let mut prev_dirac = false;
     for depth in 1..MAX_VERTICES {
         let Some(hit) = world.intersect(o, d, f32::INFINITY) else {
@@ -226,16 +253,9 @@ pub fn trace_path(
         let m = s.material_of(hit.prim);
         let w_in = -d;
         if !m.is_dirac() {
-            let keep_going = visitor.surface(&SurfaceVertex {
-                p: hit.p,
-                ng: hit.ng,
-                ns: hit.ns,
-                material: m,
-                w_in,
-                beta: beta * inv_n,
-                prev_dirac,
-                depth,
-            });
+            let (p, ng, ns) = (hit.p, hit.ng, hit.ns);
+            let v = SurfaceVertex { p, ng, ns, material: m, w_in, beta: beta * inv_n, prev_dirac, depth };
+            let keep_going = visitor.surface(&v);
             counts.surface_vertices += 1;
             counts.caustic_vertices += prev_dirac as u64;
             if !keep_going {
@@ -243,20 +263,26 @@ pub fn trace_path(
             }
         }
         let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
-        let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
-        let Some(bs) = bsdf::sample(m, &sp, w_in, u, Mode::Importance) else {
+        let Some((wi, weight, is_delta)) = scatter(m, &sp, w_in, rng) else {
             return;
         };
-        // spec §2: RR survival q = min(1, lum(f·|cos|/p)), β ← β·(f·|cos|/p)/q
-        let Some(w) = roulette(bs.weight, q_particle(bs.weight), &mut rng) else {
-            return;
-        };
-        beta *= w;
-        prev_dirac = bs.is_delta;
-        o = offset_origin(hit.p, hit.ng, bs.wi);
-        d = bs.wi;
+        beta *= weight;
+        prev_dirac = is_delta;
+        o = offset_origin(hit.p, hit.ng, wi);
+        d = wi;
     }
     counts.capped += 1;
+}
+
+/// One bounce of a light path: a BSDF sample in `Mode::Importance`, then Russian roulette
+/// (spec §2: survival `q = min(1, lum(f·|cos|/p))`, `β ← β·(f·|cos|/p)/q`). Returns the new
+/// direction, the throughput factor and whether the bounce was Dirac; `None` ends the path.
+#[inline]
+fn scatter(m: &Material, sp: &ShadingPoint, w_in: Vec3, rng: &mut Rng) -> Option<(Vec3, Rgb, bool)> {
+    let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+    let bs = bsdf::sample(m, sp, w_in, u, Mode::Importance)?;
+    let w = roulette(bs.weight, q_particle(bs.weight), rng)?;
+    Some((bs.wi, w, bs.is_delta))
 }
 
 /// Traces paths `0..n_paths` of `paths` sequentially into one visitor.

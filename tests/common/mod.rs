@@ -36,7 +36,7 @@ pub fn job(
 ) -> RenderJob {
     RenderJob {
         scene: scene.to_path_buf(),
-        method: Some(method),
+        method: Some(method.into()),
         args: MethodArgs::default(),
         spp: Some(spp),
         time: None,
