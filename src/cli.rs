@@ -40,7 +40,7 @@ impl Cli {
         let mut cli = Cli::from_arg_matches(&matches)?;
         if let (Command::Render(a), Some(("render", sub))) = (&mut cli.command, matches.subcommand()) {
             a.method_args.explicit = explicit_method_flags(sub);
-            if let Some(m) = a.method {
+            if let Some(crate::integrators::auto::MethodChoice::Named(m)) = a.method {
                 check_foreign_flags(m, sub)?;
             }
         }

@@ -162,12 +162,12 @@ fn resume_with_another_seed_is_refused() {
 fn render_json(name: &str, args: &[&str]) -> (std::process::Output, serde_json::Value, PathBuf) {
     let d = tmp_dir(name);
     let out = d.join("r");
+    // `pt` unless the case names its method (the scene's own default is `auto`)
+    let method: &[&str] = if args.contains(&"--method") { &[] } else { &["--method", "pt"] };
     let o = Command::new(bin())
+        .args(["render", scene().to_str().unwrap()])
+        .args(method)
         .args([
-            "render",
-            scene().to_str().unwrap(),
-            "--method",
-            "pt",
             "--resolution",
             "16x16",
             "--seed",
