@@ -83,7 +83,10 @@ fn bench_mixture(name: &str, m: Material, wo: Vec3, (theta, phi): (f32, f32)) {
     let mut r = Rng::keyed(5, stream::MISC, 5, 0);
     let photons: Vec<(Vec3, f32)> = (0..200)
         .map(|_| {
-            let d = dir((theta + 10.0 * (2.0 * r.next_f32() - 1.0)).clamp(0.5, 89.0), phi + 10.0 * (2.0 * r.next_f32() - 1.0));
+            let d = dir(
+                (theta + 10.0 * (2.0 * r.next_f32() - 1.0)).clamp(0.5, 89.0),
+                phi + 10.0 * (2.0 * r.next_f32() - 1.0),
+            );
             (d, d.z)
         })
         .collect();

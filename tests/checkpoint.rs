@@ -167,13 +167,7 @@ fn render_json(name: &str, args: &[&str]) -> (std::process::Output, serde_json::
     let o = Command::new(bin())
         .args(["render", scene().to_str().unwrap()])
         .args(method)
-        .args([
-            "--resolution",
-            "16x16",
-            "--seed",
-            "2",
-            "--quiet",
-        ])
+        .args(["--resolution", "16x16", "--seed", "2", "--quiet"])
         .args(args)
         .arg("--out")
         .arg(&out)

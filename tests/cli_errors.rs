@@ -220,7 +220,10 @@ fn the_json_records_only_the_chosen_methods_options() {
     for k in ["guide_fraction", "guide_min_share", "photons", "gather", "path_filter"] {
         assert!(!cf.contains_key(k), "iws-cf options hold another method's `{k}`: {cf:?}");
     }
-    assert_eq!((cf["variant"].as_str(), cf["direct"].as_str(), cf["clusters"].as_u64()), (Some("baj08"), Some("vpl"), Some(4)));
+    assert_eq!(
+        (cf["variant"].as_str(), cf["direct"].as_str(), cf["clusters"].as_u64()),
+        (Some("baj08"), Some("vpl"), Some(4))
+    );
     let _ = std::fs::remove_dir_all(d);
 }
 
@@ -242,7 +245,10 @@ fn invalid_render_options_are_refused_before_any_work() {
         (&["--max-depth", "1"], "--max-depth 1: max_depth must be at least 2"),
         (&["--max-depth", "0"], "--max-depth 0: max_depth must be at least 2"),
         (&["--method", "iws-cf", "--split", "4294967295"], "--split 4294967295: split must be between 1 and 1024"),
-        (&["--method", "iws", "--vpl-paths", "4294967295"], "--vpl-paths 4294967295: vpl paths must be between 1 and 65536"),
+        (
+            &["--method", "iws", "--vpl-paths", "4294967295"],
+            "--vpl-paths 4294967295: vpl paths must be between 1 and 65536",
+        ),
     ];
     let sc = scene();
     for (opts, want) in cases {

@@ -22,7 +22,8 @@ fn world(s: Scene) -> World {
 /// Method options: cap 64, `vpl` IWS paths per pass, `photons` for iws-pm and iws-cf.
 fn opts(vpl: u32, photons: u64) -> MethodArgs {
     let mut o = MethodArgs::default();
-    (o.settings.max_depth, o.iws.vpl_paths, o.pm.photons, o.cf.forecast_photons) = (Some(64), vpl, photons, Some(photons));
+    (o.settings.max_depth, o.iws.vpl_paths, o.pm.photons, o.cf.forecast_photons) =
+        (Some(64), vpl, photons, Some(photons));
     o
 }
 
@@ -113,7 +114,10 @@ fn sms_ring_loads_with_its_ignored_parameters_listed() {
     // the light: 0.2 × 0.2 at y = 10 facing down, radiance 70000 × the sRGB of illuminant E
     assert_eq!(s.emitters.len(), 2);
     let e = &s.emitters[0];
-    assert!((e.area - 0.02).abs() < 1e-6 && (e.radiance - 70000.0 * Vec3::new(1.204_793_9, 0.948_291, 0.908_916_06)).abs().max_element() < 0.05);
+    assert!(
+        (e.area - 0.02).abs() < 1e-6
+            && (e.radiance - 70000.0 * Vec3::new(1.204_793_9, 0.948_291, 0.908_916_06)).abs().max_element() < 0.05
+    );
     // (a uniform emitter <spectrum> is Mitsuba 3's equal-energy spectrum in sRGB: docs/mitsuba.md)
     assert!((s.triangles[0].ng - Vec3::NEG_Y).length() < 1e-6);
     // -D overrides the default

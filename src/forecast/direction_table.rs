@@ -13,7 +13,8 @@
 //! - `DualSpread { radius, alpha }`: T1 as `Dual`; T2 on the same empty bins, but weighted
 //!   `(1−α)·s_i/S + α·v_i/V` where `s` is the forecasters spread by a tent of `radius` bins
 //!   (`splat.rs`): a caustic seen through glass that the photons covered with gaps puts T2's
-//!   samples into the gaps next to the photons instead of over the whole hemisphere;
+//!   samples into the gaps next to the photons instead of over the whole hemisphere.
+//!
 //! (The single defensive table and the defensive T1, `--table single|dual-defensive`, measured
 //! no better and were retired: `results/rejected/table.md`.)
 //!
