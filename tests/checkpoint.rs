@@ -17,25 +17,20 @@ fn scene() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml")
 }
 
+/// `forecast render SCENE --method pt`, the start of most command lines here.
+fn pt_render() -> Command {
+    let mut c = Command::new(bin());
+    c.args(["render", scene().to_str().unwrap(), "--method", "pt"]);
+    c
+}
+
 #[test]
 fn killed_render_resumes_to_the_uninterrupted_image() {
     let d = tmp_dir("kill");
     let spp = "600";
     let full = d.join("full");
-    let st = Command::new(bin())
-        .args([
-            "render",
-            scene().to_str().unwrap(),
-            "--method",
-            "pt",
-            "--spp",
-            spp,
-            "--resolution",
-            "48x48",
-            "--seed",
-            "3",
-            "--quiet",
-        ])
+    let st = pt_render()
+        .args(["--spp", spp, "--resolution", "48x48", "--seed", "3", "--quiet"])
         .arg("--out")
         .arg(&full)
         .status()
@@ -45,20 +40,8 @@ fn killed_render_resumes_to_the_uninterrupted_image() {
     // Start the same render with frequent checkpoints and kill it once one exists.
     let part = d.join("part");
     let ckpt = PathBuf::from(format!("{}.ckpt", part.display()));
-    let mut child = Command::new(bin())
-        .args([
-            "render",
-            scene().to_str().unwrap(),
-            "--method",
-            "pt",
-            "--spp",
-            spp,
-            "--resolution",
-            "48x48",
-            "--seed",
-            "3",
-            "--quiet",
-        ])
+    let mut child = pt_render()
+        .args(["--spp", spp, "--resolution", "48x48", "--seed", "3", "--quiet"])
         .args(["--checkpoint-every", "50ms", "--threads", "1"])
         .arg("--out")
         .arg(&part)
@@ -83,20 +66,8 @@ fn killed_render_resumes_to_the_uninterrupted_image() {
     assert!(finished_early || part_json["complete"] == false, "{part_json}");
     assert!(Path::new(&format!("{}.exr", part.display())).exists());
 
-    let st = Command::new(bin())
-        .args([
-            "render",
-            scene().to_str().unwrap(),
-            "--method",
-            "pt",
-            "--spp",
-            spp,
-            "--resolution",
-            "48x48",
-            "--seed",
-            "3",
-            "--quiet",
-        ])
+    let st = pt_render()
+        .args(["--spp", spp, "--resolution", "48x48", "--seed", "3", "--quiet"])
         .arg("--resume")
         .arg(&ckpt)
         .arg("--out")
@@ -114,40 +85,16 @@ fn killed_render_resumes_to_the_uninterrupted_image() {
 fn resume_with_another_seed_is_refused() {
     let d = tmp_dir("seed");
     let out = d.join("a");
-    let st = Command::new(bin())
-        .args([
-            "render",
-            scene().to_str().unwrap(),
-            "--method",
-            "pt",
-            "--spp",
-            "4",
-            "--resolution",
-            "16x16",
-            "--seed",
-            "1",
-            "--quiet",
-        ])
+    let st = pt_render()
+        .args(["--spp", "4", "--resolution", "16x16", "--seed", "1", "--quiet"])
         .args(["--checkpoint-every", "1ms"])
         .arg("--out")
         .arg(&out)
         .status()
         .unwrap();
     assert!(st.success());
-    let o = Command::new(bin())
-        .args([
-            "render",
-            scene().to_str().unwrap(),
-            "--method",
-            "pt",
-            "--spp",
-            "8",
-            "--resolution",
-            "16x16",
-            "--seed",
-            "2",
-            "--quiet",
-        ])
+    let o = pt_render()
+        .args(["--spp", "8", "--resolution", "16x16", "--seed", "2", "--quiet"])
         .arg("--resume")
         .arg(format!("{}.ckpt", out.display()))
         .arg("--out")
