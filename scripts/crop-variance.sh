@@ -2,7 +2,7 @@
 # Per-sample variance of a method on a crop camera (scenes/crops/*.toml): the crop's squared error
 # against a long `pt` image of the same camera, times the samples per pixel, averaged over seeds.
 # Equal-time efficiency on the full frame is 1/(variance × the full frame's µs per sample), so two
-# methods compare as sqrt(var_a·t_a / var_b·t_b) (README, "Crop cameras").
+# methods compare as sqrt(var_a·t_a / var_b·t_b) (results/2026-11-30-crop-cameras.md).
 #   scripts/crop-variance.sh CROP METHOD SPP SEEDS [render options…]
 #   e.g. scripts/crop-variance.sh scenes/crops/cornell-glass-caustic.toml iws-cf 128 4
 # The reference (pt, 32,768 spp, seed 9001; about a minute per crop on 2 cores) is made once, in

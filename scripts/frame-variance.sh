@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Variance of one sample over a whole frame, from seeds alone (no reference), and the CPU µs per
-# sample: the two numbers whose product ranks methods and options at equal time (README,
+# sample: the two numbers whose product ranks methods and options at equal time (results/2026-11-30-crop-cameras.md,
 # "Crop cameras"). Renders SEEDS images at SPP and prints half the mean squared difference of
 # consecutive seeds times SPP, and each run's `profile_per_sample.total_us`.
 #   scripts/frame-variance.sh SCENE METHOD SPP SEEDS [render options…]

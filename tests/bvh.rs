@@ -452,7 +452,7 @@ fn comparison_detects_a_wrong_bvh() {
 /// in a crease next to small detail) must be found: `intersect` promises t ∈ (0, tmax).
 /// FAILS with obvhs 0.4 (see `OBVHS_NODE_EPSILON`); reported, not fixed here (src/accel is not ours).
 #[test]
-#[ignore = "known obvhs 0.4 limitation: CWBVH node entry is clamped to t >= 1e-4 (README, Known limitations)"]
+#[ignore = "known obvhs 0.4 limitation: CWBVH node entry is clamped to t >= 1e-4 (docs/limitations.md)"]
 fn hits_closer_than_1e4_are_found() {
     let src = format!(
         "{HEADER}\n[[shape]]\ntype = \"quad\"\ncorner = [-2e-5, -2e-5, 5e-5]\nu = [4e-5, 0.0, 0.0]\nv = [0.0, 4e-5, 0.0]\nmaterial = \"m\"\n\n[[shape]]\ntype = \"quad\"\ncorner = [-1.0, -1.0, 1.0]\nu = [2.0, 0.0, 0.0]\nv = [0.0, 2.0, 0.0]\nmaterial = \"m\"\n"

@@ -1,5 +1,5 @@
 //! The binary's error paths, run as a user would (`env!("CARGO_BIN_EXE_forecast")`): each case
-//! is a clear message and the documented exit status (README "Exit status"): 1 for an error,
+//! is a clear message and the documented exit status (docs/cli.md, "Exit status"): 1 for an error,
 //! 2 for a command line clap cannot parse, never 101 (a panic).
 //!
 //! * stdout and/or stderr on `/dev/full` (Linux): no panic ("failed printing to stdout"), exit 1;

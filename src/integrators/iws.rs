@@ -7,7 +7,7 @@
 //!   shadow ray, never clamped; `transport::direct`). The point lights are then only the light
 //!   paths' surface vertices, and `C` drops emitter hits. With `--direct vpl` (the paper) `D = 0`
 //!   and the emitter vertices are point lights clamped like the rest, `C` recovering their
-//!   clamped part. Measured (README, `--direct`): the glossy highlights of `figurines`, which 32
+//!   clamped part. Measured (docs/methods/iws.md, `--direct`): the glossy highlights of `figurines`, which 32
 //!   clamped light points per pass render as sparkles, are 4.6× less noisy per sample.
 //! - `VPL_b = Σ_v W_v·e_v·min(G,b)·V·f` over the pass's point lights (spec §2), with
 //!   `G = |n_x·ŵ||n_y·ŵ|/r²` on **geometric** normals; Dirac surfaces block VPL shadow rays;

@@ -5,7 +5,7 @@
 //! Russian roulette from the 5th bounce (survival min(max β·etaScale, 0.95), as Mitsuba and
 //! pbrt-v4: `transport::roulette::Throughput`).
 //! `max_depth` (default 64 vertices) is a safety cap only: with RR the truncated energy is far
-//! below the noise (documented in the README).
+//! below the noise (results/2026-11-30-roulette.md).
 //!
 //! `--path-filter` (a biased diagnostic, off by default) keeps only some path classes
 //! (`integrators::path_class`); without it the estimator is exactly the above.
