@@ -340,6 +340,16 @@ impl OutputSet {
         self
     }
 
+    /// The scene file and the mesh files it read (`Scene::mesh_files`): the inputs of every
+    /// subcommand that loads a scene.
+    pub fn scene_inputs(&mut self, scene: &Path, meshes: &[PathBuf]) -> &mut Self {
+        self.input("the scene", scene);
+        meshes.iter().for_each(|m| {
+            self.input("the scene's mesh", m);
+        });
+        self
+    }
+
     /// An output file; `flag` names where it comes from (`--out`, `--checkpoint-path`).
     pub fn output(&mut self, flag: &str, path: &Path) -> &mut Self {
         self.outputs.push((flag.to_string(), path.to_path_buf(), None));

@@ -244,10 +244,7 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs, opts: &forecast::scene::Load
     forecast::atomic_io::check_output_prefix(&r.out)?;
     let scene = forecast::scene::load_with(&r.scene, opts).map_err(|e| e.to_string())?;
     let mut guard = forecast::atomic_io::OutputSet::new();
-    guard.input("the scene", &r.scene).output("--out", &image_io::with_ext(&r.out, "png"));
-    scene.mesh_files.iter().for_each(|m| {
-        guard.input("the scene's mesh", m);
-    });
+    guard.scene_inputs(&r.scene, &scene.mesh_files).output("--out", &image_io::with_ext(&r.out, "png"));
     guard.output("--out", &image_io::with_ext(&r.out, "json")).check()?;
     let world = accel::World::build(scene).map_err(|e| format!("{}: {e}", r.scene.display()))?;
     let cf_args = &r.method_args.cf;

@@ -348,10 +348,7 @@ fn run_prefix(runs_dir: &Path, method: Method, budget: f64, k: u64) -> PathBuf {
 /// `report.html`, and the `charts/` and `crops/` directories.
 fn output_guard(cfg: &CompareConfig, scene: &crate::scene::Scene, runs_dir: &Path) -> OutputSet {
     let mut g = OutputSet::new();
-    g.input("the scene", &cfg.base.scene).input("--reference", &cfg.reference);
-    scene.mesh_files.iter().for_each(|m| {
-        g.input("the scene's mesh", m);
-    });
+    g.scene_inputs(&cfg.base.scene, &scene.mesh_files).input("--reference", &cfg.reference);
     let top = cfg.budgets.iter().copied().max_by(f64::total_cmp).unwrap_or(0.0);
     let mut labels = Vec::new();
     for &budget in &cfg.budgets {

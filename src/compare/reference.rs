@@ -39,10 +39,7 @@ fn resume_prefix(p: &Path) -> PathBuf {
 /// `PREFIX.{exr,png,json}` and each half's `PREFIX.half{k}.{exr,png,json,ckpt}`.
 fn reference_guard(base: &pipeline::RenderJob, scene: &crate::scene::Scene) -> crate::atomic_io::OutputSet {
     let mut g = crate::atomic_io::OutputSet::new();
-    g.input("the scene", &base.scene);
-    scene.mesh_files.iter().for_each(|m| {
-        g.input("the scene's mesh", m);
-    });
+    g.scene_inputs(&base.scene, &scene.mesh_files);
     for e in ["exr", "png", "json"] {
         g.output("--out", &with_ext(&base.out, e));
     }

@@ -78,7 +78,7 @@ pub fn value_parser() -> impl clap::builder::TypedValueParser<Value = MethodChoi
 pub fn enclosure(scene: &Scene) -> f32 {
     let d = scene.bounds.1 - scene.bounds.0;
     let box_area = 2.0 * (d.x * d.y + d.y * d.z + d.z * d.x);
-    if box_area.is_nan() || box_area <= 0.0 || !box_area.is_finite() {
+    if !(box_area.is_finite() && box_area > 0.0) {
         return 0.0;
     }
     scene.non_specular_area() / box_area

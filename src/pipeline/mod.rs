@@ -114,10 +114,7 @@ impl RenderJob {
     /// `PREFIX.snap-LABEL.{exr,json}`). The checkpoint may replace the one it resumed from.
     pub fn output_set(&self, scene: &Scene) -> OutputSet {
         let mut g = OutputSet::new();
-        g.input("the scene", &self.scene);
-        scene.mesh_files.iter().for_each(|m| {
-            g.input("the scene's mesh", m);
-        });
+        g.scene_inputs(&self.scene, &scene.mesh_files);
         if let Some(r) = &self.resume {
             g.input("--resume", r);
         }

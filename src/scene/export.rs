@@ -108,10 +108,7 @@ fn write_export(
     mesh_dir: &Path,
 ) -> Result<(), String> {
     let mut guard = crate::atomic_io::OutputSet::new();
-    guard.input("the scene", scene_path);
-    scene.mesh_files.iter().for_each(|m| {
-        guard.input("the scene's mesh", m);
-    });
+    guard.scene_inputs(scene_path, &scene.mesh_files);
     guard.output("--out", out);
     meshes.iter().for_each(|(p, _)| {
         guard.output("the exported mesh", p);
