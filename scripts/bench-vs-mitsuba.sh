@@ -23,7 +23,10 @@
 # `load_file` (scene load, BVH and LLVM JIT inside the budget) it renders chunks of spp (the first
 # chunk 1 spp, then chunks sized to ~1 s, each kernel compiled once) until the next chunk would
 # pass the budget; samples = spp·W·H over the elapsed time. Both counts are whole samples per
-# pixel. The ratio printed is forecast / Mitsuba, per run and averaged over RUNS.
+# pixel. The ratio printed is forecast / Mitsuba, per run and averaged over RUNS. The cpu ratio
+# divides the same sample counts by each process's user + system CPU seconds instead (Mitsuba's
+# counted from just before `load_file`): it is the figure to read when other work shares the
+# machine, which slows both renderers' wall clocks unevenly.
 set -euo pipefail
 
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -74,7 +77,7 @@ else
   "$FORECAST" export-mitsuba "$scene" --out "$xml" >/dev/null
 fi
 
-mitsuba_run() { # SEED -> "spp seconds"
+mitsuba_run() { # SEED -> "spp seconds cpu_seconds"
   "$venv/bin/python" - "$xml" "$w" "$h" "$budget" "$threads" "$((max_depth + 1))" "$rr_depth" "$variant" "$1" "$out" <<'EOF'
 import sys, time, os, tempfile, xml.etree.ElementTree as ET
 xml, w, h, budget, threads, max_depth, rr_depth, variant, seed, out = sys.argv[1:]
@@ -102,7 +105,11 @@ mi.set_variant(variant)
 (mi.file_resolver() if hasattr(mi, 'file_resolver') else mi.Thread.thread().file_resolver()).prepend(
     os.path.dirname(os.path.abspath(xml)))
 dr.set_thread_count(threads)
-t0 = time.perf_counter()
+import resource
+def cpu_s():
+    ru = resource.getrusage(resource.RUSAGE_SELF)
+    return ru.ru_utime + ru.ru_stime
+t0, c0 = time.perf_counter(), cpu_s()
 try:
     scene = mi.load_file(tmp)
 finally:
@@ -120,34 +127,33 @@ chunk = max(1, int(1.0 / per_spp))  # one kernel size from here on: compiled onc
 while budget - (time.perf_counter() - t0) >= chunk * per_spp:
     per_spp = chunk_s(chunk, spp) / chunk
     spp += chunk
-print(spp, time.perf_counter() - t0)
+print(spp, time.perf_counter() - t0, cpu_s() - c0)
 EOF
 }
 
-forecast_run() { # SEED -> "spp seconds"
+forecast_run() { # SEED -> "spp seconds cpu_seconds"
   local prefix="$out/forecast-$name-$1"
-  "$FORECAST" render "$scene" --method pt --time "${budget}s" --resolution "$res" --threads "$threads" \
+  /usr/bin/time -f '%U %S' -o "$prefix.cpu" "$FORECAST" render "$scene" --method pt --time "${budget}s" --resolution "$res" --threads "$threads" \
     --max-depth "$max_depth" --seed "$1" --out "$prefix" --quiet 2>/dev/null
-  "$venv/bin/python" -c 'import json, sys; j = json.load(open(sys.argv[1])); print(j["passes"], j["timings"]["total_s"])' \
-    "$prefix.json"
+  "$venv/bin/python" -c 'import json, sys; j = json.load(open(sys.argv[1])); u, s = map(float, open(sys.argv[2]).read().split()[-2:]); print(j["passes"], j["timings"]["total_s"], u + s)' \
+    "$prefix.json" "$prefix.cpu"
 }
 
 echo "bench-vs-mitsuba: $scene at ${w}x${h}, ${budget} s each, $runs runs, $threads threads," \
   "forecast pt --max-depth $max_depth vs Mitsuba $variant path max_depth=$((max_depth + 1)) rr_depth=$rr_depth"
-printf '%-4s %12s %14s %12s %14s %7s\n' run "forecast spp" "forecast S/s" "mitsuba spp" "mitsuba S/s" ratio
-sum_f=0; sum_m=0; sum_r=0
+printf '%-4s %12s %14s %12s %14s %7s %9s\n' run "forecast spp" "forecast S/s" "mitsuba spp" "mitsuba S/s" ratio "cpu ratio"
+rows=""
 for ((i = 1; i <= runs; i++)); do
   fres="$(forecast_run "$i")" # a failed run stops the script (set -e)
   mres="$(mitsuba_run "$i")"
-  read -r fspp fsec <<<"$fres"
-  read -r mspp msec <<<"$mres"
-  line="$(awk -v a="$fspp" -v b="$fsec" -v c="$mspp" -v d="$msec" -v px="$((w * h))" -v i="$i" 'BEGIN {
-    f = a * px / b; m = c * px / d; printf "%-4d %12d %14.4g %12d %14.4g %7.3f %g %g %g\n", i, a, f, c, m, f / m, f, m, f / m }')"
-  read -r _ _ _ _ _ _ f m r <<<"$line"
-  echo "${line% * * *}"
-  sum_f="$(awk -v s="$sum_f" -v x="$f" 'BEGIN { print s + x }')"
-  sum_m="$(awk -v s="$sum_m" -v x="$m" 'BEGIN { print s + x }')"
-  sum_r="$(awk -v s="$sum_r" -v x="$r" 'BEGIN { print s + x }')"
+  row="$(awk -v px="$((w * h))" -v i="$i" -v f="$fres" -v m="$mres" 'BEGIN {
+    split(f, a, " "); split(m, b, " ")
+    fs = a[1] * px / a[2]; ms = b[1] * px / b[2]; fc = a[1] * px / a[3]; mc = b[1] * px / b[3]
+    printf "%-4d %12d %14.4g %12d %14.4g %7.3f %9.3f\n", i, a[1], fs, b[1], ms, fs / ms, fc / mc }')"
+  echo "$row"
+  rows+="$row"$'\n'
 done
-awk -v f="$sum_f" -v m="$sum_m" -v r="$sum_r" -v n="$runs" 'BEGIN {
-  printf "mean %12s %14.4g %12s %14.4g %7.3f  (ratio of the means %.3f)\n", "", f / n, "", m / n, r / n, f / m }'
+# the mean of the per-run ratios (wall-clock and per CPU-second: user + system time of each
+# process, Mitsuba's from just before load_file), and the ratio of the mean rates
+awk 'NF == 7 { f += $3; m += $5; r += $6; c += $7; n++ } END {
+  printf "mean %12s %14.4g %12s %14.4g %7.3f %9.3f  (ratio of the means %.3f)\n", "", f / n, "", m / n, r / n, c / n, f / m }' <<<"$rows"

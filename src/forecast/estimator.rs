@@ -23,7 +23,7 @@ pub use super::table_cache::TableCache;
 use super::table_cache::{cell_of, normal_key, CellSizes};
 use crate::bsdf::{self, Mode};
 use crate::math::{luminance, Frame, Rgb, Vec3};
-use crate::profile::{Phase, Stopwatch};
+use crate::profile::Phase;
 use crate::progress::Phases;
 use crate::transport::context::{Context, ShadingQuery};
 use std::sync::Arc;
@@ -308,7 +308,7 @@ impl CausticForecast {
         if self.radius <= 0.0 {
             return None;
         }
-        let t = Stopwatch::start();
+        let t = ctx.profile.start(Phase::CfTable);
         let c = self.cluster_map.query(q.x.p, Self::lit_normals(q).0);
         ctx.profile.record(Phase::CfTable, t);
         c
@@ -330,7 +330,7 @@ impl CausticForecast {
         let cache = cache.filter(|_| cacheable);
         // cached tables live in the frame of the geometric normal (equal to ns there)
         let frame = if cache.is_some() { Frame::from_normal(ng) } else { Frame::from_normal(ns) };
-        let t_table = Stopwatch::start();
+        let t_table = ctx.profile.start(Phase::CfTable);
         let tables = match cache {
             Some(cache) => self.cached_tables(cache, (c, sp.p, ng), ctx),
             None => self.point_tables(c, q, &frame, ctx),

@@ -8,7 +8,7 @@
 use crate::accel::{offset_origin, Hit, World};
 use crate::bsdf::{self, Mode};
 use crate::math::{Rgb, Vec3};
-use crate::profile::{Phase, Profile, Stopwatch};
+use crate::profile::{Phase, Profile};
 use crate::scene::NO_EMITTER;
 pub use crate::transport::context::{Context, ShadingQuery};
 use crate::transport::dirac::follow_dirac_chain;
@@ -93,7 +93,7 @@ pub fn caustic_chain(
     let Some(w) = roulette(weight, q_recursion(weight, q.depth + 1), &mut ctx.rng) else {
         return Rgb::ZERO;
     };
-    let t0 = Stopwatch::start();
+    let t0 = ctx.profile.start(Phase::CfChain);
     ctx.profile.cf_chains += 1;
     let l = match follow_dirac_chain(world, hit, wi, w, MAX_VERTICES, &mut ctx.rng) {
         Some((z, d, beta)) => beta * full.l_hat(world, &z, -d, q.depth + 1, ctx),

@@ -34,7 +34,7 @@ use crate::progress::Phases;
 use crate::accel::{offset_origin, ray_epsilon, Hit, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::math::{Rgb, Vec3, PI};
-use crate::profile::{Phase, Profile, Stopwatch};
+use crate::profile::{Phase, Profile};
 use crate::scene::{Material, NO_EMITTER};
 use crate::transport::dirac::follow_dirac_chain;
 use crate::transport::direct;
@@ -229,7 +229,7 @@ impl Iws {
         if n == 0 && !nee {
             return Rgb::ZERO;
         }
-        let t0 = Stopwatch::start();
+        let t0 = ctx.profile.start(Phase::Gather);
         ctx.profile.gather_vertices += 1;
         let mut l = Rgb::ZERO;
         if nee {
@@ -290,7 +290,7 @@ impl Iws {
         if self.b.is_infinite() || depth + 1 >= MAX_VERTICES {
             return Rgb::ZERO;
         }
-        let t0 = Stopwatch::start();
+        let t0 = ctx.profile.start(Phase::Compensation);
         let Some(bs) = bsdf::sample(m, x, wo, u, Mode::Radiance) else {
             return Rgb::ZERO;
         };
@@ -336,7 +336,7 @@ impl Iws {
         }
         let mut l = self.gather(world, q, ctx);
         l += self.compensate(world, q, ctx);
-        let t0 = Stopwatch::start();
+        let t0 = ctx.profile.start(Phase::Caustics);
         let lc = self.caustics.estimate(world, q, ctx, self);
         ctx.profile.record(Phase::Caustics, t0);
         l + lc
@@ -376,7 +376,7 @@ impl Integrator for Iws {
     }
 
     fn estimate(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
-        let t0 = Stopwatch::start();
+        let t0 = ctx.profile.start(Phase::Radiance);
         let mut l = CameraEstimate::default();
         if let Some(hit) = world.intersect(origin, dir, f32::INFINITY) {
             // the camera ray follows Dirac chains to the first non-specular vertex (spec §1)

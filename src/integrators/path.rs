@@ -12,7 +12,7 @@
 //!
 //! CLI: `forecast render scenes/cornell-box.toml --method pt --spp 64`.
 
-use crate::profile::{Phase, Profile, Stopwatch};
+use crate::profile::{Phase, Profile};
 use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
 use crate::progress::Phases;
 use crate::accel::{offset_origin, Hit, World};
@@ -88,7 +88,7 @@ pub fn emitter_hit(world: &World, hit: &Hit, d: Vec3, prev_delta: bool, prev_pdf
 
 impl Integrator for PathTracer {
     fn estimate(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
-        let t0 = Stopwatch::start();
+        let t0 = ctx.profile.start(Phase::Radiance);
         let l = self.trace(world, origin, dir, ctx);
         ctx.profile.samples += 1;
         ctx.profile.record(Phase::Radiance, t0);

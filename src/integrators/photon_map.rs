@@ -19,7 +19,7 @@
 //!
 //! The estimate is biased (blur, boundary darkening), consistent as `N → ∞, k/N → 0`.
 
-use crate::profile::{Phase, Profile, Stopwatch};
+use crate::profile::{Phase, Profile};
 use super::caustics::{CausticEstimator, Recurse, ShadingQuery};
 use super::iws::Iws;
 use super::{Context, Integrator, MethodArgs, MethodSpec};
@@ -209,7 +209,7 @@ impl CausticEstimator for PhotonMap {
         "photon-map"
     }
     fn estimate(&self, _: &World, q: &ShadingQuery, ctx: &mut Context, _: &dyn Recurse) -> Rgb {
-        let t0 = Stopwatch::start();
+        let t0 = ctx.profile.start(Phase::PhotonQuery);
         let l = self.radiance(q.x, q.m, q.wo, &mut ctx.knn);
         ctx.profile.record(Phase::PhotonQuery, t0);
         l

@@ -51,7 +51,7 @@ use crate::forecast::mixture::{DefensiveMixture, MixtureWeights};
 use crate::forecast::share::{min_share, parse_min_share};
 use crate::forecast::subset_grid::SubsetGrid;
 use crate::math::{Frame, Rgb, Vec3};
-use crate::profile::{Phase, Profile, Stopwatch};
+use crate::profile::{Phase, Profile};
 use crate::scene::NO_EMITTER;
 use crate::transport::context::ShadingQuery;
 use crate::transport::direct;
@@ -305,7 +305,7 @@ fn continue_path(st: &mut PathState, (index, p, ng): (u32, Vec3, Vec3), bs: &Bsd
 
 impl Integrator for GuidedPathTracer {
     fn estimate(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
-        let t0 = Stopwatch::start();
+        let t0 = ctx.profile.start(Phase::Radiance);
         let st = PathState {
             o: origin,
             d: dir,

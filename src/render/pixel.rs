@@ -29,7 +29,7 @@ use super::Context;
 use crate::accel::World;
 use crate::integrators::Integrator;
 use crate::math::Rgb;
-use crate::profile::{Phase, Stopwatch};
+use crate::profile::Phase;
 use crate::sampling::rng::{stream, Rng};
 use crate::scene::Camera;
 use crate::transport::dirac::prefix_emission;
@@ -141,7 +141,7 @@ impl<'a> PixelSampler<'a> {
         };
         let chosen = rng.below(k as u32) as usize;
         let est = integrator.estimate(world, cam.position, at(chosen, [jx, jy]), ctx);
-        let t0 = Stopwatch::start();
+        let t0 = ctx.profile.start(Phase::EmissionSplit);
         let mut e = est.prefix_le;
         for i in (0..k).filter(|&i| i != chosen) {
             e += prefix_emission(world, cam.position, at(i, rng.next_2d()), self.cap, &mut rng);
