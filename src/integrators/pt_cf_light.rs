@@ -308,32 +308,42 @@ impl<'a> Tracer<'a> {
         if self.world.occluded(o, (cam.position - o) / len, len) {
             return;
         }
-        let w_l = density.map_or(1.0, |p0| self.light_weight(sp, m, (wc, w_in), p0 * dist2 / imp, ctx));
+        let pt = self.pt;
+        let mut q = |sp: &ShadingPoint, m: &Material, w: (Vec3, Vec3), d: u32| pt.camera_pdf_w(sp, m, w, d, ctx);
+        let w_l = density.map_or(1.0, |p0| light_weight(self.n, &self.verts, (sp, m), (wc, w_in), p0 * dist2 / imp, &mut q));
         let corr = sp.ns.dot(w_in).abs() / cos_in;
         let v = beta * f * (w_l * corr * sp.ng.dot(wc).abs() * imp / (dist2 * self.n as f32));
         if v.is_finite() && v != Rgb::ZERO {
             self.splats.push((pixel, v));
         }
     }
+}
 
-    /// `w_L = 1/(1 + 1/r)` at the connected vertex `x1` (`(wc, w_in)`: toward the camera and the
-    /// light), `p0` = `P_ℓ p_A p_e/|cos θ_y0| · |x1 − x0|² A_pix cos³θ_c`; the earlier vertices'
-    /// camera-side pdfs at their camera diffuse depth.
-    fn light_weight(&self, sp: &ShadingPoint, m: &Material, (wc, w_in): (Vec3, Vec3), p0: f32, ctx: &mut Context) -> f32 {
-        let q1 = self.pt.camera_pdf_w(sp, m, (wc, w_in), 0, ctx);
-        let mut num = sp.ng.dot(wc).abs() * q1;
-        let mut den = self.n as f32 * p0 * sp.ng.dot(w_in).abs();
-        for (k, v) in self.verts.iter().rev().enumerate() {
-            let q = self.pt.camera_pdf_w(&v.sp, v.m, (v.w_out, v.w_in), k as u32 + 1, ctx);
-            num *= v.sp.ng.dot(v.w_out).abs() * q;
-            den *= v.pdf_l * v.sp.ng.dot(v.w_in).abs();
-        }
-        let rho = num / den;
-        if rho.is_finite() {
-            1.0 / (1.0 + rho)
-        } else {
-            0.0
-        }
+/// The camera side's pdf at a vertex: `(point, material, (wo, wi), diffuse depth) → pdf_w`.
+type CameraPdf<'q> = dyn FnMut(&ShadingPoint, &Material, (Vec3, Vec3), u32) -> f32 + 'q;
+
+/// `w_L = 1/(1 + 1/r)` at the connected vertex `x1` (`(wc, w_in)`: toward the camera and the
+/// light) of a path with the earlier non-Dirac vertices `verts` (oldest first), `n` light paths,
+/// `p0 = P_ℓ p_A p_e/|cos θ_y0| · |x1 − x0|² A_pix cos³θ_c`, and `q` the camera side's pdfs.
+fn light_weight(
+    n: u64,
+    verts: &[Vertex],
+    (sp, m): (&ShadingPoint, &Material),
+    (wc, w_in): (Vec3, Vec3),
+    p0: f32,
+    q: &mut CameraPdf,
+) -> f32 {
+    let mut num = sp.ng.dot(wc).abs() * q(sp, m, (wc, w_in), 0);
+    let mut den = n as f32 * p0 * sp.ng.dot(w_in).abs();
+    for (k, v) in verts.iter().rev().enumerate() {
+        num *= v.sp.ng.dot(v.w_out).abs() * q(&v.sp, v.m, (v.w_out, v.w_in), k as u32 + 1);
+        den *= v.pdf_l * v.sp.ng.dot(v.w_in).abs();
+    }
+    let rho = num / den;
+    if rho.is_finite() {
+        1.0 / (1.0 + rho)
+    } else {
+        0.0
     }
 }
 
