@@ -103,7 +103,7 @@ fn has_dirac(scene: &Scene) -> bool {
 /// objects.
 fn point_light_note(scene: &Scene) -> &'static str {
     if has_dirac(scene) && !scene.point_lights.is_empty() {
-        "; caustics lit by point lights (L S+ D) are rendered by no method yet (light tracing is a later issue)"
+        "; caustics lit by point lights (L S+ D) are rendered only by pt-cf's light paths (issue #34; this rule predates them)"
     } else {
         ""
     }
