@@ -33,8 +33,8 @@ pub use caustics::{BsdfCaustics, CausticEstimator, NoCaustics, Recurse, ShadingQ
 use crate::accel::World;
 use crate::math::{Rgb, Vec3};
 use crate::profile::Profile;
-use crate::scene::Camera;
 use crate::progress::{Hidden, Phases};
+use crate::scene::Camera;
 pub use crate::transport::context::Context;
 pub use settings::RenderSettings;
 

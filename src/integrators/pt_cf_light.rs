@@ -288,7 +288,15 @@ impl<'a> Tracer<'a> {
 
     /// Connects the non-Dirac vertex `sp` (light arriving from `w_in` with throughput `beta`) to
     /// the camera and splats its weighted contribution.
-    fn connect(&mut self, sp: &ShadingPoint, m: &Material, w_in: Vec3, beta: Rgb, density: Option<f32>, ctx: &mut Context) {
+    fn connect(
+        &mut self,
+        sp: &ShadingPoint,
+        m: &Material,
+        w_in: Vec3,
+        beta: Rgb,
+        density: Option<f32>,
+        ctx: &mut Context,
+    ) {
         let cam = self.camera;
         let to = cam.position - sp.p;
         let dist2 = to.length_squared();
@@ -310,7 +318,8 @@ impl<'a> Tracer<'a> {
         }
         let pt = self.pt;
         let mut q = |sp: &ShadingPoint, m: &Material, w: (Vec3, Vec3), d: u32| pt.camera_pdf_w(sp, m, w, d, ctx);
-        let w_l = density.map_or(1.0, |p0| light_weight(self.n, &self.verts, (sp, m), (wc, w_in), p0 * dist2 / imp, &mut q));
+        let w_l =
+            density.map_or(1.0, |p0| light_weight(self.n, &self.verts, (sp, m), (wc, w_in), p0 * dist2 / imp, &mut q));
         let corr = sp.ns.dot(w_in).abs() / cos_in;
         let v = beta * f * (w_l * corr * sp.ng.dot(wc).abs() * imp / (dist2 * self.n as f32));
         if v.is_finite() && v != Rgb::ZERO {
@@ -442,7 +451,8 @@ emission = [5.0, 5.0, 5.0]
                 // one non-Dirac vertex: x1 → chain
                 let wi1 = (Vec3::new(0.05, 0.5, 0.0) - h1.p).normalize();
                 let q1 = bsdf::pdf_w(m1, &sp1, wo1, wi1);
-                let w_e = camera_weight(&world, &light, &cam, &hy, d, first_ratio(&cam, d0, h1.t, h1.ng, (wo1, wi1), q1));
+                let w_e =
+                    camera_weight(&world, &light, &cam, &hy, d, first_ratio(&cam, d0, h1.t, h1.ng, (wo1, wi1), q1));
                 let dist2 = (cam.position - h1.p).length_squared();
                 let p0 = light_start_density(&world, &light, 1, &hy, d) * dist2 / pinhole_importance(&cam, d0);
                 let w_l = light_weight(N_L, &[], (&sp1, m1), (wo1, wi1), p0, &mut q);
@@ -452,7 +462,11 @@ emission = [5.0, 5.0, 5.0]
                 // two non-Dirac vertices: x1 → x2 (a point on the glossy wall) → chain
                 // x2 on the wall (x1 on the floor) or on the floor (x1 on the wall), clear of the ball
                 let on_floor = h1.p.y.abs() < 1e-4;
-                let x2 = if on_floor { Vec3::new(1.5 - 3.0 * k as f32, 0.3, -1.0) } else { Vec3::new(1.5 - 3.0 * k as f32, 0.0, 0.8) };
+                let x2 = if on_floor {
+                    Vec3::new(1.5 - 3.0 * k as f32, 0.3, -1.0)
+                } else {
+                    Vec3::new(1.5 - 3.0 * k as f32, 0.0, 0.8)
+                };
                 let x1_to_wall = x2 - h1.p;
                 let h2 = hit_along(&world, offset_origin(h1.p, h1.ng, x1_to_wall.normalize()), x1_to_wall);
                 let (m2, sp2) = (world.scene.material_of(h2.prim), point(&h2));
