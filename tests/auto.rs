@@ -24,7 +24,7 @@ fn auto_picks_the_documented_method_for_each_scene() {
         ("scenes/ring.toml", Method::PtCf, "open scene"),
         ("scenes/figurines.toml", Method::PtCf, "glossy"),
         ("scenes/stability/no-dirac.toml", Method::Pt, "no mirror or glass"),
-        ("scenes/stability/point-glass.toml", Method::Pt, "point lights only"),
+        ("scenes/stability/point-glass.toml", Method::PtCf, "point lights only"),
         ("tests/scenes/cornell-nodirac.toml", Method::Pt, "no mirror or glass"),
     ] {
         let (m, reason) = choose(&load(scene));
@@ -33,11 +33,11 @@ fn auto_picks_the_documented_method_for_each_scene() {
     }
 }
 
-/// Caustics lit by point lights are rendered by no method: the reason says so.
+/// Caustics lit by point lights are rendered by `pt-cf`'s light paths only: the reason says so.
 #[test]
-fn the_reason_names_what_no_method_renders() {
+fn the_reason_names_what_only_pt_cf_renders() {
     let (_, reason) = choose(&load("scenes/stability/point-glass.toml"));
-    assert!(reason.contains("L S+ D") && reason.contains("no method"), "{reason}");
+    assert!(reason.contains("L S+ D") && reason.contains("pt-cf"), "{reason}");
     let (_, reason) = choose(&load("scenes/cornell-box.toml"));
     assert!(!reason.contains("L S+ D"), "cornell-box has no point lights: {reason}");
 }

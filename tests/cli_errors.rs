@@ -173,6 +173,7 @@ fn a_flag_of_another_method_exits_2_naming_its_method() {
         // no --method: the scene names none, so `auto` resolves it (iws-cf on cornell-box)
         (&["--guide-fraction", "0.5"], "--guide-fraction belongs to pt-cf, not iws-cf"),
         (&["--method", "iws", "--guide-fraction", "0.5"], "--guide-fraction belongs to pt-cf, not iws"),
+        (&["--method", "iws-cf", "--light-paths", "100"], "--light-paths belongs to pt-cf, not iws-cf"),
         (&["--method", "pt-cf", "--variant", "baj08"], "--variant belongs to iws-cf, not pt-cf"),
         (&["--method", "iws-pm", "--split", "4"], "--split belongs to iws-cf/pt-cf, not iws-pm"),
         (&["--method", "iws-cf", "--photons", "10"], "--photons belongs to iws-pm, not iws-cf"),
@@ -217,7 +218,7 @@ fn the_json_records_only_the_chosen_methods_options() {
     for k in ["max_depth", "emission_split", "vpl_paths", "direct", "clusters", "split", "table_depth", "variant"] {
         assert!(cf.contains_key(k), "iws-cf options lack `{k}`: {cf:?}");
     }
-    for k in ["guide_fraction", "guide_min_share", "photons", "gather", "path_filter"] {
+    for k in ["guide_fraction", "guide_min_share", "light_paths", "photons", "gather", "path_filter"] {
         assert!(!cf.contains_key(k), "iws-cf options hold another method's `{k}`: {cf:?}");
     }
     assert_eq!(

@@ -1,7 +1,8 @@
 //! Correctness tests of `pt-cf` (issue #12): agreement with `pt` by a Šidák-corrected per-pixel
 //! Welch z-test (family-wise α = 1e-3) plus a whole-image z-test on the Cornell box (defaults, and
 //! a strongly guided variant with splitting and deeper guiding) and on `ring`; the glass furnace
-//! (L = 1 exactly, with caustic light so the tables are used); bit-for-bit `pt` at c = 1 and on a
+//! (L = 1 exactly, with caustic light so the tables are used); bit-for-bit `pt` at c = 1 (with
+//! `--light-paths 0`; the light-traced caustics are `tests/pt_cf_light.rs`'s) and on a
 //! scene without Dirac objects (no forecasters, so every vertex is a `pt` vertex); parameter errors.
 //! The split counts per cluster are checked against the energy rule.
 //! Each agreement test checks that guiding really happened (lookups inside clusters), and negative
@@ -140,7 +141,8 @@ fn share_rule_guiding_every_cluster_agrees_with_pt_on_cornell_box() {
 fn unguided_clusters_are_pt_vertices_bit_for_bit() {
     let w = world("scenes/cornell-box.toml");
     let mut o = opts();
-    o.ptcf.guide_min_share = 1.0;
+    // the camera side alone (the light paths add the light-traced caustics, tests/pt_cf_light.rs)
+    (o.ptcf.guide_min_share, o.ptcf.light_paths) = (1.0, Some(0));
     let mut g = build(&w, Method::PtCf, &o);
     let (a, profile) = render_profiled(&w, g.as_mut(), (16, 16), 64, 9);
     let stats = g.stats(&profile);
@@ -209,6 +211,7 @@ fn guide_fraction_one_is_pt_bit_for_bit() {
     let w = world("scenes/cornell-box.toml");
     let mut o = opts();
     (o.ptcf.guide_fraction, o.cf.split, o.cf.table_depth) = (1.0, 4, 8);
+    o.ptcf.light_paths = Some(0); // the camera side alone (tests/pt_cf_light.rs has the light side)
     let mut g = build(&w, Method::PtCf, &o);
     let (a, profile) = render_profiled(&w, g.as_mut(), (16, 16), 64, 9);
     let mut p = Method::Pt.build(&w, &o, &[]).unwrap();

@@ -2,10 +2,9 @@
 //! "model no more than a scene needs". [`choose`] picks a method from what the scene contains,
 //! by a rule whose evidence (the equal-time tables) is in `docs/auto.md`:
 //!
-//! 1. No Dirac (mirror/glass) objects, or Dirac objects lit by point lights only: `pt`, the
-//!    cheapest method that is unbiased for the scene. Caustics lit by point lights (L S+ D) are
-//!    rendered by no method yet (light tracing is a later issue), so there is nothing for a
-//!    caustic method to add; the reason says so.
+//! 1. No Dirac (mirror/glass) objects: `pt`, the cheapest method that is unbiased for the scene.
+//!    Dirac objects lit by point lights only: `pt-cf`, whose light paths (issue #34) are the only
+//!    technique that samples their caustics (L S+ D); the reason says so.
 //! 2. Caustics from area lights in a closed room of Lambertian surfaces (every non-Dirac surface
 //!    diffuse, [`enclosure`] ≥ [`CLOSED_ROOM`]): `iws-cf`, whose VPLs carry the room's diffuse
 //!    interreflection (`cornell-box`: 0.64–0.71× `pt`'s whole-image RMSE at 1 and 4 min, `pt-cf`
@@ -103,7 +102,7 @@ fn has_dirac(scene: &Scene) -> bool {
 /// objects.
 fn point_light_note(scene: &Scene) -> &'static str {
     if has_dirac(scene) && !scene.point_lights.is_empty() {
-        "; caustics lit by point lights (L S+ D) are rendered by no method yet (light tracing is a later issue)"
+        "; caustics lit by point lights (L S+ D) are rendered only by pt-cf's light paths (issue #34)"
     } else {
         ""
     }
@@ -116,8 +115,10 @@ pub fn choose(scene: &Scene) -> (Method, String) {
         return (Method::Pt, "no mirror or glass objects: pt, the cheapest unbiased method".into());
     }
     if scene.emitters.is_empty() {
-        let why = format!("mirror/glass objects lit by point lights only: pt, the cheapest unbiased method{note}");
-        return (Method::Pt, why);
+        let why = "mirror/glass objects lit by point lights only: pt-cf, whose light paths render their caustics \
+                   (L S+ D; pt and iws-cf cannot sample them)"
+            .to_string();
+        return (Method::PtCf, why);
     }
     let closed = enclosure(scene);
     if lambertian_only(scene) && closed >= CLOSED_ROOM {

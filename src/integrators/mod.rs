@@ -23,6 +23,7 @@ pub mod auto;
 pub mod caustic_share;
 pub mod caustics;
 pub mod path_class;
+pub mod pt_cf_light;
 pub mod settings;
 pub mod vpl;
 
@@ -33,6 +34,7 @@ use crate::accel::World;
 use crate::math::{Rgb, Vec3};
 use crate::profile::Profile;
 use crate::progress::{Hidden, Phases};
+use crate::scene::Camera;
 pub use crate::transport::context::Context;
 pub use settings::RenderSettings;
 
@@ -78,6 +80,23 @@ pub trait Integrator: Send + Sync {
     fn stats(&self, _profile: &Profile) -> serde_json::Value {
         serde_json::json!({})
     }
+    /// The pass's light-traced splats (`pt-cf`'s light paths, `integrators::pt_cf_light`): a dense
+    /// row-major image of `camera`'s size added to every pixel's camera sample of pass `pass`, a
+    /// pure function of (seed, pass) and the scene. `None`: the method traces no light paths.
+    fn light_splats(&self, _world: &World, _camera: &Camera, _seed: u64, _pass: u64) -> Option<LightSplats> {
+        None
+    }
+}
+
+/// One pass's light-traced contributions ([`Integrator::light_splats`]).
+#[derive(Clone, Debug, Default)]
+pub struct LightSplats {
+    /// Row-major, one value per pixel (already divided by the pass's light paths).
+    pub image: Vec<Rgb>,
+    /// Closest-hit rays traced by the light paths.
+    pub closest_rays: u64,
+    /// Shadow (camera-connection) rays.
+    pub shadow_rays: u64,
 }
 
 /// One method: its preprocess and its construction (its parameters are its field of

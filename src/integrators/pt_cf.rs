@@ -37,12 +37,13 @@
 //!
 //! CLI: `forecast render scenes/cornell-box.toml --method pt-cf --time 1m`.
 
-use super::iws_forecast::IwsCf;
+use super::iws_forecast::{targeted_emission, IwsCf};
+use super::pt_cf_light::{self, LightSide};
 use super::path::emitter_hit;
 use super::path_class::{kept, PathClass, PathFilter};
 use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
 use crate::progress::Phases;
-use crate::accel::{offset_origin, World};
+use crate::accel::{offset_origin, Hit, World};
 use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
 use crate::forecast::cluster::Cluster;
 use crate::forecast::direction_table::ForecastTables;
@@ -52,7 +53,8 @@ use crate::forecast::share::{min_share, parse_min_share};
 use crate::forecast::subset_grid::SubsetGrid;
 use crate::math::{Frame, Rgb, Vec3};
 use crate::profile::{Phase, Profile};
-use crate::scene::NO_EMITTER;
+use crate::scene::{Camera, Material, NO_EMITTER};
+use crate::transport::particle::MAX_VERTICES;
 use crate::transport::context::ShadingQuery;
 use crate::transport::direct;
 use crate::transport::roulette::Throughput;
@@ -69,6 +71,10 @@ pub struct PtCfArgs {
     /// pt-cf: clusters whose caustic share s_k of indirect irradiance is below this are not guided.
     #[arg(long, default_value_t = 0.5, value_parser = parse_min_share)]
     pub guide_min_share: f32,
+    /// pt-cf: light paths per pass connected to the camera for the caustics L S+ (S|D)* D E, MIS-
+    /// weighted against the camera paths (0 = none: the camera side alone; default 0.5 per pixel).
+    #[arg(long, value_name = "N")]
+    pub light_paths: Option<u64>,
 }
 
 fn parse_guide_fraction(s: &str) -> Result<f32, String> {
@@ -84,7 +90,7 @@ impl MethodSpec for PtCf {
     fn preprocess(world: &World, args: &MethodArgs, seed: u64, phases: &dyn Phases) -> Result<CausticForecast, String> {
         <IwsCf as MethodSpec>::preprocess(world, args, seed, phases)
     }
-    fn build(_: &World, args: &MethodArgs, g: CausticForecast) -> Result<Box<dyn Integrator>, String> {
+    fn build(world: &World, args: &MethodArgs, g: CausticForecast) -> Result<Box<dyn Integrator>, String> {
         let p = &args.ptcf;
         let c = p.guide_fraction;
         let weights = MixtureWeights::guide_fraction(c).map_err(|e| format!("--guide-fraction: {e}"))?;
@@ -117,8 +123,21 @@ impl MethodSpec for PtCf {
             cf: g,
             cache: TableCache::default(),
             filter: args.pt.filter()?,
+            light: light_side(world, args),
         }))
     }
+}
+
+/// The light side (`None`: `--light-paths 0`, a `--path-filter` diagnostic, or no light or Dirac
+/// object to make a path of C).
+fn light_side(world: &World, args: &MethodArgs) -> Option<LightSide> {
+    let s = &world.scene;
+    let useful = !s.lights.is_empty() && s.dirac_bounds().is_some() && args.pt.path_filter.is_none();
+    (useful && args.ptcf.light_paths != Some(0)).then(|| LightSide {
+        paths: args.ptcf.light_paths,
+        emission: targeted_emission(world),
+        max_depth: args.settings.cap(),
+    })
 }
 
 /// Continuations at diffuse depth 0 in each kept cluster by the energy rule against the densest
@@ -154,6 +173,8 @@ pub struct GuidedPathTracer {
     cache: TableCache,
     /// `--path-filter` (a diagnostic; `None`: the unbiased estimate).
     filter: Option<PathFilter>,
+    /// The light paths (`integrators::pt_cf_light`); `None`: today's camera side alone.
+    light: Option<LightSide>,
 }
 
 /// One path (or branch) in flight: the ray, its throughput and how the last vertex sampled it.
@@ -173,6 +194,9 @@ struct PathState {
     prev_pdf_w: f32,
     /// The path's class so far (`--path-filter`).
     class: PathClass,
+    /// The running MIS ratio against the light paths (`pt_cf_light::first_ratio`, `next_ratio`)
+    /// while the path may be of class C (its first vertex non-Dirac); `None` otherwise.
+    mis: Option<f32>,
 }
 
 /// The guide at one vertex: tables, their frame, the mixture weights and the split count.
@@ -206,6 +230,50 @@ impl GuidedPathTracer {
         Some(Guide { tables, frame, weights, n })
     }
 
+    /// The pdf `pt-cf` uses to draw `wi` at a non-Dirac vertex of diffuse depth `depth` seen from
+    /// `wo`: the BSDF's, or `n·q` of the guided mixture with its split count `n` (the light
+    /// side's MIS weight, `pt_cf_light`).
+    pub(super) fn camera_pdf_w(
+        &self,
+        sp: &ShadingPoint,
+        m: &Material,
+        (wo, wi): (Vec3, Vec3),
+        depth: u32,
+        ctx: &mut Context,
+    ) -> f32 {
+        match self.guide_at(&ShadingQuery { x: sp, m, wo, depth }, ctx) {
+            Some(g) => g.n as f32 * DefensiveMixture::new(m, sp, wo, &g.tables, g.frame, g.weights).pdf_w(wi),
+            None => bsdf::pdf_w(m, sp, wo, wi),
+        }
+    }
+
+    /// Updates the path's MIS ratio after its vertex `index` (`(m, sp, wo, t)`: material, point,
+    /// toward the previous vertex, distance from it) drew the continuation now in `st`.
+    #[inline]
+    fn track_mis(&self, st: &mut PathState, (m, sp, wo, t): (&Material, &ShadingPoint, Vec3, f32), index: u32, ctx: &Context) {
+        let (Some(_), Some(cam)) = (&self.light, &ctx.camera) else { return };
+        if m.is_dirac() {
+            return;
+        }
+        if index == 0 {
+            st.mis = Some(pt_cf_light::first_ratio(cam, -wo, t, sp.ng, (wo, st.d), st.prev_pdf_w));
+        } else if let Some(r) = st.mis {
+            st.mis = Some(r * pt_cf_light::next_ratio(m, sp, (wo, st.d), st.prev_pdf_w));
+        }
+    }
+
+    /// The camera side's MIS weight of an emitter hit against the light paths: `w_E` on a path of
+    /// class C (first vertex non-Dirac, the emitter reached from a Dirac vertex), 1 otherwise.
+    #[inline]
+    fn camera_weight(&self, world: &World, st: &PathState, hit: &Hit, ctx: &Context) -> f32 {
+        match (&self.light, &ctx.camera, st.mis) {
+            (Some(light), Some(cam), Some(ratio)) if st.prev_delta && st.vertex < MAX_VERTICES => {
+                pt_cf_light::camera_weight(world, light, cam, hit, st.d, ratio)
+            }
+            _ => 1.0,
+        }
+    }
+
     /// A contribution `v` reaching the light from `class`, or 0 if `--path-filter` drops it.
     #[inline]
     fn kept(&self, class: PathClass, v: Rgb) -> Rgb {
@@ -221,6 +289,7 @@ impl GuidedPathTracer {
             if s.emitter_of(hit.prim) != NO_EMITTER {
                 if let Some((le, w)) = emitter_hit(world, &hit, st.d, st.prev_delta, st.prev_pdf_w) {
                     // no non-Dirac vertex yet: the camera's Dirac prefix
+                    let w = w * self.camera_weight(world, &st, &hit, ctx);
                     let v = self.kept(st.class, st.t.beta * le * w);
                     *if st.diffuse == 0 { &mut l.prefix_le } else { &mut l.rest } += v;
                 }
@@ -248,6 +317,7 @@ impl GuidedPathTracer {
                 if !continue_path(&mut st, (depth, hit.p, hit.ng), &bs, ctx) {
                     break;
                 }
+                self.track_mis(&mut st, (m, &sp, wo, hit.t), depth, ctx);
                 continue;
             };
             st.diffuse += 1;
@@ -260,9 +330,10 @@ impl GuidedPathTracer {
                 if !continue_path(&mut st, (depth, hit.p, hit.ng), &ms.as_bsdf_sample(), ctx) {
                     break;
                 }
+                self.track_mis(&mut st, (m, &sp, wo, hit.t), depth, ctx);
                 continue;
             }
-            self.split(world, (&st, (depth, hit.p, hit.ng)), (&mix, g.n), &mut l.rest, ctx);
+            self.split(world, (&st, (depth, hit.p, hit.ng)), (&mix, g.n), (m, &sp, wo, hit.t), &mut l.rest, ctx);
             break;
         }
         l
@@ -275,6 +346,7 @@ impl GuidedPathTracer {
         world: &World,
         (st, at): (&PathState, (u32, Vec3, Vec3)),
         (mix, n): (&DefensiveMixture, usize),
+        v: (&Material, &ShadingPoint, Vec3, f32),
         rest: &mut Rgb,
         ctx: &mut Context,
     ) {
@@ -284,6 +356,7 @@ impl GuidedPathTracer {
             let mut b = *st;
             let bs = BsdfSample { weight: ms.weight * (1.0 / nf), pdf_w: nf * ms.pdf_w, ..ms.as_bsdf_sample() };
             if continue_path(&mut b, at, &bs, ctx) {
+                self.track_mis(&mut b, v, at.0, ctx);
                 *rest += self.trace(world, b, ctx).total();
             }
         }
@@ -315,6 +388,7 @@ impl Integrator for GuidedPathTracer {
             prev_delta: true,
             prev_pdf_w: 0.0,
             class: PathClass::default(),
+            mis: None,
         };
         let l = self.trace(world, st, ctx);
         ctx.profile.samples += 1;
@@ -324,6 +398,11 @@ impl Integrator for GuidedPathTracer {
 
     fn prefix_cap(&self) -> u32 {
         self.max_depth
+    }
+
+    fn light_splats(&self, world: &World, camera: &Camera, seed: u64, pass: u64) -> Option<super::LightSplats> {
+        let light = self.light.as_ref()?;
+        Some(pt_cf_light::light_splats(self, light, world, camera, (seed, pass)))
     }
 
     fn stats(&self, profile: &Profile) -> serde_json::Value {
@@ -351,6 +430,11 @@ impl Integrator for GuidedPathTracer {
             "preprocess": self.cf.stats,
             "cache_cells": self.cf.cells.json(),
             "options": self.cf.opts,
+            "light_paths": self.light.map(|l| serde_json::json!({
+                "per_pass_option": l.paths,
+                "per_pixel_default": pt_cf_light::PATHS_PER_PIXEL,
+                "emission": format!("{:?}", l.emission),
+            })),
         })
     }
 }

@@ -294,8 +294,6 @@ fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), String> 
     let t_load = Instant::now();
     let mut scene = crate::scene::load_with(&job.scene, &job.load_options()).map_err(|e| e.to_string())?;
     job.output_set(&scene).check()?; // before anything is written
-    let limitations = crate::scene::scene_warnings(&scene);
-    scene.warnings.extend(limitations);
     let load_s = secs(t_load);
     if rank == 0 {
         for w in &scene.warnings {
@@ -303,6 +301,17 @@ fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), String> 
         }
     }
     let plan = job.resolve(&scene)?;
+    // the point-light caustic warning does not concern `pt-cf` with its light paths
+    let lights_caustics = plan.method == Method::PtCf && plan.args.ptcf.light_paths != Some(0);
+    for w in crate::scene::scene_warnings(&scene) {
+        if lights_caustics && w.contains(crate::scene::POINT_LIGHT_WARNING) {
+            continue;
+        }
+        if rank == 0 {
+            crate::errln!("warning: {w}");
+        }
+        scene.warnings.push(w);
+    }
     if rank == 0 && job.progress {
         crate::errln!("method: {} ({})", plan.method.name(), plan.method_reason);
     }

@@ -11,7 +11,7 @@ pub mod film;
 pub mod pixel;
 
 use crate::accel::{take_ray_counts, World};
-use crate::integrators::Integrator;
+use crate::integrators::{Integrator, LightSplats};
 use crate::math::Rgb;
 use crate::profile::Profile;
 use crate::sampling::rng::{stream, Rng};
@@ -71,6 +71,7 @@ pub fn render_pass(
             let mut out = Vec::with_capacity(TILE * TILE);
             let mut c = PassCounters::default();
             let mut ctx = Context::new(Rng::keyed(seed, stream::CAMERA, pass, 0));
+            ctx.camera = Some(pixels.camera().clone());
             for y in ty * TILE..((ty + 1) * TILE).min(h) {
                 for x in tx * TILE..((tx + 1) * TILE).min(w) {
                     let pixel = (y * w + x) as u64;
@@ -92,16 +93,37 @@ pub fn render_pass(
         })
         .collect();
     let mut total = PassCounters::default();
+    let splats = integrator.light_splats(world, pixels.camera(), seed, pass);
     for (tile, out, c) in results {
         let (tx, ty) = (tile % tiles_x, tile / tiles_x);
         let mut k = 0;
         for y in ty * TILE..((ty + 1) * TILE).min(h) {
             for x in tx * TILE..((tx + 1) * TILE).min(w) {
-                film.add(y * w + x, out[k]);
+                film.add(y * w + x, with_splat(out[k], splats.as_ref(), y * w + x, &mut total));
                 k += 1;
             }
         }
         total.add(&c);
     }
+    if let Some(s) = &splats {
+        total.closest_rays += s.closest_rays;
+        total.shadow_rays += s.shadow_rays;
+    }
     total
+}
+
+/// A pixel's sample of the pass: its camera estimate plus the pass's light splats there, if the
+/// integrator traces light paths (so each pass still adds one i.i.d. sample per pixel and the
+/// film's variance stays the variance of the pass values). A non-finite sum is counted and
+/// replaced by zero, as a non-finite camera estimate.
+#[inline]
+fn with_splat(camera: Rgb, splats: Option<&LightSplats>, pixel: usize, c: &mut PassCounters) -> Rgb {
+    let Some(s) = splats else { return camera };
+    let l = camera + s.image[pixel];
+    if l.is_finite() {
+        l
+    } else {
+        c.nonfinite += 1;
+        Rgb::ZERO
+    }
 }

@@ -106,6 +106,11 @@ impl<'a> PixelSampler<'a> {
         (self.camera.width, self.camera.height)
     }
 
+    /// The camera.
+    pub fn camera(&self) -> &Camera {
+        self.camera
+    }
+
     /// What the probe found.
     pub fn stats(&self) -> SplitStats {
         self.stats

@@ -24,6 +24,8 @@ pub mod stream {
     pub const PIXEL_SPLIT: u64 = 7;
     /// The CF preprocess's caustic-share gather (`integrators::caustic_share`).
     pub const GUIDE: u64 = 8;
+    /// `pt-cf`'s light paths connected to the camera (`integrators::pt_cf_light`).
+    pub const LIGHT_PATHS: u64 = 9;
 }
 
 #[inline]

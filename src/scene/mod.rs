@@ -339,7 +339,8 @@ pub fn scene_warnings(scene: &Scene) -> Vec<String> {
         w.push(format!(
             "{}: {n} point light(s) and Dirac (mirror/glass) objects: caustics lit by point lights (paths L S+ D) \
              {POINT_LIGHT_WARNING} (BAJ08 limitation: a point light is never hit, and a Dirac chain cannot be \
-             connected to it); those methods leave them out, `iws-pm` includes them",
+             connected to it); those methods leave them out, `iws-pm` includes them (biased) and `pt-cf` renders them \
+             with its light paths (`--light-paths`)",
             scene.path
         ));
     }

@@ -8,7 +8,7 @@ use crate::bsdf::ShadingPoint;
 use crate::math::Vec3;
 use crate::profile::Profile;
 use crate::sampling::rng::Rng;
-use crate::scene::Material;
+use crate::scene::{Camera, Material};
 
 /// Per-worker state of the hot path.
 pub struct Context {
@@ -18,12 +18,15 @@ pub struct Context {
     pub knn: Vec<(f32, u32)>,
     /// Counters and phase times, summed into the report.
     pub profile: Profile,
+    /// The camera of the image being rendered (set by `render::render_pass`; `None` elsewhere,
+    /// e.g. preprocess gathers): `pt-cf`'s camera-side MIS weight against its light paths.
+    pub camera: Option<Camera>,
 }
 
 impl Context {
     /// A context drawing from `rng`.
     pub fn new(rng: Rng) -> Context {
-        Context { rng, knn: Vec::new(), profile: Profile::default() }
+        Context { rng, knn: Vec::new(), profile: Profile::default(), camera: None }
     }
 }
 

@@ -79,6 +79,29 @@ impl Emission {
     }
 }
 
+impl Emission {
+    /// The solid-angle pdf with which [`Emission::sample_dir`] draws `w` from `y` (normal `n`,
+    /// ignored for point lights): the cone's uniform pdf inside the cone and 0 outside it, or
+    /// the fallback's (`pt-cf`'s camera-side MIS weight against its light paths).
+    pub fn pdf_dir(&self, y: Vec3, n: Vec3, point_light: bool, w: Vec3) -> f32 {
+        if let Emission::Targeted { center, radius } = *self {
+            let to_c = center - y;
+            let dist2 = to_c.length_squared();
+            if dist2 > radius * radius * 1.0001 {
+                let cos_max = (1.0 - radius * radius / dist2).max(0.0).sqrt();
+                let pdf_w = 1.0 / (2.0 * std::f32::consts::PI * (1.0 - cos_max));
+                let inside = w.dot(to_c) >= cos_max * dist2.sqrt();
+                return if inside && pdf_w.is_finite() { pdf_w } else { 0.0 };
+            }
+        }
+        if point_light {
+            uniform_sphere_pdf()
+        } else {
+            cosine_hemisphere_pdf(n.dot(w)).max(0.0)
+        }
+    }
+}
+
 /// The light-source vertex of a path: a "direct point light" (spec §2).
 #[derive(Clone, Copy, Debug)]
 pub struct EmitterVertex {

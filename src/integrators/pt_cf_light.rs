@@ -1,0 +1,506 @@
+//! `pt-cf`'s light-traced caustics (issue #34): light paths connected to the pinhole camera,
+//! MIS-combined with `pt-cf`'s camera paths (design: `docs/methods/pt-cf.md` §"Light paths").
+//!
+//! Path class. **C** = light paths whose first vertex after the emitter is Dirac, ending at a
+//! non-Dirac vertex `x1` that the camera sees directly: `L S+ (S|D)* D E`. Next-event estimation
+//! never samples C (its light segment ends at a Dirac vertex), so exactly two techniques do: the
+//! camera side (E: `pt-cf`'s path through `x1` that hits the emitter through a Dirac chain) and
+//! the light side (L: the light subpath `y0 … x1` connected to the camera). Every other class
+//! keeps `pt-cf`'s weights exactly.
+//!
+//! Light side. Each pass traces `N_L` light paths (`--light-paths`; path `i` draws from
+//! `Rng::keyed(seed, stream::LIGHT_PATHS, pass, i)`), launched as the particle tracer's with the
+//! CF preprocess's targeted emission (`Emission::Targeted`) and bounced by BSDF sampling in
+//! importance mode with the particle tracer's roulette. At each non-Dirac vertex `x` after a
+//! Dirac first vertex (and at most `--max-depth − 1` vertices from the light, the camera side's
+//! cap on C) it splats into the pixel that sees `x`
+//!
+//!   `w_L · β · f(ω_c, ω_in) · (|n_s·ω_in|/|n_g·ω_in|) · V(x, x0) · |n_g·ω_c| / |x − x0|² · W / N_L`,
+//!
+//! `W = 1/(A_pix cos³θ_c)` (a pixel's value is the mean radiance over its footprint on the image
+//! plane at distance 1, area `A_pix`; pbrt-v4's `We = 1/(A cos⁴θ)` times the camera-side cosine
+//! of its `G`), the shading-normal factor of importance transport as `transport::particle`.
+//!
+//! Weights (balance heuristic with counts, Veach ch. 10; SmallVCM `vertexcm` without merging).
+//! With `r = N_L p_L / (n_E p_E)`, `w_L = r/(1 + r)` and `w_E = 1/(1 + r)`, which sum to 1. Along
+//! the camera path `x0, x1, …, x_m` (non-Dirac vertices `v_1 = x1 … v_m`, Dirac chains between),
+//! then the chain to the emitter point `y0`:
+//!
+//!   `r = N_L · P_ℓ p_A(y0) p_e(ω0)/|cos θ_y0| · |x1 − x0|²·A_pix cos³θ_c
+//!        · Π_{j=1..m} c⁺_j / (c⁻_j q_j) · Π_{j=2..m} p^L_j`
+//!
+//! `c⁺_j`/`c⁻_j` the geometric cosines at `v_j` toward the light/camera side, `q_j` the pdf
+//! `pt-cf` used at `v_j` (BSDF, or `n·q` of the defensive mixture with its split count `n`, so
+//! `n_E` is inside `q_1`), `p^L_j` the light side's BSDF pdf at `v_j`. The chains' generalized
+//! distances cancel pairwise, so do their Fresnel choice probabilities; roulette is neither pdf.
+//! Assumed: `x1` and the light lie in the same medium (the `(η_x1/η_y0)²` factor is 1; no scene
+//! has a diffuse surface inside glass). A point light has `p_E = 0`: `w_L = 1`, the light side
+//! alone renders its caustics.
+//!
+//! Splat film. Light paths run in chunks of [`CHUNK`] (in parallel); each chunk returns its
+//! (pixel, value) list and the lists are added in chunk order into a dense per-pass image, which
+//! `render::render_pass` adds to each pixel's camera sample: the pass's value of a pixel is still
+//! one i.i.d. sample, so the film's variance layer and checkpoints stay valid, and the image does
+//! not depend on threads or ranks (a pass, light paths included, is rendered by one rank).
+
+use super::pt_cf::GuidedPathTracer;
+use super::{Context, LightSplats};
+use crate::accel::{offset_origin, take_ray_counts, Hit, World};
+use crate::bsdf::{self, Mode, ShadingPoint};
+use crate::math::{Rgb, Vec3};
+use crate::sampling::rng::{stream, Rng};
+use crate::scene::{Camera, LightRef, Material, NO_EMITTER};
+use crate::transport::particle::{Emission, MAX_VERTICES};
+use crate::transport::roulette::{q_particle, roulette};
+use rayon::prelude::*;
+
+/// Light paths per parallel work item.
+pub const CHUNK: u64 = 1024;
+
+/// Light paths per pass per pixel when `--light-paths` is not given (measured:
+/// `results/2026-12-02-light-traced-caustics.md`).
+pub const PATHS_PER_PIXEL: f64 = 0.5;
+
+/// The light side's settings.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSide {
+    /// `--light-paths` (`None`: [`PATHS_PER_PIXEL`] × the pixel count).
+    pub paths: Option<u64>,
+    /// The CF preprocess's targeted emission.
+    pub emission: Emission,
+    /// `--max-depth`.
+    pub max_depth: u32,
+}
+
+impl LightSide {
+    /// Light paths per pass for `camera`'s image.
+    pub fn n_paths(&self, camera: &Camera) -> u64 {
+        self.paths.unwrap_or_else(|| (PATHS_PER_PIXEL * camera.width as f64 * camera.height as f64).ceil() as u64)
+    }
+}
+
+/// `1/(A_pix cos³θ_c)` for the unit direction `d` from the camera (0 behind it): the pinhole's
+/// importance per solid angle, and the camera's solid-angle density of a pixel sample.
+#[inline]
+pub fn pinhole_importance(camera: &Camera, d: Vec3) -> f32 {
+    let c = d.dot(camera.forward);
+    if c <= 0.0 {
+        return 0.0;
+    }
+    let side = 2.0 * (camera.fov_deg.to_radians() * 0.5).tan() / camera.height as f32;
+    1.0 / (side * side * c * c * c)
+}
+
+/// `N_L · P_ℓ p_A(y0) p_e(ω0)/|cos θ_y0|` for the camera path's emitter hit `hit` along `d`, 0
+/// when the light side cannot draw it (outside the cone, back side).
+fn light_start_density(world: &World, light: &LightSide, n_l: u64, hit: &Hit, d: Vec3) -> f32 {
+    let s = &world.scene;
+    let em = s.emitter_of(hit.prim);
+    let cos_y0 = hit.ng.dot(-d);
+    if em == NO_EMITTER || cos_y0 <= 0.0 {
+        return 0.0;
+    }
+    let p_a = 1.0 / s.emitters[em as usize].area;
+    let p_e = light.emission.pdf_dir(hit.p, hit.ng, false, -d);
+    n_l as f32 * s.light_pick.pmf(em as usize) * p_a * p_e / cos_y0
+}
+
+/// The camera side's weight `w_E = 1/(1 + r)` of a path of C that hits the emitter at `hit`
+/// along `d` after a Dirac vertex, `ratio` the running product of the camera path
+/// ([`first_ratio`], [`next_ratio`]).
+pub fn camera_weight(world: &World, light: &LightSide, camera: &Camera, hit: &Hit, d: Vec3, ratio: f32) -> f32 {
+    let density = light_start_density(world, light, light.n_paths(camera), hit, d);
+    if density <= 0.0 {
+        return 1.0; // the light side cannot draw this path
+    }
+    let r = ratio * density;
+    if r.is_finite() {
+        1.0 / (1.0 + r)
+    } else {
+        0.0
+    }
+}
+
+/// The camera path's ratio after `x1` (first hit at distance `t` along the camera ray `d0`, wo
+/// toward the camera, continuation `wi` drawn with pdf `q`): `t²·A_pix cos³θ_c · c⁺/(c⁻ q)`.
+pub fn first_ratio(camera: &Camera, d0: Vec3, t: f32, ng: Vec3, (wo, wi): (Vec3, Vec3), q: f32) -> f32 {
+    let w = pinhole_importance(camera, d0);
+    let den = w * ng.dot(wo).abs() * q;
+    if den > 0.0 {
+        t * t * ng.dot(wi).abs() / den
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// The factor of a later non-Dirac camera vertex: `p^L c⁺/(c⁻ q)`, `p^L` the light side's
+/// BSDF pdf of `wo` given `wi`.
+pub fn next_ratio(m: &Material, sp: &ShadingPoint, (wo, wi): (Vec3, Vec3), q: f32) -> f32 {
+    let p_l = bsdf::pdf_w(m, sp, wi, wo);
+    let den = sp.ng.dot(wo).abs() * q;
+    if den > 0.0 {
+        p_l * sp.ng.dot(wi).abs() / den
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// A non-Dirac vertex of a light path before the connected one.
+#[derive(Clone, Copy)]
+struct Vertex<'a> {
+    sp: ShadingPoint,
+    m: &'a Material,
+    /// Toward the light side.
+    w_in: Vec3,
+    /// The sampled direction (toward the camera side).
+    w_out: Vec3,
+    /// Its pdf (importance-mode BSDF sampling).
+    pdf_l: f32,
+}
+
+/// A light path's start: its ray, β and `P_ℓ p_A p_e/|cos θ_y0|` (`None` for a point light,
+/// which the camera side never samples).
+struct Start {
+    o: Vec3,
+    d: Vec3,
+    beta: Rgb,
+    density: Option<f32>,
+}
+
+/// The launch of `transport::particle` (same random numbers: light, point, direction).
+fn launch(world: &World, emission: Emission, rng: &mut Rng) -> Option<Start> {
+    let s = &world.scene;
+    let (li, pmf, _) = s.light_pick.sample(rng.next_f32());
+    if pmf <= 0.0 {
+        return None;
+    }
+    let (u_pos, u_dir) = (rng.next_2d(), rng.next_2d());
+    match s.lights[li] {
+        LightRef::Area(e) => {
+            let (y, n, pdf_a) = s.sample_emitter_point(e, u_pos);
+            let (w, pdf_w) = emission.sample_dir(y, n, false, u_dir)?;
+            let cos0 = n.dot(w);
+            if pdf_a <= 0.0 || cos0 <= 0.0 {
+                return None;
+            }
+            let p = pmf * pdf_a * pdf_w;
+            let beta = s.emitters[e as usize].radiance * (cos0 / p);
+            Some(Start { o: offset_origin(y, n, w), d: w, beta, density: Some(p / cos0) })
+        }
+        LightRef::Point(i) => {
+            let pl = &s.point_lights[i as usize];
+            let (w, pdf_w) = emission.sample_dir(pl.position, Vec3::Z, true, u_dir)?;
+            Some(Start { o: pl.position, d: w, beta: pl.intensity / (pmf * pdf_w), density: None })
+        }
+    }
+}
+
+/// What one chunk of light paths produced.
+struct Chunk {
+    splats: Vec<(u32, Rgb)>,
+    closest: u64,
+    shadow: u64,
+}
+
+/// The pass's light splats for `camera` (see the module docs).
+pub fn light_splats(
+    pt: &GuidedPathTracer,
+    light: &LightSide,
+    world: &World,
+    camera: &Camera,
+    (seed, pass): (u64, u64),
+) -> LightSplats {
+    let n = light.n_paths(camera);
+    let chunks: Vec<Chunk> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let _ = take_ray_counts();
+            let mut ctx = Context::new(Rng::keyed(seed, stream::LIGHT_PATHS, pass, u64::MAX));
+            let mut t = Tracer { pt, light, world, camera, n, splats: Vec::new(), verts: Vec::new() };
+            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                t.path(Rng::keyed(seed, stream::LIGHT_PATHS, pass, i), &mut ctx);
+            }
+            let (closest, shadow) = take_ray_counts();
+            Chunk { splats: t.splats, closest, shadow }
+        })
+        .collect();
+    let mut out = LightSplats {
+        image: vec![Rgb::ZERO; camera.width as usize * camera.height as usize],
+        ..LightSplats::default()
+    };
+    for c in chunks {
+        for (p, v) in c.splats {
+            out.image[p as usize] += v;
+        }
+        out.closest_rays += c.closest;
+        out.shadow_rays += c.shadow;
+    }
+    out
+}
+
+/// One chunk's light tracer.
+struct Tracer<'a> {
+    pt: &'a GuidedPathTracer,
+    light: &'a LightSide,
+    world: &'a World,
+    camera: &'a Camera,
+    /// `N_L`.
+    n: u64,
+    splats: Vec<(u32, Rgb)>,
+    /// The current path's non-Dirac vertices so far (scratch).
+    verts: Vec<Vertex<'a>>,
+}
+
+impl<'a> Tracer<'a> {
+    /// Traces one light path, splatting at its vertices of C.
+    fn path(&mut self, mut rng: Rng, ctx: &mut Context) {
+        let s = &self.world.scene;
+        self.verts.clear();
+        let Some(Start { mut o, mut d, mut beta, density }) = launch(self.world, self.light.emission, &mut rng) else {
+            return;
+        };
+        for depth in 1..MAX_VERTICES {
+            let Some(hit) = self.world.intersect(o, d, f32::INFINITY) else { return };
+            if s.emitter_of(hit.prim) != NO_EMITTER {
+                return; // emitters absorb
+            }
+            let m: &'a Material = s.material_of(hit.prim);
+            let (w_in, sp) = (-d, ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns });
+            if !m.is_dirac() {
+                if depth == 1 {
+                    return; // not a path of C
+                }
+                if depth < self.light.max_depth {
+                    self.connect(&sp, m, w_in, beta, density, ctx);
+                }
+            }
+            let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+            let Some(bs) = bsdf::sample(m, &sp, w_in, u, Mode::Importance) else { return };
+            let Some(w) = roulette(bs.weight, q_particle(bs.weight), &mut rng) else { return };
+            if !m.is_dirac() {
+                self.verts.push(Vertex { sp, m, w_in, w_out: bs.wi, pdf_l: bs.pdf_w });
+            }
+            beta *= w;
+            o = offset_origin(hit.p, hit.ng, bs.wi);
+            d = bs.wi;
+        }
+    }
+
+    /// Connects the non-Dirac vertex `sp` (light arriving from `w_in` with throughput `beta`) to
+    /// the camera and splats its weighted contribution.
+    fn connect(
+        &mut self,
+        sp: &ShadingPoint,
+        m: &Material,
+        w_in: Vec3,
+        beta: Rgb,
+        density: Option<f32>,
+        ctx: &mut Context,
+    ) {
+        let cam = self.camera;
+        let to = cam.position - sp.p;
+        let dist2 = to.length_squared();
+        if dist2 <= 0.0 {
+            return;
+        }
+        let wc = to / dist2.sqrt();
+        let imp = pinhole_importance(cam, -wc);
+        let Some(pixel) = pixel_of(cam, sp.p) else { return };
+        let cos_in = sp.ng.dot(w_in).abs();
+        let f = bsdf::eval(m, sp, wc, w_in);
+        if imp <= 0.0 || cos_in <= 0.0 || f == Rgb::ZERO {
+            return;
+        }
+        let o = offset_origin(sp.p, sp.ng, wc);
+        let len = (cam.position - o).length();
+        if self.world.occluded(o, (cam.position - o) / len, len) {
+            return;
+        }
+        let pt = self.pt;
+        let mut q = |sp: &ShadingPoint, m: &Material, w: (Vec3, Vec3), d: u32| pt.camera_pdf_w(sp, m, w, d, ctx);
+        let w_l =
+            density.map_or(1.0, |p0| light_weight(self.n, &self.verts, (sp, m), (wc, w_in), p0 * dist2 / imp, &mut q));
+        let corr = sp.ns.dot(w_in).abs() / cos_in;
+        let v = beta * f * (w_l * corr * sp.ng.dot(wc).abs() * imp / (dist2 * self.n as f32));
+        if v.is_finite() && v != Rgb::ZERO {
+            self.splats.push((pixel, v));
+        }
+    }
+}
+
+/// The camera side's pdf at a vertex: `(point, material, (wo, wi), diffuse depth) → pdf_w`.
+type CameraPdf<'q> = dyn FnMut(&ShadingPoint, &Material, (Vec3, Vec3), u32) -> f32 + 'q;
+
+/// `w_L = 1/(1 + 1/r)` at the connected vertex `x1` (`(wc, w_in)`: toward the camera and the
+/// light) of a path with the earlier non-Dirac vertices `verts` (oldest first), `n` light paths,
+/// `p0 = P_ℓ p_A p_e/|cos θ_y0| · |x1 − x0|² A_pix cos³θ_c`, and `q` the camera side's pdfs.
+fn light_weight(
+    n: u64,
+    verts: &[Vertex],
+    (sp, m): (&ShadingPoint, &Material),
+    (wc, w_in): (Vec3, Vec3),
+    p0: f32,
+    q: &mut CameraPdf,
+) -> f32 {
+    let mut num = sp.ng.dot(wc).abs() * q(sp, m, (wc, w_in), 0);
+    let mut den = n as f32 * p0 * sp.ng.dot(w_in).abs();
+    for (k, v) in verts.iter().rev().enumerate() {
+        num *= v.sp.ng.dot(v.w_out).abs() * q(&v.sp, v.m, (v.w_out, v.w_in), k as u32 + 1);
+        den *= v.pdf_l * v.sp.ng.dot(v.w_in).abs();
+    }
+    let rho = num / den;
+    if rho.is_finite() {
+        1.0 / (1.0 + rho)
+    } else {
+        0.0
+    }
+}
+
+/// The row-major pixel that sees `p`, if any.
+fn pixel_of(camera: &Camera, p: Vec3) -> Option<u32> {
+    let (x, y) = camera.project(p)?;
+    let (w, h) = (camera.width as f32, camera.height as f32);
+    if !(x >= 0.0 && x < w && y >= 0.0 && y < h) {
+        return None;
+    }
+    let (ix, iy) = ((x as u32).min(camera.width - 1), (y as u32).min(camera.height - 1));
+    Some(iy * camera.width + ix)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrators::iws_forecast::targeted_emission;
+    use std::path::Path;
+
+    /// A glass ball over a diffuse floor, a glossy back wall, a small quad light above.
+    const SCENE: &str = r#"
+[camera]
+position = [0.0, 1.0, 3.0]
+look_at = [0.0, 0.5, 0.0]
+fov = 40.0
+resolution = [32, 24]
+[materials.floor]
+type = "diffuse"
+albedo = [0.7, 0.7, 0.7]
+[materials.wall]
+type = "glossy"
+albedo = [0.3, 0.3, 0.3]
+specular = [0.4, 0.4, 0.4]
+exponent = 20.0
+[materials.glass]
+type = "glass"
+ior = 1.5
+[[shape]]
+type = "quad"
+corner = [-2.0, 0.0, -2.0]
+u = [0.0, 0.0, 4.0]
+v = [4.0, 0.0, 0.0]
+material = "floor"
+[[shape]]
+type = "quad"
+corner = [-2.0, 0.0, -1.0]
+u = [4.0, 0.0, 0.0]
+v = [0.0, 3.0, 0.0]
+material = "wall"
+[[shape]]
+type = "sphere"
+center = [0.0, 0.5, 0.0]
+radius = 0.4
+material = "glass"
+[[shape]]
+type = "quad"
+corner = [-0.1, 2.0, -0.1]
+u = [0.2, 0.0, 0.0]
+v = [0.0, 0.0, 0.2]
+emission = [5.0, 5.0, 5.0]
+"#;
+
+    fn hit_along(world: &World, o: Vec3, d: Vec3) -> Hit {
+        world.intersect(o, d.normalize(), f32::INFINITY).expect("a hit")
+    }
+
+    fn point(h: &Hit) -> ShadingPoint {
+        ShadingPoint { p: h.p, ng: h.ng, ns: h.ns }
+    }
+
+    /// For enumerated paths of C with one and with two non-Dirac vertices, `w_E` computed along
+    /// the camera path (`first_ratio`, `next_ratio`, `camera_weight`) and `w_L` computed along
+    /// the light path (`light_weight`, with the light side's own pdfs and cosines) sum to 1 to
+    /// f32 rounding; and neither is trivial (both in (0.001, 0.999) on some path).
+    #[test]
+    fn camera_and_light_weights_sum_to_one() {
+        // few light paths, so that both techniques matter on these paths (r ≈ 0.1 … 10)
+        const N_L: u64 = 2;
+        let s = crate::scene::load_str(SCENE, "mis.toml", Path::new(".")).unwrap();
+        let world = World::build(s).unwrap();
+        let cam = world.scene.camera.clone();
+        let light = LightSide { paths: Some(N_L), emission: targeted_emission(&world), max_depth: 64 };
+        let mut q = |sp: &ShadingPoint, m: &Material, (wo, wi): (Vec3, Vec3), _d: u32| bsdf::pdf_w(m, sp, wo, wi);
+        let (mut checked, mut checked2, mut mixed) = (0, 0, 0);
+        for (px, py) in [(16.5, 20.5), (10.2, 21.7), (22.0, 19.1), (16.0, 6.0), (5.5, 9.5), (27.0, 3.0)] {
+            let d0 = cam.direction(px, py);
+            let h1 = hit_along(&world, cam.position, d0);
+            let (m1, sp1, wo1) = (world.scene.material_of(h1.prim), point(&h1), -d0);
+            // the chain's end: from the glass ball to a point of the light
+            for (k, y) in [Vec3::new(0.03, 2.0, 0.05), Vec3::new(-0.08, 2.0, -0.02)].into_iter().enumerate() {
+                let from = Vec3::new(0.1 * k as f32, 0.95, 0.05); // just above the ball
+                let hy = hit_along(&world, from, y - from);
+                let d = (hy.p - from).normalize();
+                assert!(world.scene.emitter_of(hy.prim) != NO_EMITTER);
+                // one non-Dirac vertex: x1 → chain
+                let wi1 = (Vec3::new(0.05, 0.5, 0.0) - h1.p).normalize();
+                let q1 = bsdf::pdf_w(m1, &sp1, wo1, wi1);
+                let w_e =
+                    camera_weight(&world, &light, &cam, &hy, d, first_ratio(&cam, d0, h1.t, h1.ng, (wo1, wi1), q1));
+                let dist2 = (cam.position - h1.p).length_squared();
+                let p0 = light_start_density(&world, &light, 1, &hy, d) * dist2 / pinhole_importance(&cam, d0);
+                let w_l = light_weight(N_L, &[], (&sp1, m1), (wo1, wi1), p0, &mut q);
+                assert!((w_e + w_l - 1.0).abs() < 1e-5, "one vertex: w_E {w_e} + w_L {w_l}");
+                checked += 1;
+                mixed += (w_l > 1e-3 && w_l < 0.999) as u32;
+                // two non-Dirac vertices: x1 → x2 (a point on the glossy wall) → chain
+                // x2 on the wall (x1 on the floor) or on the floor (x1 on the wall), clear of the ball
+                let on_floor = h1.p.y.abs() < 1e-4;
+                let x2 = if on_floor {
+                    Vec3::new(1.5 - 3.0 * k as f32, 0.3, -1.0)
+                } else {
+                    Vec3::new(1.5 - 3.0 * k as f32, 0.0, 0.8)
+                };
+                let x1_to_wall = x2 - h1.p;
+                let h2 = hit_along(&world, offset_origin(h1.p, h1.ng, x1_to_wall.normalize()), x1_to_wall);
+                let (m2, sp2) = (world.scene.material_of(h2.prim), point(&h2));
+                if m2.is_dirac() {
+                    continue; // the ball is in the way
+                }
+                let (wi1, wo2) = (x1_to_wall.normalize(), -x1_to_wall.normalize());
+                let wi2 = (Vec3::new(0.0, 0.55, 0.1) - h2.p).normalize();
+                let (q1, q2) = (bsdf::pdf_w(m1, &sp1, wo1, wi1), bsdf::pdf_w(m2, &sp2, wo2, wi2));
+                let ratio = first_ratio(&cam, d0, h1.t, h1.ng, (wo1, wi1), q1) * next_ratio(m2, &sp2, (wo2, wi2), q2);
+                let w_e = camera_weight(&world, &light, &cam, &hy, d, ratio);
+                let v = Vertex { sp: sp2, m: m2, w_in: wi2, w_out: wo2, pdf_l: bsdf::pdf_w(m2, &sp2, wi2, wo2) };
+                let w_l = light_weight(N_L, &[v], (&sp1, m1), (wo1, wi1), p0, &mut q);
+                assert!((w_e + w_l - 1.0).abs() < 1e-5, "two vertices: w_E {w_e} + w_L {w_l} ({:?})", h2.p);
+                checked2 += 1;
+                mixed += (w_l > 1e-3 && w_l < 0.999) as u32;
+            }
+        }
+        eprintln!("{checked} one-vertex and {checked2} two-vertex paths, {mixed} with 0 < w_L < 1");
+        assert!(checked == 12 && checked2 >= 6, "{checked} {checked2}");
+        assert!(mixed > 0, "every weight was 0 or 1: the test has no power");
+    }
+
+    /// The pinhole's density per pixel sample.
+    #[test]
+    fn pixel_importance_is_the_camera_density() {
+        // ∫ over the image plane of 1/(A_pix cos³θ) dω = pixels: each pixel's solid angle × its
+        // density is 1, checked at the centre pixel (cos θ ≈ 1) by the pixel's solid angle.
+        let cam = Camera::new(Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), Vec3::Y, 40.0, 64, 48);
+        let (a, b) = (cam.direction(32.0, 24.0), cam.direction(33.0, 25.0));
+        let (c, e) = (cam.direction(33.0, 24.0), cam.direction(32.0, 25.0));
+        // the small pixel's solid angle ≈ |(c − a) × (e − a)|
+        let omega = (c - a).cross(e - a).length();
+        let w = pinhole_importance(&cam, (a + b).normalize());
+        assert!((w * omega - 1.0).abs() < 2e-3, "{}", w * omega);
+    }
+}
