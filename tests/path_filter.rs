@@ -34,6 +34,8 @@ fn film_of(scene: &str, method: Method, filter: Option<&str>, name: &str) -> Fil
         // what a filter implies (the split's extra rays are unfiltered): the filtered renders
         // keep the default split of 16, which `MethodArgs::emission_split` must turn off
         j.args.settings.emission_split = 1;
+        // and a filter turns `pt-cf`'s light paths off (they are not class-filtered)
+        j.args.ptcf.light_paths = Some(0);
     }
     j.args.cf.forecast_photons = Some(20_000);
     render_film(&j)
