@@ -180,17 +180,7 @@ fn caustic_shares_do_not_depend_on_threads() {
 /// estimators' tails light enough for the CLT at 8×8 pixels.
 #[test]
 fn agrees_with_pt_on_ring() {
-    let src = std::fs::read_to_string("scenes/ring.toml").unwrap();
-    let wide = src
-        .replace("corner   = [-6.803, 4.21650635, -0.25]", "corner   = [-6.428, 4.866, -1.0]")
-        .replace(
-            "u        = [0.0, 0.0, 0.5]\nv        = [-0.25, -0.4330127, 0.0]",
-            "u        = [0.0, 0.0, 2.0]\nv        = [-1.0, -1.7320508, 0.0]",
-        )
-        .replace("emission = [1000.0, 1000.0, 1000.0]", "emission = [62.5, 62.5, 62.5]");
-    assert!(wide.contains("[62.5, 62.5, 62.5]") && wide.contains("-1.7320508"), "ring.toml changed: update the test");
-    let w =
-        World::build(forecast::scene::load_str(&wide, "ring-wide-light.toml", Path::new("scenes")).unwrap()).unwrap();
+    let w = common::ring_with_wide_light();
     agrees_with_pt(&w, &opts(), 8, (16384, 2048), "pt-cf ring (wide light)");
 }
 

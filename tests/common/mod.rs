@@ -267,3 +267,19 @@ pub fn assert_furnace_is_one(img: &Film, label: &str) {
     let mean: f64 = m.iter().map(|p| p[0] as f64).sum::<f64>() / m.len() as f64;
     assert!((mean - 1.0).abs() < 0.01, "{label}: furnace mean {mean}");
 }
+
+/// `scenes/ring.toml` under a 2 × 2 m light of the same power in the same direction (its
+/// cardioid stays; `pt`'s tails become light enough for a z-test at a few pixels).
+pub fn ring_with_wide_light() -> forecast::accel::World {
+    let src = std::fs::read_to_string("scenes/ring.toml").unwrap();
+    let wide = src
+        .replace("corner   = [-6.803, 4.21650635, -0.25]", "corner   = [-6.428, 4.866, -1.0]")
+        .replace(
+            "u        = [0.0, 0.0, 0.5]\nv        = [-0.25, -0.4330127, 0.0]",
+            "u        = [0.0, 0.0, 2.0]\nv        = [-1.0, -1.7320508, 0.0]",
+        )
+        .replace("emission = [1000.0, 1000.0, 1000.0]", "emission = [62.5, 62.5, 62.5]");
+    assert!(wide.contains("[62.5, 62.5, 62.5]") && wide.contains("-1.7320508"), "ring.toml changed: update the test");
+    let scene = forecast::scene::load_str(&wide, "ring-wide-light.toml", Path::new("scenes")).unwrap();
+    forecast::accel::World::build(scene).unwrap()
+}
