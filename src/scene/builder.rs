@@ -226,7 +226,7 @@ impl SceneBuilder {
                 if forward.dot(up).abs() > 1e-4 || forward.dot(right).abs() > 1e-4 || up.dot(right).abs() > 1e-4 {
                     return Err(self.err(&mat, "the camera transform must be rigid (no shear)"));
                 }
-                Camera { position, forward, right, up, fov_deg: fov, width: w, height: h }
+                Camera::from_frame(position, (forward, right, up), fov, w, h)
             }
         };
         self.camera = Some(camera);

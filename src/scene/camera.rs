@@ -14,12 +14,15 @@ pub struct Camera {
     pub right: Vec3,
     /// Up unit vector (orthogonal to forward).
     pub up: Vec3,
-    /// Vertical field of view in degrees.
+    /// Vertical field of view in degrees (set it through a constructor: rays use the cached
+    /// tangent).
     pub fov_deg: f32,
     /// Image width in pixels.
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
+    /// `tan(fov/2)`, computed once (it was 2% of `pt` on `ring`, per camera ray).
+    tan_half: f32,
 }
 
 impl Camera {
@@ -28,7 +31,19 @@ impl Camera {
         let forward = (look_at - position).normalize();
         let right = forward.cross(up).normalize();
         let up = right.cross(forward);
-        Camera { position, forward, right, up, fov_deg, width, height }
+        Camera::from_frame(position, (forward, right, up), fov_deg, width, height)
+    }
+
+    /// A camera from its orthonormal frame `(forward, right, up)` (checked by the loader).
+    pub fn from_frame(
+        position: Vec3,
+        (forward, right, up): (Vec3, Vec3, Vec3),
+        fov_deg: f32,
+        width: u32,
+        height: u32,
+    ) -> Self {
+        let tan_half = (fov_deg.to_radians() * 0.5).tan();
+        Camera { position, forward, right, up, fov_deg, width, height, tan_half }
     }
 
     /// The same camera at another resolution (the field of view stays vertical).
@@ -39,7 +54,7 @@ impl Camera {
     /// Unit direction through film position (px, py) in pixels, (0,0) = top-left corner.
     #[inline]
     pub fn direction(&self, px: f32, py: f32) -> Vec3 {
-        let tan_half = (self.fov_deg.to_radians() * 0.5).tan();
+        let tan_half = self.tan_half;
         let aspect = self.width as f32 / self.height as f32;
         let sx = (2.0 * px / self.width as f32 - 1.0) * tan_half * aspect;
         let sy = (1.0 - 2.0 * py / self.height as f32) * tan_half;
@@ -53,7 +68,7 @@ impl Camera {
         if z <= 1e-6 {
             return None;
         }
-        let tan_half = (self.fov_deg.to_radians() * 0.5).tan();
+        let tan_half = self.tan_half;
         let aspect = self.width as f32 / self.height as f32;
         let sx = d.dot(self.right) / z / (tan_half * aspect);
         let sy = d.dot(self.up) / z / tan_half;
