@@ -10,7 +10,9 @@
 //! `tests/selection.rs`; `tests/furnace.rs` runs `pt-cf` through `Method::ALL`.
 
 mod common;
-use common::{assert_agrees, assert_furnace_is_one, max_z, render_passes as render, render_profiled};
+use common::{
+    assert_agrees, assert_furnace_is_one, cf_test_opts as opts, max_z, render_passes as render, render_profiled, world,
+};
 use forecast::accel::World;
 use forecast::forecast::estimator::CausticForecast;
 use forecast::integrators::caustic_share::{caustic_shares, CausticShare};
@@ -18,18 +20,6 @@ use forecast::integrators::{Integrator, Method, MethodArgs};
 use forecast::profile::Profile;
 use forecast::render::film::Film;
 use forecast::stats::z_test_threshold;
-use std::path::Path;
-
-fn world(path: &str) -> World {
-    World::build(forecast::scene::load(Path::new(path)).expect("scene loads")).expect("BVH builds")
-}
-
-/// Small preprocess (20k forecasters, 16 clusters), as `tests/forecast.rs`.
-fn opts() -> MethodArgs {
-    let mut o = MethodArgs::default();
-    (o.settings.max_depth, o.cf.forecast_photons, o.cf.clusters) = (Some(64), Some(20_000), 16);
-    o
-}
 
 /// Builds `method` through the broadcast bytes, as a rank would.
 fn build(world: &World, method: Method, o: &MethodArgs) -> Box<dyn Integrator> {

@@ -6,24 +6,16 @@
 //! uninterrupted one. The MIS weights' sum is a unit test in `src/integrators/pt_cf_light.rs`.
 
 mod common;
-use common::{assert_agrees, assert_furnace_is_one, assert_same_image, job, render_film, render_passes, tmp_dir};
+use common::{
+    assert_agrees, assert_furnace_is_one, assert_same_image, cf_test_opts as opts, job, render_film, render_passes,
+    tmp_dir, world,
+};
 use forecast::accel::World;
 use forecast::integrators::{Integrator, Method, MethodArgs};
 use forecast::render::film::Film;
 use forecast::stats::z_test_threshold;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-fn world(path: &str) -> World {
-    World::build(forecast::scene::load(Path::new(path)).expect("scene loads")).expect("BVH builds")
-}
-
-/// Small preprocess (20k forecasters, 16 clusters), as `tests/pt_cf.rs`.
-fn opts() -> MethodArgs {
-    let mut o = MethodArgs::default();
-    (o.settings.max_depth, o.cf.forecast_photons, o.cf.clusters) = (Some(64), Some(20_000), 16);
-    o
-}
 
 fn build(world: &World, method: Method, o: &MethodArgs) -> Box<dyn Integrator> {
     let bytes = method.preprocess(world, o, 17).unwrap();

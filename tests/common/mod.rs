@@ -283,3 +283,15 @@ pub fn ring_with_wide_light() -> forecast::accel::World {
     let scene = forecast::scene::load_str(&wide, "ring-wide-light.toml", Path::new("scenes")).unwrap();
     forecast::accel::World::build(scene).unwrap()
 }
+
+/// The scene at `path` (relative to the package root) with its BVH.
+pub fn world(path: &str) -> forecast::accel::World {
+    forecast::accel::World::build(forecast::scene::load(Path::new(path)).expect("scene loads")).expect("BVH builds")
+}
+
+/// A small CF preprocess for the `pt-cf` tests: 20k forecasters, 16 clusters, `--max-depth 64`.
+pub fn cf_test_opts() -> MethodArgs {
+    let mut o = MethodArgs::default();
+    (o.settings.max_depth, o.cf.forecast_photons, o.cf.clusters) = (Some(64), Some(20_000), 16);
+    o
+}
