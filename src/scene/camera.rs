@@ -51,6 +51,12 @@ impl Camera {
         Camera { width, height, ..self.clone() }
     }
 
+    /// `tan(fov/2)`: half the image plane's height at distance 1.
+    #[inline]
+    pub fn tan_half_fov(&self) -> f32 {
+        self.tan_half
+    }
+
     /// Unit direction through film position (px, py) in pixels, (0,0) = top-left corner.
     #[inline]
     pub fn direction(&self, px: f32, py: f32) -> Vec3 {
