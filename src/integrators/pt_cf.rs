@@ -431,7 +431,7 @@ impl Integrator for GuidedPathTracer {
             "cache_cells": self.cf.cells.json(),
             "options": self.cf.opts,
             "light_paths": self.light.map(|l| serde_json::json!({
-                "per_pass_option": l.paths,
+                "per_pass": l.paths,
                 "per_pixel_default": pt_cf_light::PATHS_PER_PIXEL,
                 "emission": format!("{:?}", l.emission),
             })),

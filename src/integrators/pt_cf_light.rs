@@ -72,10 +72,15 @@ pub struct LightSide {
     pub max_depth: u32,
 }
 
+/// Light paths per pass when `--light-paths` is not given: [`PATHS_PER_PIXEL`] × the pixel count.
+pub fn default_paths(width: u32, height: u32) -> u64 {
+    (PATHS_PER_PIXEL * width as f64 * height as f64).ceil() as u64
+}
+
 impl LightSide {
     /// Light paths per pass for `camera`'s image.
     pub fn n_paths(&self, camera: &Camera) -> u64 {
-        self.paths.unwrap_or_else(|| (PATHS_PER_PIXEL * camera.width as f64 * camera.height as f64).ceil() as u64)
+        self.paths.unwrap_or_else(|| default_paths(camera.width, camera.height))
     }
 }
 
