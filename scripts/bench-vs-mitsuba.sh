@@ -16,13 +16,14 @@
 #   VARIANT       Mitsuba variant (default llvm_ad_rgb; scalar_rgb needs no LLVM)
 #   MITSUBA_VENV  virtual environment (default out/mitsuba-venv; created with pip if missing)
 #   FORECAST      forecast binary (default: cargo build --release, target/release/forecast)
+#   FORECAST_ARGS extra arguments of forecast's render (e.g. "--accel embree")
 #   OUT           work folder (default out/bench-vs-mitsuba)
 #
 # Timing. forecast: `render --time BUDGET` (whole passes; loading, BVH and probe inside the
-# budget), samples = passes·W·H over its JSON `timings.total_s`. Mitsuba: from just before
-# `load_file` (scene load, BVH and LLVM JIT inside the budget) it renders chunks of spp (the first
-# chunk 1 spp, then chunks sized to ~1 s, each kernel compiled once) until the next chunk would
-# pass the budget; samples = spp·W·H over the elapsed time. Both counts are whole samples per
+# budget), samples = passes·W·H over its JSON `timings.total_s`. Mitsuba: scripts/mitsuba_timed.py
+# (from just before `load_file`, so scene load, BVH and LLVM JIT are inside the budget; chunks of
+# spp, each kernel compiled once, until the next chunk would pass the budget); samples = spp·W·H
+# over the elapsed time. Both counts are whole samples per
 # pixel. The ratio printed is forecast / Mitsuba, per run and averaged over RUNS. The cpu ratio
 # divides the same sample counts by each process's user + system CPU seconds instead (Mitsuba's
 # counted from just before `load_file`): it is the figure to read when other work shares the
@@ -77,64 +78,15 @@ else
   "$FORECAST" export-mitsuba "$scene" --out "$xml" >/dev/null
 fi
 
-mitsuba_run() { # SEED -> "spp seconds cpu_seconds"
-  "$venv/bin/python" - "$xml" "$w" "$h" "$budget" "$threads" "$((max_depth + 1))" "$rr_depth" "$variant" "$1" "$out" <<'EOF'
-import sys, time, os, tempfile, xml.etree.ElementTree as ET
-xml, w, h, budget, threads, max_depth, rr_depth, variant, seed, out = sys.argv[1:]
-w, h, budget, threads, seed = int(w), int(h), float(budget), int(threads), int(seed)
-# The film resolution and the integrator are set in a copy under OUT; the scene's folder goes on
-# Mitsuba's file resolver for its relative mesh paths.
-tree = ET.parse(xml)
-root = tree.getroot()
-for it in root.findall('integrator'):
-    root.remove(it)
-integ = ET.Element('integrator', type='path')
-ET.SubElement(integ, 'integer', name='max_depth', value=max_depth)
-ET.SubElement(integ, 'integer', name='rr_depth', value=rr_depth)
-root.insert(0, integ)
-for film in root.iter('film'):
-    for k, v in (('width', w), ('height', h)):
-        for e in [e for e in film if e.get('name') == k]:
-            film.remove(e)
-        ET.SubElement(film, 'integer', name=k, value=str(v))
-fd, tmp = tempfile.mkstemp(suffix='.xml', dir=out)
-os.close(fd)
-tree.write(tmp)
-import mitsuba as mi, drjit as dr
-mi.set_variant(variant)
-(mi.file_resolver() if hasattr(mi, 'file_resolver') else mi.Thread.thread().file_resolver()).prepend(
-    os.path.dirname(os.path.abspath(xml)))
-dr.set_thread_count(threads)
-import resource
-def cpu_s():
-    ru = resource.getrusage(resource.RUSAGE_SELF)
-    return ru.ru_utime + ru.ru_stime
-t0, c0 = time.perf_counter(), cpu_s()
-try:
-    scene = mi.load_file(tmp)
-finally:
-    os.remove(tmp)
-def chunk_s(n, first):
-    t = time.perf_counter()
-    img = mi.render(scene, spp=n, seed=seed * 1000003 + first)
-    dr.eval(img)
-    dr.sync_thread()
-    return time.perf_counter() - t
-chunk_s(1, 0)  # the first sample per pixel carries the JIT
-per_spp = chunk_s(1, 1)
-spp = 2
-chunk = max(1, int(1.0 / per_spp))  # one kernel size from here on: compiled once
-while budget - (time.perf_counter() - t0) >= chunk * per_spp:
-    per_spp = chunk_s(chunk, spp) / chunk
-    spp += chunk
-print(spp, time.perf_counter() - t0, cpu_s() - c0)
-EOF
+mitsuba_run() { # SEED -> "spp seconds cpu_seconds" (scripts/mitsuba_timed.py, no image written)
+  "$venv/bin/python" "$root/scripts/mitsuba_timed.py" "$xml" "$w" "$h" "$budget" "$threads" "$((max_depth + 1))" \
+    "$rr_depth" "$variant" path "$1" -
 }
 
 forecast_run() { # SEED -> "spp seconds cpu_seconds"
   local prefix="$out/forecast-$name-$1"
   /usr/bin/time -f '%U %S' -o "$prefix.cpu" "$FORECAST" render "$scene" --method pt --time "${budget}s" --resolution "$res" --threads "$threads" \
-    --max-depth "$max_depth" --seed "$1" --out "$prefix" --quiet 2>/dev/null
+    --max-depth "$max_depth" --seed "$1" --out "$prefix" --quiet ${FORECAST_ARGS:-} 2>/dev/null
   "$venv/bin/python" -c 'import json, sys; j = json.load(open(sys.argv[1])); u, s = map(float, open(sys.argv[2]).read().split()[-2:]); print(j["passes"], j["timings"]["total_s"], u + s)' \
     "$prefix.json" "$prefix.cpu"
 }

@@ -8,7 +8,7 @@ mod common;
 use clap::Parser;
 use common::{root, tmp_dir};
 use forecast::cli::{Cli, Command};
-use forecast::integrators::auto::{choose, enclosure, resolve, CLOSED_ROOM};
+use forecast::integrators::auto::{choose, resolve};
 use forecast::integrators::{Method, MethodChoice};
 use forecast::scene::Scene;
 
@@ -20,9 +20,9 @@ fn load(rel: &str) -> Scene {
 #[test]
 fn auto_picks_the_documented_method_for_each_scene() {
     for (scene, want, why) in [
-        ("scenes/cornell-box.toml", Method::IwsCf, "closed room"),
-        ("scenes/ring.toml", Method::PtCf, "open scene"),
-        ("scenes/figurines.toml", Method::PtCf, "glossy"),
+        ("scenes/cornell-box.toml", Method::PtCf, "area lights"),
+        ("scenes/ring.toml", Method::PtCf, "area lights"),
+        ("scenes/figurines.toml", Method::PtCf, "area lights"),
         ("scenes/stability/no-dirac.toml", Method::Pt, "no mirror or glass"),
         ("scenes/stability/point-glass.toml", Method::PtCf, "point lights only"),
         ("tests/scenes/cornell-nodirac.toml", Method::Pt, "no mirror or glass"),
@@ -42,16 +42,6 @@ fn the_reason_names_what_only_pt_cf_renders() {
     assert!(!reason.contains("L S+ D"), "cornell-box has no point lights: {reason}");
 }
 
-/// The enclosure separates the closed rooms from the open ground plane with a margin.
-#[test]
-fn enclosure_of_the_committed_scenes() {
-    let e = |s: &str| enclosure(&load(s));
-    let (cornell, ring) = (e("scenes/cornell-box.toml"), e("scenes/ring.toml"));
-    assert!((cornell - 20.0 / 24.0).abs() < 1e-3, "cornell-box: five 2x2 walls of a 2x2x2 box, got {cornell}");
-    assert!(ring < 0.5 && CLOSED_ROOM > 0.5, "ring: a ground plane, got {ring}");
-    assert!(e("scenes/figurines.toml") > 0.95, "figurines: a closed hall");
-}
-
 /// `--method` first, then the scene's `[render] method`, else `auto`.
 #[test]
 fn the_command_line_then_the_scene_then_auto() {
@@ -65,7 +55,7 @@ fn the_command_line_then_the_scene_then_auto() {
     let cornell = load("scenes/cornell-box.toml"); // names none
     assert_eq!(cornell.render.method, "auto");
     let (m, why) = resolve(None, &cornell).unwrap();
-    assert_eq!(m, Method::IwsCf);
+    assert_eq!(m, Method::PtCf);
     assert!(why.starts_with("auto"), "{why}");
     let (m, why) = resolve(Some(MethodChoice::Auto), &glass).unwrap();
     assert_eq!(m, choose(&glass).0);

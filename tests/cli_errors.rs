@@ -170,15 +170,15 @@ fn a_flag_of_another_method_exits_2_naming_its_method() {
     let sc = scene();
     let cases: &[(&[&str], &str)] = &[
         (&["--method", "pt", "--clusters", "5"], "--clusters belongs to iws-cf/pt-cf, not pt"),
-        // no --method: the scene names none, so `auto` resolves it (iws-cf on cornell-box)
-        (&["--guide-fraction", "0.5"], "--guide-fraction belongs to pt-cf, not iws-cf"),
+        // no --method: the scene names none, so `auto` resolves it (pt-cf on cornell-box)
+        (&["--variant", "baj08"], "--variant belongs to iws-cf, not pt-cf"),
         (&["--method", "iws", "--guide-fraction", "0.5"], "--guide-fraction belongs to pt-cf, not iws"),
         (&["--method", "iws-cf", "--light-paths", "100"], "--light-paths belongs to pt-cf, not iws-cf"),
         (&["--method", "pt-cf", "--variant", "baj08"], "--variant belongs to iws-cf, not pt-cf"),
         (&["--method", "iws-pm", "--split", "4"], "--split belongs to iws-cf/pt-cf, not iws-pm"),
         (&["--method", "iws-cf", "--photons", "10"], "--photons belongs to iws-pm, not iws-cf"),
         (&["--method", "pt", "--vpl-paths", "8"], "--vpl-paths belongs to iws/iws-pm/iws-cf, not pt"),
-        (&["--photons", "10"], "--photons belongs to iws-pm, not iws-cf"),
+        (&["--photons", "10"], "--photons belongs to iws-pm, not pt-cf"),
     ];
     for (opts, want) in cases {
         let t = Instant::now();
