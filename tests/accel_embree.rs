@@ -6,6 +6,12 @@
 //! chains of three diffuse-like bounces off each hit, spawned with `offset_origin` as the
 //! integrators do (the rays a render traces most, starting on a surface).
 //!
+//! Images: `pt` with `--accel embree` against `--accel obvhs` at different seeds must agree by
+//! `common::assert_agrees` (Šidák per-pixel and whole-image Welch z-tests, family-wise α = 1e-3,
+//! with its negative control: a 3% scaling must be detected), through the pipeline (the flag's
+//! path) on the cornell box without Dirac surfaces and directly on `ring` with the wide light
+//! (`common::ring_with_wide_light`: light enough tails for the CLT at 8×8).
+//!
 //! Tolerances, derived: both back ends intersect the same f32 vertices with the same sphere test,
 //! but their triangle tests are different f32 formulas (obvhs: Möller–Trumbore on precomputed
 //! edges; Embree robust mode: a watertight edge-function test), each exact to a few ulps
@@ -30,6 +36,7 @@
 mod common;
 
 use forecast::accel::{offset_origin, AccelKind, World};
+use forecast::integrators::Method;
 use forecast::math::Vec3;
 use forecast::sampling::rng::{stream, Rng};
 use forecast::sampling::warp::{sample_triangle, sample_uniform_sphere};
@@ -243,4 +250,32 @@ fn empty_scene_and_degenerate_queries() {
         assert!(e.intersect(p, d, tmax).is_none() && !e.occluded(p, d, tmax), "tmax {tmax}");
         assert_eq!(o.occluded(p, d, tmax), e.occluded(p, d, tmax), "tmax {tmax}");
     }
+}
+
+#[test]
+fn pt_image_agrees_through_the_pipeline() {
+    let d = common::tmp_dir("accel-embree-z");
+    let scene = common::root().join("tests/scenes/cornell-nodirac.toml");
+    let film = |accel: AccelKind, seed: u64| {
+        let mut j = common::job(&scene, Method::Pt, 256, seed, (16, 16), 2, &d.join(accel.name()));
+        j.args.settings.accel = accel;
+        common::render_film(&j)
+    };
+    let (o, e) = (film(AccelKind::Obvhs, 1), film(AccelKind::Embree, 2));
+    let report = std::fs::read_to_string(d.join("embree.json")).expect("report written");
+    let j: serde_json::Value = serde_json::from_str(&report).expect("JSON");
+    assert_eq!(j["options"]["accel"].as_str(), Some("embree"), "the report records the back end");
+    common::assert_agrees(&e, &o, "pt --accel embree vs obvhs (cornell-nodirac)");
+}
+
+#[test]
+fn pt_image_agrees_on_ring() {
+    let o = common::ring_with_wide_light();
+    let e = World::build_with(o.scene.clone(), AccelKind::Embree).expect("embree builds");
+    let args = forecast::integrators::MethodArgs::default();
+    let img = |w: &World, seed: u64| {
+        let mut p = Method::Pt.build(w, &args, &[]).unwrap();
+        common::render_passes(w, p.as_mut(), 8, 8, 2048, seed)
+    };
+    common::assert_agrees(&img(&e, 2), &img(&o, 1), "pt --accel embree vs obvhs (ring, wide light)");
 }
