@@ -152,7 +152,7 @@ fn compare(o: &World, e: &World, org: Vec3, d: Vec3, tmax: f32, tally: &mut Tall
 fn random_ray(s: &Scene, rng: &mut Rng, k: usize) -> (Vec3, Vec3, f32) {
     let (lo, hi) = s.bounds;
     let (c, ext) = ((lo + hi) * 0.5, (hi - lo).max_element().max(1e-6));
-    let (o, d) = if k % 2 == 0 {
+    let (o, d) = if k.is_multiple_of(2) {
         let u = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
         (c + (u * 1.5 - Vec3::splat(0.75)) * ext, sample_uniform_sphere(rng.next_2d()))
     } else {

@@ -287,7 +287,7 @@ impl EmbreeScene {
     /// Closest hit along `origin + t·dir`, t ∈ (0, tmax): (primitive id, t).
     #[inline]
     pub(super) fn closest(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<(u32, f32)> {
-        if !(tmax > 0.0) {
+        if tmax.is_nan() || tmax <= 0.0 {
             return None;
         }
         let mut rh = ffi::RTCRayHit { ray: ray(origin, dir, tmax), hit: ffi::RTCHit::default() };
@@ -305,7 +305,7 @@ impl EmbreeScene {
     /// True if anything blocks the segment (0, tmax) along unit `dir`.
     #[inline]
     pub(super) fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
-        if !(tmax > 0.0) {
+        if tmax.is_nan() || tmax <= 0.0 {
             return false;
         }
         let mut r = ray(origin, dir, tmax);
