@@ -1,6 +1,9 @@
 //! The Embree back end against the obvhs back end (cargo feature `embree`): on the same random
 //! rays, `intersect` must agree on hit/miss, primitive id and t, and `occluded` must agree.
 //!
+//! Scenes: `cornell-box`, `ring`, the glass furnace (2 spheres each, which the Embree back end
+//! tests in a loop) and the cornell box with 40 more spheres (Embree's user geometry).
+//!
 //! Rays (fixed seeds): half from random points of the scene's bounds in uniform directions, half
 //! aimed from outside at a random point of a random primitive; tmax ∞ for half, else random; and
 //! chains of three diffuse-like bounces off each hit, spawned with `offset_origin` as the
@@ -176,7 +179,10 @@ fn random_ray(s: &Scene, rng: &mut Rng, k: usize) -> (Vec3, Vec3, f32) {
 /// `n` random rays, each followed by up to three bounces off its hits (uniform directions,
 /// origins offset as the integrators do).
 fn agree_on_random_rays(path: &str, n: usize, seed: u64) -> Tally {
-    let (o, e) = worlds(path);
+    agree_on(worlds(path), path, n, seed)
+}
+
+fn agree_on((o, e): (World, World), path: &str, n: usize, seed: u64) -> Tally {
     let mut rng = Rng::keyed(seed, stream::MISC, 0, 0);
     let mut tally = Tally::default();
     for k in 0..n {
@@ -218,6 +224,22 @@ fn ring_agrees() {
 #[test]
 fn spheres_agree() {
     agree_on_random_rays("tests/scenes/furnace_glass.toml", 60_000, 3);
+}
+
+/// 40 more spheres in the cornell box: more than the Embree back end tests in a loop, so they
+/// go through its user geometry (the loaded scenes have 2 spheres each: the loop).
+#[test]
+fn many_spheres_agree() {
+    let mut s = forecast::scene::load(&common::root().join("scenes/cornell-box.toml")).expect("scene loads");
+    let mut rng = Rng::keyed(5, stream::MISC, 0, 0);
+    let proto = s.spheres[0].clone();
+    for _ in 0..40 {
+        let c = Vec3::new(rng.next_f32() * 1.6 - 0.8, rng.next_f32() * 1.6 + 0.2, rng.next_f32() * 1.6 - 0.8);
+        s.spheres.push(forecast::scene::Sphere { center: c, radius: 0.02 + 0.15 * rng.next_f32(), ..proto.clone() });
+    }
+    let o = World::build_with(s.clone(), AccelKind::Obvhs).expect("obvhs builds");
+    let e = World::build_with(s, AccelKind::Embree).expect("embree builds");
+    agree_on((o, e), "cornell-box + 40 spheres", 60_000, 5);
 }
 
 #[test]

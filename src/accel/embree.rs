@@ -159,12 +159,18 @@ struct SphereData {
     radius: f32,
 }
 
+/// At most this many spheres are tested in a loop before the Embree query instead of as a user
+/// geometry (a user primitive costs Embree a callback per box hit; see `results/2026-12-03-embree-backend.md`).
+const LOOP_SPHERES: usize = 8;
+
 /// A committed Embree scene over the triangles and spheres of a `Scene`.
 pub(super) struct EmbreeScene {
     device: ffi::RTCDevice,
     scene: ffi::RTCScene,
     /// Read by the sphere callbacks through the geometry's user pointer; never mutated.
     spheres: Box<[SphereData]>,
+    /// The spheres are tested in a loop (≤ `LOOP_SPHERES`), not by Embree.
+    loop_spheres: bool,
     ntri: u32,
 }
 
@@ -226,7 +232,8 @@ impl EmbreeScene {
             };
             return Err(format!("Embree: rtcNewScene failed (RTCError {err})"));
         }
-        let e = EmbreeScene { device, scene: handle, spheres, ntri: scene.ntri() };
+        let loop_spheres = spheres.len() <= LOOP_SPHERES;
+        let e = EmbreeScene { device, scene: handle, spheres, loop_spheres, ntri: scene.ntri() };
         // SAFETY: valid handles; buffers are filled within their allocated sizes.
         unsafe {
             ffi::rtcSetSceneFlags(e.scene, ffi::RTC_SCENE_FLAG_ROBUST);
@@ -234,7 +241,7 @@ impl EmbreeScene {
             if !scene.triangles.is_empty() {
                 e.attach_triangles(scene);
             }
-            if !e.spheres.is_empty() {
+            if !e.spheres.is_empty() && !e.loop_spheres {
                 e.attach_spheres();
             }
             ffi::rtcCommitScene(e.scene);
@@ -290,7 +297,16 @@ impl EmbreeScene {
         if tmax.is_nan() || tmax <= 0.0 {
             return None;
         }
-        let mut rh = ffi::RTCRayHit { ray: ray(origin, dir, tmax), hit: ffi::RTCHit::default() };
+        let (mut tfar, mut best) = (tmax, None);
+        if self.loop_spheres {
+            for (i, s) in self.spheres.iter().enumerate() {
+                let t = super::sphere_t(s.center, s.radius, origin, dir, 0.0, tfar);
+                if t < tfar {
+                    (tfar, best) = (t, Some((self.ntri + i as u32, t)));
+                }
+            }
+        }
+        let mut rh = ffi::RTCRayHit { ray: ray(origin, dir, tfar), hit: ffi::RTCHit::default() };
         rh.hit.geomID = ffi::RTC_INVALID_GEOMETRY_ID;
         let mut ctx = context();
         // SAFETY: the scene is committed; `rh` and `ctx` are valid, aligned and live for the call.
@@ -298,7 +314,7 @@ impl EmbreeScene {
         match rh.hit.geomID {
             TRI_GEOM => Some((rh.hit.primID, rh.ray.tfar)),
             SPHERE_GEOM => Some((self.ntri + rh.hit.primID, rh.ray.tfar)),
-            _ => None,
+            _ => best,
         }
     }
 
@@ -307,6 +323,11 @@ impl EmbreeScene {
     pub(super) fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
         if tmax.is_nan() || tmax <= 0.0 {
             return false;
+        }
+        if self.loop_spheres
+            && self.spheres.iter().any(|s| super::sphere_t(s.center, s.radius, origin, dir, 0.0, tmax) < tmax)
+        {
+            return true;
         }
         let mut r = ray(origin, dir, tmax);
         let mut ctx = context();
