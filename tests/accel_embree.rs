@@ -17,7 +17,7 @@
 //!
 //! Tolerances, derived: both back ends intersect the same f32 vertices with the same sphere test,
 //! but their triangle tests are different f32 formulas (obvhs: Möller–Trumbore on precomputed
-//! edges; Embree robust mode: a watertight edge-function test), each exact to a few ulps
+//! edges; Embree: its own Möller–Trumbore variant), each exact to a few ulps
 //! (ε = 1.2e-7) of the magnitudes involved, L = |o|∞ + t, times 1/|cos θ| against the face.
 //! - Agreement: same hit/miss, same primitive, t within a relative `T_REL` = 1e-4 (three orders
 //!   above the rounding for |cos θ| > 1e-3, still far below the gaps between the surfaces of these
