@@ -12,7 +12,8 @@ set -euo pipefail
 
 have_embree() {
     [ -f /usr/include/embree3/rtcore.h ] || return 1
-    ldconfig -p 2>/dev/null | grep -q 'libembree3\.so ' || [ -e /usr/lib/x86_64-linux-gnu/libembree3.so ] || return 1
+    # grep without -q reads all of ldconfig's output: no SIGPIPE under pipefail
+    ldconfig -p 2>/dev/null | grep 'libembree3\.so ' >/dev/null || [ -e /usr/lib/x86_64-linux-gnu/libembree3.so ] || return 1
     return 0
 }
 
