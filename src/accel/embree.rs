@@ -260,6 +260,9 @@ impl EmbreeScene {
     unsafe fn attach_triangles(&self, scene: &Scene) {
         let n = scene.triangles.len();
         let g = ffi::rtcNewGeometry(self.device, ffi::RTC_GEOMETRY_TYPE_TRIANGLE);
+        if g.is_null() {
+            return; // the device error is reported after the commit
+        }
         let vb = ffi::rtcSetNewGeometryBuffer(g, ffi::RTC_BUFFER_TYPE_VERTEX, 0, ffi::RTC_FORMAT_FLOAT3, 12, 3 * n);
         let ib = ffi::rtcSetNewGeometryBuffer(g, ffi::RTC_BUFFER_TYPE_INDEX, 0, ffi::RTC_FORMAT_UINT3, 12, n);
         if vb.is_null() || ib.is_null() {
@@ -284,6 +287,9 @@ impl EmbreeScene {
     /// Geometry `SPHERE_GEOM`: a user geometry over `self.spheres`.
     unsafe fn attach_spheres(&self) {
         let g = ffi::rtcNewGeometry(self.device, ffi::RTC_GEOMETRY_TYPE_USER);
+        if g.is_null() {
+            return; // the device error is reported after the commit
+        }
         let user = self.spheres.as_ptr() as *mut c_void;
         ffi::rtcSetGeometryUserPrimitiveCount(g, self.spheres.len() as u32);
         ffi::rtcSetGeometryUserData(g, user);
