@@ -3,7 +3,10 @@
 #   1. installs MPICH (+ libclang for bindgen) if missing — needs root; FORECAST_NO_MPI=1 skips MPI
 #   2. cargo test --release                    (unit + integration tests, single process)
 #   3. cargo test --release --features mpi --test mpi   (2-rank tests under mpirun; target/mpi)
-#   4. scripts/check-mitsuba.sh                (pt vs the independent Mitsuba 3 reference)
+#   4. installs libembree-dev if missing (root/sudo); FORECAST_NO_EMBREE=1 skips Embree, then
+#      cargo test --release --features embree --test accel_embree --test bvh   (target/embree;
+#      Embree against obvhs, pt image z-tests, and tests/bvh.rs on the Embree back end)
+#   5. scripts/check-mitsuba.sh                (pt vs the independent Mitsuba 3 reference)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -27,6 +30,26 @@ if [ "${FORECAST_NO_MPI:-0}" != "1" ] && command -v mpirun >/dev/null 2>&1; then
     CARGO_TARGET_DIR=target/mpi cargo test --release --features mpi --test mpi -- --test-threads=1 2>&1 | tee -a "$log"
 else
     echo "warning: MPI tests skipped (mpirun not found)" >&2
+fi
+
+embree=0
+if [ "${FORECAST_NO_EMBREE:-0}" != "1" ]; then
+    if [ "$(id -u)" = "0" ] || command -v sudo >/dev/null 2>&1; then
+        bash .ci/install-embree.sh && embree=1
+    elif [ -f /usr/include/embree3/rtcore.h ]; then
+        embree=1
+    else
+        echo "warning: not root and no sudo: skipping the Embree install" >&2
+    fi
+fi
+if [ "$embree" = "1" ]; then
+    echo "== cargo test --release --features embree --test accel_embree --test bvh (Embree back end)"
+    # a separate target dir keeps the Embree build from replacing the default one
+    CARGO_TARGET_DIR=target/embree cargo test --release --features embree --test accel_embree 2>&1 | tee -a "$log"
+    FORECAST_TEST_ACCEL=embree CARGO_TARGET_DIR=target/embree cargo test --release --features embree --test bvh 2>&1 \
+        | tee -a "$log"
+else
+    echo "warning: Embree tests skipped" >&2
 fi
 
 echo "== Mitsuba agreement check"

@@ -241,6 +241,9 @@ pub struct BenchArgs {
     /// Passes for the `--method` profile.
     #[arg(long, default_value_t = 2)]
     pub spp: u64,
+    /// Ray-tracing back end (`embree` needs a build with `--features embree`).
+    #[arg(long, value_enum, default_value_t = crate::accel::AccelKind::Obvhs)]
+    pub accel: crate::accel::AccelKind,
 }
 
 fn parse_secs(s: &str) -> Result<f64, String> {

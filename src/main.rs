@@ -181,15 +181,17 @@ fn diff(a: &forecast::cli::DiffArgs) -> Result<(), String> {
 
 fn bench_cmd(a: &forecast::cli::BenchArgs, opts: &forecast::scene::LoadOptions) -> Result<(), String> {
     forecast::param_limits::SPP.check_flag("--spp", a.spp)?;
+    a.accel.check()?;
     let scene = forecast::scene::load_with(&a.scene, opts).map_err(|e| e.to_string())?;
     let t = Instant::now();
     let ntri = scene.triangles.len();
-    let world = accel::World::build(scene).map_err(|e| format!("{}: {e}", a.scene.display()))?;
+    let world = accel::World::build_with(scene, a.accel).map_err(|e| format!("{}: {e}", a.scene.display()))?;
     outln!(
-        "scene {}: {} triangles, {} spheres, BVH {:.3} s",
+        "scene {}: {} triangles, {} spheres, BVH ({}) {:.3} s",
         a.scene.display(),
         ntri,
         world.scene.spheres.len(),
+        a.accel.name(),
         t.elapsed().as_secs_f64()
     )?;
     let pool = pipeline::thread_pool(a.threads)?;
@@ -246,7 +248,9 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs, opts: &forecast::scene::Load
     let mut guard = forecast::atomic_io::OutputSet::new();
     guard.scene_inputs(&r.scene, &scene.mesh_files).output("--out", &image_io::with_ext(&r.out, "png"));
     guard.output("--out", &image_io::with_ext(&r.out, "json")).check()?;
-    let world = accel::World::build(scene).map_err(|e| format!("{}: {e}", r.scene.display()))?;
+    let accel = r.method_args.settings.accel;
+    accel.check()?;
+    let world = accel::World::build_with(scene, accel).map_err(|e| format!("{}: {e}", r.scene.display()))?;
     let cf_args = &r.method_args.cf;
     let cf_opts = r.method_args.forecast_options();
     let seed = r.seed.unwrap_or(world.scene.render.seed);

@@ -14,17 +14,30 @@
 //!   random rays, so at most 1e-3 of the rays may use any of these exemptions (counted, asserted).
 //!
 //! `occluded(o, d, tmax)` must equal "brute force has a hit in (0, tmax)" under the same rules.
+//!
+//! Back end: obvhs; `FORECAST_TEST_ACCEL=embree` with `--features embree` runs every test here on
+//! the Embree back end (scripts/test.sh does).
 
 mod common;
 
 use common::{brute_hits, tmp_dir};
-use forecast::accel::World;
+use forecast::accel::{AccelKind, BuildError, World};
 use forecast::math::Vec3;
 use forecast::sampling::rng::{stream, Rng};
 use forecast::sampling::warp::sample_uniform_sphere;
 use forecast::scene::{load_str, Scene};
 use std::fmt::Write;
 use std::path::Path;
+
+/// `World::build_with` on the back end under test (`FORECAST_TEST_ACCEL`, default obvhs).
+fn build(s: Scene) -> Result<World, BuildError> {
+    let kind = match std::env::var("FORECAST_TEST_ACCEL").as_deref() {
+        Ok("embree") => AccelKind::Embree,
+        Ok("obvhs") | Err(_) => AccelKind::Obvhs,
+        Ok(other) => panic!("FORECAST_TEST_ACCEL={other}: expected obvhs or embree"),
+    };
+    World::build_with(s, kind)
+}
 
 const HEADER: &str = r#"
 [camera]
@@ -286,7 +299,7 @@ fn random_triangle_soup() {
     let dir = tmp_dir("bvh-soup");
     let mut rng = Rng::keyed(1, stream::MISC, 0, 0);
     let tris = soup(&mut rng, 2000, 1.0, 0.2);
-    let w = World::build(mesh_scene(&dir, &tris, "", "")).expect("BVH builds");
+    let w = build(mesh_scene(&dir, &tris, "", "")).expect("BVH builds");
     assert_eq!(w.scene.triangles.len(), 2000);
     let t = random_rays(&w, 20_000, 11);
     eprintln!("soup: {t:?}");
@@ -312,7 +325,7 @@ fn triangles_and_spheres_mixed() {
     // a few quads, one axis-aligned
     extra.push_str("[[shape]]\ntype = \"quad\"\ncorner = [-1.5, -1.0, -1.5]\nu = [3.0, 0.0, 0.0]\nv = [0.0, 0.0, 3.0]\nmaterial = \"m\"\n");
     extra.push_str("[[shape]]\ntype = \"quad\"\ncorner = [-1.0, -1.0, 1.3]\nu = [2.0, 0.5, 0.0]\nv = [0.0, 2.0, 0.3]\nmaterial = \"m\"\n");
-    let w = World::build(mesh_scene(&dir, &tris, &extra, "")).expect("BVH builds");
+    let w = build(mesh_scene(&dir, &tris, &extra, "")).expect("BVH builds");
     assert_eq!(w.scene.spheres.len(), 40);
     let t = random_rays(&w, 20_000, 12);
     eprintln!("mixed: {t:?}");
@@ -336,7 +349,7 @@ fn spheres_only() {
         )
         .unwrap();
     }
-    let w = World::build(load_str(&src, "spheres.toml", Path::new(".")).unwrap()).expect("BVH builds");
+    let w = build(load_str(&src, "spheres.toml", Path::new(".")).unwrap()).expect("BVH builds");
     assert_eq!(w.scene.ntri(), 0);
     let t = random_rays(&w, 20_000, 13);
     eprintln!("spheres: {t:?}");
@@ -372,7 +385,7 @@ fn degenerate_and_coincident_triangles() {
         tris.push(tris[k]);
         tris.push([tris[50 + k][0], tris[50 + k][2], tris[50 + k][1]]);
     }
-    let w = World::build(mesh_scene(&dir, &tris, "", "")).expect("BVH builds");
+    let w = build(mesh_scene(&dir, &tris, "", "")).expect("BVH builds");
     assert_eq!(w.scene.triangles.len(), n_good + 100, "the 3 zero-area triangles must be skipped");
     assert!(
         w.scene.warnings.iter().any(|m| m.contains("skipped 3 degenerate") && m.contains("bvh.toml")),
@@ -400,7 +413,7 @@ fn rays_parallel_to_faces() {
     ] {
         writeln!(src, "[[shape]]\ntype = \"quad\"\ncorner = {c:?}\nu = {u:?}\nv = {v:?}\nmaterial = \"m\"\n").unwrap();
     }
-    let w = World::build(load_str(&src, "parallel.toml", Path::new(".")).unwrap()).expect("BVH builds");
+    let w = build(load_str(&src, "parallel.toml", Path::new(".")).unwrap()).expect("BVH builds");
     let mut rng = Rng::keyed(5, stream::MISC, 0, 0);
     let mut tally = Tally::default();
     for k in 0..5000 {
@@ -425,7 +438,7 @@ fn very_large_and_very_small_scales() {
         let mut rng = Rng::keyed(seed, stream::MISC, 0, 0);
         let tris = soup(&mut rng, 500, 1.0, 0.3);
         let transform = format!("scale = {scale:e}\ntranslate = [{offset:e}, 0.0, {:e}]", -offset);
-        let w = World::build(mesh_scene(&dir, &tris, "", &transform)).expect("BVH builds");
+        let w = build(mesh_scene(&dir, &tris, "", &transform)).expect("BVH builds");
         assert_eq!(w.scene.triangles.len(), 500, "{name}: no triangle may be dropped as degenerate");
         let t = random_rays_ext(&w, 10_000, seed + 100, true, 10);
         eprintln!("{name}: {t:?}");
@@ -442,7 +455,7 @@ fn comparison_detects_a_wrong_bvh() {
     let tris = soup(&mut rng, 200, 1.0, 0.3);
     let full = mesh_scene(&dir, &tris, "", "");
     let half = mesh_scene(&dir, &tris[..100], "", "");
-    let mut w = World::build(half).expect("BVH builds");
+    let mut w = build(half).expect("BVH builds");
     w.scene = full; // the brute force now sees 200 triangles, the BVH only 100
     let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| random_rays(&w, 2000, 16)));
     assert!(r.is_err(), "missing primitives went undetected");
@@ -457,7 +470,7 @@ fn hits_closer_than_1e4_are_found() {
     let src = format!(
         "{HEADER}\n[[shape]]\ntype = \"quad\"\ncorner = [-2e-5, -2e-5, 5e-5]\nu = [4e-5, 0.0, 0.0]\nv = [0.0, 4e-5, 0.0]\nmaterial = \"m\"\n\n[[shape]]\ntype = \"quad\"\ncorner = [-1.0, -1.0, 1.0]\nu = [2.0, 0.0, 0.0]\nv = [0.0, 2.0, 0.0]\nmaterial = \"m\"\n"
     );
-    let w = World::build(load_str(&src, "tiny.toml", Path::new(".")).unwrap()).expect("BVH builds");
+    let w = build(load_str(&src, "tiny.toml", Path::new(".")).unwrap()).expect("BVH builds");
     // along +z: the 40 µm quad at z = 5e-5 is first, the big one at z = 1 second (the origin is off
     // both quads' diagonals, so no shared edge is involved)
     let (o, d) = (Vec3::new(0.5e-5, 0.3e-5, 0.0), Vec3::Z);
@@ -484,7 +497,7 @@ fn hits_closer_than_1e4_are_found() {
 #[test]
 fn ray_through_shared_edge_hits() {
     let src = format!("{HEADER}\n[[shape]]\ntype = \"quad\"\ncorner = [-1.0, -1.0, 1.0]\nu = [2.0, 0.0, 0.0]\nv = [0.0, 2.0, 0.0]\nmaterial = \"m\"\n");
-    let w = World::build(load_str(&src, "edge.toml", Path::new(".")).unwrap()).expect("BVH builds");
+    let w = build(load_str(&src, "edge.toml", Path::new(".")).unwrap()).expect("BVH builds");
     assert_eq!(
         brute_hits(&w.scene, Vec3::ZERO, Vec3::Z, f64::INFINITY).len(),
         2,
@@ -506,7 +519,7 @@ fn ray_through_shared_edge_hits() {
 fn negative_zero_direction_components_hit() {
     let src =
         format!("{HEADER}\n[[shape]]\ntype = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\nmaterial = \"m\"\n");
-    let w = World::build(load_str(&src, "negzero.toml", Path::new(".")).unwrap()).expect("BVH builds");
+    let w = build(load_str(&src, "negzero.toml", Path::new(".")).unwrap()).expect("BVH builds");
     let o = Vec3::new(0.2, 0.2, 5.0);
     let plus = w.intersect(o, Vec3::new(0.0, 0.0, -1.0), f32::INFINITY).map(|h| h.t);
     assert!(plus.is_some_and(|t| (t - 4.0408).abs() < 1e-3), "control with +0.0: {plus:?}");
@@ -528,13 +541,13 @@ fn coincident_triangles_build_in_bounded_time() {
     let mut rng = Rng::keyed(7, stream::MISC, 0, 0);
     let distinct = mesh_scene(&dir, &soup(&mut rng, n, 1.0, 0.05), "", "");
     let t = std::time::Instant::now();
-    let w = World::build(distinct).expect("BVH builds");
+    let w = build(distinct).expect("BVH builds");
     let t_distinct = t.elapsed().as_secs_f64();
     assert_eq!(w.scene.triangles.len(), n);
     let tri = [Vec3::new(-0.5, -0.5, 0.0), Vec3::new(0.5, -0.5, 0.0), Vec3::new(0.0, 0.5, 0.0)];
     let same = mesh_scene(&dir, &vec![tri; n], "", "");
     let t = std::time::Instant::now();
-    let w = World::build(same).expect("BVH builds");
+    let w = build(same).expect("BVH builds");
     let t_same = t.elapsed().as_secs_f64();
     let bound = 20.0 * t_distinct + 1.0;
     eprintln!("32k faces: distinct {t_distinct:.3} s, identical {t_same:.3} s (bound {bound:.3} s)");
@@ -558,7 +571,7 @@ fn duplicated_triangles_agree_with_brute_force() {
         tris.extend(std::iter::repeat_n(*t, 1 + i % 4));
     }
     tris.extend(std::iter::repeat_n(base[0], 3000));
-    let w = World::build(mesh_scene(&dir, &tris, "", "")).expect("BVH builds");
+    let w = build(mesh_scene(&dir, &tris, "", "")).expect("BVH builds");
     assert_eq!(w.scene.triangles.len(), tris.len());
     let t = random_rays_ext(&w, 4000, 12, false, 4000);
     eprintln!("duplicates: {t:?}");
@@ -576,8 +589,7 @@ fn scene_at_the_extent_limit_builds_and_traces() {
         d = 2.0 * l,
         r = 0.5 * l
     );
-    let w =
-        World::build(load_str(&src, "limit.toml", Path::new(".")).unwrap_or_else(|e| panic!("{e}"))).expect("builds");
+    let w = build(load_str(&src, "limit.toml", Path::new(".")).unwrap_or_else(|e| panic!("{e}"))).expect("builds");
     let o = Vec3::new(0.0, 0.0, l);
     let h = w.intersect(o, Vec3::new(0.0, 0.0, -1.0), f32::INFINITY).expect("hits the sphere");
     assert!((h.t - 0.5 * l).abs() <= 1e-5 * l && h.prim == 2, "{h:?}");

@@ -213,7 +213,8 @@ fn the_json_records_only_the_chosen_methods_options() {
     let pt = keys("pt", &[]);
     let mut names: Vec<&str> = pt.keys().map(String::as_str).collect();
     names.sort_unstable();
-    assert_eq!(names, ["emission_split", "max_depth", "path_filter"], "{pt:?}");
+    assert_eq!(names, ["accel", "emission_split", "max_depth", "path_filter"], "{pt:?}");
+    assert_eq!(pt["accel"].as_str(), Some("obvhs"), "the default back end is recorded");
     let cf = keys("iws-cf", &["--variant", "baj08", "--forecast-photons", "2000", "--clusters", "4"]);
     for k in ["max_depth", "emission_split", "vpl_paths", "direct", "clusters", "split", "table_depth", "variant"] {
         assert!(cf.contains_key(k), "iws-cf options lack `{k}`: {cf:?}");
@@ -342,4 +343,23 @@ fn help_into_a_full_stdout_is_an_error() {
     let (code, out, _) = run(&["--version"]);
     assert_eq!(code, 0);
     assert!(out.starts_with("forecast "), "{out}");
+}
+
+/// `--accel embree` in a build without the `embree` feature is a clear error, before any work
+/// (`render` and `bench`).
+#[cfg(not(feature = "embree"))]
+#[test]
+fn accel_embree_without_the_feature_is_refused() {
+    let d = tmp_dir("cli-accel");
+    let sc = scene();
+    let prefix = d.join("r").display().to_string();
+    for args in [
+        vec!["render", sc.as_str(), "--accel", "embree", "--spp", "1", "--quiet", "--out", &prefix],
+        vec!["bench", sc.as_str(), "--accel", "embree", "--repeats", "1"],
+    ] {
+        let (code, _, err) = run(&args);
+        assert_ne!(code, 0, "{args:?} succeeded");
+        assert!(err.contains("rebuild with --features embree"), "{args:?}: {err}");
+    }
+    assert!(!Path::new(&format!("{prefix}.json")).exists(), "nothing is written");
 }

@@ -1,27 +1,27 @@
-//! `World`: the scene plus its ray-tracing acceleration structure (the only obvhs user).
+//! `World`: the scene plus its ray-tracing acceleration structure, from one of two back ends.
 //!
-//! One CWBVH (obvhs, `medium_build`, made robust to coincident primitives in `build`) over the
-//! AABBs of every triangle and analytic sphere. `World::build` refuses primitives whose box is not
-//! finite or leaves the scene extent limit (`scene::MAX_EXTENT`): obvhs panics on such boxes, and
-//! the loader should have rejected them already (this is the last line of defence).
-//! Triangles are reordered into BVH slot order as `RtTriangle`s, so traversal needs no indirection.
-//! Closest-hit and occlusion queries; ray counts are kept in thread-local counters
-//! (`take_ray_counts`).
+//! `AccelKind::Obvhs` (the default, `obvhs.rs`): a CWBVH from the obvhs crate.
+//! `AccelKind::Embree` (`embree.rs`, cargo feature `embree`): Intel Embree 3 through the system
+//! library. `World` holds the chosen one in an enum (no trait object in the hot path); a back end
+//! answers only "which primitive, at which t"; this module turns that into a `Hit` (normals,
+//! shading normal, sphere re-projection), so both back ends give hits of the same meaning.
+//! Spheres are analytic in both, tested by the one `sphere_t` here.
+//!
+//! `World::build` refuses primitives whose box is not finite or leaves the scene extent limit
+//! (`scene::MAX_EXTENT`): obvhs panics on such boxes, and the loader should have rejected them
+//! already (this is the last line of defence). Closest-hit and occlusion queries; ray counts are
+//! kept in thread-local counters (`take_ray_counts`).
 //!
 //! Invariants: directions passed in are unit length (the sphere test relies on it); hit normals
 //! are unit; `Hit::ns` lies on the side of `Hit::ng`; primitive ids follow `Scene` (triangles, then
-//! spheres).
+//! spheres); a back end reports t ∈ [0, tmax] (triangles) or (0, tmax) (spheres).
 
-use crate::math::{Vec3, Vec3A};
+use crate::math::Vec3;
 use crate::scene::Scene;
-mod build;
+#[cfg(feature = "embree")]
+mod embree;
+mod obvhs;
 
-use obvhs::aabb::Aabb;
-use obvhs::cwbvh::CwBvh;
-use obvhs::ray::{Ray, RayHit};
-use obvhs::rt_triangle::RtTriangle;
-use obvhs::triangle::Triangle as ObvTriangle;
-use obvhs::BvhBuildParams;
 use std::cell::Cell;
 
 thread_local! {
@@ -87,6 +87,8 @@ pub enum BuildError {
     },
     /// More primitives than 32-bit ids can name.
     TooManyPrimitives(usize),
+    /// The back end is not in this build, or failed (Embree's device or scene).
+    Backend(String),
 }
 
 impl std::fmt::Display for BuildError {
@@ -99,96 +101,128 @@ impl std::fmt::Display for BuildError {
                 crate::scene::MAX_EXTENT
             ),
             BuildError::TooManyPrimitives(n) => write!(f, "cannot build the BVH: {n} primitives (at most 2^32 - 2)"),
+            BuildError::Backend(m) => write!(f, "cannot build the BVH: {m}"),
         }
     }
 }
 
 impl std::error::Error for BuildError {}
 
-/// The scene with its BVH.
+/// The ray-tracing back end (`--accel`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AccelKind {
+    /// obvhs CWBVH (always built in).
+    #[default]
+    Obvhs,
+    /// Intel Embree 3 (cargo feature `embree`).
+    Embree,
+}
+
+impl AccelKind {
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            AccelKind::Obvhs => "obvhs",
+            AccelKind::Embree => "embree",
+        }
+    }
+
+    /// Whether this build has the back end.
+    pub fn available(self) -> bool {
+        match self {
+            AccelKind::Obvhs => true,
+            AccelKind::Embree => cfg!(feature = "embree"),
+        }
+    }
+
+    /// `Err` with the message for a back end this build lacks.
+    pub fn check(self) -> Result<(), String> {
+        if self.available() {
+            Ok(())
+        } else {
+            Err("--accel embree: this build has no Embree back end; rebuild with --features embree".into())
+        }
+    }
+}
+
+/// The built back end.
+enum Accel {
+    Obvhs(obvhs::ObvhsBvh),
+    #[cfg(feature = "embree")]
+    Embree(embree::EmbreeScene),
+}
+
+/// The scene with its acceleration structure.
 pub struct World {
     /// The scene.
     pub scene: Scene,
-    bvh: CwBvh,
-    slot_tri: Vec<RtTriangle>,
-    slot_prim: Vec<u32>,
+    accel: Accel,
     /// BVH build time in seconds.
     pub build_secs: f64,
 }
 
+/// Each primitive's bounds (lo, hi): triangles, then spheres.
+fn bounds(scene: &Scene) -> Vec<(Vec3, Vec3)> {
+    let tris = scene.triangles.iter().map(|t| (t.p[0].min(t.p[1]).min(t.p[2]), t.p[0].max(t.p[1]).max(t.p[2])));
+    let r = |s: &crate::scene::Sphere| Vec3::splat(s.radius);
+    tris.chain(scene.spheres.iter().map(|s| (s.center - r(s), s.center + r(s)))).collect()
+}
+
 impl World {
-    /// Builds the BVH over the scene's primitives; refuses boxes that are not finite or exceed
-    /// `scene::MAX_EXTENT` (obvhs would panic on them).
+    /// Builds the default (obvhs) BVH over the scene's primitives; refuses boxes that are not
+    /// finite or exceed `scene::MAX_EXTENT` (obvhs would panic on them).
     pub fn build(scene: Scene) -> Result<World, BuildError> {
+        World::build_with(scene, AccelKind::Obvhs)
+    }
+
+    /// Builds the acceleration structure of back end `kind` (same checks as `build`).
+    pub fn build_with(scene: Scene, kind: AccelKind) -> Result<World, BuildError> {
         let t0 = std::time::Instant::now();
+        kind.check().map_err(BuildError::Backend)?;
         let nprim = scene.triangles.len() + scene.spheres.len();
         if nprim >= u32::MAX as usize - 1 {
             return Err(BuildError::TooManyPrimitives(nprim));
         }
-        let ntri = scene.ntri();
-        let mut aabbs: Vec<Aabb> = scene
-            .triangles
-            .iter()
-            .map(|t| {
-                let lo = t.p[0].min(t.p[1]).min(t.p[2]);
-                let hi = t.p[0].max(t.p[1]).max(t.p[2]);
-                Aabb::new(Vec3A::from(lo), Vec3A::from(hi))
-            })
-            .collect();
-        aabbs.extend(scene.spheres.iter().map(|s| {
-            Aabb::new(Vec3A::from(s.center - Vec3::splat(s.radius)), Vec3A::from(s.center + Vec3::splat(s.radius)))
-        }));
-        if let Some(i) = aabbs
-            .iter()
-            .position(|b| !crate::scene::within_extent(b.min.into()) || !crate::scene::within_extent(b.max.into()))
-        {
-            let b = aabbs[i];
-            return Err(BuildError::OutOfRange { prim: i as u32, lo: b.min.to_array(), hi: b.max.to_array() });
+        let b = bounds(&scene);
+        let within = crate::scene::within_extent;
+        if let Some(i) = b.iter().position(|&(lo, hi)| !within(lo) || !within(hi)) {
+            let (lo, hi) = b[i];
+            return Err(BuildError::OutOfRange { prim: i as u32, lo: lo.to_array(), hi: hi.to_array() });
         }
-        let bvh = build::build_cwbvh(&aabbs, BvhBuildParams::medium_build());
-        let slot_prim: Vec<u32> = bvh.primitive_indices.clone();
-        let dummy = ObvTriangle { v0: Vec3A::ZERO, v1: Vec3A::X, v2: Vec3A::Y };
-        let slot_tri = slot_prim
-            .iter()
-            .map(|&p| {
-                if p < ntri {
-                    let t = &scene.triangles[p as usize];
-                    RtTriangle::from(&ObvTriangle { v0: t.p[0].into(), v1: t.p[1].into(), v2: t.p[2].into() })
-                } else {
-                    RtTriangle::from(&dummy)
-                }
-            })
-            .collect();
-        Ok(World { scene, bvh, slot_tri, slot_prim, build_secs: t0.elapsed().as_secs_f64() })
+        let accel = match kind {
+            AccelKind::Obvhs => Accel::Obvhs(obvhs::ObvhsBvh::build(&scene, &b)),
+            #[cfg(feature = "embree")]
+            AccelKind::Embree => Accel::Embree(embree::EmbreeScene::build(&scene).map_err(BuildError::Backend)?),
+            #[cfg(not(feature = "embree"))]
+            AccelKind::Embree => unreachable!("checked by AccelKind::check"),
+        };
+        Ok(World { scene, accel, build_secs: t0.elapsed().as_secs_f64() })
     }
 
-    #[inline]
-    fn prim_t(&self, r: &Ray, slot: usize) -> f32 {
-        let p = self.slot_prim[slot];
-        let ntri = self.scene.ntri();
-        if p < ntri {
-            tri_t(&self.slot_tri[slot], r)
-        } else {
-            let s = &self.scene.spheres[(p - ntri) as usize];
-            sphere_t(s.center, s.radius, r)
+    /// The back end in use.
+    pub fn accel(&self) -> AccelKind {
+        match self.accel {
+            Accel::Obvhs(_) => AccelKind::Obvhs,
+            #[cfg(feature = "embree")]
+            Accel::Embree(_) => AccelKind::Embree,
         }
     }
 
     /// Closest hit along `origin + t·dir`, t ∈ (0, tmax); `dir` must be unit length.
     pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
         count(1, 0);
-        if self.slot_prim.is_empty() {
-            return None;
-        }
-        // + 0.0 turns −0.0 components into +0.0 (obvhs' node test misreads −0.0)
-        let ray = Ray::new(origin.into(), (dir + Vec3::ZERO).into(), 0.0, tmax);
-        let mut hit = RayHit::none();
-        if !self.bvh.ray_traverse(ray, &mut hit, |r, slot| self.prim_t(r, slot)) {
-            return None;
-        }
-        let slot = hit.primitive_id as usize;
-        let prim = self.slot_prim[slot];
-        let t = hit.t;
+        let (prim, t) = match &self.accel {
+            Accel::Obvhs(b) => b.closest(&self.scene, origin, dir, tmax),
+            #[cfg(feature = "embree")]
+            Accel::Embree(e) => e.closest(origin, dir, tmax),
+        }?;
+        Some(self.hit(origin, dir, prim, t))
+    }
+
+    /// The hit record of primitive `prim` at `t` along the ray.
+    #[inline]
+    fn hit(&self, origin: Vec3, dir: Vec3, prim: u32, t: f32) -> Hit {
         let p = origin + t * dir;
         let ntri = self.scene.ntri();
         if prim < ntri {
@@ -206,7 +240,7 @@ impl World {
                 }
                 None => tri.ng,
             };
-            Some(Hit { t, p, ng: tri.ng, ns, prim })
+            Hit { t, p, ng: tri.ng, ns, prim }
         } else {
             let s = &self.scene.spheres[(prim - ntri) as usize];
             let mut n = ((p - s.center) / s.radius).normalize();
@@ -215,18 +249,18 @@ impl World {
             }
             // re-project onto the surface to limit error growth along Dirac chains
             let p = s.center + (p - s.center).normalize() * s.radius;
-            Some(Hit { t, p, ng: n, ns: n, prim })
+            Hit { t, p, ng: n, ns: n, prim }
         }
     }
 
     /// True if anything blocks the open segment (0, tmax) along unit `dir`.
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
         count(0, 1);
-        if self.slot_prim.is_empty() || tmax <= 0.0 {
-            return false;
+        match &self.accel {
+            Accel::Obvhs(b) => b.occluded(&self.scene, origin, dir, tmax),
+            #[cfg(feature = "embree")]
+            Accel::Embree(e) => e.occluded(origin, dir, tmax),
         }
-        let ray = Ray::new(origin.into(), (dir + Vec3::ZERO).into(), 0.0, tmax);
-        !self.bvh.ray_traverse_miss(ray, |r, slot| self.prim_t(r, slot))
     }
 
     /// Visibility between surface points `a` (normal `na`) and `b` (normal `nb`).
@@ -245,29 +279,6 @@ impl World {
     }
 }
 
-/// Möller–Trumbore on obvhs' precomputed triangle with inclusive edge tests: unlike
-/// `RtTriangle::intersect` (which rejects −0.0 barycentrics by sign bit), a ray through an edge
-/// shared by two triangles hits one of them (no pinhole leaks at quad diagonals).
-#[inline]
-fn tri_t(t: &RtTriangle, ray: &Ray) -> f32 {
-    let c = t.v0 - ray.origin;
-    let r = ray.direction.cross(c);
-    let det = t.ng.dot(ray.direction);
-    if det == 0.0 {
-        return f32::INFINITY;
-    }
-    let inv_det = 1.0 / det;
-    let u = r.dot(t.e2) * inv_det;
-    let v = r.dot(t.e1) * inv_det;
-    if u >= 0.0 && v >= 0.0 && u + v <= 1.0 {
-        let tt = t.ng.dot(c) * inv_det;
-        if tt >= ray.tmin && tt <= ray.tmax {
-            return tt;
-        }
-    }
-    f32::INFINITY
-}
-
 /// Barycentric (b1, b2) of `p` in triangle `t` (b0 = 1 − b1 − b2).
 #[inline]
 fn barycentrics(t: [Vec3; 3], p: Vec3) -> (f32, f32) {
@@ -281,11 +292,10 @@ fn barycentrics(t: [Vec3; 3], p: Vec3) -> (f32, f32) {
     ((d11 * d20 - d01 * d21) / den, (d00 * d21 - d01 * d20) / den)
 }
 
-/// Ray–sphere distance in [tmin, tmax], or ∞ (unit direction; Ray Tracing Gems ch. 7 form).
+/// Ray–sphere distance in (tmin, tmax), or ∞ (unit direction `d`; Ray Tracing Gems ch. 7 form).
+/// The one sphere test of both back ends.
 #[inline]
-fn sphere_t(c: Vec3, r: f32, ray: &Ray) -> f32 {
-    let o = Vec3::from(ray.origin);
-    let d = Vec3::from(ray.direction);
+fn sphere_t(c: Vec3, r: f32, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> f32 {
     let f = o - c;
     let b = -f.dot(d);
     let l = f + b * d;
@@ -299,9 +309,9 @@ fn sphere_t(c: Vec3, r: f32, ray: &Ray) -> f32 {
     if t0 > t1 {
         std::mem::swap(&mut t0, &mut t1);
     }
-    if t0 > ray.tmin && t0 < ray.tmax {
+    if t0 > tmin && t0 < tmax {
         t0
-    } else if t1 > ray.tmin && t1 < ray.tmax {
+    } else if t1 > tmin && t1 < tmax {
         t1
     } else {
         f32::INFINITY

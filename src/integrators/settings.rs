@@ -1,11 +1,13 @@
-//! The render settings every method reads: the path-vertex safety cap (`--max-depth`) and the
-//! pixel sampler's emission split (`--emission-split`, `render::pixel`). They are not a method's
+//! The render settings every method reads: the path-vertex safety cap (`--max-depth`), the
+//! pixel sampler's emission split (`--emission-split`, `render::pixel`) and the ray-tracing back
+//! end (`--accel`, `accel::AccelKind`). They are not a method's
 //! options: every method accepts them, and the JSON report records them for every method.
 //!
 //! Invariants: `max_depth` is `None` only before the pipeline resolves it against the scene's
 //! `render.max_depth` (direct callers get [`MAX_VERTICES`]); `1 <= emission_split <=
 //! MAX_EMISSION_SPLIT` (clap checks the flag; the pixel sampler clamps API values).
 
+use crate::accel::AccelKind;
 use crate::transport::particle::MAX_VERTICES;
 
 /// The most camera rays per pixel sample (`--emission-split`; `render::pixel` clamps to it).
@@ -22,6 +24,10 @@ pub struct RenderSettings {
     /// carries the rest of the estimate (unbiased; 1 = off; default by measurement).
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=MAX_EMISSION_SPLIT as i64))]
     pub emission_split: u32,
+    /// Ray-tracing back end: `obvhs` (CWBVH, always built in) or `embree` (Intel Embree 3; needs a
+    /// build with `--features embree`).
+    #[arg(long, value_enum, default_value_t = AccelKind::Obvhs)]
+    pub accel: AccelKind,
 }
 
 impl RenderSettings {
@@ -32,6 +38,7 @@ impl RenderSettings {
 
     /// The limits of `crate::param_limits` (the scene's `render.max_depth` has the same).
     pub fn validate(&self) -> Result<(), String> {
+        self.accel.check()?;
         self.max_depth.map_or(Ok(()), |d| crate::param_limits::MAX_DEPTH.check_flag("--max-depth", d.into()))
     }
 }

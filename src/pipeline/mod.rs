@@ -328,7 +328,8 @@ fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), String> 
         }
         scene.warnings.push(w);
     }
-    let world = World::build(scene).map_err(|e| format!("{}: {e}", job.scene.display()))?;
+    let world =
+        World::build_with(scene, plan.args.settings.accel).map_err(|e| format!("{}: {e}", job.scene.display()))?;
     let bvh_s = world.build_secs;
     Ok((world, plan, Timings { load_s, bvh_s, ..Timings::default() }))
 }

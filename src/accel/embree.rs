@@ -1,0 +1,413 @@
+//! The Embree back end (cargo feature `embree`, off by default): Intel Embree 3 (the system's
+//! `libembree3`, Debian `libembree-dev` 3.13) over the same primitives as the obvhs back end.
+//!
+//! Bindings: raw FFI declarations of the few Embree 3 functions used (`ffi` below, written against
+//! the installed `embree3/rtcore*.h`), not the `embree` crate (embree-rs 0.3): its safe API has no
+//! user geometry, which the analytic spheres need, and the dozen calls here are simpler to audit
+//! than a binding's full surface. `rtcInitIntersectContext` is an inline function in the header,
+//! so `context()` does what it does.
+//!
+//! Geometry 0 (`TRI_GEOM`) is one triangle mesh with three unshared vertices per triangle (the
+//! scene's coordinates, bit for bit); geometry 1 (`SPHERE_GEOM`) is a user geometry whose callbacks
+//! run `super::sphere_t`, the sphere test of the obvhs back end; with at most `LOOP_SPHERES`
+//! spheres (the committed scenes) they are tested in a loop before the Embree query instead, which
+//! spares Embree's callbacks. The scene is built with `RTC_BUILD_QUALITY_HIGH` and the default
+//! flags: `RTC_SCENE_FLAG_ROBUST` (a watertight triangle test) traced 10–25% fewer closest-hit
+//! rays per second on `ring` and is not needed for agreement: the default test matches obvhs'
+//! inclusive test on every random ray of `tests/accel_embree.rs` (robust mode differed on 6 of
+//! 96k rays at shared edges), and a ray through a shared edge hits (`tests/bvh.rs`).
+//!
+//! Invariants: primitive ids map back to `Scene` ids (triangle `primID`, `ntri + primID` for
+//! spheres); the sphere data the callbacks read is owned here in a boxed slice (stable address) and
+//! never changes after the build; a committed scene is only read, which Embree allows from any
+//! number of threads (hence `Send`/`Sync`); the device and scene are released once, in `Drop`.
+
+use crate::math::Vec3;
+use crate::scene::Scene;
+use std::ffi::c_void;
+
+/// The Embree 3 declarations used (values from `rtcore_*.h`, 3.13.5).
+#[allow(non_snake_case, non_camel_case_types, dead_code)]
+mod ffi {
+    use std::ffi::{c_char, c_int, c_uint, c_void};
+    pub type RTCDevice = *mut c_void;
+    pub type RTCScene = *mut c_void;
+    pub type RTCGeometry = *mut c_void;
+    pub const RTC_GEOMETRY_TYPE_TRIANGLE: c_uint = 0;
+    pub const RTC_GEOMETRY_TYPE_USER: c_uint = 120;
+    pub const RTC_BUFFER_TYPE_INDEX: c_uint = 0;
+    pub const RTC_BUFFER_TYPE_VERTEX: c_uint = 1;
+    pub const RTC_FORMAT_UINT3: c_uint = 0x5003;
+    pub const RTC_FORMAT_FLOAT3: c_uint = 0x9003;
+    pub const RTC_SCENE_FLAG_NONE: c_uint = 0;
+    pub const RTC_SCENE_FLAG_ROBUST: c_uint = 1 << 2;
+    pub const RTC_BUILD_QUALITY_HIGH: c_uint = 2;
+    pub const RTC_INVALID_GEOMETRY_ID: c_uint = u32::MAX;
+    pub const RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT: c_uint = 0;
+
+    /// `RTCIntersectContext` with `RTC_MAX_INSTANCE_LEVEL_COUNT` 1 and `RTC_MIN_WIDTH` 0.
+    #[repr(C)]
+    pub struct RTCIntersectContext {
+        pub flags: c_uint,
+        pub filter: *const c_void,
+        pub instID: [c_uint; 1],
+    }
+    #[repr(C, align(16))]
+    #[derive(Clone, Copy, Default)]
+    pub struct RTCRay {
+        pub org: [f32; 3],
+        pub tnear: f32,
+        pub dir: [f32; 3],
+        pub time: f32,
+        pub tfar: f32,
+        pub mask: c_uint,
+        pub id: c_uint,
+        pub flags: c_uint,
+    }
+    #[repr(C, align(16))]
+    #[derive(Clone, Copy, Default)]
+    pub struct RTCHit {
+        pub Ng: [f32; 3],
+        pub u: f32,
+        pub v: f32,
+        pub primID: c_uint,
+        pub geomID: c_uint,
+        pub instID: [c_uint; 1],
+    }
+    #[repr(C)]
+    #[derive(Clone, Copy, Default)]
+    pub struct RTCRayHit {
+        pub ray: RTCRay,
+        pub hit: RTCHit,
+    }
+    #[repr(C, align(16))]
+    pub struct RTCBounds {
+        pub lower: [f32; 3],
+        pub align0: f32,
+        pub upper: [f32; 3],
+        pub align1: f32,
+    }
+    #[repr(C)]
+    pub struct RTCBoundsFunctionArguments {
+        pub geometryUserPtr: *mut c_void,
+        pub primID: c_uint,
+        pub timeStep: c_uint,
+        pub bounds_o: *mut RTCBounds,
+    }
+    #[repr(C)]
+    pub struct RTCIntersectFunctionNArguments {
+        pub valid: *mut c_int,
+        pub geometryUserPtr: *mut c_void,
+        pub primID: c_uint,
+        pub context: *mut RTCIntersectContext,
+        pub rayhit: *mut f32,
+        pub N: c_uint,
+        pub geomID: c_uint,
+    }
+    #[repr(C)]
+    pub struct RTCOccludedFunctionNArguments {
+        pub valid: *mut c_int,
+        pub geometryUserPtr: *mut c_void,
+        pub primID: c_uint,
+        pub context: *mut RTCIntersectContext,
+        pub ray: *mut f32,
+        pub N: c_uint,
+        pub geomID: c_uint,
+    }
+    pub type BoundsFn = unsafe extern "C" fn(*const RTCBoundsFunctionArguments);
+    pub type IntersectFn = unsafe extern "C" fn(*const RTCIntersectFunctionNArguments);
+    pub type OccludedFn = unsafe extern "C" fn(*const RTCOccludedFunctionNArguments);
+
+    #[link(name = "embree3")]
+    extern "C" {
+        pub fn rtcNewDevice(config: *const c_char) -> RTCDevice;
+        pub fn rtcReleaseDevice(device: RTCDevice);
+        pub fn rtcGetDeviceError(device: RTCDevice) -> c_uint;
+        pub fn rtcNewScene(device: RTCDevice) -> RTCScene;
+        pub fn rtcSetSceneFlags(scene: RTCScene, flags: c_uint);
+        pub fn rtcSetSceneBuildQuality(scene: RTCScene, quality: c_uint);
+        pub fn rtcAttachGeometryByID(scene: RTCScene, geometry: RTCGeometry, id: c_uint);
+        pub fn rtcCommitScene(scene: RTCScene);
+        pub fn rtcReleaseScene(scene: RTCScene);
+        pub fn rtcNewGeometry(device: RTCDevice, kind: c_uint) -> RTCGeometry;
+        pub fn rtcSetNewGeometryBuffer(
+            geometry: RTCGeometry,
+            kind: c_uint,
+            slot: c_uint,
+            format: c_uint,
+            stride: usize,
+            count: usize,
+        ) -> *mut c_void;
+        pub fn rtcSetGeometryBuildQuality(geometry: RTCGeometry, quality: c_uint);
+        pub fn rtcSetGeometryUserPrimitiveCount(geometry: RTCGeometry, count: c_uint);
+        pub fn rtcSetGeometryUserData(geometry: RTCGeometry, ptr: *mut c_void);
+        pub fn rtcSetGeometryBoundsFunction(geometry: RTCGeometry, f: BoundsFn, user: *mut c_void);
+        pub fn rtcSetGeometryIntersectFunction(geometry: RTCGeometry, f: IntersectFn);
+        pub fn rtcSetGeometryOccludedFunction(geometry: RTCGeometry, f: OccludedFn);
+        pub fn rtcCommitGeometry(geometry: RTCGeometry);
+        pub fn rtcReleaseGeometry(geometry: RTCGeometry);
+        pub fn rtcIntersect1(scene: RTCScene, context: *mut RTCIntersectContext, rayhit: *mut RTCRayHit);
+        pub fn rtcOccluded1(scene: RTCScene, context: *mut RTCIntersectContext, ray: *mut RTCRay);
+    }
+}
+
+/// Geometry id of the triangle mesh.
+const TRI_GEOM: u32 = 0;
+/// Geometry id of the spheres.
+const SPHERE_GEOM: u32 = 1;
+
+/// A sphere as the callbacks read it.
+#[derive(Clone, Copy)]
+struct SphereData {
+    center: Vec3,
+    radius: f32,
+}
+
+/// At most this many spheres are tested in a loop before the Embree query instead of as a user
+/// geometry (a user primitive costs Embree a callback per box hit; see `results/2026-12-03-embree-backend.md`).
+const LOOP_SPHERES: usize = 8;
+
+/// A committed Embree scene over the triangles and spheres of a `Scene`.
+pub(super) struct EmbreeScene {
+    device: ffi::RTCDevice,
+    scene: ffi::RTCScene,
+    /// Read by the sphere callbacks through the geometry's user pointer; never mutated.
+    spheres: Box<[SphereData]>,
+    /// The spheres are tested in a loop (≤ `LOOP_SPHERES`), not by Embree.
+    loop_spheres: bool,
+    ntri: u32,
+}
+
+// SAFETY: after `rtcCommitScene` the scene is only traversed, which Embree documents as thread
+// safe; the sphere data is immutable; the handles are released once, in `Drop`.
+unsafe impl Send for EmbreeScene {}
+unsafe impl Sync for EmbreeScene {}
+
+impl Drop for EmbreeScene {
+    fn drop(&mut self) {
+        // SAFETY: both handles are valid (checked non-null in `build`) and released only here.
+        unsafe {
+            ffi::rtcReleaseScene(self.scene);
+            ffi::rtcReleaseDevice(self.device);
+        }
+    }
+}
+
+/// A fresh intersection context (what the header's inline `rtcInitIntersectContext` sets).
+#[inline]
+fn context() -> ffi::RTCIntersectContext {
+    ffi::RTCIntersectContext {
+        flags: ffi::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT,
+        filter: std::ptr::null(),
+        instID: [ffi::RTC_INVALID_GEOMETRY_ID],
+    }
+}
+
+#[inline]
+fn ray(origin: Vec3, dir: Vec3, tmax: f32) -> ffi::RTCRay {
+    ffi::RTCRay {
+        org: origin.to_array(),
+        tnear: 0.0,
+        dir: dir.to_array(),
+        tfar: tmax,
+        mask: u32::MAX,
+        ..Default::default()
+    }
+}
+
+impl EmbreeScene {
+    /// Builds and commits the scene (bounds already checked by `World::build_with`).
+    pub(super) fn build(scene: &Scene) -> Result<EmbreeScene, String> {
+        // SAFETY: a null config is allowed; the result is checked before use.
+        let device = unsafe { ffi::rtcNewDevice(std::ptr::null()) };
+        if device.is_null() {
+            return Err("Embree: rtcNewDevice failed (unsupported CPU?)".into());
+        }
+        let spheres: Box<[SphereData]> =
+            scene.spheres.iter().map(|s| SphereData { center: s.center, radius: s.radius }).collect();
+        // SAFETY: `device` is valid; a null scene is released nowhere (checked here).
+        let handle = unsafe { ffi::rtcNewScene(device) };
+        if handle.is_null() {
+            // SAFETY: `device` is valid and released once, here.
+            let err = unsafe {
+                let err = ffi::rtcGetDeviceError(device);
+                ffi::rtcReleaseDevice(device);
+                err
+            };
+            return Err(format!("Embree: rtcNewScene failed (RTCError {err})"));
+        }
+        let loop_spheres = spheres.len() <= LOOP_SPHERES;
+        let e = EmbreeScene { device, scene: handle, spheres, loop_spheres, ntri: scene.ntri() };
+        // SAFETY: valid handles; buffers are filled within their allocated sizes.
+        unsafe {
+            ffi::rtcSetSceneFlags(e.scene, ffi::RTC_SCENE_FLAG_NONE);
+            ffi::rtcSetSceneBuildQuality(e.scene, ffi::RTC_BUILD_QUALITY_HIGH);
+            if !scene.triangles.is_empty() {
+                e.attach_triangles(scene);
+            }
+            if !e.spheres.is_empty() && !e.loop_spheres {
+                e.attach_spheres();
+            }
+            ffi::rtcCommitScene(e.scene);
+            match ffi::rtcGetDeviceError(device) {
+                0 => Ok(e),
+                err => Err(format!("Embree: building the scene failed (RTCError {err})")),
+            }
+        }
+    }
+
+    /// Geometry `TRI_GEOM`: three unshared vertices per triangle.
+    unsafe fn attach_triangles(&self, scene: &Scene) {
+        let n = scene.triangles.len();
+        let g = ffi::rtcNewGeometry(self.device, ffi::RTC_GEOMETRY_TYPE_TRIANGLE);
+        if g.is_null() {
+            return; // the device error is reported after the commit
+        }
+        let vb = ffi::rtcSetNewGeometryBuffer(g, ffi::RTC_BUFFER_TYPE_VERTEX, 0, ffi::RTC_FORMAT_FLOAT3, 12, 3 * n);
+        let ib = ffi::rtcSetNewGeometryBuffer(g, ffi::RTC_BUFFER_TYPE_INDEX, 0, ffi::RTC_FORMAT_UINT3, 12, n);
+        if vb.is_null() || ib.is_null() {
+            ffi::rtcReleaseGeometry(g);
+            return; // the device error is reported after the commit
+        }
+        let verts = std::slice::from_raw_parts_mut(vb as *mut [f32; 3], 3 * n);
+        let idx = std::slice::from_raw_parts_mut(ib as *mut [u32; 3], n);
+        for (i, t) in scene.triangles.iter().enumerate() {
+            for k in 0..3 {
+                verts[3 * i + k] = t.p[k].to_array();
+            }
+            let b = 3 * i as u32;
+            idx[i] = [b, b + 1, b + 2];
+        }
+        ffi::rtcSetGeometryBuildQuality(g, ffi::RTC_BUILD_QUALITY_HIGH);
+        ffi::rtcCommitGeometry(g);
+        ffi::rtcAttachGeometryByID(self.scene, g, TRI_GEOM);
+        ffi::rtcReleaseGeometry(g);
+    }
+
+    /// Geometry `SPHERE_GEOM`: a user geometry over `self.spheres`.
+    unsafe fn attach_spheres(&self) {
+        let g = ffi::rtcNewGeometry(self.device, ffi::RTC_GEOMETRY_TYPE_USER);
+        if g.is_null() {
+            return; // the device error is reported after the commit
+        }
+        let user = self.spheres.as_ptr() as *mut c_void;
+        ffi::rtcSetGeometryUserPrimitiveCount(g, self.spheres.len() as u32);
+        ffi::rtcSetGeometryUserData(g, user);
+        ffi::rtcSetGeometryBoundsFunction(g, sphere_bounds, user);
+        ffi::rtcSetGeometryIntersectFunction(g, sphere_intersect);
+        ffi::rtcSetGeometryOccludedFunction(g, sphere_occluded);
+        ffi::rtcCommitGeometry(g);
+        ffi::rtcAttachGeometryByID(self.scene, g, SPHERE_GEOM);
+        ffi::rtcReleaseGeometry(g);
+    }
+
+    /// Closest hit along `origin + t·dir`, t ∈ (0, tmax): (primitive id, t).
+    #[inline]
+    pub(super) fn closest(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<(u32, f32)> {
+        if tmax.is_nan() || tmax <= 0.0 {
+            return None;
+        }
+        let (mut tfar, mut best) = (tmax, None);
+        if self.loop_spheres {
+            for (i, s) in self.spheres.iter().enumerate() {
+                let t = super::sphere_t(s.center, s.radius, origin, dir, 0.0, tfar);
+                if t < tfar {
+                    (tfar, best) = (t, Some((self.ntri + i as u32, t)));
+                }
+            }
+        }
+        let mut rh = ffi::RTCRayHit { ray: ray(origin, dir, tfar), hit: ffi::RTCHit::default() };
+        rh.hit.geomID = ffi::RTC_INVALID_GEOMETRY_ID;
+        let mut ctx = context();
+        // SAFETY: the scene is committed; `rh` and `ctx` are valid, aligned and live for the call.
+        unsafe { ffi::rtcIntersect1(self.scene, &mut ctx, &mut rh) };
+        match rh.hit.geomID {
+            TRI_GEOM => Some((rh.hit.primID, rh.ray.tfar)),
+            SPHERE_GEOM => Some((self.ntri + rh.hit.primID, rh.ray.tfar)),
+            _ => best,
+        }
+    }
+
+    /// True if anything blocks the segment (0, tmax) along unit `dir`.
+    #[inline]
+    pub(super) fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
+        if tmax.is_nan() || tmax <= 0.0 {
+            return false;
+        }
+        if self.loop_spheres
+            && self.spheres.iter().any(|s| super::sphere_t(s.center, s.radius, origin, dir, 0.0, tmax) < tmax)
+        {
+            return true;
+        }
+        let mut r = ray(origin, dir, tmax);
+        let mut ctx = context();
+        // SAFETY: as in `closest`.
+        unsafe { ffi::rtcOccluded1(self.scene, &mut ctx, &mut r) };
+        r.tfar == f32::NEG_INFINITY
+    }
+}
+
+/// The box of sphere `primID` (Embree's bounds callback).
+unsafe extern "C" fn sphere_bounds(args: *const ffi::RTCBoundsFunctionArguments) {
+    let a = &*args;
+    let s = *(a.geometryUserPtr as *const SphereData).add(a.primID as usize);
+    let r = Vec3::splat(s.radius);
+    let b = &mut *a.bounds_o;
+    b.lower = (s.center - r).to_array();
+    b.upper = (s.center + r).to_array();
+}
+
+/// Field `f` of ray `i` of a packet of `n` rays in Embree's structure-of-arrays layout
+/// (`RTCRayHitN`: 12 ray fields, then the hit's; every field is 4 bytes).
+#[inline]
+unsafe fn field(base: *mut f32, n: usize, f: usize, i: usize) -> *mut f32 {
+    base.add(f * n + i)
+}
+
+/// Ray `i` of a packet: (origin, direction, tnear, tfar).
+#[inline]
+unsafe fn packet_ray(base: *mut f32, n: usize, i: usize) -> (Vec3, Vec3, f32, f32) {
+    let g = |f| *field(base, n, f, i);
+    (Vec3::new(g(0), g(1), g(2)), Vec3::new(g(4), g(5), g(6)), g(3), g(8))
+}
+
+/// Embree's intersect callback: `super::sphere_t`, shortening tfar and writing the hit.
+unsafe extern "C" fn sphere_intersect(args: *const ffi::RTCIntersectFunctionNArguments) {
+    let a = &*args;
+    let s = *(a.geometryUserPtr as *const SphereData).add(a.primID as usize);
+    let n = a.N as usize;
+    for i in 0..n {
+        if *a.valid.add(i) == 0 {
+            continue;
+        }
+        let (o, d, tnear, tfar) = packet_ray(a.rayhit, n, i);
+        let t = super::sphere_t(s.center, s.radius, o, d, tnear, tfar);
+        if t < f32::INFINITY {
+            let ng = o + t * d - s.center;
+            *field(a.rayhit, n, 8, i) = t;
+            for (k, v) in [ng.x, ng.y, ng.z, 0.0, 0.0].into_iter().enumerate() {
+                *field(a.rayhit, n, 12 + k, i) = v;
+            }
+            let ids = [a.primID, a.geomID, (*a.context).instID[0]];
+            for (k, v) in ids.into_iter().enumerate() {
+                *(field(a.rayhit, n, 17 + k, i) as *mut u32) = v;
+            }
+        }
+    }
+}
+
+/// Embree's occluded callback: tfar = −∞ on a hit.
+unsafe extern "C" fn sphere_occluded(args: *const ffi::RTCOccludedFunctionNArguments) {
+    let a = &*args;
+    let s = *(a.geometryUserPtr as *const SphereData).add(a.primID as usize);
+    let n = a.N as usize;
+    for i in 0..n {
+        if *a.valid.add(i) == 0 {
+            continue;
+        }
+        let (o, d, tnear, tfar) = packet_ray(a.ray, n, i);
+        if super::sphere_t(s.center, s.radius, o, d, tnear, tfar) < f32::INFINITY {
+            *field(a.ray, n, 8, i) = f32::NEG_INFINITY;
+        }
+    }
+}
