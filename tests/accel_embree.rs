@@ -151,31 +151,6 @@ fn compare(o: &World, e: &World, org: Vec3, d: Vec3, tmax: f32, tally: &mut Tall
     ho
 }
 
-/// A random ray as `tests/bvh.rs` draws them.
-fn random_ray(s: &Scene, rng: &mut Rng, k: usize) -> (Vec3, Vec3, f32) {
-    let (lo, hi) = s.bounds;
-    let (c, ext) = ((lo + hi) * 0.5, (hi - lo).max_element().max(1e-6));
-    let (o, d) = if k.is_multiple_of(2) {
-        let u = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
-        (c + (u * 1.5 - Vec3::splat(0.75)) * ext, sample_uniform_sphere(rng.next_2d()))
-    } else {
-        let nprim = s.triangles.len() + s.spheres.len();
-        let p = (rng.next_f32() * nprim as f32) as usize % nprim;
-        let target = if p < s.triangles.len() {
-            let t = &s.triangles[p];
-            let (b0, b1) = sample_triangle(rng.next_2d());
-            b0 * t.p[0] + b1 * t.p[1] + (1.0 - b0 - b1) * t.p[2]
-        } else {
-            let sp = &s.spheres[p - s.triangles.len()];
-            sp.center + sp.radius * 0.999 * sample_uniform_sphere(rng.next_2d())
-        };
-        let o = c + sample_uniform_sphere(rng.next_2d()) * ext * 1.5;
-        (o, (target - o).normalize())
-    };
-    let tmax = if rng.next_f32() < 0.5 { f32::INFINITY } else { rng.next_f32() * 2.0 * ext };
-    (o, d, tmax)
-}
-
 /// `n` random rays, each followed by up to three bounces off its hits (uniform directions,
 /// origins offset as the integrators do).
 fn agree_on_random_rays(path: &str, n: usize, seed: u64) -> Tally {
@@ -186,7 +161,7 @@ fn agree_on((o, e): (World, World), path: &str, n: usize, seed: u64) -> Tally {
     let mut rng = Rng::keyed(seed, stream::MISC, 0, 0);
     let mut tally = Tally::default();
     for k in 0..n {
-        let (org, d, tmax) = random_ray(&o.scene, &mut rng, k);
+        let (org, d, tmax) = common::random_ray(&o.scene, &mut rng, k);
         let mut hit = compare(&o, &e, org, d, tmax, &mut tally);
         for _ in 0..3 {
             let Some(h) = hit else { break };

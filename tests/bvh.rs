@@ -253,30 +253,10 @@ fn random_rays(w: &World, n: usize, seed: u64) -> Tally {
 
 /// `max_exempt`: how many rays may use the tie/edge-case exemptions.
 fn random_rays_ext(w: &World, n: usize, seed: u64, allow_near_misses: bool, max_exempt: usize) -> Tally {
-    let s = &w.scene;
-    let (lo, hi) = s.bounds;
-    let (c, ext) = ((lo + hi) * 0.5, (hi - lo).max_element().max(1e-6));
     let mut rng = Rng::keyed(seed, stream::MISC, 0, 0);
     let mut tally = Tally { allow_near_misses, ..Tally::default() };
-    let nprim = s.triangles.len() + s.spheres.len();
     for k in 0..n {
-        let (o, d) = if k % 2 == 0 {
-            let o = c + (rand_vec(&mut rng, -0.75, 0.75) * ext);
-            (o, sample_uniform_sphere(rng.next_2d()))
-        } else {
-            let p = (rng.next_f32() * nprim as f32) as usize % nprim;
-            let target = if p < s.triangles.len() {
-                let t = &s.triangles[p];
-                let (b0, b1) = forecast::sampling::warp::sample_triangle(rng.next_2d());
-                b0 * t.p[0] + b1 * t.p[1] + (1.0 - b0 - b1) * t.p[2]
-            } else {
-                let sp = &s.spheres[p - s.triangles.len()];
-                sp.center + sp.radius * 0.999 * sample_uniform_sphere(rng.next_2d())
-            };
-            let o = c + sample_uniform_sphere(rng.next_2d()) * ext * 1.5;
-            (o, (target - o).normalize())
-        };
-        let tmax = if rng.next_f32() < 0.5 { f32::INFINITY } else { rng.next_f32() * 2.0 * ext };
+        let (o, d, tmax) = common::random_ray(&w.scene, &mut rng, k);
         compare(w, o, d, tmax, &mut tally);
     }
     assert!(

@@ -295,3 +295,31 @@ pub fn cf_test_opts() -> MethodArgs {
     (o.settings.max_depth, o.cf.forecast_photons, o.cf.clusters) = (Some(64), Some(20_000), 16);
     o
 }
+
+/// A random test ray of `s` (the `k`-th): even `k` from a random point in the (expanded) bounds in
+/// a uniform direction, odd `k` aimed from outside at a random point of a random primitive (so
+/// most of them hit). tmax is ∞ for half of them and a random distance otherwise.
+pub fn random_ray(s: &Scene, rng: &mut forecast::sampling::rng::Rng, k: usize) -> (Vec3, Vec3, f32) {
+    use forecast::sampling::warp::{sample_triangle, sample_uniform_sphere};
+    let (lo, hi) = s.bounds;
+    let (c, ext) = ((lo + hi) * 0.5, (hi - lo).max_element().max(1e-6));
+    let (o, d) = if k.is_multiple_of(2) {
+        let u = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+        (c + (u * 1.5 - Vec3::splat(0.75)) * ext, sample_uniform_sphere(rng.next_2d()))
+    } else {
+        let nprim = s.triangles.len() + s.spheres.len();
+        let p = (rng.next_f32() * nprim as f32) as usize % nprim;
+        let target = if p < s.triangles.len() {
+            let t = &s.triangles[p];
+            let (b0, b1) = sample_triangle(rng.next_2d());
+            b0 * t.p[0] + b1 * t.p[1] + (1.0 - b0 - b1) * t.p[2]
+        } else {
+            let sp = &s.spheres[p - s.triangles.len()];
+            sp.center + sp.radius * 0.999 * sample_uniform_sphere(rng.next_2d())
+        };
+        let o = c + sample_uniform_sphere(rng.next_2d()) * ext * 1.5;
+        (o, (target - o).normalize())
+    };
+    let tmax = if rng.next_f32() < 0.5 { f32::INFINITY } else { rng.next_f32() * 2.0 * ext };
+    (o, d, tmax)
+}
