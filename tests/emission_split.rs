@@ -3,9 +3,14 @@
 //! the estimate.
 //!
 //! - Unbiased: on the Cornell box (light seen directly and in the mirror ball) every method with
-//!   `K = 8` in every pixel (not only the probed edges) agrees with `pt` at `K = 1`
+//!   `K = 8` in every pixel (not only the probed edges) agrees with the same method at `K = 1`
 //!   (Šidák-corrected per-pixel and whole-image z-tests, family-wise α = 1e-3, with a negative
-//!   control inside `assert_agrees`).
+//!   control inside `assert_agrees`). Not with `pt` at `K = 1`: `pt`'s estimate of the mirror
+//!   ball's caustic on the ceiling is heavy-tailed, so at 4096 spp its sample variance is not a
+//!   reliable z-test reference (seed 11: pixel 45's blue 0.00453 ± 0.00015; seeds 12, 13 at 4096
+//!   spp 0.0088 ± 0.0020, 0.0064 ± 0.0013; 16384 spp 0.0066 ± 0.0006), and `pt-cf`'s light paths,
+//!   which sample that light well (0.00570 ± 0.00013), failed against it on every seed tried.
+//!   Each method's agreement with `pt` is `tests/pt_cf.rs`, `tests/pt_cf_light.rs`, `tests/iws.rs`.
 //! - The probe marks the edges, and splitting works in every integrator: in a scene that is only
 //!   a tilted emitter in the void, a pixel sample is its prefix emission and nothing else, so the summed per-pixel
 //!   variance with `K = 16` must be at most 1/8 of that with `K = 1`. Bound: `K` independent rays
@@ -83,13 +88,15 @@ fn summed_variance(f: &Film) -> f64 {
 }
 
 #[test]
-fn every_method_with_split_agrees_with_pt_on_cornell_box() {
+fn every_method_with_split_agrees_with_itself_unsplit_on_cornell_box() {
     let w = world("scenes/cornell-box.toml");
-    let reference = render(&w, Method::Pt, (16, 4096, 11), Split::Probed(1));
     for &m in Method::ALL.iter().filter(|&&m| m != Method::Iws && m != Method::IwsPm) {
+        // the method's own image at K = 1 (the plain sampler, bit for bit: below) is the
+        // reference; each method's agreement with `pt` is its own test file's
+        let reference = render(&w, m, (16, 4096, 11), Split::Probed(1));
         // every pixel split: E and L − E are separated right on diffuse, mirror and glass pixels
         let img = render(&w, m, (16, 1024, 3), Split::Everywhere(8));
-        assert_agrees(&img, &reference, &format!("{} --emission-split 8 everywhere", m.name()));
+        assert_agrees(&img, &reference, &format!("{} --emission-split 8 everywhere vs K = 1", m.name()));
     }
 }
 
