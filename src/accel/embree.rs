@@ -376,10 +376,7 @@ unsafe extern "C" fn sphere_intersect(args: *const ffi::RTCIntersectFunctionNArg
     let a = &*args;
     let s = *(a.geometryUserPtr as *const SphereData).add(a.primID as usize);
     let n = a.N as usize;
-    for i in 0..n {
-        if *a.valid.add(i) == 0 {
-            continue;
-        }
+    for i in (0..n).filter(|&i| *a.valid.add(i) != 0) {
         let (o, d, tnear, tfar) = packet_ray(a.rayhit, n, i);
         let t = super::sphere_t(s.center, s.radius, o, d, tnear, tfar);
         if t < f32::INFINITY {
@@ -401,10 +398,7 @@ unsafe extern "C" fn sphere_occluded(args: *const ffi::RTCOccludedFunctionNArgum
     let a = &*args;
     let s = *(a.geometryUserPtr as *const SphereData).add(a.primID as usize);
     let n = a.N as usize;
-    for i in 0..n {
-        if *a.valid.add(i) == 0 {
-            continue;
-        }
+    for i in (0..n).filter(|&i| *a.valid.add(i) != 0) {
         let (o, d, tnear, tfar) = packet_ray(a.ray, n, i);
         if super::sphere_t(s.center, s.radius, o, d, tnear, tfar) < f32::INFINITY {
             *field(a.ray, n, 8, i) = f32::NEG_INFINITY;
