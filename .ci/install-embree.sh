@@ -23,19 +23,7 @@ if have_embree; then
     exit 0
 fi
 
-SUDO=""
-if [ "$(id -u)" -ne 0 ]; then
-    if command -v sudo >/dev/null 2>&1; then
-        SUDO="sudo"
-    else
-        echo "install-embree: need root (or sudo) to install libembree-dev" >&2
-        exit 1
-    fi
-fi
-
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update
-$SUDO apt-get install -y --no-install-recommends libembree-dev
+bash "$(dirname "$0")/apt-install.sh" install-embree libembree-dev
 
 if ! have_embree; then
     echo "install-embree: installed libembree-dev but embree3/rtcore.h or libembree3.so is missing" >&2

@@ -35,19 +35,7 @@ if have_mpi && have_libclang; then
     exit 0
 fi
 
-SUDO=""
-if [ "$(id -u)" -ne 0 ]; then
-    if command -v sudo >/dev/null 2>&1; then
-        SUDO="sudo"
-    else
-        echo "install-mpi: need root (or sudo) to install mpich libmpich-dev libclang-dev" >&2
-        exit 1
-    fi
-fi
-
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update
-$SUDO apt-get install -y --no-install-recommends mpich libmpich-dev libclang-dev
+bash "$(dirname "$0")/apt-install.sh" install-mpi mpich libmpich-dev libclang-dev
 
 if ! have_mpi; then
     echo "install-mpi: installed packages but MPICH is still not usable" >&2

@@ -244,12 +244,12 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs, opts: &forecast::scene::Load
     use forecast::transport::particle::Emission;
     let r = &a.render;
     forecast::atomic_io::check_output_prefix(&r.out)?;
+    let accel = r.method_args.settings.accel;
+    accel.check()?; // before any work, as `bench` and `render`
     let scene = forecast::scene::load_with(&r.scene, opts).map_err(|e| e.to_string())?;
     let mut guard = forecast::atomic_io::OutputSet::new();
     guard.scene_inputs(&r.scene, &scene.mesh_files).output("--out", &image_io::with_ext(&r.out, "png"));
     guard.output("--out", &image_io::with_ext(&r.out, "json")).check()?;
-    let accel = r.method_args.settings.accel;
-    accel.check()?;
     let world = accel::World::build_with(scene, accel).map_err(|e| format!("{}: {e}", r.scene.display()))?;
     let cf_args = &r.method_args.cf;
     let cf_opts = r.method_args.forecast_options();
