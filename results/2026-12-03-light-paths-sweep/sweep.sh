@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
-# light paths per pixel sweep, 2026-12-03 stop 39
+# The light-paths-per-pixel sweep of results/2026-12-03-light-paths-sweep.md (stop 39).
+# The recorded run used the release binary of 643fb8f; FORECAST names another.
+#   FORECAST=BIN bash results/2026-12-03-light-paths-sweep/sweep.sh   (writes out/lp2/)
 set -u
-cd /work/main
-BIN=/work/bin/forecast-obvhs
+cd "$(dirname "$0")/../.."
+BIN="${FORECAST:-target/release/forecast}"
 run() { # NAME SCENE RES N SEED
-  local d=out/lp2/$1-$4; mkdir -p $d
+  local d=out/lp2/$1-$4; mkdir -p "$d"
   local o=$d/pt-cf-$5
-  [ -f $o.exr ] && return
-  /usr/bin/time -f '%e %U %S' -o $o.time $BIN render $2 --method pt-cf --light-paths $4 --time 60s --resolution $3 --threads 2 --max-depth 64 --seed $5 --out $o --quiet
+  [ -f "$o.exr" ] && return
+  /usr/bin/time -f '%e %U %S' -o "$o.time" "$BIN" render "$2" --method pt-cf --light-paths "$4" --time 60s --resolution "$3" --threads 2 --max-depth 64 --seed "$5" --out "$o" --quiet
 }
 for s in 1 2 3; do
   for n in 65536 131072 262144; do run sms scenes/external/sms-ring/ring.xml 256x192 $((n*3/4)) $s; done
