@@ -179,6 +179,9 @@ fn a_flag_of_another_method_exits_2_naming_its_method() {
         (&["--method", "iws-cf", "--photons", "10"], "--photons belongs to iws-pm, not iws-cf"),
         (&["--method", "pt", "--vpl-paths", "8"], "--vpl-paths belongs to iws/iws-pm/iws-cf, not pt"),
         (&["--photons", "10"], "--photons belongs to iws-pm, not pt-cf"),
+        (&["--method", "iws-cf", "--light-path-pilot"], "--light-path-pilot belongs to pt-cf, not iws-cf"),
+        // one of the two ways of setting pt-cf's light paths
+        (&["--method", "pt-cf", "--light-path-pilot", "--light-paths", "9"], "cannot be used with"),
     ];
     for (opts, want) in cases {
         let t = Instant::now();
@@ -219,7 +222,9 @@ fn the_json_records_only_the_chosen_methods_options() {
     for k in ["max_depth", "emission_split", "vpl_paths", "direct", "clusters", "split", "table_depth", "variant"] {
         assert!(cf.contains_key(k), "iws-cf options lack `{k}`: {cf:?}");
     }
-    for k in ["guide_fraction", "guide_min_share", "light_paths", "photons", "gather", "path_filter"] {
+    for k in
+        ["guide_fraction", "guide_min_share", "light_paths", "light_path_pilot", "photons", "gather", "path_filter"]
+    {
         assert!(!cf.contains_key(k), "iws-cf options hold another method's `{k}`: {cf:?}");
     }
     assert_eq!(

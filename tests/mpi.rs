@@ -219,7 +219,8 @@ fn a_failed_checkpoint_under_two_ranks_warns_and_completes() {
 }
 
 /// `pt-cf` (issue #12) on 2 ranks gives the 1-process image, guided (c = 0.3, splitting, two
-/// guided depths) so that the broadcast tables are really used. Self-contained.
+/// guided depths) so that the broadcast tables are really used, with the light-path pilot (rank
+/// 0's count broadcast). Self-contained.
 #[test]
 fn pt_cf_two_ranks_equal_one_process() {
     let d = tmp_dir("pt-cf-equiv");
@@ -242,6 +243,7 @@ fn pt_cf_two_ranks_equal_one_process() {
         "4",
         "--table-depth",
         "2",
+        "--light-path-pilot",
     ];
     let st = Command::new(bin()).args(["render", &scene()]).args(common).arg("--out").arg(&one).status().unwrap();
     assert!(st.success());
@@ -252,6 +254,9 @@ fn pt_cf_two_ranks_equal_one_process() {
     let ranks = j["per_rank"].as_array().unwrap();
     assert_eq!(ranks[0]["product_hash"], ranks[1]["product_hash"]);
     assert!(j["method_stats"]["guide"]["fraction_inside_clusters"].as_f64().unwrap() > 0.0);
+    // rank 0's light-path pilot reached rank 1: the count both used is the one recorded
+    assert_eq!(j["options"]["light_paths"], json(&one)["options"]["light_paths"]);
+    assert_eq!(j["options"]["light_paths"], j["light_path_rule"]["light_paths"]);
 }
 
 #[test]

@@ -2,8 +2,8 @@
 //! (Šidák per-pixel and whole-image z-tests, α = 1e-3, `common::assert_agrees`) with area lights
 //! on `cornell-box` and `ring`, and with a light inside glass; the glass furnace; the analytic
 //! point-light caustic of a planar mirror (which `pt` misses); `--light-paths 0` is the old
-//! `pt-cf` bit for bit (a stored render of the base commit); the image does not depend on the
-//! thread count, and a resumed render is the uninterrupted one. The MIS weights' sum is a unit
+//! `pt-cf` bit for bit (a stored render of the base commit); the image and the light-path pilot
+//! do not depend on the thread count, and a resumed render is the uninterrupted one. The MIS weights' sum is a unit
 //! test in `src/integrators/pt_cf_light.rs`.
 
 mod common;
@@ -188,6 +188,44 @@ fn light_paths_do_not_depend_on_the_thread_count() {
     let mut off = light_job(&d.join("off"), 2, 3);
     off.args.ptcf.light_paths = Some(0);
     assert!(render_film(&off).data != two.data, "the light paths changed nothing");
+}
+
+/// `--light-path-pilot` (`pipeline::light_pilot`) picks the count: the report holds its figures
+/// and the count the render used, neither depends on the thread count, nor does the image; a
+/// given count runs no pilot.
+#[test]
+fn the_light_path_pilot_is_recorded_and_does_not_depend_on_the_thread_count() {
+    use forecast::distributed::local::Local;
+    let d = tmp_dir("light-pilot");
+    let report = |j: &forecast::pipeline::RenderJob| {
+        let r = forecast::pipeline::render(j, &Local::new(), std::time::Instant::now()).unwrap().unwrap();
+        serde_json::to_value(&r.report).unwrap()
+    };
+    let pilot = |out: &Path, threads| {
+        let mut j = light_job(out, threads, 1);
+        j.args.ptcf.light_path_pilot = true;
+        j
+    };
+    let (one, two) = (report(&pilot(&d.join("one"), 1)), report(&pilot(&d.join("two"), 2)));
+    assert_same_image(&d.join("one.exr"), &d.join("two.exr"));
+    let rule = &one["light_path_rule"];
+    assert_eq!(rule, &two["light_path_rule"], "the pilot differs between 1 and 2 threads");
+    assert_eq!(rule["pilot_resolution"], serde_json::json!([32, 32]), "a 32² image is its own pilot");
+    let nu = rule["paths_per_pixel"].as_f64().unwrap();
+    assert_eq!(rule["light_paths"].as_u64(), Some((nu * 1024.0).ceil() as u64), "{rule}");
+    assert_eq!(one["options"]["light_paths"], rule["light_paths"], "the render used another count");
+    // the chosen count is the candidate of least variance × rays, and more paths cost more rays
+    let cands = rule["candidates"].as_array().unwrap();
+    let f = |c: &serde_json::Value, k: &str| c[k].as_f64().unwrap();
+    let least = cands.iter().map(|c| f(c, "relative_variance_x_rays")).fold(f64::INFINITY, f64::min);
+    let chosen = cands.iter().find(|c| f(c, "paths_per_pixel") == nu).expect("the choice is a candidate");
+    assert_eq!(f(chosen, "relative_variance_x_rays"), least, "{rule}");
+    assert!(cands.windows(2).all(|w| f(&w[1], "rays_per_pixel") > f(&w[0], "rays_per_pixel")), "{rule}");
+    assert!(cands.iter().all(|c| f(c, "variance") > 0.0), "{rule}");
+    let mut given = light_job(&d.join("given"), 2, 1);
+    given.args.ptcf.light_paths = Some(100);
+    let g = report(&given);
+    assert!(g["light_path_rule"].is_null() && g["options"]["light_paths"] == 100, "{}", g["options"]);
 }
 
 #[test]

@@ -86,6 +86,10 @@ pub trait Integrator: Send + Sync {
     fn light_splats(&self, _world: &World, _camera: &Camera, _seed: u64, _pass: u64) -> Option<LightSplats> {
         None
     }
+    /// Sets the light paths per pass of the next passes, both sides' weights included (`pt-cf`'s
+    /// light-path pilot, `pipeline::light_pilot`, which tries several counts on one integrator
+    /// and its warm table cache). A method without light paths ignores it.
+    fn set_light_paths(&mut self, _n: u64) {}
 }
 
 /// One pass's light-traced contributions ([`Integrator::light_splats`]).

@@ -75,6 +75,10 @@ pub struct PtCfArgs {
     /// weighted against the camera paths (0 = none: the camera side alone; default 1 per pixel).
     #[arg(long, value_name = "N")]
     pub light_paths: Option<u64>,
+    /// pt-cf: let a pilot render pick the light paths per pass, 1/4 to 4 per pixel, for the least
+    /// whole-image variance × rays (instead of --light-paths).
+    #[arg(long, conflicts_with = "light_paths")]
+    pub light_path_pilot: bool,
 }
 
 fn parse_guide_fraction(s: &str) -> Result<f32, String> {
@@ -403,6 +407,12 @@ impl Integrator for GuidedPathTracer {
     fn light_splats(&self, world: &World, camera: &Camera, seed: u64, pass: u64) -> Option<super::LightSplats> {
         let light = self.light.as_ref()?;
         Some(pt_cf_light::light_splats(self, light, world, camera, (seed, pass)))
+    }
+
+    fn set_light_paths(&mut self, n: u64) {
+        if let Some(l) = &mut self.light {
+            l.paths = Some(n);
+        }
     }
 
     fn stats(&self, profile: &Profile) -> serde_json::Value {

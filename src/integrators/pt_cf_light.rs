@@ -60,7 +60,8 @@ pub const CHUNK: u64 = 1024;
 /// Light paths per pass per pixel when `--light-paths` is not given (measured:
 /// `results/2026-12-02-light-traced-caustics.md`, `results/2026-12-03-light-paths-per-pixel.md`:
 /// 1 against 0.5 per pixel halves the variance of the SMS ring's floor at equal time and costs
-/// `cornell-box`'s whole image 7% of RMSE).
+/// `cornell-box`'s whole image 7% of RMSE). `--light-path-pilot` picks a count per scene instead
+/// (`pipeline::light_pilot`, `results/2026-12-03-light-path-pilot.md`).
 pub const PATHS_PER_PIXEL: f64 = 1.0;
 
 /// The light side's settings.

@@ -36,12 +36,14 @@ use crate::scene::Scene;
 
 mod checkpoints;
 mod identity;
+mod light_pilot;
 mod memory;
 mod report;
 mod snapshots;
 
 pub use checkpoints::{image_files, image_from_film, write_images};
 pub use identity::{job_fields, job_keys};
+pub use light_pilot::LightPathRule;
 pub use report::{RankStats, Rays, RenderReport, RenderResult, Timings};
 pub use snapshots::{check_snapshots, snapshot_label, snapshot_prefix, SnapshotReport};
 
@@ -159,7 +161,7 @@ impl RenderJob {
         args.cf.time_budget_s = time; // the CF preprocess scales its photon count to the budget
         let spp = if time.is_some() { None } else { Some(self.spp.or(r.spp).unwrap_or(16)) };
         let resolution = self.resolution.unwrap_or((scene.camera.width, scene.camera.height));
-        if method == Method::PtCf {
+        if method == Method::PtCf && !args.ptcf.light_path_pilot {
             // the report records the light paths per pass the render uses, default or not
             let default = crate::integrators::pt_cf_light::default_paths(resolution.0, resolution.1);
             args.ptcf.light_paths = Some(args.ptcf.light_paths.unwrap_or(default));
@@ -223,16 +225,27 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
     }
     let setup = crate::atomic_io::check_output_prefix(&job.out)
         .and_then(|()| Ok((thread_pool(job.threads)?, load(job, cluster.rank())?)));
-    let (pool, (world, plan, mut timings)) = distributed::agree(cluster, setup)?;
+    let (pool, (world, mut plan, mut timings)) = distributed::agree(cluster, setup)?;
     distributed::job::agree_job(cluster, &job_fields(job, &world.scene, &plan))?;
     let deadline = distributed::shared_deadline(cluster, started, plan.time);
-    let mut pre = preprocess(&world, &plan, cluster, &PhaseBar::new(job.progress && cluster.rank() == 0))?;
+    let mut pre = preprocess(&world, &mut plan, cluster, &PhaseBar::new(job.progress && cluster.rank() == 0))?;
     timings.preprocess_s = pre.stats.preprocess_s;
     timings.broadcast_s = pre.stats.broadcast_s;
     let over_budget = preprocess_over_budget(&plan, &timings, started, cluster.rank());
     let resumed = agree_resume(job, &world, &plan, cluster)?;
     let preprocess_s = timings.preprocess_s;
-    let run = Run { job, world: &world, plan: &plan, cluster, pool: &pool, started, resumed: &resumed, preprocess_s };
+    let light_path_rule = pre.light_path_rule.take();
+    let run = Run {
+        job,
+        world: &world,
+        plan: &plan,
+        cluster,
+        pool: &pool,
+        started,
+        resumed: &resumed,
+        preprocess_s,
+        light_path_rule,
+    };
     let mut passes = run_passes(&run, pre.integrator.as_mut(), deadline)?;
     passes.preprocess_over_budget = over_budget.is_some();
     passes.warnings.splice(0..0, over_budget);
@@ -338,19 +351,32 @@ fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), String> 
 struct Prepared {
     integrator: Box<dyn Integrator>,
     stats: RankStats,
+    /// `pt-cf`'s light-path pilot (rank 0 under `--light-path-pilot`; `None` otherwise).
+    light_path_rule: Option<LightPathRule>,
 }
 
-/// Stage 2: the caustic preprocess on rank 0, broadcast to the others; every rank builds its
-/// integrator from the same bytes. Its phases are shown under the render bar's rules.
-fn preprocess(world: &World, plan: &Plan, cluster: &dyn Cluster, phases: &PhaseBar) -> Result<Prepared, String> {
+/// Stage 2: the caustic preprocess on rank 0 (with `pt-cf`'s light-path pilot,
+/// `light_pilot`), broadcast to the others; every rank builds its integrator from the same
+/// bytes and the same light-path count, which `plan` then records. Its phases are shown under
+/// the render bar's rules.
+fn preprocess(world: &World, plan: &mut Plan, cluster: &dyn Cluster, phases: &PhaseBar) -> Result<Prepared, String> {
     let t_pre = Instant::now();
-    let run = || plan.method.preprocess_reporting(world, &plan.args, plan.seed, phases);
-    let pre = if cluster.rank() == 0 { run() } else { Ok(Vec::new()) };
+    let pilot = light_pilot::wanted(plan);
+    let run = || -> Result<(Vec<u8>, Option<LightPathRule>), String> {
+        let product = plan.method.preprocess_reporting(world, &plan.args, plan.seed, phases)?;
+        let rule =
+            if pilot { light_pilot::choose(world, &plan.args, (plan.seed, plan.resolution), &product)? } else { None };
+        Ok((product, rule))
+    };
+    let pre = if cluster.rank() == 0 { run() } else { Ok((Vec::new(), None)) };
     let preprocess_s = secs(t_pre);
     // every rank must leave together when rank 0 fails, or the others wait in the broadcast
-    let mut product = distributed::agree(cluster, pre)?;
+    let (mut product, light_path_rule) = distributed::agree(cluster, pre)?;
     let t_bc = Instant::now();
     cluster.broadcast_bytes(&mut product);
+    if pilot {
+        plan.args.ptcf.light_paths = Some(light_pilot::broadcast_count(cluster, plan, light_path_rule.as_ref())?);
+    }
     let stats = RankStats {
         rank: cluster.rank(),
         preprocess_s,
@@ -360,7 +386,7 @@ fn preprocess(world: &World, plan: &Plan, cluster: &dyn Cluster, phases: &PhaseB
         ..RankStats::default()
     };
     let integrator = plan.method.build(world, &plan.args, &product)?;
-    Ok(Prepared { integrator, stats })
+    Ok(Prepared { integrator, stats, light_path_rule })
 }
 
 /// A checkpoint to continue and the first pass of this run.
@@ -398,6 +424,8 @@ struct Run<'a> {
     resumed: &'a Resume,
     /// Rank 0's preprocess seconds (for the snapshots' reports).
     preprocess_s: f64,
+    /// `pt-cf`'s light-path pilot (rank 0).
+    light_path_rule: Option<LightPathRule>,
 }
 
 /// This rank's passes.
@@ -576,6 +604,7 @@ impl Run<'_> {
             preprocess_over_budget: p.preprocess_over_budget,
             snapshots: p.snaps.written.clone(),
             pixel_sampler: p.pixel_sampler,
+            light_path_rule: self.light_path_rule.clone(),
             complete,
             image_mean: image.mean(),
         }

@@ -50,6 +50,62 @@ impl PassCounters {
     }
 }
 
+/// One tile's camera estimates (row-major within the tile) and what they cost.
+pub type TileResult = (usize, Vec<Rgb>, PassCounters);
+
+/// The tile grid of a `w` × `h` image: `(tiles_x, tiles_y)`.
+pub fn tile_counts(w: usize, h: usize) -> (usize, usize) {
+    (w.div_ceil(TILE), h.div_ceil(TILE))
+}
+
+/// The pixels of tile `tile` in row-major order, as `(x, y)`.
+pub fn tile_pixels(tile: usize, (w, h): (usize, usize)) -> impl Iterator<Item = (usize, usize)> {
+    let tiles_x = w.div_ceil(TILE);
+    let (tx, ty) = (tile % tiles_x, tile / tiles_x);
+    (ty * TILE..((ty + 1) * TILE).min(h)).flat_map(move |y| (tx * TILE..((tx + 1) * TILE).min(w)).map(move |x| (x, y)))
+}
+
+/// The camera side of pass `pass`: every tile's pixel estimates (non-finite ones counted and
+/// replaced by zero), in tile order, with the tile's rays and profile. The light side is
+/// [`Integrator::light_splats`].
+pub fn camera_tiles(
+    world: &World,
+    integrator: &dyn Integrator,
+    pixels: &PixelSampler,
+    seed: u64,
+    pass: u64,
+) -> Vec<TileResult> {
+    let (w, h) = pixels.resolution();
+    let (w, h) = (w as usize, h as usize);
+    let (tiles_x, tiles_y) = tile_counts(w, h);
+    (0..tiles_x * tiles_y)
+        .into_par_iter()
+        .map(|tile| {
+            let _ = take_ray_counts();
+            let mut out = Vec::with_capacity(TILE * TILE);
+            let mut c = PassCounters::default();
+            let mut ctx = Context::new(Rng::keyed(seed, stream::CAMERA, pass, 0));
+            ctx.camera = Some(pixels.camera().clone());
+            for (x, y) in tile_pixels(tile, (w, h)) {
+                let pixel = (y * w + x) as u64;
+                ctx.rng = Rng::keyed(seed, stream::CAMERA, pass, pixel);
+                let mut l = pixels.sample(world, integrator, (x, y, pixel), (seed, pass), &mut ctx);
+                if !l.is_finite() {
+                    c.nonfinite += 1;
+                    l = Rgb::ZERO;
+                }
+                c.samples += 1;
+                out.push(l);
+            }
+            let (closest, shadow) = take_ray_counts();
+            c.closest_rays = closest;
+            c.shadow_rays = shadow;
+            c.profile = ctx.profile;
+            (tile, out, c)
+        })
+        .collect()
+}
+
 /// Renders pass `pass` (one sample per pixel) into `film`.
 pub fn render_pass(
     world: &World,
@@ -61,47 +117,12 @@ pub fn render_pass(
 ) -> PassCounters {
     let (w, h) = (film.width, film.height);
     assert_eq!(pixels.resolution(), (w as u32, h as u32), "pixel sampler and film sizes differ");
-    let tiles_x = w.div_ceil(TILE);
-    let tiles_y = h.div_ceil(TILE);
-    let results: Vec<(usize, Vec<Rgb>, PassCounters)> = (0..tiles_x * tiles_y)
-        .into_par_iter()
-        .map(|tile| {
-            let _ = take_ray_counts();
-            let (tx, ty) = (tile % tiles_x, tile / tiles_x);
-            let mut out = Vec::with_capacity(TILE * TILE);
-            let mut c = PassCounters::default();
-            let mut ctx = Context::new(Rng::keyed(seed, stream::CAMERA, pass, 0));
-            ctx.camera = Some(pixels.camera().clone());
-            for y in ty * TILE..((ty + 1) * TILE).min(h) {
-                for x in tx * TILE..((tx + 1) * TILE).min(w) {
-                    let pixel = (y * w + x) as u64;
-                    ctx.rng = Rng::keyed(seed, stream::CAMERA, pass, pixel);
-                    let mut l = pixels.sample(world, integrator, (x, y, pixel), (seed, pass), &mut ctx);
-                    if !l.is_finite() {
-                        c.nonfinite += 1;
-                        l = Rgb::ZERO;
-                    }
-                    c.samples += 1;
-                    out.push(l);
-                }
-            }
-            let (closest, shadow) = take_ray_counts();
-            c.closest_rays = closest;
-            c.shadow_rays = shadow;
-            c.profile = ctx.profile;
-            (tile, out, c)
-        })
-        .collect();
+    let results = camera_tiles(world, integrator, pixels, seed, pass);
     let mut total = PassCounters::default();
     let splats = integrator.light_splats(world, pixels.camera(), seed, pass);
     for (tile, out, c) in results {
-        let (tx, ty) = (tile % tiles_x, tile / tiles_x);
-        let mut k = 0;
-        for y in ty * TILE..((ty + 1) * TILE).min(h) {
-            for x in tx * TILE..((tx + 1) * TILE).min(w) {
-                film.add(y * w + x, with_splat(out[k], splats.as_ref(), y * w + x, &mut total));
-                k += 1;
-            }
+        for ((x, y), l) in tile_pixels(tile, (w, h)).zip(out) {
+            film.add(y * w + x, with_splat(l, splats.as_ref(), y * w + x, &mut total));
         }
         total.add(&c);
     }

@@ -1,0 +1,292 @@
+//! `pt-cf`'s light paths per pass under `--light-path-pilot` (issue #34): a pilot render on
+//! rank 0, after the CF preprocess, measures the whole image's variance × cost at a few
+//! counts per pixel and keeps the best: the efficiency of the image's mean squared error at
+//! equal cost.
+//!
+//! Why measured, not modelled. A pass's value of a pixel is its camera estimate plus the
+//! pass's light splats there, so one could split its variance into the two sides' and let the
+//! light side's fall as `1/ν`. That model picked 0.08–0.3 paths per pixel on the four measured
+//! scenes, where the equal-time sweep found 1–2 best: more light paths also take a larger MIS
+//! share of the paths both sides sample, and the camera side's variance on those paths, large
+//! on a caustic, falls with them. The pilot measures the sum instead.
+//!
+//! Pilot. The render's camera at about [`PILOT_PIXELS`] pixels (same aspect; the full image if
+//! smaller), [`PILOT_PASSES`] passes at each count of [`CANDIDATES`] (paths per pixel), on one
+//! integrator ([`Integrator::set_light_paths`]). Every count sees the same camera random numbers
+//! (keyed by pass and pixel) and a prefix of the same light paths (keyed by path index), so the
+//! counts are compared on common random numbers. For each count: `V` = the per-pass variance of
+//! every pixel's luminance (camera + splats), summed; `C` = rays per pixel per pass, both sides
+//! (rays, not seconds, so that the choice is a pure function of the seed and never of the
+//! machine). The score of a count is its `V·C` relative to that of 1 path per pixel, taken as
+//! the median over [`GROUPS`] interleaved sets of pixels (median of means): one camera sample in
+//! 10⁵ can be a firefly that holds 98% of a pilot's `V` (seen on `ring`) and is the same for every
+//! count, so the plain sum would compare noise; the median ignores the one set that holds it.
+//! The least score wins (ties: the fewer paths). The passes are
+//! [`PILOT_PASS_BASE`]`+i`, which no render reaches: the pilot's random numbers are disjoint
+//! from the render's, it is a function of (scene, options, seed, resolution) only, so every rank
+//! count, thread count and `--resume` gets the same count, and its samples are not in the image.
+//! The render's count is `⌈ν·W·H⌉` for its `W × H`.
+//!
+//! Known leanings: the pilot's larger pixels add the image's variation inside a pixel to the
+//! camera side's variance (towards fewer paths); rays price the camera side's table lookups and
+//! mixtures at nothing (towards fewer paths where those dominate, more where a light path's rays
+//! are cheap). `results/2026-12-03-light-path-pilot.md` measures the choices at equal time.
+
+use super::Plan;
+use crate::accel::World;
+use crate::distributed::Cluster;
+use crate::integrators::{Integrator, Method, MethodArgs};
+use crate::math::{luminance, Rgb};
+use crate::render::{camera_tiles, tile_pixels, PixelSampler};
+
+/// Pixels of the pilot image (about; the aspect is kept).
+pub const PILOT_PIXELS: f64 = 4096.0;
+/// Passes of the pilot per candidate count (each pixel's variance from this many samples).
+pub const PILOT_PASSES: u64 = 8;
+/// The pilot's first pass index: far beyond any render's passes (`Rng::keyed` streams differ).
+pub const PILOT_PASS_BASE: u64 = 1 << 62;
+/// The light paths per pixel the pilot tries: the range of the equal-time sweep
+/// (`results/2026-12-03-light-paths-sweep.md`), by factors of 2. Never 0, which would drop the
+/// point-light caustics that only the light side renders.
+pub const CANDIDATES: [f64; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
+
+/// The interleaved pixel sets of the median of means (pixel `i` is in set `i mod GROUPS`).
+pub const GROUPS: usize = 8;
+/// The candidate the scores are relative to (1 path per pixel).
+const REFERENCE: usize = 2;
+
+/// One candidate count as the pilot measured it.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Candidate {
+    /// Light paths per pixel `ν`.
+    pub paths_per_pixel: f64,
+    /// `V`: the per-pass variance of luminance, summed over the pilot's pixels.
+    pub variance: f64,
+    /// `C`: rays per pixel per pass, camera and light side.
+    pub rays_per_pixel: f64,
+    /// The score: the median over the pixel sets of `V·C` relative to 1 path per pixel (lower
+    /// is better; 1 for that count).
+    pub relative_variance_x_rays: f64,
+}
+
+/// What one candidate's passes measured: the variance sum of each pixel set, and the rays.
+struct Measured {
+    groups: [f64; GROUPS],
+    rays_per_pixel: f64,
+}
+
+/// The median over the pixel sets of `V_g·C / (V_g,ref·C_ref)`; a set with no variance at
+/// either count compares the costs alone.
+fn relative(m: &Measured, reference: &Measured) -> f64 {
+    let c = m.rays_per_pixel / reference.rays_per_pixel;
+    let mut r: Vec<f64> = (0..GROUPS)
+        .map(|g| if m.groups[g] == reference.groups[g] { c } else { m.groups[g] / reference.groups[g] * c })
+        .collect();
+    r.sort_by(f64::total_cmp);
+    0.5 * (r[GROUPS / 2 - 1] + r[GROUPS / 2])
+}
+
+/// What the pilot measured and chose (the report's `light_path_rule`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct LightPathRule {
+    /// The pilot image, `[w, h]`.
+    pub pilot_resolution: [u32; 2],
+    /// Its passes per candidate.
+    pub pilot_passes: u64,
+    /// Every candidate, in [`CANDIDATES`]' order.
+    pub candidates: Vec<Candidate>,
+    /// The chosen light paths per pixel.
+    pub paths_per_pixel: f64,
+    /// Light paths per pass of the render, `⌈ν·W·H⌉`.
+    pub light_paths: u64,
+}
+
+/// The pilot's image size for a `w × h` render.
+pub fn pilot_resolution(w: u32, h: u32) -> (u32, u32) {
+    let n = w as f64 * h as f64;
+    if n <= PILOT_PIXELS {
+        return (w, h);
+    }
+    let s = (PILOT_PIXELS / n).sqrt();
+    (((w as f64 * s).round() as u32).max(1), ((h as f64 * s).round() as u32).max(1))
+}
+
+/// The candidate with the least score, the first of equals (the fewer paths); a score that is
+/// not a number never wins unless all are.
+pub fn best(candidates: &[Candidate]) -> Option<&Candidate> {
+    candidates.iter().fold(None, |b: Option<&Candidate>, c| match b {
+        Some(b)
+            if !(c.relative_variance_x_rays < b.relative_variance_x_rays) && !b.relative_variance_x_rays.is_nan() =>
+        {
+            Some(b)
+        }
+        _ => Some(c),
+    })
+}
+
+/// Per-pixel sums of luminance over the passes: `(Σx, Σx²)`.
+struct Moments(Vec<(f64, f64)>);
+
+impl Moments {
+    fn add(&mut self, i: usize, x: f64) {
+        let m = &mut self.0[i];
+        m.0 += x;
+        m.1 += x * x;
+    }
+
+    /// The per-pass variance of every pixel (unbiased, `n − 1`), summed over each pixel set.
+    fn variance_sums(&self, n: u64) -> [f64; GROUPS] {
+        let n = n as f64;
+        let mut v = [0.0; GROUPS];
+        for (i, &(s, s2)) in self.0.iter().enumerate() {
+            v[i % GROUPS] += ((s2 - s * s / n) / (n - 1.0)).max(0.0);
+        }
+        v
+    }
+}
+
+/// Whether `plan`'s light paths per pass are the pilot's choice (`pt-cf --light-path-pilot`).
+pub fn wanted(plan: &Plan) -> bool {
+    plan.method == Method::PtCf && plan.args.ptcf.light_path_pilot
+}
+
+/// Rank 0's count (the rule's; without a light side, where the count does not matter, the
+/// default per pixel), broadcast to every rank (collective).
+pub fn broadcast_count(cluster: &dyn Cluster, plan: &Plan, rule: Option<&LightPathRule>) -> Result<u64, String> {
+    let (w, h) = plan.resolution;
+    let n = rule.map_or(crate::integrators::pt_cf_light::default_paths(w, h), |r| r.light_paths);
+    let mut bytes = n.to_le_bytes().to_vec();
+    cluster.broadcast_bytes(&mut bytes);
+    Ok(u64::from_le_bytes(bytes.as_slice().try_into().map_err(|_| "bad light-path broadcast")?))
+}
+
+/// Runs the pilot for a `pt-cf` render of `resolution` from the broadcast `product` and returns
+/// the rule's choice; `None` when the render has no light side (no light or Dirac object, or a
+/// `--path-filter`), whose count then does not matter. Runs on the current rayon pool.
+pub fn choose(
+    world: &World,
+    args: &MethodArgs,
+    (seed, resolution): (u64, (u32, u32)),
+    product: &[u8],
+) -> Result<Option<LightPathRule>, String> {
+    let (pw, ph) = pilot_resolution(resolution.0, resolution.1);
+    let px = pw as f64 * ph as f64;
+    let paths = |nu: f64| (nu * px).ceil() as u64;
+    let mut pilot_args = args.clone();
+    pilot_args.ptcf.light_paths = Some(paths(CANDIDATES[0]));
+    let mut integrator = Method::PtCf.build(world, &pilot_args, product)?;
+    let camera = world.scene.camera.with_resolution(pw, ph);
+    if integrator.light_splats(world, &camera, seed, PILOT_PASS_BASE).is_none() {
+        return Ok(None);
+    }
+    let pixels = PixelSampler::new(world, &camera, args.emission_split(), integrator.prefix_cap());
+    let measured: Vec<Measured> = CANDIDATES
+        .iter()
+        .map(|&nu| {
+            integrator.set_light_paths(paths(nu));
+            measure(world, integrator.as_mut(), &pixels, seed)
+        })
+        .collect();
+    let candidates: Vec<Candidate> = CANDIDATES
+        .iter()
+        .zip(&measured)
+        .map(|(&nu, m)| Candidate {
+            paths_per_pixel: nu,
+            variance: m.groups.iter().sum(),
+            rays_per_pixel: m.rays_per_pixel,
+            relative_variance_x_rays: relative(m, &measured[REFERENCE]),
+        })
+        .collect();
+    let nu = best(&candidates).map_or(1.0, |c| c.paths_per_pixel);
+    Ok(Some(LightPathRule {
+        pilot_resolution: [pw, ph],
+        pilot_passes: PILOT_PASSES,
+        candidates,
+        paths_per_pixel: nu,
+        light_paths: (nu * resolution.0 as f64 * resolution.1 as f64).ceil().max(1.0) as u64,
+    }))
+}
+
+/// The pilot's passes at the integrator's current count: the summed per-pixel variance of the
+/// pass values in each pixel set (camera + splats, a non-finite sum counted as 0 as
+/// `render::render_pass` does) and the rays of both sides per pixel and pass.
+fn measure(world: &World, integrator: &mut dyn Integrator, pixels: &PixelSampler, seed: u64) -> Measured {
+    let (w, h) = pixels.resolution();
+    let (w, h) = (w as usize, h as usize);
+    let mut m = Moments(vec![(0.0, 0.0); w * h]);
+    let mut rays = 0u64;
+    for i in 0..PILOT_PASSES {
+        let pass = PILOT_PASS_BASE + i;
+        integrator.begin_pass(world, seed, pass);
+        let splats = integrator.light_splats(world, pixels.camera(), seed, pass).unwrap_or_default();
+        rays += splats.closest_rays + splats.shadow_rays;
+        for (tile, out, c) in camera_tiles(world, &*integrator, pixels, seed, pass) {
+            rays += c.closest_rays + c.shadow_rays;
+            for ((x, y), l) in tile_pixels(tile, (w, h)).zip(out) {
+                let v = l + splats.image.get(y * w + x).copied().unwrap_or(Rgb::ZERO);
+                m.add(y * w + x, if v.is_finite() { luminance(v) as f64 } else { 0.0 });
+            }
+        }
+    }
+    Measured {
+        groups: m.variance_sums(PILOT_PASSES),
+        rays_per_pixel: rays as f64 / (w * h * PILOT_PASSES as usize) as f64,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cand(nu: f64, e: f64) -> Candidate {
+        Candidate { paths_per_pixel: nu, variance: e, rays_per_pixel: 1.0, relative_variance_x_rays: e }
+    }
+
+    #[test]
+    fn the_least_score_wins_and_ties_go_to_fewer_paths() {
+        let c = [cand(0.25, 3.0), cand(0.5, 2.0), cand(1.0, 2.0), cand(2.0, 5.0)];
+        assert_eq!(best(&c).unwrap().paths_per_pixel, 0.5);
+        let n = [cand(0.25, f64::NAN), cand(0.5, 4.0), cand(1.0, f64::NAN)];
+        assert_eq!(best(&n).unwrap().paths_per_pixel, 0.5, "a NaN never wins");
+        assert!(best(&[]).is_none());
+    }
+
+    /// One set holding a firefly common to both counts does not move the median.
+    #[test]
+    fn a_firefly_in_one_pixel_set_does_not_decide() {
+        let reference = Measured { groups: [1.0; GROUPS], rays_per_pixel: 4.0 };
+        let mut more = Measured { groups: [0.5; GROUPS], rays_per_pixel: 6.0 };
+        let (mut r0, mut r1) = (
+            Measured { groups: [1.0; GROUPS], rays_per_pixel: 4.0 },
+            Measured { groups: [0.5; GROUPS], rays_per_pixel: 6.0 },
+        );
+        assert!((relative(&more, &reference) - 0.75).abs() < 1e-12);
+        r0.groups[3] += 1e6;
+        r1.groups[3] += 1e6;
+        assert!((relative(&r1, &r0) - 0.75).abs() < 1e-12, "{}", relative(&r1, &r0));
+        more.groups = [0.0; GROUPS];
+        let none = Measured { groups: [0.0; GROUPS], rays_per_pixel: 4.0 };
+        assert!((relative(&more, &none) - 1.5).abs() < 1e-12, "no variance: the costs decide");
+    }
+
+    #[test]
+    fn the_pilot_keeps_the_aspect_and_small_images() {
+        assert_eq!(pilot_resolution(32, 16), (32, 16));
+        assert_eq!(pilot_resolution(256, 256), (64, 64));
+        assert_eq!(pilot_resolution(640, 360), (85, 48));
+        let (w, h) = pilot_resolution(100_000, 1); // a thin strip keeps one row
+        assert_eq!((w, h), (20239, 1));
+    }
+
+    #[test]
+    fn the_variance_is_the_unbiased_per_pixel_one_summed_per_set() {
+        let mut m = Moments(vec![(0.0, 0.0); GROUPS + 1]);
+        for x in [1.0, 2.0, 3.0] {
+            m.add(0, x);
+            m.add(1, 5.0);
+            m.add(GROUPS, 2.0 * x);
+        }
+        let v = m.variance_sums(3);
+        assert!((v[0] - 5.0).abs() < 1e-12 && v[1] == 0.0, "{v:?}");
+    }
+}
