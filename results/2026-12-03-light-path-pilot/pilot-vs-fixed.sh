@@ -1,16 +1,17 @@
 #!/usr/bin/env bash
 # The light-path pilot against the fixed 1 path per pixel of results/2026-12-03-light-path-pilot.md
-# (stop 40): pt-cf with no --light-paths (the pilot's count) and with --light-paths = 1 per
-# pixel, 60 s, seeds 1-3, alternating seed by seed. FORECAST names the binary.
+# (stop 40): pt-cf --light-path-pilot (the pilot's count) and with --light-paths = 1 per
+# pixel, 60 s, seeds 1-3, alternating seed by seed. FORECAST names the binary (the recorded run:
+# the work tree before 9eb2449, where no --light-paths meant the pilot).
 #   FORECAST=BIN bash results/2026-12-03-light-path-pilot/pilot-vs-fixed.sh   (writes out/pilot/)
 set -u
 cd "$(dirname "$0")/../.."
 BIN="${FORECAST:-target/release/forecast}"
-run() { # NAME SCENE RES N SEED   (N = "rule": no --light-paths)
+run() { # NAME SCENE RES N SEED   (N = "rule": --light-path-pilot)
   local d=out/pilot/$1-$4; mkdir -p "$d"
   local o=$d/pt-cf-$5
   [ -f "$o.exr" ] && return
-  local lp=(); [ "$4" = rule ] || lp=(--light-paths "$4")
+  local lp=(--light-paths "$4"); [ "$4" = rule ] && lp=(--light-path-pilot)
   /usr/bin/time -f '%e %U %S' -o "$o.time" "$BIN" render "$2" --method pt-cf "${lp[@]}" --time 60s --resolution "$3" --threads 2 --max-depth 64 --seed "$5" --out "$o" --quiet
 }
 for s in 1 2 3; do
