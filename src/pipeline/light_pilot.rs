@@ -114,12 +114,11 @@ pub fn pilot_resolution(w: u32, h: u32) -> (u32, u32) {
 /// The candidate with the least score, the first of equals (the fewer paths); a score that is
 /// not a number never wins unless all are.
 pub fn best(candidates: &[Candidate]) -> Option<&Candidate> {
+    let better = |c: &Candidate, b: &Candidate| {
+        b.relative_variance_x_rays.is_nan() || c.relative_variance_x_rays < b.relative_variance_x_rays
+    };
     candidates.iter().fold(None, |b: Option<&Candidate>, c| match b {
-        Some(b)
-            if !(c.relative_variance_x_rays < b.relative_variance_x_rays) && !b.relative_variance_x_rays.is_nan() =>
-        {
-            Some(b)
-        }
+        Some(b) if !better(c, b) => Some(b),
         _ => Some(c),
     })
 }
