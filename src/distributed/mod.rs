@@ -184,6 +184,13 @@ pub fn agree_round(c: &dyn Cluster, go: bool, failure: Option<String>) -> Result
     Ok(all == 0.0)
 }
 
+/// Rank 0's `v` on every rank (collective); `what` names it in the error of a malformed broadcast.
+pub fn broadcast_u64(c: &dyn Cluster, v: u64, what: &str) -> Result<u64, String> {
+    let mut bytes = v.to_le_bytes().to_vec();
+    c.broadcast_bytes(&mut bytes);
+    bytes.as_slice().try_into().map(u64::from_le_bytes).map_err(|_| format!("bad {what} broadcast"))
+}
+
 /// Builds a [`Deadline`] shared by all ranks for a time box of `budget_secs` seconds
 /// counted from rank 0's `local_start` (e.g. the instant rank 0's process started).
 ///

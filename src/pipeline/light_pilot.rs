@@ -36,8 +36,8 @@ use super::Plan;
 use crate::accel::World;
 use crate::distributed::Cluster;
 use crate::integrators::{Integrator, Method, MethodArgs};
-use crate::math::{luminance, Rgb};
-use crate::render::{camera_tiles, tile_pixels, PixelSampler};
+use crate::math::luminance;
+use crate::render::{camera_tiles, tile_pixels, with_splat, PassCounters, PixelSampler};
 
 /// Pixels of the pilot image (about; the aspect is kept).
 pub const PILOT_PIXELS: f64 = 4096.0;
@@ -154,9 +154,7 @@ pub fn wanted(plan: &Plan) -> bool {
 pub fn broadcast_count(cluster: &dyn Cluster, plan: &Plan, rule: Option<&LightPathRule>) -> Result<u64, String> {
     let (w, h) = plan.resolution;
     let n = rule.map_or(crate::integrators::pt_cf_light::default_paths(w, h), |r| r.light_paths);
-    let mut bytes = n.to_le_bytes().to_vec();
-    cluster.broadcast_bytes(&mut bytes);
-    Ok(u64::from_le_bytes(bytes.as_slice().try_into().map_err(|_| "bad light-path broadcast")?))
+    crate::distributed::broadcast_u64(cluster, n, "light-path")
 }
 
 /// Runs the pilot for a `pt-cf` render of `resolution` from the broadcast `product` and returns
@@ -175,17 +173,15 @@ pub fn choose(
     pilot_args.ptcf.light_paths = Some(paths(CANDIDATES[0]));
     let mut integrator = Method::PtCf.build(world, &pilot_args, product)?;
     let camera = world.scene.camera.with_resolution(pw, ph);
-    if integrator.light_splats(world, &camera, seed, PILOT_PASS_BASE).is_none() {
-        return Ok(None);
-    }
     let pixels = PixelSampler::new(world, &camera, args.emission_split(), integrator.prefix_cap());
-    let measured: Vec<Measured> = CANDIDATES
+    let measured: Option<Vec<Measured>> = CANDIDATES
         .iter()
         .map(|&nu| {
             integrator.set_light_paths(paths(nu));
             measure(world, integrator.as_mut(), &pixels, seed)
         })
         .collect();
+    let Some(measured) = measured else { return Ok(None) };
     let candidates: Vec<Candidate> = CANDIDATES
         .iter()
         .zip(&measured)
@@ -207,30 +203,30 @@ pub fn choose(
 }
 
 /// The pilot's passes at the integrator's current count: the summed per-pixel variance of the
-/// pass values in each pixel set (camera + splats, a non-finite sum counted as 0 as
-/// `render::render_pass` does) and the rays of both sides per pixel and pass.
-fn measure(world: &World, integrator: &mut dyn Integrator, pixels: &PixelSampler, seed: u64) -> Measured {
+/// pass values in each pixel set (camera + splats, as `render::render_pass` adds them) and the
+/// rays of both sides per pixel and pass; `None` when the integrator traces no light paths.
+fn measure(world: &World, integrator: &mut dyn Integrator, pixels: &PixelSampler, seed: u64) -> Option<Measured> {
     let (w, h) = pixels.resolution();
     let (w, h) = (w as usize, h as usize);
     let mut m = Moments(vec![(0.0, 0.0); w * h]);
-    let mut rays = 0u64;
+    let (mut rays, mut scratch) = (0u64, PassCounters::default());
     for i in 0..PILOT_PASSES {
         let pass = PILOT_PASS_BASE + i;
         integrator.begin_pass(world, seed, pass);
-        let splats = integrator.light_splats(world, pixels.camera(), seed, pass).unwrap_or_default();
+        let splats = integrator.light_splats(world, pixels.camera(), seed, pass)?;
         rays += splats.closest_rays + splats.shadow_rays;
         for (tile, out, c) in camera_tiles(world, &*integrator, pixels, seed, pass) {
             rays += c.closest_rays + c.shadow_rays;
             for ((x, y), l) in tile_pixels(tile, (w, h)).zip(out) {
-                let v = l + splats.image.get(y * w + x).copied().unwrap_or(Rgb::ZERO);
-                m.add(y * w + x, if v.is_finite() { luminance(v) as f64 } else { 0.0 });
+                let v = with_splat(l, Some(&splats), y * w + x, &mut scratch);
+                m.add(y * w + x, luminance(v) as f64);
             }
         }
     }
-    Measured {
+    Some(Measured {
         groups: m.variance_sums(PILOT_PASSES),
         rays_per_pixel: rays as f64 / (w * h * PILOT_PASSES as usize) as f64,
-    }
+    })
 }
 
 #[cfg(test)]

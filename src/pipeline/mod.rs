@@ -11,7 +11,8 @@
 //! is a warning (the previous set stays, the next interval retries). `--resume` continues with the
 //! next pass and repeats none.
 //! Snapshots (`--snapshots`) are taken at round boundaries the same way: `PREFIX.snap-LABEL.*`.
-//! Submodules: `memory` (the up-front estimate), `checkpoints` (checkpoint and output sets),
+//! Submodules: `memory` (the up-front estimate), `preprocess` (stage 2, with `light_pilot`,
+//! `pt-cf`'s light-path pilot), `checkpoints` (checkpoint and output sets),
 //! `snapshots` (the image at intermediate wall-clock times), `report` (the typed `RenderReport`).
 //!
 //! Failure: every parameter is validated and the memory estimated in [`RenderJob::resolve`],
@@ -38,6 +39,7 @@ mod checkpoints;
 mod identity;
 mod light_pilot;
 mod memory;
+mod preprocess;
 mod report;
 mod snapshots;
 
@@ -48,6 +50,7 @@ pub use report::{RankStats, Rays, RenderReport, RenderResult, Timings};
 pub use snapshots::{check_snapshots, snapshot_label, snapshot_prefix, SnapshotReport};
 
 use memory::local_ranks;
+use preprocess::preprocess;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -347,48 +350,6 @@ fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), String> 
     Ok((world, plan, Timings { load_s, bvh_s, ..Timings::default() }))
 }
 
-/// The integrator built from the broadcast preprocess product, with the figures of both.
-struct Prepared {
-    integrator: Box<dyn Integrator>,
-    stats: RankStats,
-    /// `pt-cf`'s light-path pilot (rank 0 under `--light-path-pilot`; `None` otherwise).
-    light_path_rule: Option<LightPathRule>,
-}
-
-/// Stage 2: the caustic preprocess on rank 0 (with `pt-cf`'s light-path pilot,
-/// `light_pilot`), broadcast to the others; every rank builds its integrator from the same
-/// bytes and the same light-path count, which `plan` then records. Its phases are shown under
-/// the render bar's rules.
-fn preprocess(world: &World, plan: &mut Plan, cluster: &dyn Cluster, phases: &PhaseBar) -> Result<Prepared, String> {
-    let t_pre = Instant::now();
-    let pilot = light_pilot::wanted(plan);
-    let run = || -> Result<(Vec<u8>, Option<LightPathRule>), String> {
-        let product = plan.method.preprocess_reporting(world, &plan.args, plan.seed, phases)?;
-        let rule =
-            if pilot { light_pilot::choose(world, &plan.args, (plan.seed, plan.resolution), &product)? } else { None };
-        Ok((product, rule))
-    };
-    let pre = if cluster.rank() == 0 { run() } else { Ok((Vec::new(), None)) };
-    let preprocess_s = secs(t_pre);
-    // every rank must leave together when rank 0 fails, or the others wait in the broadcast
-    let (mut product, light_path_rule) = distributed::agree(cluster, pre)?;
-    let t_bc = Instant::now();
-    cluster.broadcast_bytes(&mut product);
-    if pilot {
-        plan.args.ptcf.light_paths = Some(light_pilot::broadcast_count(cluster, plan, light_path_rule.as_ref())?);
-    }
-    let stats = RankStats {
-        rank: cluster.rank(),
-        preprocess_s,
-        broadcast_s: secs(t_bc),
-        bytes_broadcast: product.len(),
-        product_hash: crate::checkpoint::checksum(&product),
-        ..RankStats::default()
-    };
-    let integrator = plan.method.build(world, &plan.args, &product)?;
-    Ok(Prepared { integrator, stats, light_path_rule })
-}
-
 /// A checkpoint to continue and the first pass of this run.
 struct Resume {
     checkpoint: Option<Checkpoint>,
@@ -407,9 +368,7 @@ fn agree_resume(job: &RenderJob, world: &World, plan: &Plan, cluster: &dyn Clust
         _ => Ok(None),
     };
     let checkpoint: Option<Checkpoint> = distributed::agree(cluster, loaded)?;
-    let mut first = checkpoint.as_ref().map_or(0u64, |c| c.next_pass).to_le_bytes().to_vec();
-    cluster.broadcast_bytes(&mut first);
-    let first_pass = u64::from_le_bytes(first.as_slice().try_into().map_err(|_| "bad resume broadcast")?);
+    let first_pass = distributed::broadcast_u64(cluster, checkpoint.as_ref().map_or(0, |c| c.next_pass), "resume")?;
     Ok(Resume { checkpoint, first_pass })
 }
 

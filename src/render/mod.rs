@@ -138,7 +138,7 @@ pub fn render_pass(
 /// film's variance stays the variance of the pass values). A non-finite sum is counted and
 /// replaced by zero, as a non-finite camera estimate.
 #[inline]
-fn with_splat(camera: Rgb, splats: Option<&LightSplats>, pixel: usize, c: &mut PassCounters) -> Rgb {
+pub fn with_splat(camera: Rgb, splats: Option<&LightSplats>, pixel: usize, c: &mut PassCounters) -> Rgb {
     let Some(s) = splats else { return camera };
     let l = camera + s.image[pixel];
     if l.is_finite() {

@@ -1,0 +1,61 @@
+//! Stage 2 of the pipeline (`pipeline` module docs): the caustic preprocess on rank 0, and with
+//! `--light-path-pilot` `pt-cf`'s light-path pilot (`light_pilot`), broadcast to every rank,
+//! which builds its integrator from the same bytes and count.
+//!
+//! Invariant: every rank leaves together when rank 0 fails (`distributed::agree` before each
+//! collective), so none waits in a broadcast.
+
+use super::light_pilot::{self, LightPathRule};
+use super::{secs, Plan, RankStats};
+use crate::accel::World;
+use crate::distributed::{self, Cluster};
+use crate::integrators::Integrator;
+use crate::progress::PhaseBar;
+use std::time::Instant;
+
+/// The integrator built from the broadcast preprocess product, with the figures of both.
+pub(super) struct Prepared {
+    pub(super) integrator: Box<dyn Integrator>,
+    pub(super) stats: RankStats,
+    /// `pt-cf`'s light-path pilot (rank 0 under `--light-path-pilot`; `None` otherwise).
+    pub(super) light_path_rule: Option<LightPathRule>,
+}
+
+/// Stage 2: the caustic preprocess on rank 0 (with `pt-cf`'s light-path pilot,
+/// `light_pilot`), broadcast to the others; every rank builds its integrator from the same
+/// bytes and the same light-path count, which `plan` then records. Its phases are shown under
+/// the render bar's rules.
+pub(super) fn preprocess(
+    world: &World,
+    plan: &mut Plan,
+    cluster: &dyn Cluster,
+    phases: &PhaseBar,
+) -> Result<Prepared, String> {
+    let t_pre = Instant::now();
+    let pilot = light_pilot::wanted(plan);
+    let run = || -> Result<(Vec<u8>, Option<LightPathRule>), String> {
+        let product = plan.method.preprocess_reporting(world, &plan.args, plan.seed, phases)?;
+        let rule =
+            if pilot { light_pilot::choose(world, &plan.args, (plan.seed, plan.resolution), &product)? } else { None };
+        Ok((product, rule))
+    };
+    let pre = if cluster.rank() == 0 { run() } else { Ok((Vec::new(), None)) };
+    let preprocess_s = secs(t_pre);
+    // every rank must leave together when rank 0 fails, or the others wait in the broadcast
+    let (mut product, light_path_rule) = distributed::agree(cluster, pre)?;
+    let t_bc = Instant::now();
+    cluster.broadcast_bytes(&mut product);
+    if pilot {
+        plan.args.ptcf.light_paths = Some(light_pilot::broadcast_count(cluster, plan, light_path_rule.as_ref())?);
+    }
+    let stats = RankStats {
+        rank: cluster.rank(),
+        preprocess_s,
+        broadcast_s: secs(t_bc),
+        bytes_broadcast: product.len(),
+        product_hash: crate::checkpoint::checksum(&product),
+        ..RankStats::default()
+    };
+    let integrator = plan.method.build(world, &plan.args, &product)?;
+    Ok(Prepared { integrator, stats, light_path_rule })
+}
