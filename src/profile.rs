@@ -146,6 +146,13 @@ impl Profile {
         }
     }
 
+    /// Adds `ns` nanoseconds, timed exactly, to `phase` (a batch timed once, e.g. the
+    /// wavefront `pt`'s tile).
+    #[inline]
+    pub fn add_exact(&mut self, phase: Phase, ns: u64) {
+        *self.slot(phase) += ns;
+    }
+
     fn slot(&mut self, phase: Phase) -> &mut u64 {
         match phase {
             Phase::Radiance => &mut self.radiance_ns,

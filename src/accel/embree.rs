@@ -148,6 +148,20 @@ mod ffi {
         pub fn rtcReleaseGeometry(geometry: RTCGeometry);
         pub fn rtcIntersect1(scene: RTCScene, context: *mut RTCIntersectContext, rayhit: *mut RTCRayHit);
         pub fn rtcOccluded1(scene: RTCScene, context: *mut RTCIntersectContext, ray: *mut RTCRay);
+        pub fn rtcIntersect1M(
+            scene: RTCScene,
+            context: *mut RTCIntersectContext,
+            rayhit: *mut RTCRayHit,
+            m: c_uint,
+            stride: usize,
+        );
+        pub fn rtcOccluded1M(
+            scene: RTCScene,
+            context: *mut RTCIntersectContext,
+            ray: *mut RTCRay,
+            m: c_uint,
+            stride: usize,
+        );
     }
 }
 
@@ -344,6 +358,100 @@ impl EmbreeScene {
         // SAFETY: as in `closest`.
         unsafe { ffi::rtcOccluded1(self.scene, &mut ctx, &mut r) };
         r.tfar == f32::NEG_INFINITY
+    }
+}
+
+/// Reusable buffers of the stream calls (one per batch of a tile's paths, not per bounce).
+#[derive(Default)]
+pub(super) struct Scratch {
+    rayhits: Vec<ffi::RTCRayHit>,
+    rays: Vec<ffi::RTCRay>,
+    /// The batch index of each stream record (rays that need no query are not in the stream).
+    slot: Vec<u32>,
+    /// Closest hits as (primitive id, t).
+    found: Vec<Option<(u32, f32)>>,
+}
+
+impl Scratch {
+    /// The closest hits of the last `closest_batch`.
+    pub(super) fn found(&self) -> &[Option<(u32, f32)>] {
+        &self.found
+    }
+}
+
+impl EmbreeScene {
+    /// Closest hits of a batch of rays in one stream call (`rtcIntersect1M`, incoherent: the
+    /// coherent flag's packets rounded some hits differently and were no faster,
+    /// `results/2026-12-03-core-wavefront.md`): `s.found[i]` is what `closest(rays[i])` returns.
+    pub(super) fn closest_batch(&self, rays: &[super::Ray], s: &mut Scratch) {
+        s.rayhits.clear();
+        s.slot.clear();
+        s.found.clear();
+        for (i, r) in rays.iter().enumerate() {
+            if r.tmax.is_nan() || r.tmax <= 0.0 {
+                s.found.push(None);
+                continue;
+            }
+            let (mut tfar, mut best) = (r.tmax, None);
+            if self.loop_spheres {
+                for (k, sp) in self.spheres.iter().enumerate() {
+                    let t = super::sphere_t(sp.center, sp.radius, r.o, r.d, 0.0, tfar);
+                    if t < tfar {
+                        (tfar, best) = (t, Some((self.ntri + k as u32, t)));
+                    }
+                }
+            }
+            let mut rh = ffi::RTCRayHit { ray: ray(r.o, r.d, tfar), hit: ffi::RTCHit::default() };
+            rh.hit.geomID = ffi::RTC_INVALID_GEOMETRY_ID;
+            s.slot.push(i as u32);
+            s.found.push(best);
+            s.rayhits.push(rh);
+        }
+        if s.rayhits.is_empty() {
+            return;
+        }
+        let mut ctx = context();
+        let stride = std::mem::size_of::<ffi::RTCRayHit>();
+        let n = s.rayhits.len() as u32;
+        // SAFETY: the scene is committed; `rayhits` holds `n` valid, aligned records for the call.
+        unsafe { ffi::rtcIntersect1M(self.scene, &mut ctx, s.rayhits.as_mut_ptr(), n, stride) };
+        for (rh, &i) in s.rayhits.iter().zip(&s.slot) {
+            match rh.hit.geomID {
+                TRI_GEOM => s.found[i as usize] = Some((rh.hit.primID, rh.ray.tfar)),
+                SPHERE_GEOM => s.found[i as usize] = Some((self.ntri + rh.hit.primID, rh.ray.tfar)),
+                _ => {}
+            }
+        }
+    }
+
+    /// Occlusion of a batch of segments in one stream call (`rtcOccluded1M`, incoherent):
+    /// `out[i]` is what `occluded(rays[i])` returns.
+    pub(super) fn occluded_batch(&self, rays: &[super::Ray], s: &mut Scratch, out: &mut Vec<bool>) {
+        s.rays.clear();
+        s.slot.clear();
+        out.clear();
+        for (i, r) in rays.iter().enumerate() {
+            let skip = r.tmax.is_nan() || r.tmax <= 0.0;
+            let blocked = !skip
+                && self.loop_spheres
+                && self.spheres.iter().any(|sp| super::sphere_t(sp.center, sp.radius, r.o, r.d, 0.0, r.tmax) < r.tmax);
+            if !skip && !blocked {
+                s.slot.push(i as u32);
+                s.rays.push(ray(r.o, r.d, r.tmax));
+            }
+            out.push(blocked);
+        }
+        if s.rays.is_empty() {
+            return;
+        }
+        let mut ctx = context();
+        let stride = std::mem::size_of::<ffi::RTCRay>();
+        let n = s.rays.len() as u32;
+        // SAFETY: as in `closest_batch`.
+        unsafe { ffi::rtcOccluded1M(self.scene, &mut ctx, s.rays.as_mut_ptr(), n, stride) };
+        for (r, &i) in s.rays.iter().zip(&s.slot) {
+            out[i as usize] = r.tfar == f32::NEG_INFINITY;
+        }
     }
 }
 

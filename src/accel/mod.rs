@@ -41,6 +41,33 @@ pub fn take_ray_counts() -> (u64, u64) {
     RAY_COUNTS.with(|c| c.replace((0, 0)))
 }
 
+/// A ray of a batch (`World::intersect_batch`, `World::occluded_batch`): `o + t·d`, t ∈ (0, tmax),
+/// `d` unit length.
+#[derive(Clone, Copy, Debug)]
+pub struct Ray {
+    /// Origin.
+    pub o: Vec3,
+    /// Unit direction.
+    pub d: Vec3,
+    /// The far end of the segment.
+    pub tmax: f32,
+}
+
+/// Reusable buffers of [`World::intersect_batch`] and [`World::occluded_batch`] (the back end's
+/// stream records), so that a batch traced bounce after bounce allocates once.
+#[derive(Default)]
+pub struct BatchScratch {
+    #[cfg(feature = "embree")]
+    embree: embree::Scratch,
+}
+
+impl BatchScratch {
+    #[cfg(feature = "embree")]
+    fn embree_found(&self) -> &[Option<(u32, f32)>] {
+        self.embree.found()
+    }
+}
+
 /// A surface hit.
 #[derive(Clone, Copy, Debug)]
 pub struct Hit {
@@ -220,6 +247,42 @@ impl World {
         Some(self.hit(origin, dir, prim, t))
     }
 
+    /// Closest hits of a batch of rays: `out[i]` is `intersect(rays[i])`, bit for bit, with the
+    /// same ray counts. The Embree back end traces the batch in one stream call (its per-call
+    /// cost is what a batch saves, `results/2026-12-03-core-wavefront.md`); obvhs ray by ray.
+    pub fn intersect_batch(&self, rays: &[Ray], scratch: &mut BatchScratch, out: &mut Vec<Option<Hit>>) {
+        out.clear();
+        match &self.accel {
+            #[cfg(feature = "embree")]
+            Accel::Embree(e) => {
+                count(rays.len() as u64, 0);
+                e.closest_batch(rays, &mut scratch.embree);
+                let found = scratch.embree_found();
+                out.extend(rays.iter().zip(found).map(|(r, h)| h.map(|(prim, t)| self.hit(r.o, r.d, prim, t))));
+            }
+            _ => {
+                let _ = scratch;
+                out.extend(rays.iter().map(|r| self.intersect(r.o, r.d, r.tmax)));
+            }
+        }
+    }
+
+    /// Occlusion of a batch of segments: `out[i]` is `occluded(rays[i])` (as `intersect_batch`).
+    pub fn occluded_batch(&self, rays: &[Ray], scratch: &mut BatchScratch, out: &mut Vec<bool>) {
+        match &self.accel {
+            #[cfg(feature = "embree")]
+            Accel::Embree(e) => {
+                count(0, rays.len() as u64);
+                e.occluded_batch(rays, &mut scratch.embree, out);
+            }
+            _ => {
+                let _ = scratch;
+                out.clear();
+                out.extend(rays.iter().map(|r| self.occluded(r.o, r.d, r.tmax)));
+            }
+        }
+    }
+
     /// The hit record of primitive `prim` at `t` along the ray.
     #[inline]
     fn hit(&self, origin: Vec3, dir: Vec3, prim: u32, t: f32) -> Hit {
@@ -265,17 +328,24 @@ impl World {
 
     /// Visibility between surface points `a` (normal `na`) and `b` (normal `nb`).
     pub fn visible(&self, a: Vec3, na: Vec3, b: Vec3, nb: Vec3) -> bool {
+        self.visibility_ray(a, na, b, nb).is_some_and(|r| !self.occluded(r.o, r.d, r.tmax))
+    }
+
+    /// The shadow segment that [`World::visible`] tests between `a` (normal `na`) and `b`
+    /// (normal `nb`), both ends offset off their surfaces; `None` when the points coincide
+    /// (never visible).
+    pub fn visibility_ray(&self, a: Vec3, na: Vec3, b: Vec3, nb: Vec3) -> Option<Ray> {
         let d = b - a;
         let dist = d.length();
         if dist <= 0.0 {
-            return false;
+            return None;
         }
         let dir = d / dist;
         let o = offset_origin(a, na, dir);
         let target = offset_origin(b, nb, -dir);
         let seg = target - o;
         let len = seg.length();
-        !self.occluded(o, seg / len.max(1e-30), len)
+        Some(Ray { o, d: seg / len.max(1e-30), tmax: len })
     }
 }
 

@@ -22,6 +22,7 @@
 pub mod auto;
 pub mod caustic_share;
 pub mod caustics;
+pub mod path_batch;
 pub mod path_class;
 pub mod pt_cf_light;
 pub mod settings;
@@ -68,6 +69,20 @@ pub trait Integrator: Send + Sync {
     /// `transport::dirac::prefix_emission` with [`Integrator::prefix_cap`]: weight 1, the BSDF's
     /// own Dirac sampling, `pt`'s roulette, one-sided emitters.
     fn estimate(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate;
+    /// [`Integrator::estimate`] along each ray of a batch (a tile's camera rays), ray `i`
+    /// drawing from `rngs[i]`: `out[i]` is bit for bit what `estimate` returns with `ctx.rng =
+    /// rngs[i]`. The default is that loop; `pt` traces the batch as a wavefront
+    /// (`path_batch`).
+    fn estimate_batch(
+        &self,
+        world: &World,
+        rays: &[crate::accel::Ray],
+        rngs: &mut [crate::sampling::rng::Rng],
+        ctx: &mut Context,
+        out: &mut Vec<CameraEstimate>,
+    ) {
+        estimate_each(self, world, rays, rngs, ctx, out);
+    }
     /// The vertex cap of the camera's Dirac prefix in [`Integrator::estimate`] (the extra rays of
     /// emission splitting use the same).
     fn prefix_cap(&self) -> u32;
@@ -90,6 +105,24 @@ pub trait Integrator: Send + Sync {
     /// light-path pilot, `pipeline::light_pilot`, which tries several counts on one integrator
     /// and its warm table cache). A method without light paths ignores it.
     fn set_light_paths(&mut self, _n: u64) {}
+}
+
+/// [`Integrator::estimate_batch`]'s default: `estimate` ray by ray, `ctx.rng` swapped with
+/// each ray's stream around its call.
+pub fn estimate_each<I: Integrator + ?Sized>(
+    integrator: &I,
+    world: &World,
+    rays: &[crate::accel::Ray],
+    rngs: &mut [crate::sampling::rng::Rng],
+    ctx: &mut Context,
+    out: &mut Vec<CameraEstimate>,
+) {
+    out.clear();
+    for (r, rng) in rays.iter().zip(rngs) {
+        std::mem::swap(&mut ctx.rng, rng);
+        out.push(integrator.estimate(world, r.o, r.d, ctx));
+        std::mem::swap(&mut ctx.rng, rng);
+    }
 }
 
 /// One pass's light-traced contributions ([`Integrator::light_splats`]).

@@ -15,7 +15,8 @@
 use crate::profile::{Phase, Profile};
 use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
 use crate::progress::Phases;
-use crate::accel::{offset_origin, Hit, World};
+use crate::accel::{offset_origin, Hit, Ray, World};
+use crate::sampling::rng::Rng;
 use crate::bsdf::{self, Mode, ShadingPoint};
 use super::path_class::{kept, PathClass, PathFilter};
 use crate::math::{Rgb, Vec3};
@@ -93,6 +94,16 @@ impl Integrator for PathTracer {
         ctx.profile.samples += 1;
         ctx.profile.record(Phase::Radiance, t0);
         l
+    }
+
+    fn estimate_batch(&self, world: &World, rays: &[Ray], rngs: &mut [Rng], ctx: &mut Context, out: &mut Vec<CameraEstimate>) {
+        if self.filter.is_some() {
+            return super::estimate_each(self, world, rays, rngs, ctx, out);
+        }
+        let t0 = std::time::Instant::now();
+        self.trace_batch(world, rays, rngs, out);
+        ctx.profile.samples += rays.len() as u64;
+        ctx.profile.add_exact(Phase::Radiance, t0.elapsed().as_nanos() as u64);
     }
 
     fn prefix_cap(&self) -> u32 {

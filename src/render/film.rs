@@ -21,6 +21,19 @@ pub struct Film {
     pub data: Vec<f64>,
 }
 
+/// Adds one sample to a pixel's `STRIDE` sums `d`.
+#[inline]
+pub fn add_at(d: &mut [f64], c: Rgb) {
+    let (r, g, b) = (c.x as f64, c.y as f64, c.z as f64);
+    d[0] += r;
+    d[1] += g;
+    d[2] += b;
+    d[3] += r * r;
+    d[4] += g * g;
+    d[5] += b * b;
+    d[6] += 1.0;
+}
+
 impl Film {
     /// An empty film.
     pub fn new(width: usize, height: usize) -> Film {
@@ -35,15 +48,7 @@ impl Film {
     /// Adds one sample to pixel `i`.
     #[inline]
     pub fn add(&mut self, i: usize, c: Rgb) {
-        let d = &mut self.data[i * STRIDE..(i + 1) * STRIDE];
-        let (r, g, b) = (c.x as f64, c.y as f64, c.z as f64);
-        d[0] += r;
-        d[1] += g;
-        d[2] += b;
-        d[3] += r * r;
-        d[4] += g * g;
-        d[5] += b * b;
-        d[6] += 1.0;
+        add_at(&mut self.data[i * STRIDE..(i + 1) * STRIDE], c);
     }
 
     /// Adds another film's sums.

@@ -82,21 +82,17 @@ pub fn camera_tiles(
         .into_par_iter()
         .map(|tile| {
             let _ = take_ray_counts();
-            let mut out = Vec::with_capacity(TILE * TILE);
             let mut c = PassCounters::default();
             let mut ctx = Context::new(Rng::keyed(seed, stream::CAMERA, pass, 0));
             ctx.camera = Some(pixels.camera().clone());
-            for (x, y) in tile_pixels(tile, (w, h)) {
-                let pixel = (y * w + x) as u64;
-                ctx.rng = Rng::keyed(seed, stream::CAMERA, pass, pixel);
-                let mut l = pixels.sample(world, integrator, (x, y, pixel), (seed, pass), &mut ctx);
-                if !l.is_finite() {
-                    c.nonfinite += 1;
-                    l = Rgb::ZERO;
-                }
-                c.samples += 1;
-                out.push(l);
+            let px: Vec<_> = tile_pixels(tile, (w, h)).map(|(x, y)| (x, y, (y * w + x) as u64)).collect();
+            let mut out = Vec::with_capacity(px.len());
+            pixels.sample_tile(world, integrator, &px, (seed, pass), &mut ctx, &mut out);
+            for l in out.iter_mut().filter(|l| !l.is_finite()) {
+                c.nonfinite += 1;
+                *l = Rgb::ZERO;
             }
+            c.samples += out.len() as u64;
             let (closest, shadow) = take_ray_counts();
             c.closest_rays = closest;
             c.shadow_rays = shadow;
@@ -118,14 +114,31 @@ pub fn render_pass(
     let (w, h) = (film.width, film.height);
     assert_eq!(pixels.resolution(), (w as u32, h as u32), "pixel sampler and film sizes differ");
     let results = camera_tiles(world, integrator, pixels, seed, pass);
-    let mut total = PassCounters::default();
     let splats = integrator.light_splats(world, pixels.camera(), seed, pass);
-    for (tile, out, c) in results {
-        for ((x, y), l) in tile_pixels(tile, (w, h)).zip(out) {
-            film.add(y * w + x, with_splat(l, splats.as_ref(), y * w + x, &mut total));
-        }
-        total.add(&c);
-    }
+    // The merge runs in parallel over rows of tiles (each a contiguous band of the film); every
+    // pixel still gets exactly its one sample of the pass, so the film is the serial merge's.
+    let tiles_x = w.div_ceil(TILE);
+    let band = w * TILE * film::STRIDE;
+    let mut total = film
+        .data
+        .par_chunks_mut(band)
+        .zip(results.par_chunks(tiles_x))
+        .map(|(rows, tiles)| {
+            let mut c = PassCounters::default();
+            for (tile, out, tc) in tiles {
+                for ((x, y), &l) in tile_pixels(*tile, (w, h)).zip(out) {
+                    let i = (y % TILE) * w + x;
+                    let v = with_splat(l, splats.as_ref(), y * w + x, &mut c);
+                    film::add_at(&mut rows[i * film::STRIDE..(i + 1) * film::STRIDE], v);
+                }
+                c.add(tc);
+            }
+            c
+        })
+        .reduce(PassCounters::default, |mut a, b| {
+            a.add(&b);
+            a
+        });
     if let Some(s) = &splats {
         total.closest_rays += s.closest_rays;
         total.shadow_rays += s.shadow_rays;

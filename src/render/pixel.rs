@@ -26,7 +26,7 @@
 //! random numbers of the plain sampler and traces no probe.
 
 use super::Context;
-use crate::accel::World;
+use crate::accel::{Ray, World};
 use crate::integrators::Integrator;
 use crate::math::Rgb;
 use crate::profile::Phase;
@@ -116,21 +116,54 @@ impl<'a> PixelSampler<'a> {
         self.stats
     }
 
-    /// One sample of pixel `(x, y)` (row-major index `pixel`), see the module doc; `ctx.rng` is
-    /// the pixel's camera stream, `key` = (seed, pass) keys the extra rays' own stream.
-    pub(super) fn sample(
+    /// One sample of each pixel of `tile` (`(x, y, row-major index)`, in order) into `out`:
+    /// pixel `p` draws from its camera stream keyed by `key` = (seed, pass) and `p`, exactly as
+    /// [`PixelSampler::sample`] would. The unsplit pixels' camera rays go to the integrator as
+    /// one batch ([`Integrator::estimate_batch`]), the split ones one by one.
+    pub(crate) fn sample_tile(
+        &self,
+        world: &World,
+        integrator: &dyn Integrator,
+        tile: &[(usize, usize, u64)],
+        key: (u64, u64),
+        ctx: &mut Context,
+        out: &mut Vec<Rgb>,
+    ) {
+        let cam = self.camera;
+        let (mut rays, mut rngs, mut slots) = (Vec::new(), Vec::new(), Vec::new());
+        out.clear();
+        for &(x, y, pixel) in tile {
+            let mut rng = Rng::keyed(key.0, stream::CAMERA, key.1, pixel);
+            let [jx, jy] = rng.next_2d();
+            if self.k == 1 || !self.split[pixel as usize] {
+                let d = cam.direction(x as f32 + jx, y as f32 + jy);
+                rays.push(Ray { o: cam.position, d, tmax: f32::INFINITY });
+                rngs.push(rng);
+                slots.push(out.len());
+                out.push(Rgb::ZERO);
+            } else {
+                ctx.rng = rng;
+                out.push(self.split_sample(world, integrator, (x, y, pixel), key, [jx, jy], ctx));
+            }
+        }
+        let mut est = Vec::with_capacity(rays.len());
+        integrator.estimate_batch(world, &rays, &mut rngs, ctx, &mut est);
+        for (slot, e) in slots.into_iter().zip(est) {
+            out[slot] = e.total();
+        }
+    }
+
+    /// The sample of a split pixel, its jitter `[jx, jy]` already drawn from `ctx.rng`.
+    fn split_sample(
         &self,
         world: &World,
         integrator: &dyn Integrator,
         (x, y, pixel): (usize, usize, u64),
         key: (u64, u64),
+        [jx, jy]: [f32; 2],
         ctx: &mut Context,
     ) -> Rgb {
         let cam = self.camera;
-        let [jx, jy] = ctx.rng.next_2d();
-        if self.k == 1 || !self.split[pixel as usize] {
-            return integrator.radiance(world, cam.position, cam.direction(x as f32 + jx, y as f32 + jy), ctx);
-        }
         let k = self.k as usize;
         let mut rng = Rng::keyed(key.0, stream::PIXEL_SPLIT, key.1, pixel);
         let mut rows = [0u8; MAX_EMISSION_SPLIT as usize];

@@ -4,7 +4,7 @@
 //! `emitter_pdf_w` gives the light-sampling pdf of a BSDF-sampled hit on an emitter, so the
 //! path tracer can weight that hit with the same heuristic (Veach 1997 §9.2).
 
-use crate::accel::{offset_origin, World};
+use crate::accel::{offset_origin, Ray, World};
 use crate::bsdf::{self, ShadingPoint};
 use crate::math::{Rgb, Vec3};
 use crate::sampling::power_heuristic;
@@ -40,6 +40,32 @@ pub fn sample_light_mis(
     rng: &mut Rng,
     pdf_other: impl Fn(Vec3) -> f32,
 ) -> Rgb {
+    match light_sample_mis(world, sp, m, wo, rng, pdf_other) {
+        Some(ls) if !world.occluded(ls.shadow.o, ls.shadow.d, ls.shadow.tmax) => ls.value,
+        _ => Rgb::ZERO,
+    }
+}
+
+/// One NEE sample before its shadow ray: the contribution if the segment is unoccluded.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    /// `Le·f·cos/pdf` with its MIS weight (area lights), or the exact point-light term.
+    pub value: Rgb,
+    /// The shadow segment; `value` counts only if nothing blocks it.
+    pub shadow: Ray,
+}
+
+/// [`sample_light_mis`] without the shadow ray, for callers that trace shadow rays in batches
+/// (the wavefront `pt`, `integrators::path_wavefront`): the same random numbers, and `None`
+/// exactly where `sample_light_mis` returns 0 without tracing.
+pub fn light_sample_mis(
+    world: &World,
+    sp: &ShadingPoint,
+    m: &Material,
+    wo: Vec3,
+    rng: &mut Rng,
+    pdf_other: impl Fn(Vec3) -> f32,
+) -> Option<LightSample> {
     let s = &world.scene;
     let (li, pmf, _) = s.light_pick.sample(rng.next_f32());
     let u = rng.next_2d();
@@ -49,44 +75,41 @@ pub fn sample_light_mis(
             let d = y - sp.p;
             let dist2 = d.length_squared();
             if dist2 <= 0.0 {
-                return Rgb::ZERO;
+                return None;
             }
             let wi = d / dist2.sqrt();
             let cos_l = ny.dot(-wi);
             if cos_l <= 0.0 {
-                return Rgb::ZERO;
+                return None;
             }
             let f = bsdf::eval(m, sp, wo, wi);
             if f == Rgb::ZERO {
-                return Rgb::ZERO;
+                return None;
             }
             let pdf_light = pmf * pdf_a * dist2 / cos_l;
             let pdf_bsdf = pdf_other(wi);
-            if !world.visible(sp.p, sp.ng, y, ny) {
-                return Rgb::ZERO;
-            }
+            let shadow = world.visibility_ray(sp.p, sp.ng, y, ny)?;
             let le = s.emitters[e as usize].radiance;
-            le * f * (wi.dot(sp.ns).abs() / pdf_light) * power_heuristic(pdf_light, pdf_bsdf)
+            let value = le * f * (wi.dot(sp.ns).abs() / pdf_light) * power_heuristic(pdf_light, pdf_bsdf);
+            Some(LightSample { value, shadow })
         }
         LightRef::Point(i) => {
             let pl = &s.point_lights[i as usize];
             let d = pl.position - sp.p;
             let dist2 = d.length_squared();
             if dist2 <= 0.0 {
-                return Rgb::ZERO;
+                return None;
             }
             let dist = dist2.sqrt();
             let wi = d / dist;
             let f = bsdf::eval(m, sp, wo, wi);
             if f == Rgb::ZERO {
-                return Rgb::ZERO;
+                return None;
             }
             let o = offset_origin(sp.p, sp.ng, wi);
             let len = (pl.position - o).length();
-            if world.occluded(o, (pl.position - o) / len, len) {
-                return Rgb::ZERO;
-            }
-            pl.intensity * f * (wi.dot(sp.ns).abs() / (dist2 * pmf))
+            let value = pl.intensity * f * (wi.dot(sp.ns).abs() / (dist2 * pmf));
+            Some(LightSample { value, shadow: Ray { o, d: (pl.position - o) / len, tmax: len } })
         }
     }
 }

@@ -1,0 +1,140 @@
+//! `pt` as a wavefront over a batch of camera rays (a tile): the same estimator as
+//! `PathTracer::trace`, path by path and bit for bit, with the rays of each bounce traced in one
+//! batch (`World::intersect_batch`) and the shadow rays of each bounce in another
+//! (`World::occluded_batch`): Embree's stream API then pays its per-call cost once per bounce
+//! of a tile instead of once per ray (issue #33, `results/2026-12-03-core-wavefront.md`).
+//!
+//! Invariants (why it is bit-identical to the scalar loop): each path draws from its own stream
+//! (`rngs[i]`) in the scalar order (NEE's numbers, then the BSDF's, then roulette's); a path's
+//! contributions are added in the scalar order (the emitter hit of bounce k, then NEE at k, then
+//! bounce k + 1); NEE's contribution is `β·value` when its segment is unoccluded and `β·0`
+//! otherwise, as `sample_light` returns; paths never interact. `--path-filter` runs the scalar
+//! loop (`Integrator::estimate_batch`'s default).
+
+use super::path::{emitter_hit, PathTracer};
+use super::CameraEstimate;
+use crate::accel::{offset_origin, BatchScratch, Ray, World};
+use crate::bsdf::{self, Mode, ShadingPoint};
+use crate::math::Rgb;
+use crate::sampling::rng::Rng;
+use crate::scene::NO_EMITTER;
+use crate::transport::direct;
+use crate::transport::roulette::Throughput;
+
+/// One live path of the wavefront.
+#[derive(Clone, Copy)]
+struct Live {
+    /// Index of the camera ray (and of its stream and estimate).
+    i: u32,
+    /// Its throughput (with roulette's η² scale).
+    t: Throughput,
+    /// No non-Dirac vertex yet.
+    prefix: bool,
+    /// The last direction was sampled from a Dirac lobe.
+    prev_delta: bool,
+    /// The last direction's solid-angle pdf.
+    prev_pdf_w: f32,
+}
+
+/// Per-batch buffers, reused across bounces (sized once: a bounce never has more rays than
+/// the batch).
+struct Wave {
+    live: Vec<Live>,
+    rays: Vec<Ray>,
+    hits: Vec<Option<crate::accel::Hit>>,
+    next_live: Vec<Live>,
+    next_rays: Vec<Ray>,
+    /// NEE of this bounce: (path index, β at the vertex, the unoccluded value).
+    nee: Vec<(u32, Rgb, Rgb)>,
+    shadow: Vec<Ray>,
+    occluded: Vec<bool>,
+    scratch: BatchScratch,
+}
+
+impl Wave {
+    fn with_capacity(n: usize) -> Wave {
+        Wave {
+            live: Vec::with_capacity(n),
+            rays: Vec::with_capacity(n),
+            hits: Vec::with_capacity(n),
+            next_live: Vec::with_capacity(n),
+            next_rays: Vec::with_capacity(n),
+            nee: Vec::with_capacity(n),
+            shadow: Vec::with_capacity(n),
+            occluded: Vec::with_capacity(n),
+            scratch: BatchScratch::default(),
+        }
+    }
+}
+
+impl PathTracer {
+    /// `trace` for every ray of `rays`, path `i` drawing from `rngs[i]`; `out[i]` is bit for bit
+    /// `trace(rays[i])` (the module's invariants). Requires no `--path-filter`.
+    pub(super) fn trace_batch(&self, world: &World, rays: &[Ray], rngs: &mut [Rng], out: &mut Vec<CameraEstimate>) {
+        debug_assert!(self.filter.is_none() && rays.len() == rngs.len());
+        out.clear();
+        out.resize(rays.len(), CameraEstimate::default());
+        let start = Live { i: 0, t: Throughput::new(Rgb::ONE), prefix: true, prev_delta: true, prev_pdf_w: 0.0 };
+        let mut w = Wave::with_capacity(rays.len());
+        w.live.extend((0..rays.len() as u32).map(|i| Live { i, ..start }));
+        w.rays.extend_from_slice(rays);
+        for depth in 0..self.max_depth {
+            if w.live.is_empty() {
+                break;
+            }
+            world.intersect_batch(&w.rays, &mut w.scratch, &mut w.hits);
+            for k in 0..w.live.len() {
+                self.shade(world, &mut w, k, depth, rngs, out);
+            }
+            world.occluded_batch(&w.shadow, &mut w.scratch, &mut w.occluded);
+            for (&(i, beta, value), &blocked) in w.nee.iter().zip(&w.occluded) {
+                out[i as usize].rest += beta * if blocked { Rgb::ZERO } else { value };
+            }
+            w.nee.clear();
+            w.shadow.clear();
+            std::mem::swap(&mut w.live, &mut w.next_live);
+            std::mem::swap(&mut w.rays, &mut w.next_rays);
+            w.next_live.clear();
+            w.next_rays.clear();
+        }
+    }
+
+    /// One vertex of live path `k` (the body of `trace`'s loop): its emitter hit, its NEE
+    /// sample (queued with its shadow ray), its BSDF sample and roulette (queued as the next ray).
+    #[inline]
+    fn shade(&self, world: &World, w: &mut Wave, k: usize, depth: u32, rngs: &mut [Rng], out: &mut [CameraEstimate]) {
+        let s = &world.scene;
+        let (mut p, d) = (w.live[k], w.rays[k].d);
+        let (i, rng) = (p.i as usize, &mut rngs[p.i as usize]);
+        let Some(hit) = w.hits[k] else { return };
+        if s.emitter_of(hit.prim) != NO_EMITTER {
+            if let Some((le, mis)) = emitter_hit(world, &hit, d, p.prev_delta, p.prev_pdf_w) {
+                let l = &mut out[i];
+                *if p.prefix { &mut l.prefix_le } else { &mut l.rest } += p.t.beta * le * mis;
+            }
+            return; // emitters reflect nothing
+        }
+        let m = s.material_of(hit.prim);
+        let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
+        let wo = -d;
+        if !m.is_dirac() {
+            p.prefix = false;
+            match direct::light_sample_mis(world, &sp, m, wo, rng, |wi| bsdf::pdf_w(m, &sp, wo, wi)) {
+                Some(ls) => {
+                    w.nee.push((p.i, p.t.beta, ls.value));
+                    w.shadow.push(ls.shadow);
+                }
+                None => out[i].rest += p.t.beta * Rgb::ZERO,
+            }
+        }
+        let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+        let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { return };
+        if !p.t.scatter(&bs, depth, rng) {
+            return;
+        }
+        p.prev_delta = bs.is_delta;
+        p.prev_pdf_w = bs.pdf_w;
+        w.next_live.push(p);
+        w.next_rays.push(Ray { o: offset_origin(hit.p, hit.ng, bs.wi), d: bs.wi, tmax: f32::INFINITY });
+    }
+}

@@ -1,0 +1,137 @@
+//! The batched queries and the wavefront `pt` (issue #33) against their scalar forms, bit for bit.
+//!
+//! - `World::intersect_batch` / `World::occluded_batch` must return exactly what `intersect` /
+//!   `occluded` return ray by ray (primitive, t, position and normals compared as bits), for
+//!   random rays of `common::random_ray`, batches of several sizes (1, 7, 256: the stream call's
+//!   remainders) and the degenerate segments a path can produce (tmax 0, negative, NaN).
+//! - `pt`'s `estimate_batch` (the wavefront, `integrators::path_batch`) must return exactly the
+//!   estimates of `estimate` ray by ray (`integrators::estimate_each`) on every camera ray of a
+//!   small image with its per-pixel streams: the wavefront changes when a ray is traced, never
+//!   what a path draws or adds. Scenes: `cornell-box` (glass and mirror spheres, Dirac chains),
+//!   `ring` (a conductor mesh), the glass furnace.
+//!
+//! Each test runs on every back end of the build: obvhs always, Embree with `--features embree`
+//! (`scripts/test.sh` runs this file in both builds), where the batch goes through Embree's stream
+//! API, the 40-sphere scene through its user geometry.
+
+mod common;
+
+use forecast::accel::{AccelKind, BatchScratch, Ray, World};
+use forecast::integrators::{estimate_each, CameraEstimate, Context, Method, MethodArgs};
+use forecast::math::Vec3;
+use forecast::sampling::rng::{stream, Rng};
+
+fn backends() -> Vec<AccelKind> {
+    [AccelKind::Obvhs, AccelKind::Embree].into_iter().filter(|k| k.available()).collect()
+}
+
+fn world(path: &str, kind: AccelKind) -> World {
+    let s = forecast::scene::load(&common::root().join(path)).expect("scene loads");
+    World::build_with(s, kind).expect("world builds")
+}
+
+/// The cornell box with 40 more spheres (Embree's user geometry, beyond its sphere loop).
+fn many_spheres(kind: AccelKind) -> World {
+    let mut s = forecast::scene::load(&common::root().join("scenes/cornell-box.toml")).expect("scene loads");
+    let mut rng = Rng::keyed(5, stream::MISC, 0, 0);
+    let proto = s.spheres[0].clone();
+    for _ in 0..40 {
+        let c = Vec3::new(rng.next_f32() * 1.6 - 0.8, rng.next_f32() * 1.6 + 0.2, rng.next_f32() * 1.6 - 0.8);
+        s.spheres.push(forecast::scene::Sphere { center: c, radius: 0.02 + 0.15 * rng.next_f32(), ..proto.clone() });
+    }
+    World::build_with(s, kind).expect("world builds")
+}
+
+fn bits(v: Vec3) -> [u32; 3] {
+    v.to_array().map(f32::to_bits)
+}
+
+/// `n` random rays, one in 16 with a degenerate tmax (0, negative or NaN).
+fn rays(w: &World, n: usize, seed: u64) -> Vec<Ray> {
+    let mut rng = Rng::keyed(seed, stream::MISC, 0, 0);
+    (0..n)
+        .map(|k| {
+            let (o, d, tmax) = common::random_ray(&w.scene, &mut rng, k);
+            let tmax = match k % 48 {
+                5 => 0.0,
+                21 => -1.0,
+                37 => f32::NAN,
+                _ => tmax,
+            };
+            Ray { o, d, tmax }
+        })
+        .collect()
+}
+
+fn batch_equals_single(w: &World, label: &str, seed: u64) {
+    let rays = rays(w, 6000, seed);
+    let mut scratch = BatchScratch::default();
+    let (mut hits, mut occ) = (Vec::new(), Vec::new());
+    for size in [1, 7, 256] {
+        for chunk in rays.chunks(size) {
+            w.intersect_batch(chunk, &mut scratch, &mut hits);
+            w.occluded_batch(chunk, &mut scratch, &mut occ);
+            assert_eq!((hits.len(), occ.len()), (chunk.len(), chunk.len()), "{label}: one answer per ray");
+            for ((r, h), &o) in chunk.iter().zip(&hits).zip(&occ) {
+                let single = w.intersect(r.o, r.d, r.tmax);
+                let key = |h: &Option<forecast::accel::Hit>| {
+                    h.map(|h| (h.prim, h.t.to_bits(), bits(h.p), bits(h.ng), bits(h.ns)))
+                };
+                assert_eq!(key(h), key(&single), "{label} ({:?}), batch {size}: closest hit of {r:?}", w.accel());
+                assert_eq!(
+                    o,
+                    w.occluded(r.o, r.d, r.tmax),
+                    "{label} ({:?}), batch {size}: occlusion of {r:?}",
+                    w.accel()
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn batch_queries_equal_single_queries() {
+    for kind in backends() {
+        batch_equals_single(&world("scenes/cornell-box.toml", kind), "cornell-box", 1);
+        batch_equals_single(&world("scenes/ring.toml", kind), "ring", 2);
+        batch_equals_single(&many_spheres(kind), "cornell-box + 40 spheres", 3);
+    }
+}
+
+/// `pt`'s wavefront against its scalar loop on every camera ray of a `res`² image, 2 passes.
+fn wavefront_equals_scalar(w: &World, label: &str, res: u32) {
+    let mut args = MethodArgs::default();
+    args.settings.max_depth = Some(64);
+    let pt = Method::Pt.build(w, &args, &Method::Pt.preprocess(w, &args, 1).expect("no preprocess")).expect("pt");
+    let cam = w.scene.camera.with_resolution(res, res);
+    for pass in 0..2u64 {
+        let (mut rays, mut rngs) = (Vec::new(), Vec::new());
+        for p in 0..(res * res) as u64 {
+            let mut rng = Rng::keyed(9, stream::CAMERA, pass, p);
+            let [jx, jy] = rng.next_2d();
+            let (x, y) = ((p % res as u64) as f32, (p / res as u64) as f32);
+            rays.push(Ray { o: cam.position, d: cam.direction(x + jx, y + jy), tmax: f32::INFINITY });
+            rngs.push(rng);
+        }
+        let mut scalar_rngs = rngs.clone();
+        let mut ctx = Context::new(Rng::keyed(0, stream::MISC, 0, 0));
+        let (mut batch, mut scalar) = (Vec::new(), Vec::new());
+        pt.estimate_batch(w, &rays, &mut rngs, &mut ctx, &mut batch);
+        estimate_each(pt.as_ref(), w, &rays, &mut scalar_rngs, &mut ctx, &mut scalar);
+        let key = |e: &CameraEstimate| (bits(e.prefix_le), bits(e.rest));
+        let lit = scalar.iter().filter(|e| e.total() != Vec3::ZERO).count();
+        assert!(lit > rays.len() / 4, "{label}: the test image is mostly lit ({lit} of {})", rays.len());
+        for (i, (b, s)) in batch.iter().zip(&scalar).enumerate() {
+            assert_eq!(key(b), key(s), "{label} ({:?}), pass {pass}, pixel {i}", w.accel());
+        }
+    }
+}
+
+#[test]
+fn pt_wavefront_is_bit_identical_to_the_scalar_loop() {
+    for kind in backends() {
+        wavefront_equals_scalar(&world("scenes/cornell-box.toml", kind), "cornell-box", 48);
+        wavefront_equals_scalar(&world("scenes/ring.toml", kind), "ring", 48);
+        wavefront_equals_scalar(&world("tests/scenes/furnace_glass.toml", kind), "glass furnace", 32);
+    }
+}
