@@ -381,8 +381,8 @@ impl Scratch {
 
 impl EmbreeScene {
     /// Closest hits of a batch of rays in one stream call (`rtcIntersect1M`, incoherent: the
-    /// coherent flag's packets rounded some hits differently and were no faster,
-    /// `results/2026-12-03-core-wavefront.md`): `s.found[i]` is what `closest(rays[i])` returns.
+    /// coherent flag's packets may round hits differently from `rtcIntersect1`; gains in
+    /// `results/2026-12-04-core-wavefront.md`): `s.found[i]` is what `closest(rays[i])` returns.
     pub(super) fn closest_batch(&self, rays: &[super::Ray], s: &mut Scratch) {
         s.rayhits.clear();
         s.slot.clear();

@@ -249,7 +249,7 @@ impl World {
 
     /// Closest hits of a batch of rays: `out[i]` is `intersect(rays[i])`, bit for bit, with the
     /// same ray counts. The Embree back end traces the batch in one stream call (its per-call
-    /// cost is what a batch saves, `results/2026-12-03-core-wavefront.md`); obvhs ray by ray.
+    /// cost is what a batch saves, `results/2026-12-04-core-wavefront.md`); obvhs ray by ray.
     pub fn intersect_batch(&self, rays: &[Ray], scratch: &mut BatchScratch, out: &mut Vec<Option<Hit>>) {
         out.clear();
         match &self.accel {

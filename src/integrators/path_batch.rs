@@ -2,7 +2,7 @@
 //! `PathTracer::trace`, path by path and bit for bit, with the rays of each bounce traced in one
 //! batch (`World::intersect_batch`) and the shadow rays of each bounce in another
 //! (`World::occluded_batch`): Embree's stream API then pays its per-call cost once per bounce
-//! of a tile instead of once per ray (issue #33, `results/2026-12-03-core-wavefront.md`).
+//! of a tile instead of once per ray (issue #33, `results/2026-12-04-core-wavefront.md`).
 //!
 //! Invariants (why it is bit-identical to the scalar loop): each path draws from its own stream
 //! (`rngs[i]`) in the scalar order (NEE's numbers, then the BSDF's, then roulette's); a path's
