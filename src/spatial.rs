@@ -44,8 +44,10 @@ pub struct KdTree {
     ids: Vec<u32>,
 }
 
+/// Squared distance as every query of the tree computes it (callers that must reproduce a
+/// query's `(dist², id)` order bit for bit use this one).
 #[inline]
-fn dist2(a: &[f32; 3], b: &[f32; 3]) -> f32 {
+pub fn dist2(a: &[f32; 3], b: &[f32; 3]) -> f32 {
     let (x, y, z) = (a[0] - b[0], a[1] - b[1], a[2] - b[2]);
     x * x + y * y + z * z
 }

@@ -124,11 +124,16 @@ impl ClusterMap {
     /// The kept cluster valid at `x` with (geometric, viewer-side) normal `n_x`, if any.
     pub fn query(&self, x: Vec3, n_x: Vec3) -> Option<usize> {
         let (c, d2) = self.tree.nearest(x.to_array())?;
-        let c = c as usize;
-        let reach = self.reach[c];
+        self.accepts(c as usize, d2, n_x).then_some(c as usize)
+    }
+
+    /// The validity test of [`ClusterMap::query`] for a nearest representative of cluster `c` at
+    /// squared distance `d2` (false for an unknown cluster).
+    #[inline]
+    pub fn accepts(&self, c: usize, d2: f32, n_x: Vec3) -> bool {
+        let (Some(&reach), Some(n)) = (self.reach.get(c), self.normals.get(c)) else { return false };
         // spec §3: valid iff |x − q| ≤ R_c + r and n_x·n̄_c ≥ 0.5.
-        let ok = d2 <= reach * reach && n_x.dot(Vec3::from_array(self.normals[c])) >= MIN_NORMAL_COS;
-        ok.then_some(c)
+        d2 <= reach * reach && n_x.dot(Vec3::from_array(*n)) >= MIN_NORMAL_COS
     }
 }
 

@@ -1,6 +1,6 @@
-//! Where the cluster map cannot return one of a few clusters: a voxel grid that lets `pt-cf` skip
-//! the cluster map's kd-tree at the vertices that lie in no guided cluster (issue #12; an
-//! acceleration only, the image is the same bit for bit).
+//! Where the cluster map cannot return one of a few clusters, and what it returns elsewhere: a
+//! voxel grid that answers `pt-cf`'s cluster-map queries for its guided clusters (issue #12;
+//! issue #33 for the answers; an acceleration only, the image is the same bit for bit).
 //!
 //! [`ClusterMap::query`] takes the representative `q` nearest to `x` and accepts its cluster `c`
 //! iff `|x − q| ≤ reach_c` (and a normal test). For a cell `V` of the grid with centre `o` and
@@ -12,31 +12,97 @@
 //! The map's normal test gives a second exact rejection: a point whose normal `n_x` has
 //! `n_x·n̄_c < 0.5` for every subset cluster `c` (a wall, when the guided caustics lie on a floor).
 //!
-//! Invariants: conservative (`may_contain(x)` is true wherever `query(x, ·)` can return a subset
-//! cluster, with slack for rounding; `tests` check it against the map on random points), a pure
-//! function of the map and the subset, outside the grid's box always false (the box is the union
-//! of the subset clusters' boxes, which already bound where the map can accept them).
+//! The other cells store the answer itself. The representative `q*` nearest to `x ∈ V` matters
+//! only when `|x − q*| ≤ R` (beyond it no subset cluster accepts, whichever `q*` is), and then
+//! `|o − q*| ≤ min(d_n + h, R) + h`: the cell's **candidates** are the representatives within
+//! that distance of `o`. The smallest `(dist², cluster)` over them, with the map's own squared
+//! distance (`spatial::dist2`), is the map's nearest whenever that one can be accepted, and a
+//! rejected one otherwise, so [`SubsetGrid::cluster_at`] equals `query` restricted to the
+//! subset. A cell whose candidates include no subset cluster is empty; one whose candidates all
+//! belong to one cluster `c` with `d_n + h ≤ reach_c` answers `c` (only the normal test is left);
+//! one with more than [`MAX_CANDIDATES`] asks the map.
+//!
+//! Invariants: exact (`cluster_at(x, n_x)` = `query(x, n_x)` when that is a subset cluster, else
+//! `None`; distance bounds carry a relative slack for f32 rounding, and a point in the slack band
+//! around the grid asks the map; `tests` compare with the map on random points and near every
+//! representative), a pure function of the map and the subset, outside the grid's box always
+//! `None` (the box is the union of the subset clusters' boxes, which already bound where the map
+//! can accept them).
 
 use super::cluster_map::{ClusterMap, MIN_NORMAL_COS};
 use crate::math::Vec3;
-use crate::spatial::KdTree;
+use crate::spatial::{dist2, KdTree};
 use rayon::prelude::*;
 
-/// The most cells along the grid's longest axis (≤ 48³ cells, built in a few ms).
+/// The most cells along the grid's longest axis (≤ 49³ cells, built in a few ms).
 const MAX_CELLS_PER_AXIS: f32 = 48.0;
 /// Relative slack on the distance bounds (f32 rounding of positions and distances).
 const SLACK: f32 = 1e-3;
+/// The most candidates a cell scans; a cell with more asks the map's kd-tree.
+pub const MAX_CANDIDATES: usize = 64;
 
-/// A grid over the boxes of a subset of kept clusters: one flag per cell, "a subset cluster may
-/// be accepted somewhere in this cell".
+/// Cell codes: no subset cluster here; ask the map; `SCAN | k`: scan candidate list `k`; any other
+/// value: that one cluster.
+const EMPTY: u32 = u32::MAX;
+const TREE: u32 = u32::MAX - 1;
+const SCAN: u32 = 1 << 31;
+
+/// A grid over the boxes of a subset of kept clusters: per cell, what the cluster map can answer
+/// there for a subset cluster.
 #[derive(Clone, Debug, Default)]
 pub struct SubsetGrid {
     lo: Vec3,
     inv_cell: f32,
     dims: [usize; 3],
-    maybe: Vec<bool>,
+    cells: Vec<u32>,
+    /// Candidate list `k` is `candidates[scans[k].0..scans[k].1]`: (position, cluster).
+    scans: Vec<(u32, u32)>,
+    candidates: Vec<([f32; 3], u32)>,
+    /// Per kept cluster: in the subset.
+    in_subset: Vec<bool>,
     /// The subset clusters' mean normals.
     normals: Vec<Vec3>,
+}
+
+/// The cells of a [`SubsetGrid`] by how they answer (`pt-cf`'s JSON report).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct GridKinds {
+    /// All cells.
+    pub cells: usize,
+    /// Cells where no subset cluster can be accepted.
+    pub empty: usize,
+    /// Cells whose every point lies in one cluster (only its normal test is left).
+    pub one: usize,
+    /// Cells that scan a candidate list.
+    pub scan: usize,
+    /// Cells with more than [`MAX_CANDIDATES`] candidates (the map's kd-tree answers).
+    pub tree: usize,
+    /// Candidates stored over all scanned cells.
+    pub candidates: usize,
+}
+
+/// A cell's answer while the grid is built.
+enum Built {
+    Code(u32),
+    Scan(Vec<([f32; 3], u32)>),
+}
+
+/// What the cell builder reads: the map, its representatives (all, and the subset's) and the
+/// subset's largest reach.
+struct Builder<'a> {
+    map: &'a ClusterMap,
+    reps: Vec<([f32; 3], u32)>,
+    all: KdTree,
+    guided: KdTree,
+    in_subset: Vec<bool>,
+    reach: f32,
+}
+
+/// Where a point falls: outside the grid (no subset cluster), in its slack band, or in a cell.
+enum Place {
+    Outside,
+    Band,
+    Cell(usize),
 }
 
 impl SubsetGrid {
@@ -48,73 +114,212 @@ impl SubsetGrid {
                 (lo, hi) = (lo.min(a), hi.max(b));
             }
         }
-        let mut reps = Vec::new();
-        for (c, p) in map.representatives() {
-            if subset.contains(&(c as usize)) {
-                reps.push(p);
+        let mut in_subset = vec![false; map.n_clusters()];
+        for &c in subset {
+            if let Some(f) = in_subset.get_mut(c) {
+                *f = true;
             }
         }
+        let reps: Vec<([f32; 3], u32)> = map.representatives().map(|(c, p)| (p, c)).collect();
+        let guided: Vec<[f32; 3]> = reps.iter().filter(|r| in_subset[r.1 as usize]).map(|r| r.0).collect();
         let extent = hi - lo;
-        if reps.is_empty() || !extent.is_finite() {
+        if guided.is_empty() || !extent.is_finite() {
             return SubsetGrid::default();
         }
         let cell = (extent.max_element() / MAX_CELLS_PER_AXIS).max(1e-6);
         let dims = (extent / cell).to_array().map(|e| (e.ceil() as usize).clamp(1, MAX_CELLS_PER_AXIS as usize + 1));
         let reach = subset.iter().map(|&c| map.reach(c)).fold(0.0f32, f32::max);
-        let guided = KdTree::build(&reps);
+        let all = KdTree::build(&reps.iter().map(|r| r.0).collect::<Vec<_>>());
+        let b = Builder { map, reps, all, guided: KdTree::build(&guided), in_subset, reach };
         let half_diag = 0.5 * cell * 3f32.sqrt() * (1.0 + SLACK);
-        // one z slice per task: the flags are a pure function of the cell, whatever the threads
-        let maybe: Vec<bool> = (0..dims[2])
+        // one z slice per task: the answers are a pure function of the cell, whatever the threads
+        let built: Vec<Built> = (0..dims[2])
             .into_par_iter()
             .flat_map_iter(|k| {
-                let (map, guided) = (map, &guided);
-                (0..dims[1]).flat_map(move |j| {
-                    (0..dims[0]).map(move |i| {
+                let b = &b;
+                let mut out = Vec::new();
+                (0..dims[1])
+                    .flat_map(move |j| (0..dims[0]).map(move |i| (i, j)))
+                    .map(move |(i, j)| {
                         let o = lo + (Vec3::new(i as f32, j as f32, k as f32) + 0.5) * cell;
-                        cell_may_contain(map, guided, o, half_diag, reach)
+                        b.cell(o, half_diag, &mut out)
                     })
-                })
+                    .collect::<Vec<_>>()
             })
             .collect();
+        let (mut cells, mut scans, mut candidates) = (Vec::with_capacity(built.len()), Vec::new(), Vec::new());
+        for a in built {
+            cells.push(match a {
+                Built::Code(c) => c,
+                Built::Scan(list) => {
+                    let s = candidates.len() as u32;
+                    candidates.extend(list);
+                    scans.push((s, candidates.len() as u32));
+                    SCAN | (scans.len() as u32 - 1)
+                }
+            });
+        }
         let normals = subset.iter().map(|&c| map.normal(c)).collect();
-        SubsetGrid { lo, inv_cell: 1.0 / cell, dims, maybe, normals }
+        SubsetGrid { lo, inv_cell: 1.0 / cell, dims, cells, scans, candidates, in_subset: b.in_subset, normals }
+    }
+
+    /// Where `x` falls, after the normal test (`Outside` when no subset cluster can accept `n_x`).
+    #[inline]
+    fn place(&self, x: Vec3, n_x: Vec3) -> Place {
+        if self.cells.is_empty() || !self.normals.iter().any(|n| n_x.dot(*n) >= MIN_NORMAL_COS - SLACK) {
+            return Place::Outside;
+        }
+        let u = (x - self.lo) * self.inv_cell;
+        let (mut idx, mut band) = ([0usize; 3], false);
+        for a in 0..3 {
+            let n = self.dims[a] as f32;
+            // outside the box (or NaN): no subset cluster's box holds x
+            if !(u[a] >= -SLACK * n && u[a] <= n * (1.0 + SLACK)) {
+                return Place::Outside;
+            }
+            band |= !(u[a] >= 0.0 && u[a] < n);
+            idx[a] = (u[a].max(0.0) as usize).min(self.dims[a] - 1);
+        }
+        if band {
+            return Place::Band;
+        }
+        Place::Cell((idx[2] * self.dims[1] + idx[1]) * self.dims[0] + idx[0])
     }
 
     /// False when `ClusterMap::query(x, n_x)` cannot return a cluster of the subset.
     #[inline]
     pub fn may_contain(&self, x: Vec3, n_x: Vec3) -> bool {
-        if self.maybe.is_empty() || !self.normals.iter().any(|n| n_x.dot(*n) >= MIN_NORMAL_COS - SLACK) {
-            return false;
+        match self.place(x, n_x) {
+            Place::Outside => false,
+            Place::Band => true,
+            Place::Cell(i) => self.cells[i] != EMPTY,
         }
-        let u = (x - self.lo) * self.inv_cell;
-        let mut idx = [0usize; 3];
-        for a in 0..3 {
-            let n = self.dims[a] as f32;
-            // outside the box (or NaN): no subset cluster's box holds x
-            if !(u[a] >= -SLACK * n && u[a] <= n * (1.0 + SLACK)) {
-                return false;
+    }
+
+    /// `map.query(x, n_x)` when that is a subset cluster, else `None` (`map` is the map the grid
+    /// was built from): the cell's answer, a scan of its candidates, or the map's kd-tree.
+    #[inline]
+    pub fn cluster_at(&self, map: &ClusterMap, x: Vec3, n_x: Vec3) -> Option<usize> {
+        let code = match self.place(x, n_x) {
+            Place::Outside => return None,
+            Place::Band => TREE,
+            Place::Cell(i) => self.cells[i],
+        };
+        let (c, d2) = match code {
+            EMPTY => return None,
+            TREE => return map.query(x, n_x).filter(|&c| self.in_subset[c]),
+            s if s & SCAN != 0 => {
+                let (a, b) = self.scans[(s & !SCAN) as usize];
+                nearest(&self.candidates[a as usize..b as usize], x)?
             }
-            idx[a] = (u[a].max(0.0) as usize).min(self.dims[a] - 1);
+            // every x of the cell is within reach of its nearest representative, of cluster c
+            c => return (n_x.dot(map.normal(c as usize)) >= MIN_NORMAL_COS).then_some(c as usize),
+        };
+        (self.in_subset[c] && map.accepts(c, d2, n_x)).then_some(c)
+    }
+
+    /// How many cells answer in each way, and the candidates stored (reported).
+    pub fn kinds(&self) -> GridKinds {
+        let mut k = GridKinds { cells: self.cells.len(), candidates: self.candidates.len(), ..GridKinds::default() };
+        for &c in &self.cells {
+            match c {
+                EMPTY => k.empty += 1,
+                TREE => k.tree += 1,
+                c if c & SCAN != 0 => k.scan += 1,
+                _ => k.one += 1,
+            }
         }
-        self.maybe[(idx[2] * self.dims[1] + idx[1]) * self.dims[0] + idx[0]]
+        k
     }
 
     /// The share of the grid's cells that may contain a subset cluster (reported).
     pub fn fill(&self) -> f64 {
-        if self.maybe.is_empty() {
+        if self.cells.is_empty() {
             return 0.0;
         }
-        self.maybe.iter().filter(|&&m| m).count() as f64 / self.maybe.len() as f64
+        self.cells.iter().filter(|&&c| c != EMPTY).count() as f64 / self.cells.len() as f64
     }
 }
 
-/// The cell test of the module header: `d_g − h ≤ min(d_n + h, R)`, with slack.
-fn cell_may_contain(map: &ClusterMap, guided: &KdTree, o: Vec3, h: f32, reach: f32) -> bool {
-    let (Some((_, dn2)), Some((_, dg2))) = (map.nearest_representative(o), guided.nearest(o.to_array())) else {
-        return true;
-    };
-    let (dn, dg) = (dn2.sqrt(), dg2.sqrt());
-    dg - h <= (dn + h).min(reach) * (1.0 + SLACK) + SLACK * h
+/// The smallest `(dist², cluster)` of `list` from `x` (the kd-tree's order), as (cluster, dist²).
+#[inline]
+fn nearest(list: &[([f32; 3], u32)], x: Vec3) -> Option<(usize, f32)> {
+    let x = x.to_array();
+    let mut best: Option<(u32, f32)> = None;
+    for &(p, c) in list {
+        let d2 = dist2(&p, &x);
+        let better = match best {
+            None => d2 == d2, // a NaN distance is never a nearest
+            Some((bc, bd)) => d2 < bd || (d2 == bd && c < bc),
+        };
+        if better {
+            best = Some((c, d2));
+        }
+    }
+    best.map(|(c, d2)| (c as usize, d2))
+}
+
+/// Representatives fetched per cell before pruning (a cell with more asks the tree).
+const FETCH: usize = 4 * MAX_CANDIDATES;
+/// The nearest representatives to a cell's centre tried as dominators of the others.
+const DOMINATORS: usize = 4;
+
+/// The 8 corners of the cube of centre `o` and half-edge `a`, in f64.
+fn corners(o: Vec3, a: f32) -> [[f64; 3]; 8] {
+    std::array::from_fn(|k| {
+        let s = |b: usize| if k >> b & 1 == 1 { 1.0 } else { -1.0 };
+        [0, 1, 2].map(|t| f64::from(o[t]) + s(t) * f64::from(a))
+    })
+}
+
+/// True when every point of the box with `corners` is nearer to `d` than to `r` by a relative
+/// margin that f32 distances cannot erase (the set nearer to `d` is a half-space, so the corners
+/// decide).
+fn dominates(d: &[f32; 3], r: &[f32; 3], corners: &[[f64; 3]; 8]) -> bool {
+    corners.iter().all(|c| {
+        let sq = |p: &[f32; 3]| (0..3).map(|t| (c[t] - f64::from(p[t])).powi(2)).sum::<f64>();
+        let (dr, dd) = (sq(r), sq(d));
+        dr - dd > 1e-4 * dr + 1e-12
+    })
+}
+
+impl Builder<'_> {
+    /// The answer of the cell with centre `o` and half-diagonal `h` (the module header).
+    fn cell(&self, o: Vec3, h: f32, out: &mut Vec<(f32, u32)>) -> Built {
+        let (Some((_, dn2)), Some((_, dg2))) = (self.map.nearest_representative(o), self.guided.nearest(o.to_array()))
+        else {
+            return Built::Code(TREE);
+        };
+        let (dn, dg) = (dn2.sqrt(), dg2.sqrt());
+        if dg - h > (dn + h).min(self.reach) * (1.0 + SLACK) + SLACK * h {
+            return Built::Code(EMPTY);
+        }
+        let rc = ((dn + h).min(self.reach) + h) * (1.0 + SLACK) + SLACK * h;
+        self.all.k_nearest_within(o.to_array(), FETCH, rc * rc, out);
+        if out.len() == FETCH {
+            return Built::Code(TREE);
+        }
+        // a representative that one of the few nearest to o beats all over the cell is never nearest
+        let corners = corners(o, h / 3f32.sqrt());
+        let near: Vec<[f32; 3]> = out.iter().take(DOMINATORS).map(|&(_, i)| self.reps[i as usize].0).collect();
+        let list: Vec<([f32; 3], u32)> = out
+            .iter()
+            .map(|&(_, i)| self.reps[i as usize])
+            .filter(|r| !near.iter().any(|d| *d != r.0 && dominates(d, &r.0, &corners)))
+            .collect();
+        if list.len() > MAX_CANDIDATES {
+            return Built::Code(TREE);
+        }
+        if !list.iter().any(|r| self.in_subset[r.1 as usize]) {
+            return Built::Code(EMPTY);
+        }
+        let c0 = list[0].1;
+        let one = list.iter().all(|r| r.1 == c0);
+        if one && (dn + h) * (1.0 + SLACK) + SLACK * h <= self.map.reach(c0 as usize) && c0 < SCAN - 2 {
+            return Built::Code(c0);
+        }
+        Built::Scan(list)
+    }
 }
 
 #[cfg(test)]
@@ -186,5 +391,48 @@ mod tests {
             }
         }
         assert!(!SubsetGrid::build(&map, &[]).may_contain(Vec3::ZERO, Vec3::Y));
+    }
+
+    /// `cluster_at` must be `query` restricted to the subset, exactly: on random points, on points
+    /// within a few cell widths of every representative (where scans and one-cluster cells
+    /// answer), on the grid's slack band and for non-finite input. Every kind of cell must occur.
+    #[test]
+    fn cluster_at_is_the_maps_query_restricted_to_the_subset() {
+        let pts = points(12_000);
+        let cl = cluster_points(&pts, 24, 5);
+        let map = ClusterMap::build(&pts, &cl, 63, 32, 0.05);
+        let n = map.n_clusters();
+        let mut r = Rng::keyed(6, stream::MISC, 2, 0);
+        let reps: Vec<Vec3> = map.representatives().map(|(_, p)| Vec3::from_array(p)).collect();
+        let mut total = GridKinds::default();
+        for subset in [vec![0usize], vec![1, 5, 7], (0..n).step_by(3).collect::<Vec<_>>(), (0..n).collect()] {
+            let grid = SubsetGrid::build(&map, &subset);
+            let k = grid.kinds();
+            assert_eq!(k.empty + k.one + k.scan + k.tree, k.cells);
+            (total.one, total.scan, total.empty) = (total.one + k.one, total.scan + k.scan, total.empty + k.empty);
+            let expect = |x: Vec3, nx: Vec3| map.query(x, nx).filter(|c| subset.contains(c));
+            let mut accepted = 0;
+            for t in 0..300_000 {
+                let x = if t % 3 == 0 {
+                    Vec3::new(8.0 * r.next_f32() - 0.5, 0.6 * r.next_f32() - 0.1, 8.0 * r.next_f32() - 0.5)
+                } else {
+                    // near a representative, on its surface half the time
+                    let q = reps[t % reps.len()];
+                    let d = Vec3::new(r.next_f32() - 0.5, r.next_f32() - 0.5, r.next_f32() - 0.5) * 0.3;
+                    let on = |a: f32, v: f32| if t % 2 == 0 && a == 0.0 { 0.0 } else { v };
+                    let d = Vec3::new(on(q.x, d.x), on(q.y, d.y), d.z);
+                    q + d * r.next_f32()
+                };
+                let nx = [Vec3::Y, Vec3::X, Vec3::new(0.6, 0.8, 0.0)][t % 3];
+                let got = grid.cluster_at(&map, x, nx);
+                assert_eq!(got, expect(x, nx), "subset {subset:?}: x = {x}, n = {nx}");
+                accepted += usize::from(got.is_some());
+            }
+            assert!(accepted > 1000, "subset {subset:?}: only {accepted} accepted");
+            for x in [Vec3::NAN, Vec3::INFINITY, grid.lo - Vec3::splat(1e-7), grid.lo] {
+                assert_eq!(grid.cluster_at(&map, x, Vec3::Y), expect(x, Vec3::Y), "x = {x}");
+            }
+        }
+        assert!(total.one > 0 && total.scan > 0 && total.empty > 0, "{total:?}");
     }
 }

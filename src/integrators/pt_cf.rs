@@ -14,7 +14,7 @@
 //! cosine `pt` gather in the preprocess), the mixture's second moment `E_d²/c + E_c²/(1−c)` (tables
 //! matching the caustic, the BSDF the rest) is smallest at `c = 1 − s`; so `c_k = max(c, 1 − s)`
 //! where `s ≥ --guide-min-share` and no guiding elsewhere. A `SubsetGrid` of the guided clusters
-//! skips the cluster map's tree where no guided cluster can be found (same image, exactly).
+//! answers the cluster map's query for them, mostly without its tree (same image, exactly).
 //!
 //! MIS against NEE uses the pdf really used: NEE's weight is `h(p_light, n·q(ω_l))` and a mixture-sampled emitter hit's is
 //! `h(n·q, p_light)` (power heuristic `h`, `n` the split count), which sum to 1 per direction.
@@ -218,11 +218,11 @@ impl GuidedPathTracer {
             return None;
         }
         ctx.profile.cf.queries += 1;
-        // only a cell of the guided clusters' grid can hold a guided vertex (`SubsetGrid`)
-        if !self.guided_grid.may_contain(q.x.p, CausticForecast::lit_normals(q).0) {
-            return None;
-        }
-        let c = self.cf.cluster_at(q, ctx)?;
+        // the guided clusters' grid answers the cluster map's query for them (`SubsetGrid`)
+        let t = ctx.profile.start(Phase::CfTable);
+        let c = self.guided_grid.cluster_at(&self.cf.cluster_map, q.x.p, CausticForecast::lit_normals(q).0);
+        ctx.profile.record(Phase::CfTable, t);
+        let c = c?;
         let weights = self.per_cluster.get(c).copied().flatten()?;
         let (tables, frame) = self.cf.tables_in(c, q, ctx, Some(&self.cache));
         if tables.t1.is_none() && tables.t2.is_none() {
@@ -427,6 +427,7 @@ impl Integrator for GuidedPathTracer {
                 "lookups": c.queries,
                 "fraction_inside_clusters": c.fraction_inside(),
                 "guided_grid_fill": self.guided_grid.fill(),
+                "guided_grid_cells": self.guided_grid.kinds(),
                 "mean_continuations_per_lookup": c.samples_per_query(),
                 "creating_cdfs_s": c.cdf_s(),
                 "tables_built": c.tables_built,
