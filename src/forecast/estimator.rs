@@ -19,6 +19,7 @@ use super::cluster_map::{ClusterMap, DEFAULT_REPRESENTATIVES};
 use super::direction_table::{ForecastTables, TableMode};
 use super::forecast_map::{search_radius, ForecastMaps};
 use super::share::CausticShare;
+use super::subset_grid::SubsetGrid;
 pub use super::table_cache::TableCache;
 use super::table_cache::{cell_of, normal_key, CellSizes};
 use crate::bsdf::{self, Mode};
@@ -303,15 +304,27 @@ impl CausticForecast {
     }
 
     /// The kept cluster at `q` (the cluster map's membership test with the lit-side normal), or
-    /// `None` outside every kept cluster (and when no cluster is kept).
-    pub fn cluster_at(&self, q: &ShadingQuery, ctx: &mut Context) -> Option<usize> {
+    /// `None` outside every kept cluster (and when no cluster is kept). With `grid` (a
+    /// [`SubsetGrid`] of this map) only its subset's clusters are returned, the same answers
+    /// found mostly without the map's kd-tree.
+    pub fn cluster_at(&self, q: &ShadingQuery, ctx: &mut Context, grid: Option<&SubsetGrid>) -> Option<usize> {
         if self.radius <= 0.0 {
             return None;
         }
         let t = ctx.profile.start(Phase::CfTable);
-        let c = self.cluster_map.query(q.x.p, Self::lit_normals(q).0);
+        let (x, n_x) = (q.x.p, Self::lit_normals(q).0);
+        let c = match grid {
+            Some(g) => g.cluster_at(&self.cluster_map, x, n_x),
+            None => self.cluster_map.query(x, n_x),
+        };
         ctx.profile.record(Phase::CfTable, t);
         c
+    }
+
+    /// The grid over every kept cluster ([`SubsetGrid`]: `cluster_at` with it is `cluster_at`
+    /// without it, faster).
+    pub fn kept_grid(&self) -> SubsetGrid {
+        SubsetGrid::build(&self.cluster_map, &(0..self.cluster_map.n_clusters()).collect::<Vec<_>>())
     }
 
     /// The tables of kept cluster `c` at `q` and their frame (z = the normal on `q.wo`'s side).
@@ -342,17 +355,18 @@ impl CausticForecast {
     /// Ĺ_c at `q`. `g(ωi, w, ctx)` returns one sample's contribution: the integrand
     /// f·|cos|·1[first hit Dirac]·L̂ (world ωi) times its estimator weight `w` (1/pdf, over the
     /// sample count), so that a roulette inside `g` sees the sample's whole weight.
-    /// `cache` enables the table cache for Lambertian, flat-shaded points.
+    /// `cache` enables the table cache for Lambertian, flat-shaded points; `grid`, the
+    /// [`CausticForecast::kept_grid`], speeds up the cluster lookup (same answers).
     pub fn estimate(
         &self,
         q: &ShadingQuery,
         ctx: &mut Context,
-        cache: Option<&TableCache>,
+        (cache, grid): (Option<&TableCache>, Option<&SubsetGrid>),
         mut g: impl FnMut(Vec3, f32, &mut Context) -> Rgb,
     ) -> Rgb {
         ctx.profile.cf.queries += 1;
         let (sp, m, wo) = (q.x, q.m, q.wo);
-        let found = if q.depth >= self.opts.table_depth { None } else { self.cluster_at(q, ctx) };
+        let found = if q.depth >= self.opts.table_depth { None } else { self.cluster_at(q, ctx, grid) };
         let found = found.map(|c| (c, self.tables_in(c, q, ctx, cache)));
         let Some((c, (tables, frame))) = found else {
             // outside valid clusters: one BSDF (cosine for Lambert) sample

@@ -249,7 +249,7 @@ fn nearest(list: &[([f32; 3], u32)], x: Vec3) -> Option<(usize, f32)> {
     for &(p, c) in list {
         let d2 = dist2(&p, &x);
         let better = match best {
-            None => d2 == d2, // a NaN distance is never a nearest
+            None => d2 <= f32::INFINITY, // as the tree: a NaN distance is never a nearest
             Some((bc, bd)) => d2 < bd || (d2 == bd && c < bc),
         };
         if better {

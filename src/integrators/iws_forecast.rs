@@ -23,6 +23,7 @@ use crate::progress::{Hidden, Phases};
 use crate::accel::World;
 use crate::bsdf;
 use crate::forecast::caustic_point::CausticPoint;
+use crate::forecast::subset_grid::SubsetGrid;
 use crate::forecast::estimator::{CausticForecast, ForecastOptions, PreprocessStats, SplitRule, TableCache, TableKind};
 use crate::math::{Rgb, Vec3};
 use crate::sampling::rng::stream;
@@ -254,12 +255,14 @@ pub struct ForecastCaustics {
     /// The broadcast product.
     pub cf: CausticForecast,
     cache: TableCache,
+    /// The cluster-map lookup's grid over every kept cluster.
+    grid: SubsetGrid,
 }
 
 impl ForecastCaustics {
     /// Wraps a product.
     pub fn new(cf: CausticForecast) -> Self {
-        ForecastCaustics { cf, cache: TableCache::default() }
+        ForecastCaustics { grid: cf.kept_grid(), cf, cache: TableCache::default() }
     }
 }
 
@@ -282,7 +285,7 @@ impl CausticEstimator for ForecastCaustics {
             }
             caustic_chain(world, q, wi, f * (wi.dot(q.x.ns).abs() * w), ctx, full)
         };
-        self.cf.estimate(q, ctx, Some(&self.cache), g)
+        self.cf.estimate(q, ctx, (Some(&self.cache), Some(&self.grid)), g)
     }
 
     fn stats(&self, profile: &Profile) -> serde_json::Value {

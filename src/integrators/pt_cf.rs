@@ -219,10 +219,7 @@ impl GuidedPathTracer {
         }
         ctx.profile.cf.queries += 1;
         // the guided clusters' grid answers the cluster map's query for them (`SubsetGrid`)
-        let t = ctx.profile.start(Phase::CfTable);
-        let c = self.guided_grid.cluster_at(&self.cf.cluster_map, q.x.p, CausticForecast::lit_normals(q).0);
-        ctx.profile.record(Phase::CfTable, t);
-        let c = c?;
+        let c = self.cf.cluster_at(q, ctx, Some(&self.guided_grid))?;
         let weights = self.per_cluster.get(c).copied().flatten()?;
         let (tables, frame) = self.cf.tables_in(c, q, ctx, Some(&self.cache));
         if tables.t1.is_none() && tables.t2.is_none() {
