@@ -205,13 +205,7 @@ fn spheres_agree() {
 /// go through its user geometry (the loaded scenes have 2 spheres each: the loop).
 #[test]
 fn many_spheres_agree() {
-    let mut s = forecast::scene::load(&common::root().join("scenes/cornell-box.toml")).expect("scene loads");
-    let mut rng = Rng::keyed(5, stream::MISC, 0, 0);
-    let proto = s.spheres[0].clone();
-    for _ in 0..40 {
-        let c = Vec3::new(rng.next_f32() * 1.6 - 0.8, rng.next_f32() * 1.6 + 0.2, rng.next_f32() * 1.6 - 0.8);
-        s.spheres.push(forecast::scene::Sphere { center: c, radius: 0.02 + 0.15 * rng.next_f32(), ..proto.clone() });
-    }
+    let s = common::cornell_with_many_spheres();
     let o = World::build_with(s.clone(), AccelKind::Obvhs).expect("obvhs builds");
     let e = World::build_with(s, AccelKind::Embree).expect("embree builds");
     agree_on((o, e), "cornell-box + 40 spheres", 60_000, 5);

@@ -32,14 +32,7 @@ fn world(path: &str, kind: AccelKind) -> World {
 
 /// The cornell box with 40 more spheres (Embree's user geometry, beyond its sphere loop).
 fn many_spheres(kind: AccelKind) -> World {
-    let mut s = forecast::scene::load(&common::root().join("scenes/cornell-box.toml")).expect("scene loads");
-    let mut rng = Rng::keyed(5, stream::MISC, 0, 0);
-    let proto = s.spheres[0].clone();
-    for _ in 0..40 {
-        let c = Vec3::new(rng.next_f32() * 1.6 - 0.8, rng.next_f32() * 1.6 + 0.2, rng.next_f32() * 1.6 - 0.8);
-        s.spheres.push(forecast::scene::Sphere { center: c, radius: 0.02 + 0.15 * rng.next_f32(), ..proto.clone() });
-    }
-    World::build_with(s, kind).expect("world builds")
+    World::build_with(common::cornell_with_many_spheres(), kind).expect("world builds")
 }
 
 fn bits(v: Vec3) -> [u32; 3] {

@@ -323,3 +323,17 @@ pub fn random_ray(s: &Scene, rng: &mut forecast::sampling::rng::Rng, k: usize) -
     let tmax = if rng.next_f32() < 0.5 { f32::INFINITY } else { rng.next_f32() * 2.0 * ext };
     (o, d, tmax)
 }
+
+/// `cornell-box` with 40 more random spheres (seeded): more than the Embree back end tests in a
+/// loop, so they go through its user geometry.
+pub fn cornell_with_many_spheres() -> Scene {
+    use forecast::sampling::rng::{stream, Rng};
+    let mut s = forecast::scene::load(&root().join("scenes/cornell-box.toml")).expect("scene loads");
+    let mut rng = Rng::keyed(5, stream::MISC, 0, 0);
+    let proto = s.spheres[0].clone();
+    for _ in 0..40 {
+        let c = Vec3::new(rng.next_f32() * 1.6 - 0.8, rng.next_f32() * 1.6 + 0.2, rng.next_f32() * 1.6 - 0.8);
+        s.spheres.push(forecast::scene::Sphere { center: c, radius: 0.02 + 0.15 * rng.next_f32(), ..proto.clone() });
+    }
+    s
+}
