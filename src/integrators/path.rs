@@ -101,7 +101,9 @@ impl Integrator for PathTracer {
             return super::estimate_each(self, world, rays, rngs, ctx, out);
         }
         let t0 = std::time::Instant::now();
-        self.trace_batch(world, rays, rngs, out);
+        let mut wave = ctx.take_scratch::<super::path_batch::Wave>();
+        self.trace_batch(world, (rays, rngs), &mut wave, out);
+        ctx.put_scratch(wave);
         ctx.profile.samples += rays.len() as u64;
         ctx.profile.add_exact(Phase::Radiance, t0.elapsed().as_nanos() as u64);
     }

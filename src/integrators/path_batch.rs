@@ -36,9 +36,10 @@ struct Live {
     prev_pdf_w: f32,
 }
 
-/// Per-batch buffers, reused across bounces (sized once: a bounce never has more rays than
-/// the batch).
-struct Wave {
+/// Per-batch buffers, reused across bounces and, through `Context::take_scratch`, across the
+/// batches of a worker (a bounce never has more rays than the batch).
+#[derive(Default)]
+pub(super) struct Wave {
     live: Vec<Live>,
     rays: Vec<Ray>,
     hits: Vec<Option<crate::accel::Hit>>,
@@ -52,30 +53,40 @@ struct Wave {
 }
 
 impl Wave {
-    fn with_capacity(n: usize) -> Wave {
-        Wave {
-            live: Vec::with_capacity(n),
-            rays: Vec::with_capacity(n),
-            hits: Vec::with_capacity(n),
-            next_live: Vec::with_capacity(n),
-            next_rays: Vec::with_capacity(n),
-            nee: Vec::with_capacity(n),
-            shadow: Vec::with_capacity(n),
-            occluded: Vec::with_capacity(n),
-            scratch: BatchScratch::default(),
+    /// Empties every buffer and makes room for `n` paths.
+    fn reset(&mut self, n: usize) {
+        for v in [&mut self.live, &mut self.next_live] {
+            v.clear();
+            v.reserve(n);
         }
+        for v in [&mut self.rays, &mut self.next_rays, &mut self.shadow] {
+            v.clear();
+            v.reserve(n);
+        }
+        self.hits.clear();
+        self.hits.reserve(n);
+        self.nee.clear();
+        self.nee.reserve(n);
+        self.occluded.clear();
+        self.occluded.reserve(n);
     }
 }
 
 impl PathTracer {
     /// `trace` for every ray of `rays`, path `i` drawing from `rngs[i]`; `out[i]` is bit for bit
     /// `trace(rays[i])` (the module's invariants). Requires no `--path-filter`.
-    pub(super) fn trace_batch(&self, world: &World, rays: &[Ray], rngs: &mut [Rng], out: &mut Vec<CameraEstimate>) {
+    pub(super) fn trace_batch(
+        &self,
+        world: &World,
+        (rays, rngs): (&[Ray], &mut [Rng]),
+        w: &mut Wave,
+        out: &mut Vec<CameraEstimate>,
+    ) {
         debug_assert!(self.filter.is_none() && rays.len() == rngs.len());
         out.clear();
         out.resize(rays.len(), CameraEstimate::default());
         let start = Live { i: 0, t: Throughput::new(Rgb::ONE), prefix: true, prev_delta: true, prev_pdf_w: 0.0 };
-        let mut w = Wave::with_capacity(rays.len());
+        w.reset(rays.len());
         w.live.extend((0..rays.len() as u32).map(|i| Live { i, ..start }));
         w.rays.extend_from_slice(rays);
         for depth in 0..self.max_depth {
@@ -84,7 +95,7 @@ impl PathTracer {
             }
             world.intersect_batch(&w.rays, &mut w.scratch, &mut w.hits);
             for k in 0..w.live.len() {
-                self.shade(world, &mut w, k, depth, rngs, out);
+                self.shade(world, w, k, depth, rngs, out);
             }
             world.occluded_batch(&w.shadow, &mut w.scratch, &mut w.occluded);
             for (&(i, beta, value), &blocked) in w.nee.iter().zip(&w.occluded) {

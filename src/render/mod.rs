@@ -17,7 +17,7 @@ use crate::profile::Profile;
 use crate::sampling::rng::{stream, Rng};
 use crate::transport::context::Context;
 use film::Film;
-pub use pixel::{PixelSampler, MAX_EMISSION_SPLIT};
+pub use pixel::{PixelSampler, TileBuffers, MAX_EMISSION_SPLIT};
 use rayon::prelude::*;
 
 /// Tile edge in pixels.
@@ -78,16 +78,24 @@ pub fn camera_tiles(
     let (w, h) = pixels.resolution();
     let (w, h) = (w as usize, h as usize);
     let (tiles_x, tiles_y) = tile_counts(w, h);
+    let fresh = || Rng::keyed(seed, stream::CAMERA, pass, 0);
+    // one context and buffer set per rayon split, reused by its tiles (what carries over is
+    // capacity: the rng is rekeyed and the profile taken per tile)
+    let init = || {
+        let mut ctx = Context::new(fresh());
+        ctx.camera = Some(pixels.camera().clone());
+        (ctx, TileBuffers::default(), Vec::with_capacity(TILE * TILE))
+    };
     (0..tiles_x * tiles_y)
         .into_par_iter()
-        .map(|tile| {
+        .map_init(init, |(ctx, buf, px), tile| {
             let _ = take_ray_counts();
             let mut c = PassCounters::default();
-            let mut ctx = Context::new(Rng::keyed(seed, stream::CAMERA, pass, 0));
-            ctx.camera = Some(pixels.camera().clone());
-            let px: Vec<_> = tile_pixels(tile, (w, h)).map(|(x, y)| (x, y, (y * w + x) as u64)).collect();
+            ctx.rng = fresh();
+            px.clear();
+            px.extend(tile_pixels(tile, (w, h)).map(|(x, y)| (x, y, (y * w + x) as u64)));
             let mut out = Vec::with_capacity(px.len());
-            pixels.sample_tile(world, integrator, &px, (seed, pass), &mut ctx, &mut out);
+            pixels.sample_tile((world, integrator), px, (seed, pass), (ctx, buf), &mut out);
             for l in out.iter_mut().filter(|l| !l.is_finite()) {
                 c.nonfinite += 1;
                 *l = Rgb::ZERO;
@@ -96,7 +104,7 @@ pub fn camera_tiles(
             let (closest, shadow) = take_ray_counts();
             c.closest_rays = closest;
             c.shadow_rays = shadow;
-            c.profile = ctx.profile;
+            c.profile = std::mem::take(&mut ctx.profile);
             (tile, out, c)
         })
         .collect()

@@ -27,7 +27,7 @@
 
 use super::Context;
 use crate::accel::{Ray, World};
-use crate::integrators::Integrator;
+use crate::integrators::{CameraEstimate, Integrator};
 use crate::math::Rgb;
 use crate::profile::Phase;
 use crate::sampling::rng::{stream, Rng};
@@ -63,6 +63,16 @@ pub struct PixelSampler<'a> {
     /// Row-major, one flag per pixel; empty when `k = 1`.
     split: Vec<bool>,
     stats: SplitStats,
+}
+
+/// The buffers of [`PixelSampler::sample_tile`], kept by a worker from one tile to the next
+/// (capacity only).
+#[derive(Default)]
+pub struct TileBuffers {
+    rays: Vec<Ray>,
+    rngs: Vec<Rng>,
+    slots: Vec<usize>,
+    est: Vec<CameraEstimate>,
 }
 
 impl<'a> PixelSampler<'a> {
@@ -122,15 +132,17 @@ impl<'a> PixelSampler<'a> {
     /// one batch ([`Integrator::estimate_batch`]), the split ones one by one.
     pub(crate) fn sample_tile(
         &self,
-        world: &World,
-        integrator: &dyn Integrator,
+        (world, integrator): (&World, &dyn Integrator),
         tile: &[(usize, usize, u64)],
         key: (u64, u64),
-        ctx: &mut Context,
+        (ctx, buf): (&mut Context, &mut TileBuffers),
         out: &mut Vec<Rgb>,
     ) {
         let cam = self.camera;
-        let (mut rays, mut rngs, mut slots) = (Vec::new(), Vec::new(), Vec::new());
+        let TileBuffers { rays, rngs, slots, est } = buf;
+        rays.clear();
+        rngs.clear();
+        slots.clear();
         out.clear();
         for &(x, y, pixel) in tile {
             let mut rng = Rng::keyed(key.0, stream::CAMERA, key.1, pixel);
@@ -146,9 +158,8 @@ impl<'a> PixelSampler<'a> {
                 out.push(self.split_sample(world, integrator, (x, y, pixel), key, [jx, jy], ctx));
             }
         }
-        let mut est = Vec::with_capacity(rays.len());
-        integrator.estimate_batch(world, &rays, &mut rngs, ctx, &mut est);
-        for (slot, e) in slots.into_iter().zip(est) {
+        integrator.estimate_batch(world, rays, rngs, ctx, est);
+        for (&slot, e) in slots.iter().zip(est.iter()) {
             out[slot] = e.total();
         }
     }

@@ -1,7 +1,9 @@
 //! The explicit per-worker context handed down the radiance recursion (pbrt-v4's
 //! `ScratchBuffer` idea): the sample's random stream, reusable scratch buffers and the profile
-//! counters. One per rayon work item; `render::render_pass` rekeys `rng` for every pixel, so
-//! randomness stays a pure function of (seed, pass, pixel) whatever the thread. Also the
+//! counters. One per rayon work split, reused across its tiles; `render::render_pass` rekeys
+//! `rng` for every pixel and takes the profile per tile, so randomness stays a pure function of
+//! (seed, pass, pixel) whatever the thread, and nothing else carries from one tile to the next
+//! but buffers. Also the
 //! [`ShadingQuery`] of a non-specular point of the recursion.
 
 use crate::bsdf::ShadingPoint;
@@ -9,6 +11,7 @@ use crate::math::Vec3;
 use crate::profile::Profile;
 use crate::sampling::rng::Rng;
 use crate::scene::{Camera, Material};
+use std::any::Any;
 
 /// Per-worker state of the hot path.
 pub struct Context {
@@ -21,12 +24,26 @@ pub struct Context {
     /// The camera of the image being rendered (set by `render::render_pass`; `None` elsewhere,
     /// e.g. preprocess gathers): `pt-cf`'s camera-side MIS weight against its light paths.
     pub camera: Option<Camera>,
+    /// Buffers an integrator keeps from one batch to the next (`pt`'s wavefront), typed by that
+    /// integrator: capacity only, never read by the math.
+    pub scratch: Option<Box<dyn Any + Send>>,
 }
 
 impl Context {
     /// A context drawing from `rng`.
     pub fn new(rng: Rng) -> Context {
-        Context { rng, knn: Vec::new(), profile: Profile::default(), camera: None }
+        Context { rng, knn: Vec::new(), profile: Profile::default(), camera: None, scratch: None }
+    }
+
+    /// The scratch of type `T` (a fresh one when absent or of another type), to be given back
+    /// with [`Context::put_scratch`].
+    pub fn take_scratch<T: Default + Send + 'static>(&mut self) -> Box<T> {
+        self.scratch.take().and_then(|b| b.downcast::<T>().ok()).unwrap_or_default()
+    }
+
+    /// Keeps `s` for the next [`Context::take_scratch`].
+    pub fn put_scratch<T: Send + 'static>(&mut self, s: Box<T>) {
+        self.scratch = Some(s);
     }
 }
 
