@@ -259,6 +259,13 @@ fn nearest(list: &[([f32; 3], u32)], x: Vec3) -> Option<(usize, f32)> {
     best.map(|(c, d2)| (c as usize, d2))
 }
 
+/// Distance bound `d` of a cell with half-diagonal `h`, grown by the slack that covers f32
+/// rounding (every bound of `Builder::cell` goes through it).
+#[inline]
+fn padded(d: f32, h: f32) -> f32 {
+    d * (1.0 + SLACK) + SLACK * h
+}
+
 /// Representatives fetched per cell before pruning (a cell with more asks the tree).
 const FETCH: usize = 4 * MAX_CANDIDATES;
 /// The nearest representatives to a cell's centre tried as dominators of the others.
@@ -291,10 +298,10 @@ impl Builder<'_> {
             return Built::Code(TREE);
         };
         let (dn, dg) = (dn2.sqrt(), dg2.sqrt());
-        if dg - h > (dn + h).min(self.reach) * (1.0 + SLACK) + SLACK * h {
+        if dg - h > padded((dn + h).min(self.reach), h) {
             return Built::Code(EMPTY);
         }
-        let rc = ((dn + h).min(self.reach) + h) * (1.0 + SLACK) + SLACK * h;
+        let rc = padded((dn + h).min(self.reach) + h, h);
         self.all.k_nearest_within(o.to_array(), FETCH, rc * rc, out);
         if out.len() == FETCH {
             return Built::Code(TREE);
@@ -315,7 +322,7 @@ impl Builder<'_> {
         }
         let c0 = list[0].1;
         let one = list.iter().all(|r| r.1 == c0);
-        if one && (dn + h) * (1.0 + SLACK) + SLACK * h <= self.map.reach(c0 as usize) && c0 < SCAN - 2 {
+        if one && padded(dn + h, h) <= self.map.reach(c0 as usize) && c0 < SCAN - 2 {
             return Built::Code(c0);
         }
         Built::Scan(list)
