@@ -1,9 +1,10 @@
 //! The batched queries and the wavefront `pt` (issue #33) against their scalar forms, bit for bit.
 //!
-//! - `World::intersect_batch` / `World::occluded_batch` must return exactly what `intersect` /
-//!   `occluded` return ray by ray (primitive, t, position and normals compared as bits), for
-//!   random rays of `common::random_ray`, batches of several sizes (1, 7, 256: the stream call's
-//!   remainders) and the degenerate segments a path can produce (tmax 0, negative, NaN).
+//! - `World::intersect_batch` (its answers' records built by `World::hit_at`) and
+//!   `World::occluded_batch` must return exactly what `intersect` / `occluded` return ray by ray
+//!   (primitive, t, position and normals compared as bits), for random rays of
+//!   `common::random_ray`, batches of several sizes (1, 7, 256: the stream call's remainders),
+//!   and the degenerate segments a path can produce (tmax 0, negative, NaN).
 //! - `pt`'s `estimate_batch` (the wavefront, `integrators::path_batch`) must return exactly the
 //!   estimates of `estimate` ray by ray (`integrators::estimate_each`) on every camera ray of a
 //!   small image with its per-pixel streams: the wavefront changes when a ray is traced, never
@@ -67,10 +68,15 @@ fn batch_equals_single(w: &World, label: &str, seed: u64) {
             assert_eq!((hits.len(), occ.len()), (chunk.len(), chunk.len()), "{label}: one answer per ray");
             for ((r, h), &o) in chunk.iter().zip(&hits).zip(&occ) {
                 let single = w.intersect(r.o, r.d, r.tmax);
-                let key = |h: &Option<forecast::accel::Hit>| {
+                let key = |h: Option<forecast::accel::Hit>| {
                     h.map(|h| (h.prim, h.t.to_bits(), bits(h.p), bits(h.ng), bits(h.ns)))
                 };
-                assert_eq!(key(h), key(&single), "{label} ({:?}), batch {size}: closest hit of {r:?}", w.accel());
+                assert_eq!(
+                    key(h.map(|h| w.hit_at(r, h))),
+                    key(single),
+                    "{label} ({:?}), batch {size}: closest hit of {r:?}",
+                    w.accel()
+                );
                 assert_eq!(
                     o,
                     w.occluded(r.o, r.d, r.tmax),

@@ -368,28 +368,19 @@ pub(super) struct Scratch {
     rays: Vec<ffi::RTCRay>,
     /// The batch index of each stream record (rays that need no query are not in the stream).
     slot: Vec<u32>,
-    /// Closest hits as (primitive id, t).
-    found: Vec<Option<(u32, f32)>>,
-}
-
-impl Scratch {
-    /// The closest hits of the last `closest_batch`.
-    pub(super) fn found(&self) -> &[Option<(u32, f32)>] {
-        &self.found
-    }
 }
 
 impl EmbreeScene {
     /// Closest hits of a batch of rays in one stream call (`rtcIntersect1M`, incoherent: the
-    /// coherent flag's packets may round hits differently from `rtcIntersect1`; gains in
-    /// `results/2026-12-04-core-wavefront.md`): `s.found[i]` is what `closest(rays[i])` returns.
-    pub(super) fn closest_batch(&self, rays: &[super::Ray], s: &mut Scratch) {
+    /// coherent hint measured slower, even on a tile's camera rays alone,
+    /// `results/2026-12-04-lazy-hits.md`): `found[i]` is what `closest(rays[i])` returns.
+    pub(super) fn closest_batch(&self, rays: &[super::Ray], s: &mut Scratch, found: &mut Vec<Option<(u32, f32)>>) {
         s.rayhits.clear();
         s.slot.clear();
-        s.found.clear();
+        found.clear();
         for (i, r) in rays.iter().enumerate() {
             if r.tmax.is_nan() || r.tmax <= 0.0 {
-                s.found.push(None);
+                found.push(None);
                 continue;
             }
             let (mut tfar, mut best) = (r.tmax, None);
@@ -404,7 +395,7 @@ impl EmbreeScene {
             let mut rh = ffi::RTCRayHit { ray: ray(r.o, r.d, tfar), hit: ffi::RTCHit::default() };
             rh.hit.geomID = ffi::RTC_INVALID_GEOMETRY_ID;
             s.slot.push(i as u32);
-            s.found.push(best);
+            found.push(best);
             s.rayhits.push(rh);
         }
         if s.rayhits.is_empty() {
@@ -417,8 +408,8 @@ impl EmbreeScene {
         unsafe { ffi::rtcIntersect1M(self.scene, &mut ctx, s.rayhits.as_mut_ptr(), n, stride) };
         for (rh, &i) in s.rayhits.iter().zip(&s.slot) {
             match rh.hit.geomID {
-                TRI_GEOM => s.found[i as usize] = Some((rh.hit.primID, rh.ray.tfar)),
-                SPHERE_GEOM => s.found[i as usize] = Some((self.ntri + rh.hit.primID, rh.ray.tfar)),
+                TRI_GEOM => found[i as usize] = Some((rh.hit.primID, rh.ray.tfar)),
+                SPHERE_GEOM => found[i as usize] = Some((self.ntri + rh.hit.primID, rh.ray.tfar)),
                 _ => {}
             }
         }

@@ -61,13 +61,6 @@ pub struct BatchScratch {
     embree: embree::Scratch,
 }
 
-impl BatchScratch {
-    #[cfg(feature = "embree")]
-    fn embree_found(&self) -> &[Option<(u32, f32)>] {
-        self.embree.found()
-    }
-}
-
 /// A surface hit.
 #[derive(Clone, Copy, Debug)]
 pub struct Hit {
@@ -238,31 +231,44 @@ impl World {
 
     /// Closest hit along `origin + t·dir`, t ∈ (0, tmax); `dir` must be unit length.
     pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
-        count(1, 0);
-        let (prim, t) = match &self.accel {
-            Accel::Obvhs(b) => b.closest(&self.scene, origin, dir, tmax),
-            #[cfg(feature = "embree")]
-            Accel::Embree(e) => e.closest(origin, dir, tmax),
-        }?;
+        let (prim, t) = self.closest(origin, dir, tmax)?;
         Some(self.hit(origin, dir, prim, t))
     }
 
-    /// Closest hits of a batch of rays: `out[i]` is `intersect(rays[i])`, bit for bit, with the
-    /// same ray counts. The Embree back end traces the batch in one stream call (its per-call
-    /// cost is what a batch saves, `results/2026-12-04-core-wavefront.md`); obvhs ray by ray.
-    pub fn intersect_batch(&self, rays: &[Ray], scratch: &mut BatchScratch, out: &mut Vec<Option<Hit>>) {
+    /// The closest hit's (primitive, t), before its record is built (one ray counted).
+    #[inline]
+    fn closest(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<(u32, f32)> {
+        count(1, 0);
+        match &self.accel {
+            Accel::Obvhs(b) => b.closest(&self.scene, origin, dir, tmax),
+            #[cfg(feature = "embree")]
+            Accel::Embree(e) => e.closest(origin, dir, tmax),
+        }
+    }
+
+    /// The hit record of a batch answer (`intersect_batch`) for its ray: with `found[i]` and
+    /// `rays[i]`, `hit_at(&rays[i], found[i]?)` is `intersect(rays[i])`, bit for bit.
+    #[inline]
+    pub fn hit_at(&self, ray: &Ray, (prim, t): (u32, f32)) -> Hit {
+        self.hit(ray.o, ray.d, prim, t)
+    }
+
+    /// Closest hits of a batch of rays as (primitive, t), with the same ray counts as `intersect`
+    /// ray by ray: `hit_at` builds the record of the ones a caller shades (building them all here
+    /// cost about 4% of `pt`, `results/2026-12-04-lazy-hits.md`). The Embree back end
+    /// traces the batch in one stream call (its per-call cost is what a batch saves,
+    /// `results/2026-12-04-core-wavefront.md`); obvhs ray by ray.
+    pub fn intersect_batch(&self, rays: &[Ray], scratch: &mut BatchScratch, out: &mut Vec<Option<(u32, f32)>>) {
         out.clear();
         match &self.accel {
             #[cfg(feature = "embree")]
             Accel::Embree(e) => {
                 count(rays.len() as u64, 0);
-                e.closest_batch(rays, &mut scratch.embree);
-                let found = scratch.embree_found();
-                out.extend(rays.iter().zip(found).map(|(r, h)| h.map(|(prim, t)| self.hit(r.o, r.d, prim, t))));
+                e.closest_batch(rays, &mut scratch.embree, out);
             }
             _ => {
                 let _ = scratch;
-                out.extend(rays.iter().map(|r| self.intersect(r.o, r.d, r.tmax)));
+                out.extend(rays.iter().map(|r| self.closest(r.o, r.d, r.tmax)));
             }
         }
     }

@@ -42,7 +42,8 @@ struct Live {
 pub(super) struct Wave {
     live: Vec<Live>,
     rays: Vec<Ray>,
-    hits: Vec<Option<crate::accel::Hit>>,
+    /// The closest hits of `rays` as (primitive, t) (`World::hit_at` builds the record).
+    hits: Vec<Option<(u32, f32)>>,
     next_live: Vec<Live>,
     next_rays: Vec<Ray>,
     /// NEE of this bounce: (path index, β at the vertex, the unoccluded value).
@@ -117,7 +118,8 @@ impl PathTracer {
         let s = &world.scene;
         let (mut p, d) = (w.live[k], w.rays[k].d);
         let (i, rng) = (p.i as usize, &mut rngs[p.i as usize]);
-        let Some(hit) = w.hits[k] else { return };
+        let Some(found) = w.hits[k] else { return };
+        let hit = world.hit_at(&w.rays[k], found);
         if s.emitter_of(hit.prim) != NO_EMITTER {
             if let Some((le, mis)) = emitter_hit(world, &hit, d, p.prev_delta, p.prev_pdf_w) {
                 let l = &mut out[i];
