@@ -150,8 +150,10 @@ fn bin() -> &'static str {
 }
 
 /// `pt-cf --light-paths 0` renders exactly what `pt-cf` rendered before the light paths: the
-/// stored EXR was written by the base commit 3a693d7 with the same command line (regenerate it
-/// with that commit's binary if an intended change of `pt-cf`'s camera side alters it).
+/// stored EXR was written by the base commit 3a693d7 with the same command line, and rewritten
+/// with the same command line by the one intended change of `pt-cf`'s camera side since, the
+/// roulette after guided vertices (`results/2026-12-04-guided-roulette.md`; z-tested against
+/// `pt` by `tests/pt_cf.rs`). Regenerate it only for such a change, and say so there.
 #[test]
 fn light_paths_zero_is_the_old_pt_cf_bit_for_bit() {
     let d = tmp_dir("light-paths-0");

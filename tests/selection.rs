@@ -401,6 +401,8 @@ fn mixture_weights_are_bounded_by_the_bsdf_weight_over_c_b() {
             let p_b = bsdf::pdf_w(&c.m, &c.sp, c.wo, s.wi);
             let q = mix.pdf_w(s.wi);
             assert!((s.pdf_w - q).abs() <= 1e-4 * q, "{}: sample pdf {} vs pdf_w {q}", c.name, s.pdf_w);
+            // the BSDF's own pdf, which the roulette after a guided vertex divides by
+            assert!((s.bsdf_pdf_w - p_b).abs() <= 1e-4 * p_b, "{}: bsdf_pdf_w {} vs {p_b}", c.name, s.bsdf_pdf_w);
             let f_cos = bsdf::eval(&c.m, &c.sp, c.wo, s.wi) * s.wi.dot(c.sp.ns).abs();
             let bound = f_cos / (cb * p_b);
             assert!(s.weight.cmple(bound * (1.0 + 1e-4) + 1e-7).all(), "{}: weight {} > {bound}", c.name, s.weight);

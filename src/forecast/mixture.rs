@@ -76,6 +76,9 @@ pub struct MixtureSample {
     pub is_delta: bool,
     /// Relative index of a refraction (`BsdfSample::eta`), else 1.
     pub eta: f32,
+    /// The BSDF's own pdf of `wi` (`p_BSDF`; `pdf_w` when the BSDF drew it alone): roulette
+    /// after a guided vertex uses `pdf_w / bsdf_pdf_w` (`Throughput::guided`).
+    pub bsdf_pdf_w: f32,
 }
 
 impl MixtureSample {
@@ -143,10 +146,17 @@ impl<'a> DefensiveMixture<'a> {
     /// `q` at world `wi` whose table-frame coordinates are `local` (0 outside the domain).
     #[inline]
     fn q(&self, wi: Vec3, local: Vec3) -> f32 {
+        self.q_and_bsdf(wi, local).0
+    }
+
+    /// `(q, p_BSDF)` at `wi` (both 0 outside the domain).
+    #[inline]
+    fn q_and_bsdf(&self, wi: Vec3, local: Vec3) -> (f32, f32) {
         if !self.in_domain(wi) {
-            return 0.0;
+            return (0.0, 0.0);
         }
-        let mut q = self.c[0] * bsdf::pdf_w(self.m, self.sp, self.wo, wi);
+        let p_bsdf = bsdf::pdf_w(self.m, self.sp, self.wo, wi);
+        let mut q = self.c[0] * p_bsdf;
         // one bin lookup for both tables (`DirectionTable::pdf_w` = pmf of the bin / ΔΩ)
         if let Some(bin) = bin_of(local) {
             for k in 0..2 {
@@ -155,7 +165,7 @@ impl<'a> DefensiveMixture<'a> {
                 }
             }
         }
-        q
+        (q, p_bsdf)
     }
 
     /// Solid-angle pdf `q(wi)` of [`Self::sample`] (world `wi`). For a Dirac material: 0.
@@ -189,7 +199,7 @@ impl<'a> DefensiveMixture<'a> {
                 return None;
             }
             let (wi, weight, pdf_w, is_delta, eta) = (bs.wi, bs.weight, bs.pdf_w, bs.is_delta, bs.eta);
-            return Some(MixtureSample { wi, weight, pdf_w, component: 0, is_delta, eta });
+            return Some(MixtureSample { wi, weight, pdf_w, component: 0, is_delta, eta, bsdf_pdf_w: pdf_w });
         }
         let component = if pick < self.c[0] {
             0
@@ -206,12 +216,13 @@ impl<'a> DefensiveMixture<'a> {
             let (local, _) = t.sample(u);
             (self.frame.to_world(local), local)
         };
-        let q = self.q(wi, local);
+        let (q, bsdf_pdf_w) = self.q_and_bsdf(wi, local);
         if !(q > 0.0) {
             return None; // outside the domain (f = 0 there)
         }
         let f = bsdf::eval(self.m, self.sp, self.wo, wi);
         let weight = f * (wi.dot(self.sp.ns).abs() / q);
-        Some(MixtureSample { wi, weight, pdf_w: q, component: component as u8, is_delta: false, eta: 1.0 })
+        let component = component as u8;
+        Some(MixtureSample { wi, weight, pdf_w: q, component, is_delta: false, eta: 1.0, bsdf_pdf_w })
     }
 }

@@ -328,6 +328,7 @@ impl GuidedPathTracer {
             l.rest += self.kept(st.class, nee);
             if g.n == 1 {
                 let Some(ms) = mix.sample(&mut ctx.rng) else { break };
+                st.t.guided(ms.pdf_w, ms.bsdf_pdf_w);
                 if !continue_path(&mut st, (depth, hit.p, hit.ng), &ms.as_bsdf_sample(), ctx) {
                     break;
                 }
@@ -356,6 +357,8 @@ impl GuidedPathTracer {
             let Some(ms) = mix.sample(&mut ctx.rng) else { continue };
             let mut b = *st;
             let bs = BsdfSample { weight: ms.weight * (1.0 / nf), pdf_w: nf * ms.pdf_w, ..ms.as_bsdf_sample() };
+            // roulette sees the branch as one BSDF-sampled path (`Throughput::guided`)
+            b.t.guided(bs.pdf_w, ms.bsdf_pdf_w);
             if continue_path(&mut b, at, &bs, ctx) {
                 self.track_mis(&mut b, v, at.0, ctx);
                 *rest += self.trace(world, b, ctx).total();
