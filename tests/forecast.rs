@@ -255,3 +255,67 @@ fn caustic_chain_roulette_sees_the_whole_sample_weight() {
     assert!(nonzero >= 1000, "only {nonzero} samples reached the glass ball: the test is vacuous");
     assert!(max <= 2.0, "a caustic sample of {max} at depth 1: roulette on f·|cos| alone");
 }
+
+/// The targeted emission's spheres (`Scene::dirac_spheres`) hold every Dirac vertex and
+/// sphere, one per object: `ring`'s band gets its own sphere, √(1.05² + 0.2²) = 1.07 (its box's
+/// circumsphere, the single target before, was √(2·1.05² + 0.2²) = 1.50: twice the cone's
+/// solid angle from the light), `cornell-box` its two balls exactly, `figurines` one sphere per
+/// figurine and one for the tin. The single sphere (`Scene::dirac_sphere`, past `MAX_OBJECTS`)
+/// holds them too.
+#[test]
+fn the_target_spheres_are_tight_and_hold_every_dirac_primitive() {
+    let scenes = [("scenes/ring.toml", 1), ("scenes/cornell-box.toml", 2), ("scenes/figurines.toml", 3)];
+    for (path, objects) in scenes.into_iter().chain([("scenes/external/sms-ring/ring.xml", 1)]) {
+        let w = world(path);
+        let s = &w.scene;
+        let spheres = s.dirac_spheres();
+        assert_eq!(spheres.len(), objects, "{path}: {spheres:?}");
+        let one = [s.dirac_sphere().expect("the scene has Dirac objects")];
+        for set in [&spheres[..], &one[..]] {
+            let holds = |p: forecast::math::Vec3, r: f32| set.iter().any(|&(c, rs)| p.distance(c) + r < rs);
+            let dirac = |m: u32| s.materials[m as usize].is_dirac();
+            for t in s.triangles.iter().filter(|t| dirac(t.material)) {
+                assert!(t.p.iter().all(|&p| holds(p, 0.0)), "{path}: a Dirac vertex lies outside {set:?}");
+            }
+            for q in s.spheres.iter().filter(|q| dirac(q.material)) {
+                assert!(holds(q.center, q.radius), "{path}: a Dirac sphere pokes out of {set:?}");
+            }
+        }
+    }
+    let (_, r) = world("scenes/ring.toml").scene.dirac_spheres()[0];
+    let band = (1.05f32 * 1.05 + 0.2 * 0.2).sqrt();
+    assert!((r - band).abs() < 2e-3 * band, "ring: radius {r}, the band's own sphere is {band}");
+    let w = world("scenes/cornell-box.toml");
+    for (q, &(c, r)) in w
+        .scene
+        .spheres
+        .iter()
+        .filter(|q| w.scene.materials[q.material as usize].is_dirac())
+        .zip(&w.scene.dirac_spheres())
+    {
+        assert!(c == q.center && (r - q.radius).abs() <= 2e-4 * q.radius, "cornell-box: {c} {r} against {q:?}");
+    }
+}
+
+/// More Dirac objects than `MAX_TARGETS` (a row of 12 mirror balls): they are merged pairwise
+/// into 8 spheres that still hold every ball, never larger than the single sphere around all.
+#[test]
+fn many_dirac_objects_are_merged_into_spheres_that_hold_them() {
+    let src = std::fs::read_to_string("scenes/cornell-box.toml").unwrap();
+    let balls: String = (0..12)
+        .map(|i| {
+            format!(
+                "\n[[shape]]\ntype = \"sphere\"\ncenter = [{}, 0.1, 0.5]\nradius = 0.05\nmaterial = \"mirror\"\n",
+                -0.9 + 0.15 * i as f32
+            )
+        })
+        .collect();
+    let s = forecast::scene::load_str(&(src + &balls), "many-balls.toml", Path::new("scenes")).unwrap();
+    let spheres = s.dirac_spheres();
+    assert_eq!(spheres.len(), forecast::transport::target::MAX_TARGETS);
+    let (_, one) = s.dirac_sphere().unwrap();
+    for q in s.spheres.iter().filter(|q| s.materials[q.material as usize].is_dirac()) {
+        assert!(spheres.iter().any(|&(c, r)| q.center.distance(c) + q.radius < r), "{q:?} is outside {spheres:?}");
+    }
+    assert!(spheres.iter().all(|&(_, r)| r <= one), "{spheres:?} against the single radius {one}");
+}

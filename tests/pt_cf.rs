@@ -67,7 +67,9 @@ fn strong_guiding_with_splitting_agrees_with_pt_on_cornell_box() {
     let (want, _) = energy_counts(&cf, &o);
     assert_eq!(split_per_cluster(Method::PtCf.build(&w, &o, &bytes).unwrap().as_ref()), want);
     assert!(want.contains(&4) && want.contains(&1), "{want:?}");
-    agrees_with_pt(&w, &o, 16, (4096, 512), "pt-cf c=0.1 min share 0 S0=4 D=3");
+    // 8² and (131,072, 8,192) as the share-rule test below, for its reason; seeds 3–8 give
+    // max|z| 2.4–3.9 against the threshold 4.6 (at 16² and (4096, 512): 4.95 ≥ 4.84)
+    agrees_with_pt(&w, &o, 8, (131_072, 8192), "pt-cf c=0.1 min share 0 S0=4 D=3");
 }
 
 /// The continuations at diffuse depth 0 per kept cluster, from the stats.
@@ -116,12 +118,17 @@ fn energy_guide_split_follows_the_density() {
 }
 
 /// Every cluster that has any caustic light guided (c_k = max(c, 1 − s_k) from 0.2 up): the
-/// per-cluster mixtures are unbiased.
+/// per-cluster mixtures are unbiased. At 8² with 131,072 `pt` and 8,192 `pt-cf` samples per
+/// pixel: at 16² with (4096, 1024) both estimators' heavy tails (the ceiling's and the floor's
+/// caustics) broke the z-test's normal approximation, failing 5 of 8 `pt-cf` seeds already at
+/// fea9f43 (before the per-object cones), while 32,768 `pt-cf` samples showed no bias (global
+/// z −0.82); here seeds 3–8 give max|z| 2.5–3.6 against the threshold 4.6
+/// (`results/2026-12-05-targeted-cones.md`).
 #[test]
 fn share_rule_guiding_every_cluster_agrees_with_pt_on_cornell_box() {
     let mut o = opts();
     (o.ptcf.guide_fraction, o.ptcf.guide_min_share) = (0.2, 0.0);
-    agrees_with_pt(&world("scenes/cornell-box.toml"), &o, 16, (4096, 1024), "pt-cf share rule, min share 0");
+    agrees_with_pt(&world("scenes/cornell-box.toml"), &o, 8, (131_072, 8192), "pt-cf share rule, min share 0");
 }
 
 /// Clusters below `--guide-min-share` are `pt` vertices: with 1 (no cornell-box cluster is free

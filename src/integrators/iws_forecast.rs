@@ -28,6 +28,7 @@ use crate::forecast::estimator::{CausticForecast, ForecastOptions, PreprocessSta
 use crate::math::{Rgb, Vec3};
 use crate::sampling::rng::stream;
 use crate::transport::particle::{self, Emission, MAX_VERTICES};
+use crate::transport::target::Targets;
 use std::time::Instant;
 
 /// Default forecast photons to store when neither the CLI nor the scene sets it (the paper's
@@ -165,17 +166,16 @@ impl MethodSpec for IwsCf {
     }
 }
 
-/// The targeted emission for forecasters: the bounding sphere of the target box.
+/// The targeted emission for forecasters [BAJ08 §3.2]: the cones of the circumsphere of the
+/// scene's `forecast.target_box` if it has one, else of the spheres around the Dirac objects
+/// (`Scene::dirac_spheres`, `transport::target`).
 pub fn targeted_emission(world: &World) -> Emission {
-    let target = world.scene.forecast_target.or_else(|| world.scene.dirac_bounds());
-    match target {
-        Some((lo, hi)) => {
-            let center = 0.5 * (lo + hi);
-            let radius = (0.5 * (hi - lo).length()).max(1e-6);
-            Emission::Targeted { center, radius }
-        }
-        None => Emission::Cosine,
-    }
+    let s = &world.scene;
+    let spheres = match s.forecast_target {
+        Some((lo, hi)) => vec![(0.5 * (lo + hi), (0.5 * (hi - lo).length()).max(1e-6))],
+        None => s.dirac_spheres(),
+    };
+    Targets::new(&spheres).map_or(Emission::Cosine, Emission::Targeted)
 }
 
 /// Traces forecast photons: returns the caustic points (flux normalised by paths launched),

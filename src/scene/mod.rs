@@ -11,6 +11,7 @@
 
 mod builder;
 mod camera;
+mod dirac_target;
 pub mod export;
 mod file;
 mod limits;
@@ -24,6 +25,7 @@ mod schema;
 
 pub use builder::{parse_duration, SceneError};
 pub use camera::Camera;
+pub use dirac_target::{MAX_OBJECTS, MAX_TARGETS, SPHERE_PAD};
 pub use file::load_str;
 pub use limits::{within_extent, MAX_EXTENT};
 

@@ -10,3 +10,4 @@ pub mod direct;
 pub mod light_select;
 pub mod particle;
 pub mod roulette;
+pub mod target;

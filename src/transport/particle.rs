@@ -18,6 +18,7 @@
 //! whose truncated energy is below `Π q ≤ 0.95^64`-scale for any physical scene.
 
 use super::roulette::{q_particle, roulette};
+use super::target::{Cones, Targets};
 use crate::accel::{offset_origin, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::math::{Frame, Rgb, Vec3};
@@ -37,16 +38,11 @@ pub enum Emission {
     /// (point lights).
     #[default]
     Cosine,
-    /// Uniform over the cone subtended by a sphere (the bounding sphere of the Dirac objects):
-    /// targeted shooting for caustic forecasters only, never for VPLs [BAJ08 §3.2]. Falls back
-    /// to `Cosine` when the light point is inside the sphere. The pdf is the true one, so
-    /// forecaster powers stay physically weighted (spec §3).
-    Targeted {
-        /// Sphere centre.
-        center: Vec3,
-        /// Sphere radius.
-        radius: f32,
-    },
+    /// Uniform over the cones subtended by a few spheres around the Dirac objects
+    /// (`transport::target`): targeted shooting for caustic forecasters only, never for VPLs
+    /// [BAJ08 §3.2]. Falls back to `Cosine` when the light point is inside a sphere. The pdf is
+    /// the true one, so forecaster powers stay physically weighted (spec §3).
+    Targeted(Targets),
 }
 
 impl Emission {
@@ -54,20 +50,8 @@ impl Emission {
     /// returns `(ω, pdf_w)`, or `None` when the sampler produced no usable direction.
     #[inline]
     pub fn sample_dir(&self, y: Vec3, n: Vec3, point_light: bool, u: [f32; 2]) -> Option<(Vec3, f32)> {
-        if let Emission::Targeted { center, radius } = *self {
-            let to_c = center - y;
-            let dist2 = to_c.length_squared();
-            if dist2 > radius * radius * 1.0001 {
-                // uniform cone: cos θ uniform in [cos θ_max, 1], pdf_w = 1/(2π(1 − cos θ_max))
-                let cos_max = (1.0 - radius * radius / dist2).max(0.0).sqrt();
-                let cos_t = 1.0 - u[0] * (1.0 - cos_max);
-                let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-                let phi = 2.0 * std::f32::consts::PI * u[1];
-                let local = Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t);
-                let w = Frame::from_normal(to_c / dist2.sqrt()).to_world(local);
-                let pdf_w = 1.0 / (2.0 * std::f32::consts::PI * (1.0 - cos_max));
-                return (pdf_w.is_finite() && pdf_w > 0.0).then_some((w, pdf_w));
-            }
+        if let Some(cones) = self.cones(y) {
+            return cones.sample(u);
         }
         if point_light {
             Some((sample_uniform_sphere(u), uniform_sphere_pdf()))
@@ -77,27 +61,27 @@ impl Emission {
             (pdf_w > 0.0).then(|| (Frame::from_normal(n).to_world(l), pdf_w))
         }
     }
-}
 
-impl Emission {
     /// The solid-angle pdf with which [`Emission::sample_dir`] draws `w` from `y` (normal `n`,
-    /// ignored for point lights): the cone's uniform pdf inside the cone and 0 outside it, or
-    /// the fallback's (`pt-cf`'s camera-side MIS weight against its light paths).
+    /// ignored for point lights): the cones' pdf (0 outside them), or the fallback's (`pt-cf`'s
+    /// camera-side MIS weight against its light paths).
     pub fn pdf_dir(&self, y: Vec3, n: Vec3, point_light: bool, w: Vec3) -> f32 {
-        if let Emission::Targeted { center, radius } = *self {
-            let to_c = center - y;
-            let dist2 = to_c.length_squared();
-            if dist2 > radius * radius * 1.0001 {
-                let cos_max = (1.0 - radius * radius / dist2).max(0.0).sqrt();
-                let pdf_w = 1.0 / (2.0 * std::f32::consts::PI * (1.0 - cos_max));
-                let inside = w.dot(to_c) >= cos_max * dist2.sqrt();
-                return if inside && pdf_w.is_finite() { pdf_w } else { 0.0 };
-            }
+        if let Some(cones) = self.cones(y) {
+            return cones.pdf(w);
         }
         if point_light {
             uniform_sphere_pdf()
         } else {
             cosine_hemisphere_pdf(n.dot(w)).max(0.0)
+        }
+    }
+
+    /// The targeted cones seen from `y` (`None`: not targeted, or `y` inside a sphere).
+    #[inline]
+    fn cones(&self, y: Vec3) -> Option<Cones> {
+        match self {
+            Emission::Targeted(t) => t.cones(y),
+            Emission::Cosine => None,
         }
     }
 }
