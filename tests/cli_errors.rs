@@ -231,10 +231,10 @@ fn the_json_records_only_the_chosen_methods_options() {
         (cf["variant"].as_str(), cf["direct"].as_str(), cf["clusters"].as_u64()),
         (Some("baj08"), Some("vpl"), Some(4))
     );
-    // pt-cf's light paths are recorded as the count per pass the render used: 1 per pixel
+    // pt-cf's light paths are recorded as the count per pass the render used: ½ per pixel
     // (`pt_cf_light::PATHS_PER_PIXEL`) of the 4×4 image when not given
     let ptcf = keys("pt-cf", &["--forecast-photons", "2000", "--clusters", "4"]);
-    assert_eq!(ptcf["light_paths"].as_u64(), Some(16), "{ptcf:?}");
+    assert_eq!(ptcf["light_paths"].as_u64(), Some(8), "{ptcf:?}");
     let _ = std::fs::remove_dir_all(d);
 }
 

@@ -72,7 +72,7 @@ pub struct PtCfArgs {
     #[arg(long, default_value_t = 0.5, value_parser = parse_min_share)]
     pub guide_min_share: f32,
     /// pt-cf: light paths per pass connected to the camera for the caustics L S+ (S|D)* D E, MIS-
-    /// weighted against the camera paths (0 = none: the camera side alone; default 1 per pixel).
+    /// weighted against the camera paths (0 = none: the camera side alone; default ½ per pixel).
     #[arg(long, value_name = "N")]
     pub light_paths: Option<u64>,
     /// pt-cf: let a pilot render pick the light paths per pass, 1/4 to 4 per pixel, for the least

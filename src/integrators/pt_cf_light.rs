@@ -57,12 +57,14 @@ use rayon::prelude::*;
 /// Light paths per parallel work item.
 pub const CHUNK: u64 = 1024;
 
-/// Light paths per pass per pixel when `--light-paths` is not given (measured:
-/// `results/2026-12-02-light-traced-caustics.md`, `results/2026-12-03-light-paths-per-pixel.md`:
-/// 1 against 0.5 per pixel halves the variance of the SMS ring's floor at equal time and costs
-/// `cornell-box`'s whole image 7% of RMSE). `--light-path-pilot` picks a count per scene instead
-/// (`pipeline::light_pilot`, `results/2026-12-03-light-path-pilot.md`).
-pub const PATHS_PER_PIXEL: f64 = 1.0;
+/// Light paths per pass per pixel when `--light-paths` is not given. Measured again once every
+/// targeted path was aimed at a Dirac object (`results/2026-12-05-targeted-cones.md`): ½ per
+/// pixel against 1 costs the SMS ring's and `ring`'s light-lit floors 1.4× and 1.2× in noise and
+/// gains 1.1–1.3× on every crop of `cornell-box` and `figurines` and on `ring`'s cardioid; over
+/// the 11 crops of the four scenes its geometric-mean noise is the lowest of ¼, ½ and 1 (¼
+/// within 1%). The best count is per scene (1 on the SMS ring, ⅛ on `cornell-box` and
+/// `figurines`): `--light-paths`, or `--light-path-pilot` (`pipeline::light_pilot`).
+pub const PATHS_PER_PIXEL: f64 = 0.5;
 
 /// The light side's settings.
 #[derive(Clone, Copy, Debug)]
