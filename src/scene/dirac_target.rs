@@ -26,14 +26,15 @@ pub const MAX_TARGETS: usize = 8;
 pub const MAX_OBJECTS: usize = 256;
 
 impl Scene {
-    /// One sphere `(centre, radius)` holding every Dirac primitive, if any: centred on
-    /// [`Scene::dirac_bounds`]' box, reaching the farthest vertex or sphere surface.
+    /// One sphere `(centre, radius)` holding every Dirac primitive, if any: the sphere of all of
+    /// them as one object (centred on [`Scene::dirac_bounds`]' box, reaching the farthest vertex
+    /// or sphere surface).
     pub fn dirac_sphere(&self) -> Option<(Vec3, f32)> {
-        let (lo, hi) = self.dirac_bounds()?;
+        self.dirac_bounds()?;
         let dirac = |m: u32| self.materials[m as usize].is_dirac();
-        let tri = self.triangles.iter().filter(|t| dirac(t.material)).flat_map(|t| t.p);
+        let tri = self.triangles.iter().filter(|t| dirac(t.material)).flat_map(|t| t.p).map(|p| (p, 0.0));
         let sph = self.spheres.iter().filter(|s| dirac(s.material)).map(|s| (s.center, s.radius));
-        Some(farthest(0.5 * (lo + hi), tri.map(|p| (p, 0.0)).chain(sph)))
+        Some(around(tri.chain(sph)))
     }
 
     /// The target spheres (at most `MAX_TARGETS`; empty without Dirac primitives): see the
@@ -109,11 +110,7 @@ fn around(balls: impl Iterator<Item = (Vec3, f32)> + Clone) -> (Vec3, f32) {
         balls.clone().fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), (c, r)| {
             (lo.min(c - Vec3::splat(r)), hi.max(c + Vec3::splat(r)))
         });
-    farthest(0.5 * (lo + hi), balls)
-}
-
-/// The padded sphere centred on `c` that holds every ball `(centre, radius)`.
-fn farthest(c: Vec3, balls: impl Iterator<Item = (Vec3, f32)>) -> (Vec3, f32) {
+    let c = 0.5 * (lo + hi);
     let r = balls.map(|(p, r)| p.distance(c) + r).fold(0.0f32, f32::max);
     (c, (r * (1.0 + SPHERE_PAD)).max(1e-6))
 }
