@@ -118,6 +118,16 @@ mod ffi {
     pub type IntersectFn = unsafe extern "C" fn(*const RTCIntersectFunctionNArguments);
     pub type OccludedFn = unsafe extern "C" fn(*const RTCOccludedFunctionNArguments);
 
+    /// `RTCRayHit16`: 12 ray fields then 8 hit fields, each 16 lanes of 4 bytes.
+    #[repr(C, align(64))]
+    pub struct RTCRayHit16(pub [[f32; 16]; 20]);
+    /// `RTCRay16`: the 12 ray fields.
+    #[repr(C, align(64))]
+    pub struct RTCRay16(pub [[f32; 16]; 12]);
+    /// A packet's valid mask (−1 valid, 0 not).
+    #[repr(C, align(64))]
+    pub struct Valid16(pub [c_int; 16]);
+
     #[link(name = "embree3")]
     extern "C" {
         pub fn rtcNewDevice(config: *const c_char) -> RTCDevice;
@@ -148,19 +158,17 @@ mod ffi {
         pub fn rtcReleaseGeometry(geometry: RTCGeometry);
         pub fn rtcIntersect1(scene: RTCScene, context: *mut RTCIntersectContext, rayhit: *mut RTCRayHit);
         pub fn rtcOccluded1(scene: RTCScene, context: *mut RTCIntersectContext, ray: *mut RTCRay);
-        pub fn rtcIntersect1M(
+        pub fn rtcIntersect16(
+            valid: *const Valid16,
             scene: RTCScene,
             context: *mut RTCIntersectContext,
-            rayhit: *mut RTCRayHit,
-            m: c_uint,
-            stride: usize,
+            rayhit: *mut RTCRayHit16,
         );
-        pub fn rtcOccluded1M(
+        pub fn rtcOccluded16(
+            valid: *const Valid16,
             scene: RTCScene,
             context: *mut RTCIntersectContext,
-            ray: *mut RTCRay,
-            m: c_uint,
-            stride: usize,
+            ray: *mut RTCRay16,
         );
     }
 }
@@ -361,18 +369,19 @@ impl EmbreeScene {
     }
 }
 
-/// Reusable buffers of the stream calls (one per batch of a tile's paths, not per bounce).
+/// Reusable buffers of the packet calls (one per batch of a tile's paths, not per bounce).
 #[derive(Default)]
 pub(super) struct Scratch {
     rayhits: Vec<ffi::RTCRayHit>,
     rays: Vec<ffi::RTCRay>,
-    /// The batch index of each stream record (rays that need no query are not in the stream).
+    /// The batch index of each record (rays that need no query are not traced).
     slot: Vec<u32>,
 }
 
 impl EmbreeScene {
-    /// Closest hits of a batch of rays in one stream call (`rtcIntersect1M`, incoherent: the
-    /// coherent hint measured slower, even on a tile's camera rays alone,
+    /// Closest hits of a batch of rays in 16-wide packets (`rtcIntersect16`, as Mitsuba 3's llvm
+    /// variants call Embree: 1.03–1.06× the stream call `rtcIntersect1M`, bit for bit,
+    /// `results/2026-12-05-embree-packets.md`; the stream's coherent hint measured slower,
     /// `results/2026-12-04-lazy-hits.md`): `found[i]` is what `closest(rays[i])` returns.
     pub(super) fn closest_batch(&self, rays: &[super::Ray], s: &mut Scratch, found: &mut Vec<Option<(u32, f32)>>) {
         s.rayhits.clear();
@@ -401,11 +410,7 @@ impl EmbreeScene {
         if s.rayhits.is_empty() {
             return;
         }
-        let mut ctx = context();
-        let stride = std::mem::size_of::<ffi::RTCRayHit>();
-        let n = s.rayhits.len() as u32;
-        // SAFETY: the scene is committed; `rayhits` holds `n` valid, aligned records for the call.
-        unsafe { ffi::rtcIntersect1M(self.scene, &mut ctx, s.rayhits.as_mut_ptr(), n, stride) };
+        self.intersect_packets(&mut s.rayhits, &mut context());
         for (rh, &i) in s.rayhits.iter().zip(&s.slot) {
             match rh.hit.geomID {
                 TRI_GEOM => found[i as usize] = Some((rh.hit.primID, rh.ray.tfar)),
@@ -415,7 +420,7 @@ impl EmbreeScene {
         }
     }
 
-    /// Occlusion of a batch of segments in one stream call (`rtcOccluded1M`, incoherent):
+    /// Occlusion of a batch of segments in 16-wide packets (`rtcOccluded16`):
     /// `out[i]` is what `occluded(rays[i])` returns.
     pub(super) fn occluded_batch(&self, rays: &[super::Ray], s: &mut Scratch, out: &mut Vec<bool>) {
         s.rays.clear();
@@ -435,13 +440,64 @@ impl EmbreeScene {
         if s.rays.is_empty() {
             return;
         }
-        let mut ctx = context();
-        let stride = std::mem::size_of::<ffi::RTCRay>();
-        let n = s.rays.len() as u32;
-        // SAFETY: as in `closest_batch`.
-        unsafe { ffi::rtcOccluded1M(self.scene, &mut ctx, s.rays.as_mut_ptr(), n, stride) };
+        self.occluded_packets(&mut s.rays, &mut context());
         for (r, &i) in s.rays.iter().zip(&s.slot) {
             out[i as usize] = r.tfar == f32::NEG_INFINITY;
+        }
+    }
+}
+
+/// Writes ray `r` into lane `i` of a packet's first 12 fields.
+#[inline]
+fn put_ray(p: &mut [[f32; 16]], i: usize, r: &ffi::RTCRay) {
+    let f = [r.org[0], r.org[1], r.org[2], r.tnear, r.dir[0], r.dir[1], r.dir[2], r.time, r.tfar];
+    for (k, v) in f.into_iter().enumerate() {
+        p[k][i] = v;
+    }
+    p[9][i] = f32::from_bits(r.mask);
+    p[10][i] = f32::from_bits(r.id);
+    p[11][i] = f32::from_bits(r.flags);
+}
+
+impl EmbreeScene {
+    /// `rtcIntersect16` over the records, 16 at a time; each record gets its tfar and hit ids.
+    fn intersect_packets(&self, recs: &mut [ffi::RTCRayHit], ctx: &mut ffi::RTCIntersectContext) {
+        let mut p = ffi::RTCRayHit16([[0.0; 16]; 20]);
+        let mut valid = ffi::Valid16([0; 16]);
+        for chunk in recs.chunks_mut(16) {
+            for i in 0..16 {
+                valid.0[i] = if i < chunk.len() { -1 } else { 0 };
+            }
+            for (i, rh) in chunk.iter().enumerate() {
+                put_ray(&mut p.0, i, &rh.ray);
+                p.0[18][i] = f32::from_bits(ffi::RTC_INVALID_GEOMETRY_ID);
+            }
+            // SAFETY: the scene is committed; `valid` and `p` are 64-byte aligned and live for the call.
+            unsafe { ffi::rtcIntersect16(&valid, self.scene, ctx, &mut p) };
+            for (i, rh) in chunk.iter_mut().enumerate() {
+                rh.ray.tfar = p.0[8][i];
+                rh.hit.primID = p.0[17][i].to_bits();
+                rh.hit.geomID = p.0[18][i].to_bits();
+            }
+        }
+    }
+
+    /// `rtcOccluded16` over the rays, 16 at a time; an occluded ray's tfar becomes −∞.
+    fn occluded_packets(&self, rays: &mut [ffi::RTCRay], ctx: &mut ffi::RTCIntersectContext) {
+        let mut p = ffi::RTCRay16([[0.0; 16]; 12]);
+        let mut valid = ffi::Valid16([0; 16]);
+        for chunk in rays.chunks_mut(16) {
+            for i in 0..16 {
+                valid.0[i] = if i < chunk.len() { -1 } else { 0 };
+            }
+            for (i, r) in chunk.iter().enumerate() {
+                put_ray(&mut p.0, i, r);
+            }
+            // SAFETY: as in `intersect_packets`.
+            unsafe { ffi::rtcOccluded16(&valid, self.scene, ctx, &mut p) };
+            for (i, r) in chunk.iter_mut().enumerate() {
+                r.tfar = p.0[8][i];
+            }
         }
     }
 }

@@ -54,7 +54,7 @@ pub struct Ray {
 }
 
 /// Reusable buffers of [`World::intersect_batch`] and [`World::occluded_batch`] (the back end's
-/// stream records), so that a batch traced bounce after bounce allocates once.
+/// packet records), so that a batch traced bounce after bounce allocates once.
 #[derive(Default)]
 pub struct BatchScratch {
     #[cfg(feature = "embree")]
@@ -256,8 +256,9 @@ impl World {
     /// Closest hits of a batch of rays as (primitive, t), with the same ray counts as `intersect`
     /// ray by ray: `hit_at` builds the record of the ones a caller shades (building them all here
     /// cost about 4% of `pt`, `results/2026-12-04-lazy-hits.md`). The Embree back end
-    /// traces the batch in one stream call (its per-call cost is what a batch saves,
-    /// `results/2026-12-04-core-wavefront.md`); obvhs ray by ray.
+    /// traces the batch in 16-wide packets (its per-call cost is what a batch saves,
+    /// `results/2026-12-04-core-wavefront.md`, `results/2026-12-05-embree-packets.md`); obvhs
+    /// ray by ray.
     pub fn intersect_batch(&self, rays: &[Ray], scratch: &mut BatchScratch, out: &mut Vec<Option<(u32, f32)>>) {
         out.clear();
         match &self.accel {
