@@ -243,7 +243,6 @@ fn pt_cf_two_ranks_equal_one_process() {
         "4",
         "--table-depth",
         "2",
-        "--light-path-pilot",
     ];
     let st = Command::new(bin()).args(["render", &scene()]).args(common).arg("--out").arg(&one).status().unwrap();
     assert!(st.success());

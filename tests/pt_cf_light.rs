@@ -195,9 +195,9 @@ fn light_paths_do_not_depend_on_the_thread_count() {
     assert!(render_film(&off).data != two.data, "the light paths changed nothing");
 }
 
-/// `--light-path-pilot` (`pipeline::light_pilot`) picks the count: the report holds its figures
-/// and the count the render used, neither depends on the thread count, nor does the image; a
-/// given count runs no pilot.
+/// Without `--light-paths`, the pilot (`pipeline::light_pilot`) picks the count: the report holds
+/// its figures and the count the render used, neither depends on the thread count, nor does the
+/// image; a given count runs no pilot.
 #[test]
 fn the_light_path_pilot_is_recorded_and_does_not_depend_on_the_thread_count() {
     use forecast::distributed::local::Local;
@@ -206,11 +206,7 @@ fn the_light_path_pilot_is_recorded_and_does_not_depend_on_the_thread_count() {
         let r = forecast::pipeline::render(j, &Local::new(), std::time::Instant::now()).unwrap().unwrap();
         serde_json::to_value(&r.report).unwrap()
     };
-    let pilot = |out: &Path, threads| {
-        let mut j = light_job(out, threads, 1);
-        j.args.ptcf.light_path_pilot = true;
-        j
-    };
+    let pilot = |out: &Path, threads| light_job(out, threads, 1);
     let (one, two) = (report(&pilot(&d.join("one"), 1)), report(&pilot(&d.join("two"), 2)));
     assert_same_image(&d.join("one.exr"), &d.join("two.exr"));
     let rule = &one["light_path_rule"];

@@ -72,13 +72,10 @@ pub struct PtCfArgs {
     #[arg(long, default_value_t = 0.5, value_parser = parse_min_share)]
     pub guide_min_share: f32,
     /// pt-cf: light paths per pass connected to the camera for the caustics L S+ (S|D)* D E, MIS-
-    /// weighted against the camera paths (0 = none: the camera side alone; default ½ per pixel).
+    /// weighted against the camera paths (0 = none: the camera side alone; default: a pilot
+    /// render picks 1/8 to 2 per pixel).
     #[arg(long, value_name = "N")]
     pub light_paths: Option<u64>,
-    /// pt-cf: let a pilot render pick the light paths per pass, 1/4 to 4 per pixel, for the least
-    /// whole-image variance × rays (instead of --light-paths).
-    #[arg(long, conflicts_with = "light_paths")]
-    pub light_path_pilot: bool,
 }
 
 fn parse_guide_fraction(s: &str) -> Result<f32, String> {

@@ -57,13 +57,11 @@ use rayon::prelude::*;
 /// Light paths per parallel work item.
 pub const CHUNK: u64 = 1024;
 
-/// Light paths per pass per pixel when `--light-paths` is not given. Measured again once every
-/// targeted path was aimed at a Dirac object (`results/2026-12-05-targeted-cones.md`): ½ per
-/// pixel against 1 costs the SMS ring's and `ring`'s light-lit floors 1.4× and 1.2× in noise and
-/// gains 1.1–1.3× on every crop of `cornell-box` and `figurines` and on `ring`'s cardioid; over
-/// the 11 crops of the four scenes its geometric-mean noise is the lowest of ¼, ½ and 1 (¼
-/// within 1%). The best count is per scene (1 on the SMS ring, ⅛ on `cornell-box` and
-/// `figurines`): `--light-paths`, or `--light-path-pilot` (`pipeline::light_pilot`).
+/// Light paths per pass per pixel of an integrator built without a count and without the
+/// pipeline's pilot (`pipeline::light_pilot`, which picks the count of every render that does
+/// not give `--light-paths`), and of a render with no light side, where the count does not
+/// matter. Of the fixed counts, ½ per pixel had the lowest geometric-mean noise over the 11
+/// crops of the four measured scenes (`results/2026-12-05-targeted-cones.md`).
 pub const PATHS_PER_PIXEL: f64 = 0.5;
 
 /// The light side's settings.

@@ -1,7 +1,6 @@
-//! `pt-cf`'s light paths per pass under `--light-path-pilot` (issue #34): a pilot render on
-//! rank 0, after the CF preprocess, measures the whole image's variance × cost at a few
-//! counts per pixel and keeps the best: the efficiency of the image's mean squared error at
-//! equal cost.
+//! `pt-cf`'s light paths per pass unless `--light-paths` is given (issue #34): a pilot render on
+//! rank 0, after the CF preprocess, measures variance × cost region by region at a few counts
+//! per pixel and keeps the count whose regions are the most efficient together.
 //!
 //! Why measured, not modelled. A pass's value of a pixel is its camera estimate plus the
 //! pass's light splats there, so one could split its variance into the two sides' and let the
@@ -14,15 +13,18 @@
 //! smaller), [`PILOT_PASSES`] passes at each count of [`CANDIDATES`] (paths per pixel), on one
 //! integrator ([`Integrator::set_light_paths`]). Every count sees the same camera random numbers
 //! (keyed by pass and pixel) and a prefix of the same light paths (keyed by path index), so the
-//! counts are compared on common random numbers. For each count: `V` = the per-pass variance of
-//! every pixel's luminance (camera + splats), summed; `C` = rays per pixel per pass, both sides
-//! (rays, not seconds, so that the choice is a pure function of the seed and never of the
-//! machine). The score of a count is its `V·C` relative to that of 1 path per pixel, taken as
-//! the median over [`GROUPS`] interleaved sets of pixels (median of means): one camera sample in
-//! 10⁵ can be a firefly that holds 98% of a pilot's `V` (seen on `ring`) and is the same for every
-//! count, so the plain sum would compare noise; the median ignores the one set that holds it.
-//! The least score wins (ties: the fewer paths). The passes are
-//! [`PILOT_PASS_BASE`]`+i`, which no render reaches: the pilot's random numbers are disjoint
+//! counts are compared on common random numbers. For each count: `V_b` = the per-pass variance
+//! of every pixel's luminance (camera + splats), summed over each of the [`SIDE`]² blocks `b` of
+//! the image; `C` = rays per pixel per pass, both sides (rays, not seconds, so that the choice
+//! is a pure function of the seed and never of the machine). The score of a count is
+//! `C · exp(mean_b log V_b)`, relative to that of 1 path per pixel: the geometric mean over the
+//! regions of their variance × cost, so that every region's efficiency counts alike however
+//! bright it is. A whole-image sum (`results/2026-12-03-light-path-pilot.md`) let the bright
+//! regions the camera side carries outvote a dim floor lit only through a caustic (the SMS
+//! ring's: ¼ per pixel where its floor wants 1–2); `results/2026-12-05-block-pilot.md` measures
+//! this rule. A firefly of the camera side is the same at every count and adds the same to its
+//! block's `V_b`, so it cannot decide. The least score wins (ties: the fewer paths). The passes
+//! are [`PILOT_PASS_BASE`]`+i`, which no render reaches: the pilot's random numbers are disjoint
 //! from the render's, it is a function of (scene, options, seed, resolution) only, so every rank
 //! count, thread count and `--resume` gets the same count, and its samples are not in the image.
 //! The render's count is `⌈ν·W·H⌉` for its `W × H`.
@@ -30,7 +32,7 @@
 //! Known leanings: the pilot's larger pixels add the image's variation inside a pixel to the
 //! camera side's variance (towards fewer paths); rays price the camera side's table lookups and
 //! mixtures at nothing (towards fewer paths where those dominate, more where a light path's rays
-//! are cheap). `results/2026-12-03-light-path-pilot.md` measures the choices at equal time.
+//! are cheap).
 
 use super::Plan;
 use crate::accel::World;
@@ -45,15 +47,19 @@ pub const PILOT_PIXELS: f64 = 4096.0;
 pub const PILOT_PASSES: u64 = 8;
 /// The pilot's first pass index: far beyond any render's passes (`Rng::keyed` streams differ).
 pub const PILOT_PASS_BASE: u64 = 1 << 62;
-/// The light paths per pixel the pilot tries: the range of the equal-time sweep
-/// (`results/2026-12-03-light-paths-sweep.md`), by factors of 2. Never 0, which would drop the
-/// point-light caustics that only the light side renders.
-pub const CANDIDATES: [f64; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
+/// The light paths per pixel the pilot tries: the range over which the equal-time sweeps found
+/// each scene's best (`results/2026-12-05-targeted-cones.md`: ⅛ on `cornell-box` and
+/// `figurines`, ½–1 on `ring`, 1 on the SMS ring), by factors of 2. Never 0, which would drop
+/// the point-light caustics that only the light side renders.
+pub const CANDIDATES: [f64; 5] = [0.125, 0.25, 0.5, 1.0, 2.0];
 
-/// The interleaved pixel sets of the median of means (pixel `i` is in set `i mod GROUPS`).
-pub const GROUPS: usize = 8;
+/// The pilot image is cut into `SIDE × SIDE` blocks (regions) whose efficiencies the score
+/// weighs alike.
+pub const SIDE: usize = 4;
+/// The number of blocks.
+pub const BLOCKS: usize = SIDE * SIDE;
 /// The candidate the scores are relative to (1 path per pixel).
-const REFERENCE: usize = 2;
+const REFERENCE: usize = 3;
 
 /// One candidate count as the pilot measured it.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -64,26 +70,30 @@ pub struct Candidate {
     pub variance: f64,
     /// `C`: rays per pixel per pass, camera and light side.
     pub rays_per_pixel: f64,
-    /// The score: the median over the pixel sets of `V·C` relative to 1 path per pixel (lower
-    /// is better; 1 for that count).
+    /// The score: `C` times the geometric mean over the blocks of `V_b`, relative to 1 path per
+    /// pixel (lower is better; 1 for that count).
     pub relative_variance_x_rays: f64,
 }
 
-/// What one candidate's passes measured: the variance sum of each pixel set, and the rays.
+/// What one candidate's passes measured: the variance sum of each block, and the rays.
 struct Measured {
-    groups: [f64; GROUPS],
+    blocks: [f64; BLOCKS],
     rays_per_pixel: f64,
 }
 
-/// The median over the pixel sets of `V_g·C / (V_g,ref·C_ref)`; a set with no variance at
-/// either count compares the costs alone.
+/// `C/C_ref · exp(mean_b log(V_b / V_b,ref))`: the cost ratio times the geometric mean over the
+/// blocks of the variance ratios, over the blocks with variance at both counts (the costs alone
+/// when there is none). Each block's efficiency counts alike, however bright the block.
 fn relative(m: &Measured, reference: &Measured) -> f64 {
     let c = m.rays_per_pixel / reference.rays_per_pixel;
-    let mut r: Vec<f64> = (0..GROUPS)
-        .map(|g| if m.groups[g] == reference.groups[g] { c } else { m.groups[g] / reference.groups[g] * c })
+    let logs: Vec<f64> = (0..BLOCKS)
+        .filter(|&b| m.blocks[b] > 0.0 && reference.blocks[b] > 0.0)
+        .map(|b| (m.blocks[b] / reference.blocks[b]).ln())
         .collect();
-    r.sort_by(f64::total_cmp);
-    0.5 * (r[GROUPS / 2 - 1] + r[GROUPS / 2])
+    if logs.is_empty() {
+        return c;
+    }
+    c * (logs.iter().sum::<f64>() / logs.len() as f64).exp()
 }
 
 /// What the pilot measured and chose (the report's `light_path_rule`).
@@ -133,20 +143,22 @@ impl Moments {
         m.1 += x * x;
     }
 
-    /// The per-pass variance of every pixel (unbiased, `n − 1`), summed over each pixel set.
-    fn variance_sums(&self, n: u64) -> [f64; GROUPS] {
-        let n = n as f64;
-        let mut v = [0.0; GROUPS];
+    /// The per-pass variance of every pixel (unbiased, `n − 1`) of a `w`-wide image, summed
+    /// over each block.
+    fn variance_sums(&self, n: u64, w: usize) -> [f64; BLOCKS] {
+        let (n, h) = (n as f64, self.0.len() / w);
+        let mut v = [0.0; BLOCKS];
         for (i, &(s, s2)) in self.0.iter().enumerate() {
-            v[i % GROUPS] += ((s2 - s * s / n) / (n - 1.0)).max(0.0);
+            let b = (i / w) * SIDE / h * SIDE + (i % w) * SIDE / w;
+            v[b] += ((s2 - s * s / n) / (n - 1.0)).max(0.0);
         }
         v
     }
 }
 
-/// Whether `plan`'s light paths per pass are the pilot's choice (`pt-cf --light-path-pilot`).
+/// Whether `plan`'s light paths per pass are the pilot's choice (`pt-cf` without `--light-paths`).
 pub fn wanted(plan: &Plan) -> bool {
-    plan.method == Method::PtCf && plan.args.ptcf.light_path_pilot
+    plan.method == Method::PtCf && plan.args.ptcf.light_paths.is_none()
 }
 
 /// Rank 0's count (the rule's; without a light side, where the count does not matter, the
@@ -187,7 +199,7 @@ pub fn choose(
         .zip(&measured)
         .map(|(&nu, m)| Candidate {
             paths_per_pixel: nu,
-            variance: m.groups.iter().sum(),
+            variance: m.blocks.iter().sum(),
             rays_per_pixel: m.rays_per_pixel,
             relative_variance_x_rays: relative(m, &measured[REFERENCE]),
         })
@@ -224,7 +236,7 @@ fn measure(world: &World, integrator: &mut dyn Integrator, pixels: &PixelSampler
         }
     }
     Some(Measured {
-        groups: m.variance_sums(PILOT_PASSES),
+        blocks: m.variance_sums(PILOT_PASSES, w),
         rays_per_pixel: rays as f64 / (w * h * PILOT_PASSES as usize) as f64,
     })
 }
@@ -246,21 +258,29 @@ mod tests {
         assert!(best(&[]).is_none());
     }
 
-    /// One set holding a firefly common to both counts does not move the median.
+    /// A firefly common to both counts (the camera side's random numbers are shared) adds the
+    /// same variance to one block at both and barely moves the geometric mean; a block's
+    /// brightness does not weigh.
     #[test]
-    fn a_firefly_in_one_pixel_set_does_not_decide() {
-        let reference = Measured { groups: [1.0; GROUPS], rays_per_pixel: 4.0 };
-        let mut more = Measured { groups: [0.5; GROUPS], rays_per_pixel: 6.0 };
-        let (mut r0, mut r1) = (
-            Measured { groups: [1.0; GROUPS], rays_per_pixel: 4.0 },
-            Measured { groups: [0.5; GROUPS], rays_per_pixel: 6.0 },
-        );
+    fn every_block_weighs_alike_and_a_common_firefly_does_not_decide() {
+        let reference = Measured { blocks: [1.0; BLOCKS], rays_per_pixel: 4.0 };
+        let mut more = Measured { blocks: [0.5; BLOCKS], rays_per_pixel: 6.0 };
         assert!((relative(&more, &reference) - 0.75).abs() < 1e-12);
-        r0.groups[3] += 1e6;
-        r1.groups[3] += 1e6;
-        assert!((relative(&r1, &r0) - 0.75).abs() < 1e-12, "{}", relative(&r1, &r0));
-        more.groups = [0.0; GROUPS];
-        let none = Measured { groups: [0.0; GROUPS], rays_per_pixel: 4.0 };
+        let (mut r0, mut r1) = (reference.blocks, more.blocks);
+        r0[3] += 1e6;
+        r1[3] += 1e6;
+        let (a, b) = (Measured { blocks: r0, rays_per_pixel: 4.0 }, Measured { blocks: r1, rays_per_pixel: 6.0 });
+        let expect = 1.5 * 0.5f64.powf(15.0 / 16.0);
+        assert!((relative(&b, &a) - expect).abs() < 1e-6, "{} vs {expect}", relative(&b, &a));
+        // One bright block 10⁶ times the others, halved: the same as any block halved.
+        let (mut bright, mut halved) = (reference.blocks, reference.blocks);
+        bright[0] = 1e6;
+        halved[0] = 5e5;
+        let (b0, b1) =
+            (Measured { blocks: bright, rays_per_pixel: 4.0 }, Measured { blocks: halved, rays_per_pixel: 4.0 });
+        assert!((relative(&b1, &b0) - 0.5f64.powf(1.0 / 16.0)).abs() < 1e-12);
+        more.blocks = [0.0; BLOCKS];
+        let none = Measured { blocks: [0.0; BLOCKS], rays_per_pixel: 4.0 };
         assert!((relative(&more, &none) - 1.5).abs() < 1e-12, "no variance: the costs decide");
     }
 
@@ -274,14 +294,17 @@ mod tests {
     }
 
     #[test]
-    fn the_variance_is_the_unbiased_per_pixel_one_summed_per_set() {
-        let mut m = Moments(vec![(0.0, 0.0); GROUPS + 1]);
+    fn the_variance_is_the_unbiased_per_pixel_one_summed_per_block() {
+        // An 8 × 4 image: blocks of 2 × 1 pixels; pixel (1, 0) is in block 0, (2, 3) in 13.
+        let mut m = Moments(vec![(0.0, 0.0); 32]);
         for x in [1.0, 2.0, 3.0] {
             m.add(0, x);
-            m.add(1, 5.0);
-            m.add(GROUPS, 2.0 * x);
+            m.add(1, 2.0 * x);
+            m.add(8, 5.0);
+            m.add(3 * 8 + 2, x);
         }
-        let v = m.variance_sums(3);
-        assert!((v[0] - 5.0).abs() < 1e-12 && v[1] == 0.0, "{v:?}");
+        let v = m.variance_sums(3, 8);
+        assert!((v[0] - 5.0).abs() < 1e-12 && v[4] == 0.0 && (v[13] - 1.0).abs() < 1e-12, "{v:?}");
+        assert_eq!(v.iter().filter(|&&x| x > 0.0).count(), 2);
     }
 }

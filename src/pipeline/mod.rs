@@ -164,11 +164,6 @@ impl RenderJob {
         args.cf.time_budget_s = time; // the CF preprocess scales its photon count to the budget
         let spp = if time.is_some() { None } else { Some(self.spp.or(r.spp).unwrap_or(16)) };
         let resolution = self.resolution.unwrap_or((scene.camera.width, scene.camera.height));
-        if method == Method::PtCf && !args.ptcf.light_path_pilot {
-            // the report records the light paths per pass the render uses, default or not
-            let default = crate::integrators::pt_cf_light::default_paths(resolution.0, resolution.1);
-            args.ptcf.light_paths = Some(args.ptcf.light_paths.unwrap_or(default));
-        }
         let seed = self.seed.unwrap_or(r.seed);
         let plan = Plan { method, method_reason, seed, args, time, spp, resolution };
         plan.validate()?;

@@ -1,6 +1,6 @@
-//! Stage 2 of the pipeline (`pipeline` module docs): the caustic preprocess on rank 0, and with
-//! `--light-path-pilot` `pt-cf`'s light-path pilot (`light_pilot`), broadcast to every rank,
-//! which builds its integrator from the same bytes and count.
+//! Stage 2 of the pipeline (`pipeline` module docs): the caustic preprocess on rank 0, and
+//! unless `--light-paths` is given `pt-cf`'s light-path pilot (`light_pilot`), broadcast to
+//! every rank, which builds its integrator from the same bytes and count.
 //!
 //! Invariant: every rank leaves together when rank 0 fails (`distributed::agree` before each
 //! collective), so none waits in a broadcast.
@@ -17,7 +17,7 @@ use std::time::Instant;
 pub(super) struct Prepared {
     pub(super) integrator: Box<dyn Integrator>,
     pub(super) stats: RankStats,
-    /// `pt-cf`'s light-path pilot (rank 0 under `--light-path-pilot`; `None` otherwise).
+    /// `pt-cf`'s light-path pilot (rank 0 without `--light-paths`; `None` otherwise).
     pub(super) light_path_rule: Option<LightPathRule>,
 }
 

@@ -114,7 +114,7 @@ pub struct RenderReport {
     pub snapshots: Vec<SnapshotReport>,
     /// The pixel sampler: emission split and the pixels it applies to (`render::pixel`).
     pub pixel_sampler: crate::render::pixel::SplitStats,
-    /// `pt-cf --light-path-pilot`: the pilot's figures and the light paths it chose
+    /// `pt-cf` without `--light-paths`: the pilot's figures and the light paths it chose
     /// (`pipeline::light_pilot`); `null` otherwise.
     pub light_path_rule: Option<super::LightPathRule>,
     /// `false` in the JSON written with a checkpoint (a render still running), `true` at the end.
