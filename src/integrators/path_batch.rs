@@ -1,8 +1,9 @@
 //! `pt` as a wavefront over a batch of camera rays (a tile): the same estimator as
 //! `PathTracer::trace`, path by path and bit for bit, with the rays of each bounce traced in one
 //! batch (`World::intersect_batch`) and the shadow rays of each bounce in another
-//! (`World::occluded_batch`): Embree's stream API then pays its per-call cost once per bounce
-//! of a tile instead of once per ray (issue #33, `results/2026-12-04-core-wavefront.md`).
+//! (`World::occluded_batch`): Embree then pays its per-call cost once per 16-ray packet
+//! instead of once per ray (issue #33, `results/2026-12-04-core-wavefront.md`,
+//! `results/2026-12-05-embree-packets.md`).
 //!
 //! Invariants (why it is bit-identical to the scalar loop): each path draws from its own stream
 //! (`rngs[i]`) in the scalar order (NEE's numbers, then the BSDF's, then roulette's); a path's
