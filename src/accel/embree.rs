@@ -459,15 +459,18 @@ fn put_ray(p: &mut [[f32; 16]], i: usize, r: &ffi::RTCRay) {
     p[11][i] = f32::from_bits(r.flags);
 }
 
+/// A packet's valid mask with its first `n` lanes on.
+#[inline]
+fn valid_lanes(n: usize) -> ffi::Valid16 {
+    ffi::Valid16(std::array::from_fn(|i| if i < n { -1 } else { 0 }))
+}
+
 impl EmbreeScene {
     /// `rtcIntersect16` over the records, 16 at a time; each record gets its tfar and hit ids.
     fn intersect_packets(&self, recs: &mut [ffi::RTCRayHit], ctx: &mut ffi::RTCIntersectContext) {
         let mut p = ffi::RTCRayHit16([[0.0; 16]; 20]);
-        let mut valid = ffi::Valid16([0; 16]);
         for chunk in recs.chunks_mut(16) {
-            for i in 0..16 {
-                valid.0[i] = if i < chunk.len() { -1 } else { 0 };
-            }
+            let valid = valid_lanes(chunk.len());
             for (i, rh) in chunk.iter().enumerate() {
                 put_ray(&mut p.0, i, &rh.ray);
                 p.0[18][i] = f32::from_bits(ffi::RTC_INVALID_GEOMETRY_ID);
@@ -485,11 +488,8 @@ impl EmbreeScene {
     /// `rtcOccluded16` over the rays, 16 at a time; an occluded ray's tfar becomes −∞.
     fn occluded_packets(&self, rays: &mut [ffi::RTCRay], ctx: &mut ffi::RTCIntersectContext) {
         let mut p = ffi::RTCRay16([[0.0; 16]; 12]);
-        let mut valid = ffi::Valid16([0; 16]);
         for chunk in rays.chunks_mut(16) {
-            for i in 0..16 {
-                valid.0[i] = if i < chunk.len() { -1 } else { 0 };
-            }
+            let valid = valid_lanes(chunk.len());
             for (i, r) in chunk.iter().enumerate() {
                 put_ray(&mut p.0, i, r);
             }
