@@ -279,3 +279,23 @@ fn light_paths_agree_with_pt_on_sms_ring() {
     o.ptcf.light_paths = Some(1024);
     agrees_with_pt(&w, &o, 8, (16384, 2048), "pt-cf+L sms-ring (wide light)");
 }
+
+/// What `--resume` compares (`pipeline::job_keys`) holds the light paths when given and not when
+/// the pilot chose them: the pilot reads the CF product, whose photon count under `--time`
+/// follows the machine's speed, so a resume may pick another count (each pass unbiased at any).
+#[test]
+fn the_pilots_count_is_not_what_a_resume_compares() {
+    let scene = forecast::scene::load(Path::new("scenes/cornell-box.toml")).unwrap();
+    let d = tmp_dir("light-keys");
+    let keys = |light_paths: Option<u64>| {
+        let mut j = light_job(&d.join("k"), 1, 1);
+        j.args.ptcf.light_paths = light_paths;
+        let mut plan = j.resolve(&scene).unwrap();
+        plan.args.ptcf.light_paths = Some(light_paths.unwrap_or(128)); // as the preprocess sets it
+        forecast::pipeline::job_keys(&j, &plan)
+    };
+    let has = |k: &[(String, String)]| k.iter().any(|(name, _)| name == "option light_paths");
+    assert!(!has(&keys(None)), "the pilot's count is compared on resume");
+    assert!(has(&keys(Some(100))), "a given count is not compared on resume");
+    assert!(keys(None).iter().any(|(name, _)| name == "option guide_fraction"), "the other options are");
+}

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# pt-cf at equal time, the block pilot (--light-path-pilot) against a fixed count (½ per pixel),
-# four scenes, seeds 1..SEEDS, scored by scripts/equal-time-vs-mitsuba.sh without peers.
+# pt-cf at equal time, the block pilot (the default from 9d5c894 on; the measurement of
+# 2026-12-05 ran the same rule as --light-path-pilot, before that flag was retired) against a
+# fixed count (½ per pixel), four scenes, seeds 1..SEEDS, scored by
+# scripts/equal-time-vs-mitsuba.sh without peers. BIN: 9d5c894 or later.
 #   BIN=… bash results/2026-12-05-block-pilot/run.sh BUDGET_S SEEDS OUT [CASE…]
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
@@ -14,7 +16,7 @@ crops[figurines]="knot=138,180,132,90 blob=308,188,134,88"
 scene[ring]=scenes/ring.toml;                  res[ring]=256x256; crops[ring]="cardioid=139,71,71,132 floor=145,100,50,60"
 for c in $cases; do
   w=${res[$c]%x*}; h=${res[$c]#*x}; half=$(( (w * h + 1) / 2 ))
-  for setting in "pilot:--light-path-pilot" "half:--light-paths $half"; do
+  for setting in "pilot:" "half:--light-paths $half"; do
     name="${setting%%:*}"; args="${setting#*:}"
     FORECAST="$BIN" FORECAST_ARGS="$args" CROPS="${crops[$c]}" PEERS="" \
       bash "$root/scripts/equal-time-vs-mitsuba.sh" "${scene[$c]}" "${res[$c]}" "$budget" "$seeds" "$out/$c-$name"

@@ -127,6 +127,7 @@ mod ffi {
     /// A packet's valid mask (−1 valid, 0 not).
     #[repr(C, align(64))]
     pub struct Valid16(pub [c_int; 16]);
+    const _: () = assert!(std::mem::size_of::<RTCRayHit16>() == 1280 && std::mem::size_of::<RTCRay16>() == 768);
 
     #[link(name = "embree3")]
     extern "C" {
@@ -271,9 +272,15 @@ impl EmbreeScene {
                 e.attach_spheres();
             }
             ffi::rtcCommitScene(e.scene);
+            if let err @ 1.. = ffi::rtcGetDeviceError(device) {
+                return Err(format!("Embree: building the scene failed (RTCError {err})"));
+            }
+            // a libembree3 built without ray packets reports an error here instead of tracing
+            let probe = ray(Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 1.0), 0.0);
+            e.intersect_packets(&mut [ffi::RTCRayHit { ray: probe, hit: ffi::RTCHit::default() }], &mut context());
             match ffi::rtcGetDeviceError(device) {
                 0 => Ok(e),
-                err => Err(format!("Embree: building the scene failed (RTCError {err})")),
+                err => Err(format!("Embree: this libembree3 cannot trace 16-wide packets (RTCError {err})")),
             }
         }
     }
@@ -380,7 +387,7 @@ pub(super) struct Scratch {
 
 impl EmbreeScene {
     /// Closest hits of a batch of rays in 16-wide packets (`rtcIntersect16`, as Mitsuba 3's llvm
-    /// variants call Embree: 1.03–1.06× the stream call `rtcIntersect1M`, bit for bit,
+    /// variants call Embree: 1.01–1.04× the stream call `rtcIntersect1M`, bit for bit,
     /// `results/2026-12-05-embree-packets.md`; the stream's coherent hint measured slower,
     /// `results/2026-12-04-lazy-hits.md`): `found[i]` is what `closest(rays[i])` returns.
     pub(super) fn closest_batch(&self, rays: &[super::Ray], s: &mut Scratch, found: &mut Vec<Option<(u32, f32)>>) {

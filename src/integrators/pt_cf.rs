@@ -440,7 +440,7 @@ impl Integrator for GuidedPathTracer {
             "options": self.cf.opts,
             "light_paths": self.light.map(|l| serde_json::json!({
                 "per_pass": l.paths,
-                "per_pixel_default": pt_cf_light::PATHS_PER_PIXEL,
+                "per_pixel_without_pilot": pt_cf_light::PATHS_PER_PIXEL,
                 "emission": format!("{:?}", l.emission),
             })),
         })

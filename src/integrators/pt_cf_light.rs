@@ -67,7 +67,8 @@ pub const PATHS_PER_PIXEL: f64 = 0.5;
 /// The light side's settings.
 #[derive(Clone, Copy, Debug)]
 pub struct LightSide {
-    /// `--light-paths` (`None`: [`PATHS_PER_PIXEL`] × the pixel count).
+    /// `--light-paths`, or the pipeline's pilot's count (`None`, outside the pipeline:
+    /// [`PATHS_PER_PIXEL`] × the pixel count).
     pub paths: Option<u64>,
     /// The CF preprocess's targeted emission.
     pub emission: Emission,
@@ -75,7 +76,7 @@ pub struct LightSide {
     pub max_depth: u32,
 }
 
-/// Light paths per pass when `--light-paths` is not given: [`PATHS_PER_PIXEL`] × the pixel count.
+/// Light paths per pass without a count and without the pilot: [`PATHS_PER_PIXEL`] × the pixel count.
 pub fn default_paths(width: u32, height: u32) -> u64 {
     (PATHS_PER_PIXEL * width as f64 * height as f64).ceil() as u64
 }

@@ -15,12 +15,17 @@ use crate::scene::Scene;
 /// checkpoint records and `--resume` compares them (`Checkpoint::job`): each `-D NAME` value, and
 /// every method option, generically: the serialized options of the plan's method (`MethodArgs::options_for`) flattened to
 /// `option KEY` = JSON value (so `--max-depth` is `option max_depth`). Left out: the time budget
-/// (`time_budget_s`: a resume may extend `--time`, and every pass stays an unbiased sample).
+/// (`time_budget_s`: a resume may extend `--time`, and every pass stays an unbiased sample), and
+/// `pt-cf`'s light paths when its pilot chose them (not given on the command line): the pilot
+/// reads the CF product, whose photon count under `--time` follows the measured speed, so a
+/// resume may choose another count, and a pass is an unbiased sample at any count.
 pub fn job_keys(job: &RenderJob, plan: &Plan) -> Vec<(String, String)> {
     let mut keys: Vec<(String, String)> = job.defines.iter().map(|(k, v)| (format!("-D {k}"), v.clone())).collect();
     let mut options = Vec::new();
     flatten("", &serde_json::to_value(plan.args.options_for(plan.method)).unwrap_or_default(), &mut options);
-    keys.extend(options.into_iter().filter(|(k, _)| k != "time_budget_s").map(|(k, v)| (format!("option {k}"), v)));
+    let piloted = job.args.ptcf.light_paths.is_none();
+    let kept = |k: &str| k != "time_budget_s" && !(piloted && k == "light_paths");
+    keys.extend(options.into_iter().filter(|(k, _)| kept(k)).map(|(k, v)| (format!("option {k}"), v)));
     keys
 }
 

@@ -5,7 +5,7 @@
 //! Why measured, not modelled. A pass's value of a pixel is its camera estimate plus the
 //! pass's light splats there, so one could split its variance into the two sides' and let the
 //! light side's fall as `1/ν`. That model picked 0.08–0.3 paths per pixel on the four measured
-//! scenes, where the equal-time sweep found 1–2 best: more light paths also take a larger MIS
+//! scenes, where the equal-time sweep of 2026-12-03 (before the per-object cones) found 1–2 best: more light paths also take a larger MIS
 //! share of the paths both sides sample, and the camera side's variance on those paths, large
 //! on a caustic, falls with them. The pilot measures the sum instead.
 //!
@@ -25,8 +25,12 @@
 //! this rule. A firefly of the camera side is the same at every count and adds the same to its
 //! block's `V_b`, so it cannot decide. The least score wins (ties: the fewer paths). The passes
 //! are [`PILOT_PASS_BASE`]`+i`, which no render reaches: the pilot's random numbers are disjoint
-//! from the render's, it is a function of (scene, options, seed, resolution) only, so every rank
-//! count, thread count and `--resume` gets the same count, and its samples are not in the image.
+//! from the render's, it is a function of (scene, options, seed, resolution, CF product) only,
+//! so every rank count and thread count gets the same count, and its samples are not in the
+//! image. The CF product is fixed by the options except under `--time` without
+//! `--forecast-photons`, where its photon count follows the measured speed; so the pilot's count
+//! is not part of what `--resume` compares (`pipeline::identity::job_keys`): a resumed render
+//! may run its new passes at another count, each pass an unbiased sample at any count.
 //! The render's count is `⌈ν·W·H⌉` for its `W × H`.
 //!
 //! Known leanings: the pilot's larger pixels add the image's variation inside a pixel to the
@@ -77,18 +81,27 @@ pub struct Candidate {
 
 /// What one candidate's passes measured: the variance sum of each block, and the rays.
 struct Measured {
+    /// Light paths per pixel `ν`.
+    nu: f64,
     blocks: [f64; BLOCKS],
     rays_per_pixel: f64,
 }
 
 /// `C/C_ref · exp(mean_b log(V_b / V_b,ref))`: the cost ratio times the geometric mean over the
-/// blocks of the variance ratios, over the blocks with variance at both counts (the costs alone
-/// when there is none). Each block's efficiency counts alike, however bright the block.
+/// blocks of the variance ratios, over the blocks with variance at the reference count (the
+/// same set for every count; the costs alone when there is none). Each block's efficiency
+/// counts alike, however bright the block. A block with none at `m`'s count but some at the
+/// reference's is one that only light paths reach and that none reached in the pilot's passes:
+/// its variance is taken as the reference's scaled by `ν_ref/ν`, as a light-side variance
+/// scales, not as 0, which would reward the count that sampled it least.
 fn relative(m: &Measured, reference: &Measured) -> f64 {
     let c = m.rays_per_pixel / reference.rays_per_pixel;
     let logs: Vec<f64> = (0..BLOCKS)
-        .filter(|&b| m.blocks[b] > 0.0 && reference.blocks[b] > 0.0)
-        .map(|b| (m.blocks[b] / reference.blocks[b]).ln())
+        .filter(|&b| reference.blocks[b] > 0.0)
+        .map(|b| {
+            let v = if m.blocks[b] > 0.0 { m.blocks[b] } else { reference.blocks[b] * reference.nu / m.nu };
+            (v / reference.blocks[b]).ln()
+        })
         .collect();
     if logs.is_empty() {
         return c;
@@ -144,7 +157,8 @@ impl Moments {
     }
 
     /// The per-pass variance of every pixel (unbiased, `n − 1`) of a `w`-wide image, summed
-    /// over each block.
+    /// over each block. A pixel with a non-finite pass value counts no variance (`max` keeps
+    /// the 0 over a NaN): the film counts such samples, the pilot only compares counts.
     fn variance_sums(&self, n: u64, w: usize) -> [f64; BLOCKS] {
         let (n, h) = (n as f64, self.0.len() / w);
         let mut v = [0.0; BLOCKS];
@@ -190,7 +204,7 @@ pub fn choose(
         .iter()
         .map(|&nu| {
             integrator.set_light_paths(paths(nu));
-            measure(world, integrator.as_mut(), &pixels, seed)
+            measure(world, integrator.as_mut(), &pixels, (seed, nu))
         })
         .collect();
     let Some(measured) = measured else { return Ok(None) };
@@ -214,10 +228,16 @@ pub fn choose(
     }))
 }
 
-/// The pilot's passes at the integrator's current count: the summed per-pixel variance of the
-/// pass values in each pixel set (camera + splats, as `render::render_pass` adds them) and the
-/// rays of both sides per pixel and pass; `None` when the integrator traces no light paths.
-fn measure(world: &World, integrator: &mut dyn Integrator, pixels: &PixelSampler, seed: u64) -> Option<Measured> {
+/// The pilot's passes at `nu` paths per pixel (the integrator's current count): the summed
+/// per-pixel variance of the pass values in each block (camera + splats, as
+/// `render::render_pass` adds them) and the rays of both sides per pixel and pass; `None` when
+/// the integrator traces no light paths.
+fn measure(
+    world: &World,
+    integrator: &mut dyn Integrator,
+    pixels: &PixelSampler,
+    (seed, nu): (u64, f64),
+) -> Option<Measured> {
     let (w, h) = pixels.resolution();
     let (w, h) = (w as usize, h as usize);
     let mut m = Moments(vec![(0.0, 0.0); w * h]);
@@ -236,6 +256,7 @@ fn measure(world: &World, integrator: &mut dyn Integrator, pixels: &PixelSampler
         }
     }
     Some(Measured {
+        nu,
         blocks: m.variance_sums(PILOT_PASSES, w),
         rays_per_pixel: rays as f64 / (w * h * PILOT_PASSES as usize) as f64,
     })
@@ -258,30 +279,49 @@ mod tests {
         assert!(best(&[]).is_none());
     }
 
+    fn meas(nu: f64, blocks: [f64; BLOCKS], rays_per_pixel: f64) -> Measured {
+        Measured { nu, blocks, rays_per_pixel }
+    }
+
     /// A firefly common to both counts (the camera side's random numbers are shared) adds the
     /// same variance to one block at both and barely moves the geometric mean; a block's
     /// brightness does not weigh.
     #[test]
     fn every_block_weighs_alike_and_a_common_firefly_does_not_decide() {
-        let reference = Measured { blocks: [1.0; BLOCKS], rays_per_pixel: 4.0 };
-        let mut more = Measured { blocks: [0.5; BLOCKS], rays_per_pixel: 6.0 };
-        assert!((relative(&more, &reference) - 0.75).abs() < 1e-12);
-        let (mut r0, mut r1) = (reference.blocks, more.blocks);
+        let reference = meas(1.0, [1.0; BLOCKS], 4.0);
+        assert!((relative(&meas(2.0, [0.5; BLOCKS], 6.0), &reference) - 0.75).abs() < 1e-12);
+        let (mut r0, mut r1) = ([1.0; BLOCKS], [0.5; BLOCKS]);
         r0[3] += 1e6;
         r1[3] += 1e6;
-        let (a, b) = (Measured { blocks: r0, rays_per_pixel: 4.0 }, Measured { blocks: r1, rays_per_pixel: 6.0 });
+        let got = relative(&meas(2.0, r1, 6.0), &meas(1.0, r0, 4.0));
         let expect = 1.5 * 0.5f64.powf(15.0 / 16.0);
-        assert!((relative(&b, &a) - expect).abs() < 1e-6, "{} vs {expect}", relative(&b, &a));
+        assert!((got - expect).abs() < 1e-6, "{got} vs {expect}");
         // One bright block 10⁶ times the others, halved: the same as any block halved.
-        let (mut bright, mut halved) = (reference.blocks, reference.blocks);
+        let (mut bright, mut halved) = ([1.0; BLOCKS], [1.0; BLOCKS]);
         bright[0] = 1e6;
         halved[0] = 5e5;
-        let (b0, b1) =
-            (Measured { blocks: bright, rays_per_pixel: 4.0 }, Measured { blocks: halved, rays_per_pixel: 4.0 });
-        assert!((relative(&b1, &b0) - 0.5f64.powf(1.0 / 16.0)).abs() < 1e-12);
-        more.blocks = [0.0; BLOCKS];
-        let none = Measured { blocks: [0.0; BLOCKS], rays_per_pixel: 4.0 };
-        assert!((relative(&more, &none) - 1.5).abs() < 1e-12, "no variance: the costs decide");
+        let got = relative(&meas(1.0, halved, 4.0), &meas(1.0, bright, 4.0));
+        assert!((got - 0.5f64.powf(1.0 / 16.0)).abs() < 1e-12);
+        let none = meas(1.0, [0.0; BLOCKS], 4.0);
+        assert!((relative(&meas(2.0, [0.0; BLOCKS], 6.0), &none) - 1.5).abs() < 1e-12, "no variance: the costs decide");
+    }
+
+    /// A block that no light path reached at a low count (no variance there) is not free: it
+    /// stands in at the reference's variance × ν_ref/ν; a block with no variance at the
+    /// reference is left out at every count.
+    #[test]
+    fn a_block_unreached_at_a_low_count_is_not_free() {
+        let mut few = [1.0; BLOCKS];
+        few[5] = 0.0; // ⅛ per pixel: no splat landed in block 5
+        let got = relative(&meas(0.125, few, 2.0), &meas(1.0, [1.0; BLOCKS], 4.0));
+        let expect = 0.5 * 8.0f64.powf(1.0 / 16.0);
+        assert!((got - expect).abs() < 1e-12, "{got} vs {expect}");
+        let mut dark = [1.0; BLOCKS];
+        dark[7] = 0.0; // nothing at the reference either way
+        let mut more = [0.5; BLOCKS];
+        more[7] = 9.0;
+        let got = relative(&meas(2.0, more, 4.0), &meas(1.0, dark, 4.0));
+        assert!((got - 0.5).abs() < 1e-12, "{got}: the set is the reference's blocks with variance");
     }
 
     #[test]
