@@ -5,9 +5,10 @@
 //! Why measured, not modelled. A pass's value of a pixel is its camera estimate plus the
 //! pass's light splats there, so one could split its variance into the two sides' and let the
 //! light side's fall as `1/ν`. That model picked 0.08–0.3 paths per pixel on the four measured
-//! scenes, where the equal-time sweep of 2026-12-03 (before the per-object cones) found 1–2 best: more light paths also take a larger MIS
-//! share of the paths both sides sample, and the camera side's variance on those paths, large
-//! on a caustic, falls with them. The pilot measures the sum instead.
+//! scenes, where the equal-time sweep of 2026-12-03 (before the per-object cones) found 1–2
+//! best: more light paths also take a larger MIS share of the paths both sides sample, and the
+//! camera side's variance on those paths, large on a caustic, falls with them. The pilot
+//! measures the sum instead.
 //!
 //! Pilot. The render's camera at about [`PILOT_PIXELS`] pixels (same aspect; the full image if
 //! smaller), [`PILOT_PASSES`] passes at each count of [`CANDIDATES`] (paths per pixel), on one
@@ -204,7 +205,7 @@ pub fn choose(
         .iter()
         .map(|&nu| {
             integrator.set_light_paths(paths(nu));
-            measure(world, integrator.as_mut(), &pixels, (seed, nu))
+            measure(world, integrator.as_mut(), &pixels, seed, nu)
         })
         .collect();
     let Some(measured) = measured else { return Ok(None) };
@@ -236,7 +237,8 @@ fn measure(
     world: &World,
     integrator: &mut dyn Integrator,
     pixels: &PixelSampler,
-    (seed, nu): (u64, f64),
+    seed: u64,
+    nu: f64,
 ) -> Option<Measured> {
     let (w, h) = pixels.resolution();
     let (w, h) = (w as usize, h as usize);
