@@ -154,8 +154,8 @@ fn bin() -> &'static str {
 /// `pt-cf --light-paths 0` renders exactly what `pt-cf` rendered before the light paths: the
 /// stored EXR was written by the base commit 3a693d7 with the same command line, and rewritten
 /// with the same command line by each intended change of `pt-cf`'s camera side since: the
-/// roulette after guided vertices (`results/2026-12-04-guided-roulette.md`) and the forecast
-/// photons' tighter target sphere (`results/2026-12-05-tight-target.md`), both z-tested against
+/// roulette after guided vertices (`results/2026-12-04-guided-roulette.md`) and the targeted
+/// emission's cone per Dirac object (`results/2026-12-05-targeted-cones.md`), both z-tested against
 /// `pt` by `tests/pt_cf.rs`. Regenerate it only for such a change, and say so there.
 #[test]
 fn light_paths_zero_is_the_old_pt_cf_bit_for_bit() {
