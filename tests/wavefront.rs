@@ -3,17 +3,19 @@
 //! - `World::intersect_batch` (its answers' records built by `World::hit_at`) and
 //!   `World::occluded_batch` must return exactly what `intersect` / `occluded` return ray by ray
 //!   (primitive, t, position and normals compared as bits), for random rays of
-//!   `common::random_ray`, batches of several sizes (1, 7, 256: the stream call's remainders),
-//!   and the degenerate segments a path can produce (tmax 0, negative, NaN).
+//!   `common::random_ray`, batches of several sizes (1, 7, 256: the packets' remainders), with
+//!   and without the coherent hint, and the degenerate segments a path can produce (tmax 0,
+//!   negative, NaN).
 //! - `pt`'s `estimate_batch` (the wavefront, `integrators::path_batch`) must return exactly the
 //!   estimates of `estimate` ray by ray (`integrators::estimate_each`) on every camera ray of a
-//!   small image with its per-pixel streams: the wavefront changes when a ray is traced, never
-//!   what a path draws or adds. Scenes: `cornell-box` (glass and mirror spheres, Dirac chains),
+//!   small image with its per-pixel streams, for one pass and for a pass group (each pixel's 16
+//!   camera rays side by side, traced with the coherent hint): the wavefront changes when a ray
+//!   is traced, never what a path draws or adds. Scenes: `cornell-box` (glass and mirror spheres, Dirac chains),
 //!   `ring` (a conductor mesh), the glass furnace.
 //!
 //! Each test runs on every back end of the build: obvhs always, Embree with `--features embree`
-//! (`scripts/test.sh` runs this file in both builds), where the batch goes through Embree's stream
-//! API, the 40-sphere scene through its user geometry.
+//! (`scripts/test.sh` runs this file in both builds), where the batch goes through Embree's
+//! 16-wide packets, the 40-sphere scene through its user geometry.
 
 mod common;
 
@@ -61,9 +63,9 @@ fn batch_equals_single(w: &World, label: &str, seed: u64) {
     let rays = rays(w, 6000, seed);
     let mut scratch = BatchScratch::default();
     let (mut hits, mut occ) = (Vec::new(), Vec::new());
-    for size in [1, 7, 256] {
+    for (size, coherent) in [(1, false), (7, false), (256, false), (7, true), (256, true)] {
         for chunk in rays.chunks(size) {
-            w.intersect_batch(chunk, &mut scratch, &mut hits);
+            w.intersect_batch(chunk, &mut scratch, &mut hits, coherent);
             w.occluded_batch(chunk, &mut scratch, &mut occ);
             assert_eq!((hits.len(), occ.len()), (chunk.len(), chunk.len()), "{label}: one answer per ray");
             for ((r, h), &o) in chunk.iter().zip(&hits).zip(&occ) {
@@ -74,7 +76,7 @@ fn batch_equals_single(w: &World, label: &str, seed: u64) {
                 assert_eq!(
                     key(h.map(|h| w.hit_at(r, h))),
                     key(single),
-                    "{label} ({:?}), batch {size}: closest hit of {r:?}",
+                    "{label} ({:?}), batch {size}, coherent {coherent}: closest hit of {r:?}",
                     w.accel()
                 );
                 assert_eq!(
@@ -97,21 +99,26 @@ fn batch_queries_equal_single_queries() {
     }
 }
 
-/// `pt`'s wavefront against its scalar loop on every camera ray of a `res`² image, 2 passes.
+/// `pt`'s wavefront against its scalar loop on every camera ray of a `res`² image: one pass,
+/// then a group of 16 passes (the camera rays traced as coherent runs).
 fn wavefront_equals_scalar(w: &World, label: &str, res: u32) {
     let mut args = MethodArgs::default();
     args.settings.max_depth = Some(64);
     let pt = Method::Pt.build(w, &args, &Method::Pt.preprocess(w, &args, 1).expect("no preprocess")).expect("pt");
     let cam = w.scene.camera.with_resolution(res, res);
-    for pass in 0..2u64 {
+    // one pass, then a pass group of 16 (each pixel's 16 camera rays side by side)
+    for passes in [vec![0u64], (1..17).collect::<Vec<u64>>()] {
         let (mut rays, mut rngs) = (Vec::new(), Vec::new());
         for p in 0..(res * res) as u64 {
-            let mut rng = Rng::keyed(9, stream::CAMERA, pass, p);
-            let [jx, jy] = rng.next_2d();
-            let (x, y) = ((p % res as u64) as f32, (p / res as u64) as f32);
-            rays.push(Ray { o: cam.position, d: cam.direction(x + jx, y + jy), tmax: f32::INFINITY });
-            rngs.push(rng);
+            for &pass in &passes {
+                let mut rng = Rng::keyed(9, stream::CAMERA, pass, p);
+                let [jx, jy] = rng.next_2d();
+                let (x, y) = ((p % res as u64) as f32, (p / res as u64) as f32);
+                rays.push(Ray { o: cam.position, d: cam.direction(x + jx, y + jy), tmax: f32::INFINITY });
+                rngs.push(rng);
+            }
         }
+        let pass = passes[0];
         let mut scalar_rngs = rngs.clone();
         let mut ctx = Context::new(Rng::keyed(0, stream::MISC, 0, 0));
         let (mut batch, mut scalar) = (Vec::new(), Vec::new());

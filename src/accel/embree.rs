@@ -44,6 +44,7 @@ mod ffi {
     pub const RTC_BUILD_QUALITY_HIGH: c_uint = 2;
     pub const RTC_INVALID_GEOMETRY_ID: c_uint = u32::MAX;
     pub const RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT: c_uint = 0;
+    pub const RTC_INTERSECT_CONTEXT_FLAG_COHERENT: c_uint = 1;
 
     /// `RTCIntersectContext` with `RTC_MAX_INSTANCE_LEVEL_COUNT` 1 and `RTC_MIN_WIDTH` 0.
     #[repr(C)]
@@ -219,11 +220,14 @@ impl Drop for EmbreeScene {
 /// A fresh intersection context (what the header's inline `rtcInitIntersectContext` sets).
 #[inline]
 fn context() -> ffi::RTCIntersectContext {
-    ffi::RTCIntersectContext {
-        flags: ffi::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT,
-        filter: std::ptr::null(),
-        instID: [ffi::RTC_INVALID_GEOMETRY_ID],
-    }
+    context_with(ffi::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT)
+}
+
+/// An intersection context with `flags`: `RTC_INTERSECT_CONTEXT_FLAG_COHERENT` lets Embree trace
+/// a packet whose rays run side by side (one pixel's camera rays) with its frustum code path.
+#[inline]
+fn context_with(flags: std::ffi::c_uint) -> ffi::RTCIntersectContext {
+    ffi::RTCIntersectContext { flags, filter: std::ptr::null(), instID: [ffi::RTC_INVALID_GEOMETRY_ID] }
 }
 
 #[inline]
@@ -390,7 +394,13 @@ impl EmbreeScene {
     /// variants call Embree: 1.01–1.04× the stream call `rtcIntersect1M`, bit for bit,
     /// `results/2026-12-05-embree-packets.md`; the stream's coherent hint measured slower,
     /// `results/2026-12-04-lazy-hits.md`): `found[i]` is what `closest(rays[i])` returns.
-    pub(super) fn closest_batch(&self, rays: &[super::Ray], s: &mut Scratch, found: &mut Vec<Option<(u32, f32)>>) {
+    pub(super) fn closest_batch(
+        &self,
+        rays: &[super::Ray],
+        s: &mut Scratch,
+        found: &mut Vec<Option<(u32, f32)>>,
+        coherent: bool,
+    ) {
         s.rayhits.clear();
         s.slot.clear();
         found.clear();
@@ -417,7 +427,12 @@ impl EmbreeScene {
         if s.rayhits.is_empty() {
             return;
         }
-        self.intersect_packets(&mut s.rayhits, &mut context());
+        let flags = if coherent {
+            ffi::RTC_INTERSECT_CONTEXT_FLAG_COHERENT
+        } else {
+            ffi::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT
+        };
+        self.intersect_packets(&mut s.rayhits, &mut context_with(flags));
         for (rh, &i) in s.rayhits.iter().zip(&s.slot) {
             match rh.hit.geomID {
                 TRI_GEOM => found[i as usize] = Some((rh.hit.primID, rh.ray.tfar)),

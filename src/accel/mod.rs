@@ -258,17 +258,25 @@ impl World {
     /// cost about 4% of `pt`, `results/2026-12-04-lazy-hits.md`). The Embree back end
     /// traces the batch in 16-wide packets (its per-call cost is what a batch saves,
     /// `results/2026-12-04-core-wavefront.md`, `results/2026-12-05-embree-packets.md`); obvhs
-    /// ray by ray.
-    pub fn intersect_batch(&self, rays: &[Ray], scratch: &mut BatchScratch, out: &mut Vec<Option<(u32, f32)>>) {
+    /// ray by ray. `coherent` is a hint that runs of 16 rays leave one point in nearly one
+    /// direction (a pixel's camera rays, `render::render_passes`): Embree then traces them with
+    /// its coherent code path (`results/2026-12-05-pass-groups.md`); the hits are the same.
+    pub fn intersect_batch(
+        &self,
+        rays: &[Ray],
+        scratch: &mut BatchScratch,
+        out: &mut Vec<Option<(u32, f32)>>,
+        coherent: bool,
+    ) {
         out.clear();
         match &self.accel {
             #[cfg(feature = "embree")]
             Accel::Embree(e) => {
                 count(rays.len() as u64, 0);
-                e.closest_batch(rays, &mut scratch.embree, out);
+                e.closest_batch(rays, &mut scratch.embree, out, coherent);
             }
             _ => {
-                let _ = scratch;
+                let _ = (scratch, coherent);
                 out.extend(rays.iter().map(|r| self.closest(r.o, r.d, r.tmax)));
             }
         }

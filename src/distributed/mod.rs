@@ -184,6 +184,12 @@ pub fn agree_round(c: &dyn Cluster, go: bool, failure: Option<String>) -> Result
     Ok(all == 0.0)
 }
 
+/// The least of every rank's `v` (collective; exact below 2^53).
+pub fn agree_min(c: &dyn Cluster, v: u64) -> u64 {
+    let m = -c.all_reduce_max(-(v.min(1 << 53) as f64));
+    m as u64
+}
+
 /// Rank 0's `v` on every rank (collective); `what` names it in the error of a malformed broadcast.
 pub fn broadcast_u64(c: &dyn Cluster, v: u64, what: &str) -> Result<u64, String> {
     let mut bytes = v.to_le_bytes().to_vec();

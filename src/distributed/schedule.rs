@@ -9,7 +9,9 @@
 //! exactly one pass of every rank, and rank `r`'s k-th pass is in round k. So if all ranks
 //! stop after the same number of rounds `k` (agree with `distributed::all_agree` once per
 //! round), the finished passes are exactly `first_pass..passes_done_after_rounds(..)`, a
-//! contiguous range, which is what a checkpoint records.
+//! contiguous range, which is what a checkpoint records. A round may hold a *pass group* of `g`
+//! passes of every rank (`size·g` consecutive indices, `g` agreed by all ranks, [`pass_group`]);
+//! the argument is the same.
 //!
 //! Time boxes: [`Deadline`] refuses to start a pass that is expected to end after the
 //! deadline, using the running mean pass duration plus a safety margin.
@@ -50,6 +52,23 @@ pub fn round_of(pass: u64, size: usize, first_pass: u64) -> Option<u64> {
 pub fn passes_done_after_rounds(first_pass: u64, total_passes: u64, size: usize, rounds: u64) -> u64 {
     let span = rounds.saturating_mul(size.max(1) as u64);
     first_pass.saturating_add(span).min(total_passes).max(first_pass.min(total_passes))
+}
+
+/// About the longest a pass group is planned to take (seconds), so that progress, checkpoints
+/// and snapshots, which happen between rounds, stay about this fresh.
+pub const GROUP_SECS: f64 = 1.0;
+
+/// The passes per rank of the next round (a pass group): at most `limit` (1 for an integrator
+/// with per-pass state), 1 until a pass has been timed, and no more than fit before the
+/// deadline, than take about [`GROUP_SECS`] or than are `left` for this rank (`None` without an
+/// spp target). At least 1: whether a round starts at all is [`Deadline::should_start_next`]'s.
+pub fn pass_group(limit: u64, timer: &PassTimer, deadline: &Deadline, now: Instant, left: Option<u64>) -> u64 {
+    let mean = timer.mean_secs();
+    if timer.count() == 0 || !(mean > 0.0) {
+        return 1;
+    }
+    let fresh = (GROUP_SECS / mean).floor().min(u64::MAX as f64) as u64;
+    [limit, fresh, deadline.passes_that_fit(now, mean), left.unwrap_or(u64::MAX)].into_iter().min().unwrap_or(1).max(1)
 }
 
 /// A time box end shared by all ranks, with a safety margin for the pass in flight.
@@ -124,6 +143,27 @@ impl Deadline {
         // Strictly before the deadline: nothing starts once it has passed.
         now < at && need <= left
     }
+
+    /// How many passes of `mean_pass_secs` each may start at `now` and all end before the
+    /// deadline with the margin (a pass group): `u64::MAX` without a time box or before any pass
+    /// finished (mean 0), else `⌊(left − margin_secs) / (mean·(1 + margin_frac))⌋`. At least 1
+    /// exactly when [`Deadline::should_start_next`] holds (given a positive mean).
+    pub fn passes_that_fit(&self, now: Instant, mean_pass_secs: f64) -> u64 {
+        let Some(at) = self.at else { return u64::MAX };
+        if !(mean_pass_secs > 0.0) {
+            return u64::MAX;
+        }
+        if now >= at {
+            return 0;
+        }
+        let left = at.saturating_duration_since(now).as_secs_f64() - self.margin_secs;
+        let n = (left / (mean_pass_secs * (1.0 + self.margin_frac))).floor();
+        if n >= 1.0 {
+            n.min(u64::MAX as f64) as u64
+        } else {
+            0
+        }
+    }
 }
 
 /// Running mean of pass durations (seconds), for [`Deadline::should_start_next`].
@@ -142,6 +182,13 @@ impl PassTimer {
     pub fn record(&mut self, secs: f64) {
         if secs.is_finite() && secs >= 0.0 {
             self.count += 1;
+            self.total_secs += secs;
+        }
+    }
+    /// Records `n` passes that took `secs` together (a pass group) as `n` passes of `secs / n`.
+    pub fn record_group(&mut self, secs: f64, n: u64) {
+        if secs.is_finite() && secs >= 0.0 && n > 0 {
+            self.count += n;
             self.total_secs += secs;
         }
     }
@@ -262,5 +309,43 @@ mod tests {
         t.record(f64::NAN);
         t.record(-1.0);
         assert_eq!((t.count(), t.mean_secs()), (2, 2.0));
+        t.record_group(6.0, 3);
+        t.record_group(1.0, 0);
+        t.record_group(f64::NAN, 2);
+        assert_eq!((t.count(), t.mean_secs()), (5, 2.0));
+    }
+
+    /// A group of n passes fits exactly when n passes back to back would each be allowed to
+    /// start: n·mean·(1 + frac) + secs ≤ left.
+    #[test]
+    fn passes_that_fit_agrees_with_should_start_next() {
+        let t0 = Instant::now();
+        let d = Deadline::after_secs(t0, 10.0).with_margin(0.25, 0.5);
+        assert_eq!(d.passes_that_fit(t0, 1.0), 7); // 7·1.25 + 0.5 = 9.25 ≤ 10 < 8·1.25 + 0.5
+        assert_eq!(d.passes_that_fit(t0, 0.0), u64::MAX, "no pass timed yet");
+        assert_eq!(d.passes_that_fit(t0, f64::NAN), u64::MAX);
+        assert_eq!(d.passes_that_fit(t0 + Duration::from_secs(11), 1.0), 0);
+        assert_eq!(Deadline::never().passes_that_fit(t0, 1.0), u64::MAX);
+        for mean in [0.01, 0.3, 1.0, 7.6, 9.5, 12.0] {
+            assert_eq!(d.passes_that_fit(t0, mean) >= 1, d.should_start_next(t0, mean), "mean {mean}");
+        }
+    }
+
+    #[test]
+    fn pass_groups_respect_every_bound() {
+        let t0 = Instant::now();
+        let never = Deadline::never();
+        let mut timer = PassTimer::new();
+        assert_eq!(pass_group(16, &timer, &never, t0, None), 1, "no pass timed yet");
+        timer.record(0.01);
+        assert_eq!(pass_group(16, &timer, &never, t0, None), 16, "the limit");
+        assert_eq!(pass_group(1, &timer, &never, t0, None), 1, "an integrator with per-pass state");
+        assert_eq!(pass_group(16, &timer, &never, t0, Some(5)), 5, "the passes left");
+        assert_eq!(pass_group(16, &timer, &never, t0, Some(0)), 1, "at least 1");
+        let d = Deadline::after_secs(t0, 0.105).with_margin(0.0, 0.0);
+        assert_eq!(pass_group(16, &timer, &d, t0, None), 10, "the time box");
+        let mut slow = PassTimer::new();
+        slow.record(GROUP_SECS / 3.5);
+        assert_eq!(pass_group(16, &slow, &never, t0, None), 3, "about GROUP_SECS per group");
     }
 }

@@ -63,6 +63,11 @@ impl CameraEstimate {
 pub trait Integrator: Send + Sync {
     /// Per-pass refresh; randomness must come from (seed, pass) only.
     fn begin_pass(&mut self, _world: &World, _seed: u64, _pass: u64) {}
+    /// True when no pass depends on state that `begin_pass` sets, so that several passes may be
+    /// traced in one batch (`render::render_passes`). False by default.
+    fn independent_passes(&self) -> bool {
+        false
+    }
     /// One estimate of the radiance arriving at `origin` from direction `dir` (unit), drawing
     /// from `ctx.rng`, split into its Dirac-prefix emission and the rest. Contract (emission
     /// splitting is unbiased only under it): `prefix_le` estimates the same `E` as

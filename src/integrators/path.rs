@@ -88,6 +88,11 @@ pub fn emitter_hit(world: &World, hit: &Hit, d: Vec3, prev_delta: bool, prev_pdf
 }
 
 impl Integrator for PathTracer {
+    /// Every pass is a pure function of (seed, pass, pixel) and the preprocess: no `begin_pass`.
+    fn independent_passes(&self) -> bool {
+        true
+    }
+
     fn estimate(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
         let t0 = ctx.profile.start(Phase::Radiance);
         let l = self.trace(world, origin, dir, ctx);

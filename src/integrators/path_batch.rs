@@ -95,7 +95,8 @@ impl PathTracer {
             if w.live.is_empty() {
                 break;
             }
-            world.intersect_batch(&w.rays, &mut w.scratch, &mut w.hits);
+            // the camera rays (depth 0) of a pass group run pixel by pixel, side by side
+            world.intersect_batch(&w.rays, &mut w.scratch, &mut w.hits, depth == 0);
             for k in 0..w.live.len() {
                 self.shade(world, w, k, depth, rngs, out);
             }

@@ -378,6 +378,11 @@ fn continue_path(st: &mut PathState, (index, p, ng): (u32, Vec3, Vec3), bs: &Bsd
 }
 
 impl Integrator for GuidedPathTracer {
+    /// Every pass is a pure function of (seed, pass, pixel) and the preprocess: no `begin_pass`.
+    fn independent_passes(&self) -> bool {
+        true
+    }
+
     fn estimate(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
         let t0 = ctx.profile.start(Phase::Radiance);
         let st = PathState {

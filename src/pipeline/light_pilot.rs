@@ -249,7 +249,7 @@ fn measure(
         integrator.begin_pass(world, seed, pass);
         let splats = integrator.light_splats(world, pixels.camera(), seed, pass)?;
         rays += splats.closest_rays + splats.shadow_rays;
-        for (tile, out, c) in camera_tiles(world, &*integrator, pixels, seed, pass) {
+        for (tile, out, c) in camera_tiles(world, &*integrator, pixels, seed, &[pass]) {
             rays += c.closest_rays + c.shadow_rays;
             for ((x, y), l) in tile_pixels(tile, (w, h)).zip(out) {
                 let v = with_splat(l, Some(&splats), y * w + x, &mut scratch);

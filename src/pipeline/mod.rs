@@ -24,7 +24,7 @@
 use crate::accel::World;
 use crate::atomic_io::{FileSet, OutputSet};
 use crate::checkpoint::Checkpoint;
-use crate::distributed::schedule::{Deadline, PassTimer};
+use crate::distributed::schedule::{pass_group, Deadline, PassTimer};
 use crate::distributed::{self, Cluster};
 use crate::image_io::{with_ext, Image};
 use crate::integrators::{Integrator, Method, MethodArgs, MethodChoice};
@@ -32,7 +32,7 @@ use crate::param_limits as params;
 use crate::progress::{PhaseBar, Progress};
 use crate::render::film::Film;
 use crate::render::pixel::SplitStats;
-use crate::render::{render_pass, PassCounters, PixelSampler};
+use crate::render::{pass_group_limit, render_passes, PassCounters, PixelSampler};
 use crate::scene::Scene;
 
 mod checkpoints;
@@ -421,8 +421,9 @@ fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) ->
     };
     let (t_render, mut last_ckpt, mut timer) = (Instant::now(), Instant::now(), PassTimer::new());
     let mut failure: Option<String> = None;
+    let limit = if integrator.independent_passes() { pass_group_limit(w as usize, h as usize) as u64 } else { 1 };
+    let mut round_start = first_pass;
     for round in 0u64.. {
-        let round_start = first_pass + round * size;
         let more = match total {
             Some(t) => round_start < t,
             // the first round always runs, so a time-boxed image is never empty
@@ -433,18 +434,19 @@ fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) ->
         if !distributed::agree_round(run.cluster, go, failure.take())? {
             break;
         }
-        let pass = round_start + rank;
-        if total.is_none_or(|t| pass < t) {
+        // the round's pass group, the same on every rank: passes round_start + rank + j·size
+        let left = total.map(|t| (t - round_start).div_ceil(size));
+        let g = distributed::agree_min(run.cluster, pass_group(limit, &timer, &deadline, Instant::now(), left));
+        let mine: Vec<u64> =
+            (0..g).map(|j| round_start + rank + j * size).filter(|&q| total.is_none_or(|t| q < t)).collect();
+        if !mine.is_empty() {
             let t_pass = Instant::now();
-            integrator.begin_pass(run.world, run.plan.seed, pass);
-            let integ = &*integrator;
-            let (world, seed, film) = (run.world, run.plan.seed, &mut p.film);
-            let c = run.pool.install(|| render_pass(world, integ, &pixels, seed, pass, film));
-            p.counters.add(&c);
-            timer.record(secs(t_pass));
-            p.my_passes += 1;
+            p.counters.add(&run.render_group(integrator, &pixels, &mine, &mut p.film));
+            timer.record_group(secs(t_pass), mine.len() as u64);
+            p.my_passes += mine.len() as u64;
         }
-        p.passes_done = total.map_or(round_start + size, |t| (round_start + size).min(t));
+        round_start += g * size;
+        p.passes_done = total.map_or(round_start, |t| round_start.min(t));
         let rays = p.counters.closest_rays + p.counters.shadow_rays;
         progress.update(p.passes_done - first_pass, p.passes_done, secs(t_render), secs(run.started), rays * size);
         p.render_s = secs(t_render);
@@ -455,6 +457,25 @@ fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) ->
     p.render_s = secs(t_render);
     progress.finish();
     Ok(p)
+}
+
+impl Run<'_> {
+    /// This rank's passes `mine` of a round, in one group when there are several (the
+    /// integrator's passes are then independent: `pass_group`'s limit is 1 otherwise).
+    fn render_group(
+        &self,
+        integrator: &mut dyn Integrator,
+        pixels: &PixelSampler,
+        mine: &[u64],
+        film: &mut Film,
+    ) -> PassCounters {
+        let (world, seed) = (self.world, self.plan.seed);
+        for &q in mine {
+            integrator.begin_pass(world, seed, q);
+        }
+        let integ = &*integrator;
+        self.pool.install(|| render_passes(world, integ, pixels, seed, mine, film))
+    }
 }
 
 impl Passes {

@@ -1,4 +1,4 @@
-//! One rendering pass: every pixel gets one sample, tiles run in parallel with rayon.
+//! Rendering passes: every pixel gets one sample per pass, tiles run in parallel with rayon.
 //!
 //! Randomness is a pure function of (seed, pass, pixel) (`Rng::keyed` with the camera stream),
 //! and each tile's results merge into the film in tile order, so the film is bit-identical for
@@ -6,6 +6,11 @@
 //! Each tile runs with its own explicit `transport::context::Context` (random stream rekeyed
 //! per pixel, scratch, profile counters); the tiles' profiles are summed into the pass's.
 //! How a pixel sample is drawn (one camera ray, or emission splitting) is `pixel::PixelSampler`.
+//!
+//! Pass groups (`render_passes`): an integrator whose passes share no state traces several
+//! passes at once, each pixel's samples side by side in the batch. A sample's value depends only
+//! on (seed, pass, pixel), and each pixel's samples enter the film in pass order, so a group's
+//! film is bit for bit that of its passes rendered one by one; the grouping is pure speed.
 
 pub mod film;
 pub mod pixel;
@@ -65,7 +70,23 @@ pub fn tile_pixels(tile: usize, (w, h): (usize, usize)) -> impl Iterator<Item = 
     (ty * TILE..((ty + 1) * TILE).min(h)).flat_map(move |y| (tx * TILE..((tx + 1) * TILE).min(w)).map(move |x| (x, y)))
 }
 
-/// The camera side of pass `pass`: every tile's pixel estimates (non-finite ones counted and
+/// The most passes traced in one call of [`render_passes`] (issue #33): a batch then holds up
+/// to this many samples of each pixel side by side, so that a 16-ray packet of camera rays is
+/// one pixel's (Mitsuba 3's wavefront order, `results/2026-12-05-pass-groups.md`).
+pub const MAX_PASS_GROUP: usize = 16;
+
+/// Samples held at once by a pass group (its camera values and each pass's splat image, 12
+/// bytes each): the group of a `w` × `h` image is at most `MAX_GROUP_SAMPLES / (w·h)` passes.
+pub const MAX_GROUP_SAMPLES: usize = 1 << 22;
+
+/// The largest pass group for a `w` × `h` image: [`MAX_PASS_GROUP`], fewer for large images
+/// (at least 1).
+pub fn pass_group_limit(w: usize, h: usize) -> usize {
+    (MAX_GROUP_SAMPLES / (w * h).max(1)).clamp(1, MAX_PASS_GROUP)
+}
+
+/// The camera side of the passes `passes`: every tile's pixel estimates, pixel-major
+/// (`out[k·G + j]` is the tile's pixel `k` in pass `passes[j]`; non-finite ones counted and
 /// replaced by zero), in tile order, with the tile's rays and profile. The light side is
 /// [`Integrator::light_splats`].
 pub fn camera_tiles(
@@ -73,12 +94,12 @@ pub fn camera_tiles(
     integrator: &dyn Integrator,
     pixels: &PixelSampler,
     seed: u64,
-    pass: u64,
+    passes: &[u64],
 ) -> Vec<TileResult> {
     let (w, h) = pixels.resolution();
     let (w, h) = (w as usize, h as usize);
     let (tiles_x, tiles_y) = tile_counts(w, h);
-    let fresh = || Rng::keyed(seed, stream::CAMERA, pass, 0);
+    let fresh = || Rng::keyed(seed, stream::CAMERA, passes[0], 0);
     // one context and buffer set per rayon split, reused by its tiles (what carries over is
     // capacity: the rng is rekeyed and the profile taken per tile)
     let init = || {
@@ -94,8 +115,8 @@ pub fn camera_tiles(
             ctx.rng = fresh();
             px.clear();
             px.extend(tile_pixels(tile, (w, h)).map(|(x, y)| (x, y, (y * w + x) as u64)));
-            let mut out = Vec::with_capacity(px.len());
-            pixels.sample_tile((world, integrator), px, (seed, pass), (ctx, buf), &mut out);
+            let mut out = Vec::with_capacity(px.len() * passes.len());
+            pixels.sample_tile((world, integrator), px, (seed, passes), (ctx, buf), &mut out);
             for l in out.iter_mut().filter(|l| !l.is_finite()) {
                 c.nonfinite += 1;
                 *l = Rgb::ZERO;
@@ -119,12 +140,30 @@ pub fn render_pass(
     pass: u64,
     film: &mut Film,
 ) -> PassCounters {
+    render_passes(world, integrator, pixels, seed, &[pass], film)
+}
+
+/// Renders the passes `passes` (one sample per pixel each) into `film`, their camera rays traced
+/// together. Each pixel gets its samples in the order of `passes`, each the value `render_pass`
+/// would give, so the film is bit for bit that of rendering them one by one. Only for
+/// integrators whose passes are independent ([`Integrator::independent_passes`]: no state from
+/// `begin_pass`), and at most [`pass_group_limit`] passes.
+pub fn render_passes(
+    world: &World,
+    integrator: &dyn Integrator,
+    pixels: &PixelSampler,
+    seed: u64,
+    passes: &[u64],
+    film: &mut Film,
+) -> PassCounters {
     let (w, h) = (film.width, film.height);
     assert_eq!(pixels.resolution(), (w as u32, h as u32), "pixel sampler and film sizes differ");
-    let results = camera_tiles(world, integrator, pixels, seed, pass);
-    let splats = integrator.light_splats(world, pixels.camera(), seed, pass);
+    assert!(!passes.is_empty() && (passes.len() == 1 || integrator.independent_passes()));
+    let results = camera_tiles(world, integrator, pixels, seed, passes);
+    let splats: Vec<_> = passes.iter().map(|&q| integrator.light_splats(world, pixels.camera(), seed, q)).collect();
+    let g = passes.len();
     // The merge runs in parallel over rows of tiles (each a contiguous band of the film); every
-    // pixel still gets exactly its one sample of the pass, so the film is the serial merge's.
+    // pixel still gets its samples in pass order, so the film is the serial merge's.
     let tiles_x = w.div_ceil(TILE);
     let band = w * TILE * film::STRIDE;
     let mut total = film
@@ -134,10 +173,12 @@ pub fn render_pass(
         .map(|(rows, tiles)| {
             let mut c = PassCounters::default();
             for (tile, out, tc) in tiles {
-                for ((x, y), &l) in tile_pixels(*tile, (w, h)).zip(out) {
+                for ((x, y), ls) in tile_pixels(*tile, (w, h)).zip(out.chunks_exact(g)) {
                     let i = (y % TILE) * w + x;
-                    let v = with_splat(l, splats.as_ref(), y * w + x, &mut c);
-                    film::add_at(&mut rows[i * film::STRIDE..(i + 1) * film::STRIDE], v);
+                    for (&l, s) in ls.iter().zip(&splats) {
+                        let v = with_splat(l, s.as_ref(), y * w + x, &mut c);
+                        film::add_at(&mut rows[i * film::STRIDE..(i + 1) * film::STRIDE], v);
+                    }
                 }
                 c.add(tc);
             }
@@ -147,7 +188,7 @@ pub fn render_pass(
             a.add(&b);
             a
         });
-    if let Some(s) = &splats {
+    for s in splats.iter().flatten() {
         total.closest_rays += s.closest_rays;
         total.shadow_rays += s.shadow_rays;
     }

@@ -126,15 +126,17 @@ impl<'a> PixelSampler<'a> {
         self.stats
     }
 
-    /// One sample of each pixel of `tile` (`(x, y, row-major index)`, in order) into `out`:
-    /// pixel `p` draws from its camera stream keyed by `key` = (seed, pass) and `p`, exactly as
-    /// [`PixelSampler::sample`] would. The unsplit pixels' camera rays go to the integrator as
-    /// one batch ([`Integrator::estimate_batch`]), the split ones one by one.
+    /// One sample of each pixel of `tile` (`(x, y, row-major index)`, in order) for each pass of
+    /// `passes` into `out`, pixel-major: `out[k·G + j]` is pixel `k`'s sample of `passes[j]`
+    /// (`G = passes.len()`). Pixel `p` of pass `q` draws from its camera stream keyed by
+    /// (`seed`, `q`, `p`) alone, so a sample does not depend on which passes share the call. The unsplit samples' camera rays go to the integrator as one
+    /// batch ([`Integrator::estimate_batch`]), a pixel's samples side by side (coherent camera
+    /// rays for the tracer); the split ones go one by one.
     pub(crate) fn sample_tile(
         &self,
         (world, integrator): (&World, &dyn Integrator),
         tile: &[(usize, usize, u64)],
-        key: (u64, u64),
+        (seed, passes): (u64, &[u64]),
         (ctx, buf): (&mut Context, &mut TileBuffers),
         out: &mut Vec<Rgb>,
     ) {
@@ -145,17 +147,20 @@ impl<'a> PixelSampler<'a> {
         slots.clear();
         out.clear();
         for &(x, y, pixel) in tile {
-            let mut rng = Rng::keyed(key.0, stream::CAMERA, key.1, pixel);
-            let [jx, jy] = rng.next_2d();
-            if self.k == 1 || !self.split[pixel as usize] {
-                let d = cam.direction(x as f32 + jx, y as f32 + jy);
-                rays.push(Ray { o: cam.position, d, tmax: f32::INFINITY });
-                rngs.push(rng);
-                slots.push(out.len());
-                out.push(Rgb::ZERO);
-            } else {
-                ctx.rng = rng;
-                out.push(self.split_sample(world, integrator, (x, y, pixel), key, [jx, jy], ctx));
+            for &pass in passes {
+                let mut rng = Rng::keyed(seed, stream::CAMERA, pass, pixel);
+                let [jx, jy] = rng.next_2d();
+                if self.k == 1 || !self.split[pixel as usize] {
+                    let d = cam.direction(x as f32 + jx, y as f32 + jy);
+                    rays.push(Ray { o: cam.position, d, tmax: f32::INFINITY });
+                    rngs.push(rng);
+                    slots.push(out.len());
+                    out.push(Rgb::ZERO);
+                } else {
+                    ctx.rng = rng;
+                    let key = (seed, pass);
+                    out.push(self.split_sample(world, integrator, (x, y, pixel), key, [jx, jy], ctx));
+                }
             }
         }
         integrator.estimate_batch(world, rays, rngs, ctx, est);
