@@ -4,9 +4,10 @@
 #   2. cargo test --release                    (unit + integration tests, single process)
 #   3. cargo test --release --features mpi --test mpi   (2-rank tests under mpirun; target/mpi)
 #   4. installs libembree-dev if missing (root/sudo); FORECAST_NO_EMBREE=1 skips Embree, then
-#      cargo test --release --features embree --test accel_embree --test wavefront --test bvh
-#      (target/embree; Embree against obvhs, pt image z-tests, the stream queries and the wavefront
-#      pt bit for bit against their scalar forms, and tests/bvh.rs on the Embree back end)
+#      cargo test --release --features embree --test accel_embree --test wavefront --test pass_groups
+#      --test bvh (target/embree; Embree against obvhs, pt image z-tests, the packet queries, the
+#      wavefront pt and pass groups bit for bit against their scalar forms, and tests/bvh.rs on
+#      the Embree back end)
 #   5. scripts/check-mitsuba.sh                (pt vs the independent Mitsuba 3 reference)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -44,9 +45,9 @@ if [ "${FORECAST_NO_EMBREE:-0}" != "1" ]; then
     fi
 fi
 if [ "$embree" = "1" ]; then
-    echo "== cargo test --release --features embree --test accel_embree --test wavefront --test bvh (Embree back end)"
+    echo "== cargo test --release --features embree --test accel_embree --test wavefront --test pass_groups --test bvh (Embree back end)"
     # a separate target dir keeps the Embree build from replacing the default one
-    CARGO_TARGET_DIR=target/embree cargo test --release --features embree --test accel_embree --test wavefront 2>&1 \
+    CARGO_TARGET_DIR=target/embree cargo test --release --features embree --test accel_embree --test wavefront --test pass_groups 2>&1 \
         | tee -a "$log"
     FORECAST_TEST_ACCEL=embree CARGO_TARGET_DIR=target/embree cargo test --release --features embree --test bvh 2>&1 \
         | tee -a "$log"

@@ -4,7 +4,7 @@
 //! Data flow (and module order):
 //! ```text
 //! scene (TOML, OBJ) → accel::World (CWBVH) → Method::preprocess (rank 0; caustic maps)
-//!   → distributed broadcast → per pass: Integrator::begin_pass (IWS point lights) → render::render_pass
+//!   → distributed broadcast → per pass or pass group: Integrator::begin_pass (IWS point lights) → render::render_passes
 //!   → render::film::Film sums → distributed reduce → image_io (EXR, PNG) + JSON report
 //! ```
 //! Methods: `pt` (reference), `iws`, `iws-pm`, `iws-cf`; see `integrators` and ARCHITECTURE.md.

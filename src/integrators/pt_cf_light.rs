@@ -39,7 +39,7 @@
 //!
 //! Splat film. Light paths run in chunks of [`CHUNK`] (in parallel); each chunk returns its
 //! (pixel, value) list and the lists are added in chunk order into a dense per-pass image, which
-//! `render::render_pass` adds to each pixel's camera sample: the pass's value of a pixel is still
+//! `render::render_passes` adds to each pixel's camera sample: the pass's value of a pixel is still
 //! one i.i.d. sample, so the film's variance layer and checkpoints stay valid, and the image does
 //! not depend on threads or ranks (a pass, light paths included, is rendered by one rank).
 

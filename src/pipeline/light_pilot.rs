@@ -231,7 +231,7 @@ pub fn choose(
 
 /// The pilot's passes at `nu` paths per pixel (the integrator's current count): the summed
 /// per-pixel variance of the pass values in each block (camera + splats, as
-/// `render::render_pass` adds them) and the rays of both sides per pixel and pass; `None` when
+/// `render::render_passes` adds them) and the rays of both sides per pixel and pass; `None` when
 /// the integrator traces no light paths.
 fn measure(
     world: &World,

@@ -1,6 +1,6 @@
 //! The explicit per-worker context handed down the radiance recursion (pbrt-v4's
 //! `ScratchBuffer` idea): the sample's random stream, reusable scratch buffers and the profile
-//! counters. One per rayon work split, reused across its tiles; `render::render_pass` rekeys
+//! counters. One per rayon work split, reused across its tiles; `render::render_passes` rekeys
 //! `rng` for every pixel and takes the profile per tile, so randomness stays a pure function of
 //! (seed, pass, pixel) whatever the thread, and nothing else carries from one tile to the next
 //! but buffers. Also the
@@ -21,7 +21,7 @@ pub struct Context {
     pub knn: Vec<(f32, u32)>,
     /// Counters and phase times, summed into the report.
     pub profile: Profile,
-    /// The camera of the image being rendered (set by `render::render_pass`; `None` elsewhere,
+    /// The camera of the image being rendered (set by `render::render_passes`; `None` elsewhere,
     /// e.g. preprocess gathers): `pt-cf`'s camera-side MIS weight against its light paths.
     pub camera: Option<Camera>,
     /// Buffers an integrator keeps from one batch to the next (`pt`'s wavefront), typed by that
