@@ -151,7 +151,7 @@ pub struct RenderArgs {
     /// Where checkpoints go (default PREFIX.ckpt).
     #[arg(long, requires = "checkpoint_every")]
     pub checkpoint_path: Option<PathBuf>,
-    /// Stop after this many rounds of passes (testing kill/resume).
+    /// Stop after this many rounds of passes, one pass per rank each (testing kill/resume).
     #[arg(long, hide = true)]
     pub max_rounds: Option<u64>,
     /// Also write the image as it stood at these times since the start (e.g. 15s,30s,1m), each

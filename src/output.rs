@@ -42,9 +42,13 @@ pub fn stdout_line(args: fmt::Arguments<'_>) -> Result<(), String> {
     }
 }
 
-/// Writes `args` and a newline to stderr; failures are ignored (see the module docs).
+/// Writes `args` and a newline to stderr in one `write` where the OS allows, so that a line
+/// printed just before the process ends (the MPI watchdog's, before `MPI_Abort`) reaches
+/// `mpirun`'s forwarding whole; failures are ignored (see the module docs).
 pub fn stderr_line(args: fmt::Arguments<'_>) {
-    let _ = write_line(&mut io::stderr().lock(), args);
+    let line = format!("{args}\n");
+    let mut err = io::stderr().lock();
+    let _ = err.write_all(line.as_bytes()).and_then(|()| err.flush());
 }
 
 /// One line to any writer, flushed, so that a failure surfaces here and not at exit.

@@ -421,7 +421,9 @@ fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) ->
     };
     let (t_render, mut last_ckpt, mut timer) = (Instant::now(), Instant::now(), PassTimer::new());
     let mut failure: Option<String> = None;
-    let limit = if integrator.independent_passes() { pass_group_limit(w as usize, h as usize) as u64 } else { 1 };
+    // `--max-rounds` (testing) counts rounds of one pass per rank
+    let grouped = integrator.independent_passes() && run.job.max_rounds.is_none();
+    let limit = if grouped { pass_group_limit(w as usize, h as usize) as u64 } else { 1 };
     let mut round_start = first_pass;
     for round in 0u64.. {
         let more = match total {
