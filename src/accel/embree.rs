@@ -280,8 +280,10 @@ impl EmbreeScene {
                 return Err(format!("Embree: building the scene failed (RTCError {err})"));
             }
             // a libembree3 built without ray packets reports an error here instead of tracing
-            let probe = ray(Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 1.0), 0.0);
-            e.intersect_packets(&mut [ffi::RTCRayHit { ray: probe, hit: ffi::RTCHit::default() }], &mut context());
+            let mut probe = Scratch::default();
+            put_lane(&mut probe.hit16.0, 0, Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 1.0), 0.0);
+            probe.hit16.0[18][0] = f32::from_bits(ffi::RTC_INVALID_GEOMETRY_ID);
+            e.closest16(&mut probe.hit16.0, &[0], &mut context(), &mut [None]);
             match ffi::rtcGetDeviceError(device) {
                 0 => Ok(e),
                 err => Err(format!("Embree: this libembree3 cannot trace 16-wide packets (RTCError {err})")),
@@ -380,20 +382,24 @@ impl EmbreeScene {
     }
 }
 
-/// Reusable buffers of the packet calls (one per batch of a tile's paths, not per bounce).
-#[derive(Default)]
+/// The packet records of the batch calls, reused from call to call: the rays are written into
+/// them lane by lane straight from the batch (no intermediate one-ray records).
 pub(super) struct Scratch {
-    rayhits: Vec<ffi::RTCRayHit>,
-    rays: Vec<ffi::RTCRay>,
-    /// The batch index of each record (rays that need no query are not traced).
-    slot: Vec<u32>,
+    hit16: Box<ffi::RTCRayHit16>,
+    ray16: Box<ffi::RTCRay16>,
+}
+
+impl Default for Scratch {
+    fn default() -> Self {
+        Scratch { hit16: Box::new(ffi::RTCRayHit16([[0.0; 16]; 20])), ray16: Box::new(ffi::RTCRay16([[0.0; 16]; 12])) }
+    }
 }
 
 impl EmbreeScene {
     /// Closest hits of a batch of rays in 16-wide packets (`rtcIntersect16`, as Mitsuba 3's llvm
     /// variants call Embree: 1.01–1.04× the stream call `rtcIntersect1M`, bit for bit,
-    /// `results/2026-12-05-embree-packets.md`; the stream's coherent hint measured slower,
-    /// `results/2026-12-04-lazy-hits.md`): `found[i]` is what `closest(rays[i])` returns.
+    /// `results/2026-12-05-embree-packets.md`): `found[i]` is what `closest(rays[i])` returns.
+    /// The rays that need a query fill the packets in batch order, 16 to a packet.
     pub(super) fn closest_batch(
         &self,
         rays: &[super::Ray],
@@ -401,9 +407,14 @@ impl EmbreeScene {
         found: &mut Vec<Option<(u32, f32)>>,
         coherent: bool,
     ) {
-        s.rayhits.clear();
-        s.slot.clear();
         found.clear();
+        let flags = if coherent {
+            ffi::RTC_INTERSECT_CONTEXT_FLAG_COHERENT
+        } else {
+            ffi::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT
+        };
+        let mut ctx = context_with(flags);
+        let (p, mut slot, mut n) = (&mut s.hit16.0, [0u32; 16], 0);
         for (i, r) in rays.iter().enumerate() {
             if r.tmax.is_nan() || r.tmax <= 0.0 {
                 found.push(None);
@@ -418,25 +429,38 @@ impl EmbreeScene {
                     }
                 }
             }
-            let mut rh = ffi::RTCRayHit { ray: ray(r.o, r.d, tfar), hit: ffi::RTCHit::default() };
-            rh.hit.geomID = ffi::RTC_INVALID_GEOMETRY_ID;
-            s.slot.push(i as u32);
             found.push(best);
-            s.rayhits.push(rh);
+            put_lane(p, n, r.o, r.d, tfar);
+            p[18][n] = f32::from_bits(ffi::RTC_INVALID_GEOMETRY_ID);
+            (slot[n], n) = (i as u32, n + 1);
+            if n == 16 {
+                self.closest16(p, &slot[..n], &mut ctx, found);
+                n = 0;
+            }
         }
-        if s.rayhits.is_empty() {
-            return;
+        if n > 0 {
+            self.closest16(p, &slot[..n], &mut ctx, found);
         }
-        let flags = if coherent {
-            ffi::RTC_INTERSECT_CONTEXT_FLAG_COHERENT
-        } else {
-            ffi::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT
-        };
-        self.intersect_packets(&mut s.rayhits, &mut context_with(flags));
-        for (rh, &i) in s.rayhits.iter().zip(&s.slot) {
-            match rh.hit.geomID {
-                TRI_GEOM => found[i as usize] = Some((rh.hit.primID, rh.ray.tfar)),
-                SPHERE_GEOM => found[i as usize] = Some((self.ntri + rh.hit.primID, rh.ray.tfar)),
+    }
+
+    /// Traces the first `slot.len()` lanes of packet `p`; lane `k`'s hit goes to `found[slot[k]]`.
+    fn closest16(
+        &self,
+        p: &mut [[f32; 16]; 20],
+        slot: &[u32],
+        ctx: &mut ffi::RTCIntersectContext,
+        found: &mut [Option<(u32, f32)>],
+    ) {
+        let valid = valid_lanes(slot.len());
+        let packet = p as *mut [[f32; 16]; 20] as *mut ffi::RTCRayHit16;
+        // SAFETY: the scene is committed; `p` is a 64-byte aligned `RTCRayHit16` (a field of the
+        // boxed record, `repr(C, align(64))`), `valid` is aligned, and both live for the call.
+        unsafe { ffi::rtcIntersect16(&valid, self.scene, ctx, packet) };
+        for (k, &i) in slot.iter().enumerate() {
+            let (tfar, prim) = (p[8][k], p[17][k].to_bits());
+            match p[18][k].to_bits() {
+                TRI_GEOM => found[i as usize] = Some((prim, tfar)),
+                SPHERE_GEOM => found[i as usize] = Some((self.ntri + prim, tfar)),
                 _ => {}
             }
         }
@@ -445,83 +469,58 @@ impl EmbreeScene {
     /// Occlusion of a batch of segments in 16-wide packets (`rtcOccluded16`):
     /// `out[i]` is what `occluded(rays[i])` returns.
     pub(super) fn occluded_batch(&self, rays: &[super::Ray], s: &mut Scratch, out: &mut Vec<bool>) {
-        s.rays.clear();
-        s.slot.clear();
         out.clear();
+        let mut ctx = context();
+        let (p, mut slot, mut n) = (&mut s.ray16.0, [0u32; 16], 0);
         for (i, r) in rays.iter().enumerate() {
             let skip = r.tmax.is_nan() || r.tmax <= 0.0;
             let blocked = !skip
                 && self.loop_spheres
                 && self.spheres.iter().any(|sp| super::sphere_t(sp.center, sp.radius, r.o, r.d, 0.0, r.tmax) < r.tmax);
-            if !skip && !blocked {
-                s.slot.push(i as u32);
-                s.rays.push(ray(r.o, r.d, r.tmax));
-            }
             out.push(blocked);
+            if !skip && !blocked {
+                put_lane(p, n, r.o, r.d, r.tmax);
+                (slot[n], n) = (i as u32, n + 1);
+                if n == 16 {
+                    self.occluded16(p, &slot[..n], &mut ctx, out);
+                    n = 0;
+                }
+            }
         }
-        if s.rays.is_empty() {
-            return;
+        if n > 0 {
+            self.occluded16(p, &slot[..n], &mut ctx, out);
         }
-        self.occluded_packets(&mut s.rays, &mut context());
-        for (r, &i) in s.rays.iter().zip(&s.slot) {
-            out[i as usize] = r.tfar == f32::NEG_INFINITY;
+    }
+
+    /// Traces the first `slot.len()` lanes of packet `p`; lane `k`'s answer goes to `out[slot[k]]`.
+    fn occluded16(&self, p: &mut [[f32; 16]; 12], slot: &[u32], ctx: &mut ffi::RTCIntersectContext, out: &mut [bool]) {
+        let valid = valid_lanes(slot.len());
+        let packet = p as *mut [[f32; 16]; 12] as *mut ffi::RTCRay16;
+        // SAFETY: as in `closest16` (`p` is the boxed `RTCRay16`'s field).
+        unsafe { ffi::rtcOccluded16(&valid, self.scene, ctx, packet) };
+        for (k, &i) in slot.iter().enumerate() {
+            out[i as usize] = p[8][k] == f32::NEG_INFINITY;
         }
     }
 }
 
-/// Writes ray `r` into lane `i` of a packet's first 12 fields.
+/// Writes the ray (origin, unit direction, (0, tfar)) into lane `i` of a packet's first 12
+/// fields, as `ray` builds a one-ray record: time 0, every mask bit, id and flags 0.
 #[inline]
-fn put_ray(p: &mut [[f32; 16]], i: usize, r: &ffi::RTCRay) {
-    let f = [r.org[0], r.org[1], r.org[2], r.tnear, r.dir[0], r.dir[1], r.dir[2], r.time, r.tfar];
+fn put_lane(p: &mut [[f32; 16]], i: usize, o: Vec3, d: Vec3, tfar: f32) {
+    let f = [o.x, o.y, o.z, 0.0, d.x, d.y, d.z, 0.0, tfar];
     for (k, v) in f.into_iter().enumerate() {
         p[k][i] = v;
     }
-    p[9][i] = f32::from_bits(r.mask);
-    p[10][i] = f32::from_bits(r.id);
-    p[11][i] = f32::from_bits(r.flags);
+    p[9][i] = f32::from_bits(u32::MAX);
+    p[10][i] = 0.0;
+    p[11][i] = 0.0;
 }
 
 /// A packet's valid mask with its first `n` lanes on.
 #[inline]
 fn valid_lanes(n: usize) -> ffi::Valid16 {
     ffi::Valid16(std::array::from_fn(|i| if i < n { -1 } else { 0 }))
-}
-
-impl EmbreeScene {
-    /// `rtcIntersect16` over the records, 16 at a time; each record gets its tfar and hit ids.
-    fn intersect_packets(&self, recs: &mut [ffi::RTCRayHit], ctx: &mut ffi::RTCIntersectContext) {
-        let mut p = ffi::RTCRayHit16([[0.0; 16]; 20]);
-        for chunk in recs.chunks_mut(16) {
-            let valid = valid_lanes(chunk.len());
-            for (i, rh) in chunk.iter().enumerate() {
-                put_ray(&mut p.0, i, &rh.ray);
-                p.0[18][i] = f32::from_bits(ffi::RTC_INVALID_GEOMETRY_ID);
-            }
-            // SAFETY: the scene is committed; `valid` and `p` are 64-byte aligned and live for the call.
-            unsafe { ffi::rtcIntersect16(&valid, self.scene, ctx, &mut p) };
-            for (i, rh) in chunk.iter_mut().enumerate() {
-                rh.ray.tfar = p.0[8][i];
-                rh.hit.primID = p.0[17][i].to_bits();
-                rh.hit.geomID = p.0[18][i].to_bits();
-            }
-        }
-    }
-
-    /// `rtcOccluded16` over the rays, 16 at a time; an occluded ray's tfar becomes −∞.
-    fn occluded_packets(&self, rays: &mut [ffi::RTCRay], ctx: &mut ffi::RTCIntersectContext) {
-        let mut p = ffi::RTCRay16([[0.0; 16]; 12]);
-        for chunk in rays.chunks_mut(16) {
-            let valid = valid_lanes(chunk.len());
-            for (i, r) in chunk.iter().enumerate() {
-                put_ray(&mut p.0, i, r);
-            }
-            // SAFETY: as in `intersect_packets`.
-            unsafe { ffi::rtcOccluded16(&valid, self.scene, ctx, &mut p) };
-            for (i, r) in chunk.iter_mut().enumerate() {
-                r.tfar = p.0[8][i];
-            }
-        }
-    }
 }
 
 /// The box of sphere `primID` (Embree's bounds callback).

@@ -69,6 +69,8 @@ pub struct PixelSampler<'a> {
 /// (capacity only).
 #[derive(Default)]
 pub struct TileBuffers {
+    /// The camera streams' [`Rng::pass_key`] of each pass.
+    keys: Vec<u64>,
     rays: Vec<Ray>,
     rngs: Vec<Rng>,
     slots: Vec<usize>,
@@ -141,14 +143,16 @@ impl<'a> PixelSampler<'a> {
         out: &mut Vec<Rgb>,
     ) {
         let cam = self.camera;
-        let TileBuffers { rays, rngs, slots, est } = buf;
+        let TileBuffers { keys, rays, rngs, slots, est } = buf;
         rays.clear();
         rngs.clear();
         slots.clear();
         out.clear();
+        keys.clear();
+        keys.extend(passes.iter().map(|&q| Rng::pass_key(seed, stream::CAMERA, q)));
         for &(x, y, pixel) in tile {
-            for &pass in passes {
-                let mut rng = Rng::keyed(seed, stream::CAMERA, pass, pixel);
+            for (&pass, &key) in passes.iter().zip(keys.iter()) {
+                let mut rng = Rng::indexed(key, pixel);
                 let [jx, jy] = rng.next_2d();
                 if self.k == 1 || !self.split[pixel as usize] {
                     let d = cam.direction(x as f32 + jx, y as f32 + jy);
