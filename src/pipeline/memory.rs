@@ -14,8 +14,10 @@ impl Plan {
     /// the checkpoint's film, its clone and its encoding), plus the images (mean, variance, EXR,
     /// PNG: ≈ 64 bytes per pixel). Preprocess product: stored photons (`iws-pm`, ≈ 64 bytes each)
     /// or forecast photons (`iws-cf`, `pt-cf`, ≈ 128 bytes with their clusters and maps), three copies on
-    /// rank 0 (built, encoded, decoded) and one on every other rank of the node. `pt-cf` with light
-    /// paths: its per-pass splat image (12 bytes per pixel) on every rank.
+    /// rank 0 (built, encoded, decoded) and one on every other rank of the node. The camera values
+    /// of a pass group (`render::pass_group_limit` passes for `pt` and `pt-cf`, else one; 12 bytes
+    /// per pixel and pass) and, for `pt-cf` with light paths, one splat image per pass of the
+    /// group (as much again), on every rank.
     pub fn memory_estimate(&self, scene: &Scene, checkpoints: bool) -> (u64, String) {
         let pixels = self.resolution.0 as u64 * self.resolution.1 as u64;
         let film = pixels.saturating_mul((crate::render::film::STRIDE * 8) as u64);
@@ -30,9 +32,15 @@ impl Plan {
             _ => 0,
         };
         let film_total = film.saturating_mul(copies + local - 1).saturating_add(pixels.saturating_mul(64));
-        // pt-cf's light paths: a dense splat image per pass (3 f32 per pixel) on every rank
-        let splats = if self.method == Method::PtCf && self.args.ptcf.light_paths != Some(0) { 12 * local } else { 0 };
-        let film_total = film_total.saturating_add(pixels.saturating_mul(splats));
+        // a pass group's camera values and pt-cf's splat images (3 f32 per pixel and pass) per rank
+        let (w, h) = (self.resolution.0 as usize, self.resolution.1 as usize);
+        let group = match self.method {
+            Method::Pt | Method::PtCf => crate::render::pass_group_limit(w, h) as u64,
+            _ => 1,
+        };
+        let splats = self.method == Method::PtCf && self.args.ptcf.light_paths != Some(0);
+        let per_pass = 12 * local * if splats { 2 } else { 1 };
+        let film_total = film_total.saturating_add(pixels.saturating_mul(per_pass * group));
         let need = film_total.saturating_add(product.saturating_mul(2 + local));
         let (w, h) = self.resolution;
         let what =
