@@ -64,7 +64,7 @@ pub const GROUP_SECS: f64 = 1.0;
 /// spp target). At least 1: whether a round starts at all is [`Deadline::should_start_next`]'s.
 pub fn pass_group(limit: u64, timer: &PassTimer, deadline: &Deadline, now: Instant, left: Option<u64>) -> u64 {
     let mean = timer.mean_secs();
-    if timer.count() == 0 || !(mean > 0.0) {
+    if timer.count() == 0 || mean <= 0.0 {
         return 1;
     }
     let fresh = (GROUP_SECS / mean).floor().min(u64::MAX as f64) as u64;
@@ -150,7 +150,7 @@ impl Deadline {
     /// exactly when [`Deadline::should_start_next`] holds (given a positive mean).
     pub fn passes_that_fit(&self, now: Instant, mean_pass_secs: f64) -> u64 {
         let Some(at) = self.at else { return u64::MAX };
-        if !(mean_pass_secs > 0.0) {
+        if mean_pass_secs.is_nan() || mean_pass_secs <= 0.0 {
             return u64::MAX;
         }
         if now >= at {
