@@ -414,7 +414,7 @@ impl EmbreeScene {
             ffi::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT
         };
         let mut ctx = context_with(flags);
-        let (p, mut slot, mut n) = (&mut s.hit16.0, [0u32; 16], 0);
+        let (p, mut lanes) = (&mut s.hit16.0, Lanes::default());
         for (i, r) in rays.iter().enumerate() {
             if r.tmax.is_nan() || r.tmax <= 0.0 {
                 found.push(None);
@@ -430,17 +430,13 @@ impl EmbreeScene {
                 }
             }
             found.push(best);
-            put_lane(p, n, r.o, r.d, tfar);
-            p[18][n] = f32::from_bits(ffi::RTC_INVALID_GEOMETRY_ID);
-            (slot[n], n) = (i as u32, n + 1);
-            if n == 16 {
-                self.closest16(p, &slot[..n], &mut ctx, found);
-                n = 0;
+            put_lane(p, lanes.n, r.o, r.d, tfar);
+            p[18][lanes.n] = f32::from_bits(ffi::RTC_INVALID_GEOMETRY_ID);
+            if let Some(full) = lanes.push(i) {
+                self.closest16(p, full, &mut ctx, found);
             }
         }
-        if n > 0 {
-            self.closest16(p, &slot[..n], &mut ctx, found);
-        }
+        self.closest16(p, lanes.rest(), &mut ctx, found);
     }
 
     /// Traces the first `slot.len()` lanes of packet `p`; lane `k`'s hit goes to `found[slot[k]]`.
@@ -451,6 +447,9 @@ impl EmbreeScene {
         ctx: &mut ffi::RTCIntersectContext,
         found: &mut [Option<(u32, f32)>],
     ) {
+        if slot.is_empty() {
+            return;
+        }
         let valid = valid_lanes(slot.len());
         let packet = p as *mut [[f32; 16]; 20] as *mut ffi::RTCRayHit16;
         // SAFETY: the scene is committed; `p` is a 64-byte aligned `RTCRayHit16` (a field of the
@@ -471,7 +470,7 @@ impl EmbreeScene {
     pub(super) fn occluded_batch(&self, rays: &[super::Ray], s: &mut Scratch, out: &mut Vec<bool>) {
         out.clear();
         let mut ctx = context();
-        let (p, mut slot, mut n) = (&mut s.ray16.0, [0u32; 16], 0);
+        let (p, mut lanes) = (&mut s.ray16.0, Lanes::default());
         for (i, r) in rays.iter().enumerate() {
             let skip = r.tmax.is_nan() || r.tmax <= 0.0;
             let blocked = !skip
@@ -479,21 +478,20 @@ impl EmbreeScene {
                 && self.spheres.iter().any(|sp| super::sphere_t(sp.center, sp.radius, r.o, r.d, 0.0, r.tmax) < r.tmax);
             out.push(blocked);
             if !skip && !blocked {
-                put_lane(p, n, r.o, r.d, r.tmax);
-                (slot[n], n) = (i as u32, n + 1);
-                if n == 16 {
-                    self.occluded16(p, &slot[..n], &mut ctx, out);
-                    n = 0;
+                put_lane(p, lanes.n, r.o, r.d, r.tmax);
+                if let Some(full) = lanes.push(i) {
+                    self.occluded16(p, full, &mut ctx, out);
                 }
             }
         }
-        if n > 0 {
-            self.occluded16(p, &slot[..n], &mut ctx, out);
-        }
+        self.occluded16(p, lanes.rest(), &mut ctx, out);
     }
 
     /// Traces the first `slot.len()` lanes of packet `p`; lane `k`'s answer goes to `out[slot[k]]`.
     fn occluded16(&self, p: &mut [[f32; 16]; 12], slot: &[u32], ctx: &mut ffi::RTCIntersectContext, out: &mut [bool]) {
+        if slot.is_empty() {
+            return;
+        }
         let valid = valid_lanes(slot.len());
         let packet = p as *mut [[f32; 16]; 12] as *mut ffi::RTCRay16;
         // SAFETY: as in `closest16` (`p` is the boxed `RTCRay16`'s field).
@@ -501,6 +499,32 @@ impl EmbreeScene {
         for (k, &i) in slot.iter().enumerate() {
             out[i as usize] = p[8][k] == f32::NEG_INFINITY;
         }
+    }
+}
+
+/// The batch index of each filled lane of the packet being built.
+#[derive(Default)]
+struct Lanes {
+    slot: [u32; 16],
+    /// Lanes filled (the next one to fill).
+    n: usize,
+}
+
+impl Lanes {
+    /// Records that lane `n` holds the batch's ray `i`; the full packet's slots when that was
+    /// the 16th lane (the packet then starts again empty).
+    #[inline]
+    fn push(&mut self, i: usize) -> Option<&[u32]> {
+        (self.slot[self.n], self.n) = (i as u32, self.n + 1);
+        (self.n == 16).then(|| {
+            self.n = 0;
+            &self.slot[..]
+        })
+    }
+
+    /// The slots of the last, partial packet (possibly none).
+    fn rest(&self) -> &[u32] {
+        &self.slot[..self.n]
     }
 }
 
