@@ -42,19 +42,17 @@ pub fn stdout_line(args: fmt::Arguments<'_>) -> Result<(), String> {
     }
 }
 
-/// Writes `args` and a newline to stderr in one `write` where the OS allows, so that a line
-/// printed just before the process ends (the MPI watchdog's, before `MPI_Abort`) reaches
-/// `mpirun`'s forwarding whole; failures are ignored (see the module docs).
+/// Writes `args` and a newline to stderr; failures are ignored (see the module docs).
 pub fn stderr_line(args: fmt::Arguments<'_>) {
-    let line = format!("{args}\n");
-    let mut err = io::stderr().lock();
-    let _ = err.write_all(line.as_bytes()).and_then(|()| err.flush());
+    let _ = write_line(&mut io::stderr().lock(), args);
 }
 
-/// One line to any writer, flushed, so that a failure surfaces here and not at exit.
+/// One line to any writer, flushed, so that a failure surfaces here and not at exit. The line is
+/// formatted first and handed over in one `write` where the OS allows, so that a line printed
+/// just before the process ends (the MPI watchdog's, before `MPI_Abort`) reaches `mpirun`'s
+/// forwarding whole.
 pub fn write_line(w: &mut dyn Write, args: fmt::Arguments<'_>) -> io::Result<()> {
-    w.write_fmt(args)?;
-    w.write_all(b"\n")?;
+    w.write_all(format!("{args}\n").as_bytes())?;
     w.flush()
 }
 

@@ -180,12 +180,10 @@ impl PassTimer {
     }
     /// Records one finished pass. Non-finite or negative durations are ignored.
     pub fn record(&mut self, secs: f64) {
-        if secs.is_finite() && secs >= 0.0 {
-            self.count += 1;
-            self.total_secs += secs;
-        }
+        self.record_group(secs, 1);
     }
     /// Records `n` passes that took `secs` together (a pass group) as `n` passes of `secs / n`.
+    /// Non-finite or negative durations are ignored.
     pub fn record_group(&mut self, secs: f64, n: u64) {
         if secs.is_finite() && secs >= 0.0 && n > 0 {
             self.count += n;
