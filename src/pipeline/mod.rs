@@ -24,24 +24,25 @@
 use crate::accel::World;
 use crate::atomic_io::{FileSet, OutputSet};
 use crate::checkpoint::Checkpoint;
-use crate::distributed::schedule::{pass_group, Deadline, PassTimer};
 use crate::distributed::{self, Cluster};
 use crate::image_io::{with_ext, Image};
 use crate::integrators::{Integrator, Method, MethodArgs, MethodChoice};
 use crate::param_limits as params;
-use crate::progress::{PhaseBar, Progress};
+use crate::progress::PhaseBar;
 use crate::render::film::Film;
-use crate::render::pixel::SplitStats;
-use crate::render::{pass_group_limit, render_passes, PassCounters, PixelSampler};
+use crate::render::PassCounters;
 use crate::scene::Scene;
 
 mod checkpoints;
 mod identity;
 mod light_pilot;
 mod memory;
+mod passes;
 mod preprocess;
 mod report;
 mod snapshots;
+
+use passes::{run_passes, Passes};
 
 pub use checkpoints::{image_files, image_from_film, write_images};
 pub use identity::{job_fields, job_keys};
@@ -380,113 +381,6 @@ struct Run<'a> {
     preprocess_s: f64,
     /// `pt-cf`'s light-path pilot (rank 0).
     light_path_rule: Option<LightPathRule>,
-}
-
-/// This rank's passes.
-struct Passes {
-    film: Film,
-    counters: PassCounters,
-    my_passes: u64,
-    passes_done: u64,
-    render_s: f64,
-    /// The run's warnings (rank 0): failed checkpoints, the preprocess over budget.
-    warnings: Vec<String>,
-    preprocess_over_budget: bool,
-    /// The snapshot schedule and the snapshots written.
-    snaps: snapshots::Snapshots,
-    /// The emission-split probe's findings.
-    pixel_sampler: SplitStats,
-}
-
-/// Stage 4: rounds of interleaved passes until the spp or the time box is reached, with
-/// checkpoints at round boundaries.
-fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) -> Result<Passes, String> {
-    let (rank, size) = (run.cluster.rank() as u64, run.cluster.size() as u64);
-    let (first_pass, total) = (run.resumed.first_pass, run.plan.spp.map(|s| s.max(run.resumed.first_pass)));
-    let (w, h) = run.plan.resolution;
-    let camera = run.world.scene.camera.with_resolution(w, h);
-    let (k, cap) = (run.plan.args.emission_split(), integrator.prefix_cap());
-    let pixels = run.pool.install(|| PixelSampler::new(run.world, &camera, k, cap));
-    let progress = Progress::new(run.job.progress && rank == 0, total.map(|t| t - first_pass), run.plan.time);
-    let mut p = Passes {
-        film: Film::new(w as usize, h as usize),
-        counters: PassCounters::default(),
-        my_passes: 0,
-        passes_done: first_pass,
-        render_s: 0.0,
-        warnings: Vec::new(),
-        preprocess_over_budget: false,
-        snaps: snapshots::Snapshots::new(&run.job.snapshots),
-        pixel_sampler: pixels.stats(),
-    };
-    let (t_render, mut last_ckpt, mut timer) = (Instant::now(), Instant::now(), PassTimer::new());
-    let mut failure: Option<String> = None;
-    // `--max-rounds` (testing) counts rounds of one pass per rank
-    let grouped = integrator.independent_passes() && run.job.max_rounds.is_none();
-    let limit = if grouped { pass_group_limit(w as usize, h as usize) as u64 } else { 1 };
-    let mut round_start = first_pass;
-    for round in 0u64.. {
-        let more = match total {
-            Some(t) => round_start < t,
-            // the first round always runs, so a time-boxed image is never empty
-            None => round == 0 || deadline.should_start_next(Instant::now(), timer.mean_secs()),
-        };
-        let go = more && run.job.max_rounds.is_none_or(|m| round < m);
-        // one agreement per round: a stop (time box) or an error on any rank ends every rank's loop
-        if !distributed::agree_round(run.cluster, go, failure.take())? {
-            break;
-        }
-        // the round's pass group, the same on every rank: passes round_start + rank + j·size
-        let left = total.map(|t| (t - round_start).div_ceil(size));
-        let g = distributed::agree_min(run.cluster, pass_group(limit, &timer, &deadline, Instant::now(), left));
-        let mine: Vec<u64> =
-            (0..g).map(|j| round_start + rank + j * size).filter(|&q| total.is_none_or(|t| q < t)).collect();
-        if !mine.is_empty() {
-            let t_pass = Instant::now();
-            p.counters.add(&run.render_group(integrator, &pixels, &mine, &mut p.film));
-            timer.record_group(secs(t_pass), mine.len() as u64);
-            p.my_passes += mine.len() as u64;
-        }
-        round_start += g * size;
-        p.passes_done = total.map_or(round_start, |t| round_start.min(t));
-        let rays = p.counters.closest_rays + p.counters.shadow_rays;
-        progress.update(p.passes_done - first_pass, p.passes_done, secs(t_render), secs(run.started), rays * size);
-        p.render_s = secs(t_render);
-        failure =
-            run.maybe_checkpoint(&mut p, &*integrator, &mut last_ckpt).and_then(|()| run.maybe_snapshot(&mut p)).err();
-    }
-    run.unreached_snapshots(&mut p);
-    p.render_s = secs(t_render);
-    progress.finish();
-    Ok(p)
-}
-
-impl Run<'_> {
-    /// This rank's passes `mine` of a round, in one group when there are several (the
-    /// integrator's passes are then independent: `pass_group`'s limit is 1 otherwise).
-    fn render_group(
-        &self,
-        integrator: &mut dyn Integrator,
-        pixels: &PixelSampler,
-        mine: &[u64],
-        film: &mut Film,
-    ) -> PassCounters {
-        let (world, seed) = (self.world, self.plan.seed);
-        for &q in mine {
-            integrator.begin_pass(world, seed, q);
-        }
-        let integ = &*integrator;
-        self.pool.install(|| render_passes(world, integ, pixels, seed, mine, film))
-    }
-}
-
-impl Passes {
-    /// A failed checkpoint: printed (rank 0 only ever writes) and kept for the report.
-    fn warn(&mut self, what: String, retry_in: Option<f64>) {
-        let w = retry_in.map_or_else(|| what.clone(), |s| format!("{what}; next try in {s} s"));
-        crate::errln!("warning: {w}");
-        self.warnings.push(w);
-    }
 }
 
 /// The summed film (rank 0) and the run-wide figures.
