@@ -270,21 +270,11 @@ impl EmbreeScene {
         let mut ctx = context_with(flags);
         let (p, mut lanes) = (&mut s.hit16.0, Lanes::default());
         for (i, r) in rays.iter().enumerate() {
+            found.push(None);
             if r.tmax.is_nan() || r.tmax <= 0.0 {
-                found.push(None);
                 continue;
             }
-            let (mut tfar, mut best) = (r.tmax, None);
-            if self.loop_spheres {
-                for (k, sp) in self.spheres.iter().enumerate() {
-                    let t = super::sphere_t(sp.center, sp.radius, r.o, r.d, 0.0, tfar);
-                    if t < tfar {
-                        (tfar, best) = (t, Some((self.ntri + k as u32, t)));
-                    }
-                }
-            }
-            found.push(best);
-            put_lane(p, lanes.n, r.o, r.d, tfar);
+            put_lane(p, lanes.n, r.o, r.d, r.tmax);
             p[18][lanes.n] = f32::from_bits(ffi::RTC_INVALID_GEOMETRY_ID);
             if let Some(full) = lanes.push(i) {
                 self.closest16(p, full, &mut ctx, found);
@@ -294,6 +284,8 @@ impl EmbreeScene {
     }
 
     /// Traces the first `slot.len()` lanes of packet `p`; lane `k`'s hit goes to `found[slot[k]]`.
+    /// The looped spheres go first, 16 lanes at once, and shorten each lane's tfar as `closest`
+    /// does one ray at a time.
     fn closest16(
         &self,
         p: &mut [[f32; 16]; 20],
@@ -304,6 +296,17 @@ impl EmbreeScene {
         if slot.is_empty() {
             return;
         }
+        let mut sphere = [u32::MAX; 16];
+        if self.loop_spheres {
+            for (k, sp) in self.spheres.iter().enumerate() {
+                let t = super::sphere_t16(sp.center, sp.radius, [&p[0], &p[1], &p[2]], [&p[4], &p[5], &p[6]], &p[8]);
+                for j in 0..16 {
+                    if t[j] < p[8][j] {
+                        (p[8][j], sphere[j]) = (t[j], k as u32);
+                    }
+                }
+            }
+        }
         let valid = valid_lanes(slot.len());
         let packet = p as *mut [[f32; 16]; 20] as *mut ffi::RTCRayHit16;
         // SAFETY: the scene is committed; `p` is a 64-byte aligned `RTCRayHit16` (a field of the
@@ -311,11 +314,12 @@ impl EmbreeScene {
         unsafe { ffi::rtcIntersect16(&valid, self.scene, ctx, packet) };
         for (k, &i) in slot.iter().enumerate() {
             let (tfar, prim) = (p[8][k], p[17][k].to_bits());
-            match p[18][k].to_bits() {
-                TRI_GEOM => found[i as usize] = Some((prim, tfar)),
-                SPHERE_GEOM => found[i as usize] = Some((self.ntri + prim, tfar)),
-                _ => {}
-            }
+            found[i as usize] = match p[18][k].to_bits() {
+                TRI_GEOM => Some((prim, tfar)),
+                SPHERE_GEOM => Some((self.ntri + prim, tfar)),
+                // a looped sphere's hit: Embree leaves tfar as that sphere's t on a miss
+                _ => (sphere[k] != u32::MAX).then_some((self.ntri + sphere[k], tfar)),
+            };
         }
     }
 
@@ -326,32 +330,40 @@ impl EmbreeScene {
         let mut ctx = context();
         let (p, mut lanes) = (&mut s.ray16.0, Lanes::default());
         for (i, r) in rays.iter().enumerate() {
-            let skip = r.tmax.is_nan() || r.tmax <= 0.0;
-            let blocked = !skip
-                && self.loop_spheres
-                && self.spheres.iter().any(|sp| super::sphere_t(sp.center, sp.radius, r.o, r.d, 0.0, r.tmax) < r.tmax);
-            out.push(blocked);
-            if !skip && !blocked {
-                put_lane(p, lanes.n, r.o, r.d, r.tmax);
-                if let Some(full) = lanes.push(i) {
-                    self.occluded16(p, full, &mut ctx, out);
-                }
+            out.push(false);
+            if r.tmax.is_nan() || r.tmax <= 0.0 {
+                continue;
+            }
+            put_lane(p, lanes.n, r.o, r.d, r.tmax);
+            if let Some(full) = lanes.push(i) {
+                self.occluded16(p, full, &mut ctx, out);
             }
         }
         self.occluded16(p, lanes.rest(), &mut ctx, out);
     }
 
     /// Traces the first `slot.len()` lanes of packet `p`; lane `k`'s answer goes to `out[slot[k]]`.
+    /// A lane that a looped sphere blocks (tested 16 lanes at once) is answered without Embree.
     fn occluded16(&self, p: &mut [[f32; 16]; 12], slot: &[u32], ctx: &mut ffi::RTCIntersectContext, out: &mut [bool]) {
         if slot.is_empty() {
             return;
         }
-        let valid = valid_lanes(slot.len());
+        let mut valid = valid_lanes(slot.len());
+        if self.loop_spheres {
+            for sp in self.spheres.iter() {
+                let t = super::sphere_t16(sp.center, sp.radius, [&p[0], &p[1], &p[2]], [&p[4], &p[5], &p[6]], &p[8]);
+                for j in 0..16 {
+                    if t[j] < p[8][j] {
+                        valid.0[j] = 0;
+                    }
+                }
+            }
+        }
         let packet = p as *mut [[f32; 16]; 12] as *mut ffi::RTCRay16;
         // SAFETY: as in `closest16` (`p` is the boxed `RTCRay16`'s field).
         unsafe { ffi::rtcOccluded16(&valid, self.scene, ctx, packet) };
         for (k, &i) in slot.iter().enumerate() {
-            out[i as usize] = p[8][k] == f32::NEG_INFINITY;
+            out[i as usize] = valid.0[k] == 0 || p[8][k] == f32::NEG_INFINITY;
         }
     }
 }

@@ -377,6 +377,37 @@ fn barycentrics(t: [Vec3; 3], p: Vec3) -> (f32, f32) {
     ((d11 * d20 - d01 * d21) / den, (d00 * d21 - d01 * d20) / den)
 }
 
+/// `sphere_t` with tmin 0 for the 16 lanes of a packet in structure-of-arrays form (Embree's
+/// layout: `o`, `d` are the x, y, z fields): lane `j` is `sphere_t(c, r, o_j, d_j, 0, tmax[j])`
+/// bit for bit, the same operations in the same order, its branches as selects, so that LLVM runs
+/// the lanes as one vector (the Embree back end's loop over a few spheres,
+/// `results/2026-12-05-lane-spheres.md`).
+#[inline]
+fn sphere_t16(c: Vec3, r: f32, o: [&[f32; 16]; 3], d: [&[f32; 16]; 3], tmax: &[f32; 16]) -> [f32; 16] {
+    let mut out = [0.0f32; 16];
+    for j in 0..16 {
+        let (fx, fy, fz) = (o[0][j] - c.x, o[1][j] - c.y, o[2][j] - c.z);
+        let (dx, dy, dz) = (d[0][j], d[1][j], d[2][j]);
+        let b = -((fx * dx + fy * dy) + fz * dz);
+        let (lx, ly, lz) = (fx + dx * b, fy + dy * b, fz + dz * b);
+        let disc = r * r - ((lx * lx + ly * ly) + lz * lz);
+        let cc = ((fx * fx + fy * fy) + fz * fz) - r * r;
+        let q = b + b.signum() * disc.sqrt();
+        let (t0, t1) = if q == 0.0 { (0.0, 0.0) } else { (cc / q, q) };
+        let (t0, t1) = if t0 > t1 { (t1, t0) } else { (t0, t1) };
+        let tm = tmax[j];
+        let t = if t0 > 0.0 && t0 < tm {
+            t0
+        } else if t1 > 0.0 && t1 < tm {
+            t1
+        } else {
+            f32::INFINITY
+        };
+        out[j] = if disc < 0.0 { f32::INFINITY } else { t };
+    }
+    out
+}
+
 /// Ray–sphere distance in (tmin, tmax), or ∞ (unit direction `d`; Ray Tracing Gems ch. 7 form).
 /// The one sphere test of both back ends.
 #[inline]

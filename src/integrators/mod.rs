@@ -24,6 +24,7 @@ pub mod caustic_share;
 pub mod caustics;
 pub mod path_batch;
 pub mod path_class;
+mod path_lanes;
 pub mod pt_cf_light;
 pub mod settings;
 pub mod vpl;

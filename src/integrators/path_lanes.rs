@@ -1,0 +1,250 @@
+//! `pt`'s diffuse vertices sixteen at a time (issue #33): the wavefront (`path_batch`) queues each
+//! vertex on a `Material::Diffuse` surface, in a scene whose lights are all triangle emitters,
+//! into the lanes of `Lanes`, and computes their next-event estimate (`direct::light_sample_mis`
+//! with `bsdf::pdf_w` as the other pdf) and their cosine-weighted direction (`bsdf::sample`)
+//! as loops over the lanes of structure-of-arrays records, which LLVM runs as 16-wide vectors.
+//!
+//! Invariants (why the image is the scalar loop's bit for bit, `tests/wavefront.rs`):
+//! - the random numbers are drawn by the caller in the scalar order (the light pick, the point on
+//!   the light, the BSDF's three), from the path's own stream;
+//! - each lane evaluates the scalar formulas with the same operations in the same order (glam's
+//!   `Vec3` methods, `offset_origin`, `power_heuristic`, `Frame`); a branch that returns `None`
+//!   there is a lane mask here, and a lane whose mask is off adds `β·0`, as the scalar code does;
+//! - `sin` and `cos` are libm's, called lane by lane between two vector loops.
+
+use crate::accel::{offset_origin, Ray};
+use crate::math::{Frame, Rgb, Vec2, Vec3, INV_PI, PI};
+use crate::sampling::power_heuristic;
+use crate::scene::Triangle;
+
+/// Lanes per record.
+pub(super) const W: usize = 16;
+type L = [f32; W];
+
+/// A `Vec3` per lane.
+#[derive(Clone, Copy, Default)]
+struct V3 {
+    x: L,
+    y: L,
+    z: L,
+}
+
+impl V3 {
+    #[inline(always)]
+    fn get(&self, j: usize) -> Vec3 {
+        Vec3::new(self.x[j], self.y[j], self.z[j])
+    }
+    #[inline(always)]
+    fn set(&mut self, j: usize, v: Vec3) {
+        (self.x[j], self.y[j], self.z[j]) = (v.x, v.y, v.z);
+    }
+}
+
+/// One diffuse vertex, as the scalar shade loop hands it over.
+pub(super) struct Vertex<'a> {
+    /// The wavefront's live index of the path.
+    pub k: u32,
+    /// Position, geometric and shading normal (`ShadingPoint`).
+    pub p: Vec3,
+    pub ng: Vec3,
+    pub ns: Vec3,
+    /// Toward the previous vertex.
+    pub wo: Vec3,
+    pub albedo: Rgb,
+    /// The picked emitter's triangle, its light-pick pmf and radiance.
+    pub light: &'a Triangle,
+    pub pmf: f32,
+    pub le: Rgb,
+    /// The point on the light's two uniforms, then the BSDF's first two.
+    pub u_light: [f32; 2],
+    pub u_bsdf: [f32; 2],
+}
+
+/// Sixteen queued vertices and, after `run`, their NEE samples and scattered directions.
+#[derive(Default)]
+pub(super) struct Lanes {
+    /// Lanes filled.
+    pub n: usize,
+    /// Live index of each lane's path.
+    pub k: [u32; W],
+    p: V3,
+    ng: V3,
+    ns: V3,
+    wo: V3,
+    albedo: V3,
+    y0: V3,
+    y1: V3,
+    y2: V3,
+    ny: V3,
+    area: L,
+    pmf: L,
+    le: V3,
+    u_light: [L; 2],
+    u_bsdf: [L; 2],
+    /// The concentric map's radius and angle, then libm's sin and cos of the angle.
+    r: L,
+    theta: L,
+    sin: L,
+    cos: L,
+    nee_ok: [bool; W],
+    value: V3,
+    shadow_o: V3,
+    shadow_d: V3,
+    shadow_t: L,
+    bsdf_ok: [bool; W],
+    wi: V3,
+    pdf_w: L,
+}
+
+/// What `run` computed for one lane.
+pub(super) struct LaneOut {
+    /// The NEE contribution and its shadow segment (`None` where the scalar code returns `None`).
+    pub nee: Option<(Rgb, Ray)>,
+    /// The sampled direction and its pdf_w (`None` where `bsdf::sample` returns `None`).
+    pub bsdf: Option<(Vec3, f32)>,
+    /// The vertex's position, geometric normal and albedo.
+    pub p: Vec3,
+    pub ng: Vec3,
+    pub albedo: Rgb,
+}
+
+impl Lanes {
+    /// Queues `v`; true when the record is full.
+    #[inline]
+    pub fn push(&mut self, v: Vertex) -> bool {
+        let j = self.n;
+        self.k[j] = v.k;
+        for (f, x) in [(&mut self.p, v.p), (&mut self.ng, v.ng), (&mut self.ns, v.ns), (&mut self.wo, v.wo)] {
+            f.set(j, x);
+        }
+        self.albedo.set(j, v.albedo);
+        let t = v.light;
+        for (f, x) in [(&mut self.y0, t.p[0]), (&mut self.y1, t.p[1]), (&mut self.y2, t.p[2]), (&mut self.ny, t.ng)] {
+            f.set(j, x);
+        }
+        (self.area[j], self.pmf[j]) = (t.area, v.pmf);
+        self.le.set(j, v.le);
+        (self.u_light[0][j], self.u_light[1][j]) = (v.u_light[0], v.u_light[1]);
+        (self.u_bsdf[0][j], self.u_bsdf[1][j]) = (v.u_bsdf[0], v.u_bsdf[1]);
+        self.n += 1;
+        self.n == W
+    }
+
+    /// Computes every lane (those past `n` hold stale values and are ignored).
+    pub fn run(&mut self) {
+        for j in 0..W {
+            self.nee_lane(j);
+        }
+        for j in 0..W {
+            self.disk_lane(j);
+        }
+        for j in 0..W {
+            (self.sin[j], self.cos[j]) = (self.theta[j].sin(), self.theta[j].cos());
+        }
+        for j in 0..W {
+            self.bsdf_lane(j);
+        }
+    }
+
+    /// Lane `j`'s results (after `run`).
+    #[inline]
+    pub fn out(&self, j: usize) -> LaneOut {
+        let ray = Ray { o: self.shadow_o.get(j), d: self.shadow_d.get(j), tmax: self.shadow_t[j] };
+        LaneOut {
+            nee: self.nee_ok[j].then(|| (self.value.get(j), ray)),
+            bsdf: self.bsdf_ok[j].then(|| (self.wi.get(j), self.pdf_w[j])),
+            p: self.p.get(j),
+            ng: self.ng.get(j),
+            albedo: self.albedo.get(j),
+        }
+    }
+
+    /// `light_sample_mis` for an area light on a triangle, at a diffuse vertex.
+    #[inline(always)]
+    fn nee_lane(&mut self, j: usize) {
+        let (p, ng, ns, wo) = (self.p.get(j), self.ng.get(j), self.ns.get(j), self.wo.get(j));
+        let (u0, u1) = (self.u_light[0][j], self.u_light[1][j]);
+        // warp::sample_triangle and Scene::sample_emitter_point
+        let (b0, b1) = if u0 < u1 { (u0 / 2.0, u1 - u0 / 2.0) } else { (u0 - u1 / 2.0, u1 / 2.0) };
+        let y = b0 * self.y0.get(j) + b1 * self.y1.get(j) + (1.0 - b0 - b1) * self.y2.get(j);
+        let (ny, pdf_a) = (self.ny.get(j), 1.0 / self.area[j]);
+        let d = y - p;
+        let dist2 = d.length_squared();
+        let wi = d / dist2.sqrt();
+        let cos_l = ny.dot(-wi);
+        let f = diffuse_eval(self.albedo.get(j), ng, ns, wo, wi);
+        let pdf_light = self.pmf[j] * pdf_a * dist2 / cos_l;
+        let pdf_bsdf = diffuse_pdf_w(ng, ns, wo, wi);
+        // World::visibility_ray(p, ng, y, ny)
+        let dv = y - p;
+        let dist = dv.length();
+        let dir = dv / dist;
+        let o = offset_origin(p, ng, dir);
+        let seg = offset_origin(y, ny, -dir) - o;
+        let len = seg.length();
+        let value = self.le.get(j) * f * (wi.dot(ns).abs() / pdf_light) * power_heuristic(pdf_light, pdf_bsdf);
+        self.nee_ok[j] = !(dist2 <= 0.0) && !(cos_l <= 0.0) && f != Rgb::ZERO && !(dist <= 0.0);
+        self.value.set(j, value);
+        self.shadow_o.set(j, o);
+        self.shadow_d.set(j, seg / len.max(1e-30));
+        self.shadow_t[j] = len;
+    }
+
+    /// `warp::sample_concentric_disk` up to its sine and cosine.
+    #[inline(always)]
+    fn disk_lane(&mut self, j: usize) {
+        let ox = 2.0 * self.u_bsdf[0][j] - 1.0;
+        let oy = 2.0 * self.u_bsdf[1][j] - 1.0;
+        let (r, theta) =
+            if ox.abs() > oy.abs() { (ox, (PI / 4.0) * (oy / ox)) } else { (oy, PI / 2.0 - (PI / 4.0) * (ox / oy)) };
+        (self.r[j], self.theta[j]) = (r, theta);
+    }
+
+    /// The rest of `bsdf::sample` for `Material::Diffuse` in radiance mode.
+    #[inline(always)]
+    fn bsdf_lane(&mut self, j: usize) {
+        let (ox, oy) = (2.0 * self.u_bsdf[0][j] - 1.0, 2.0 * self.u_bsdf[1][j] - 1.0);
+        let disk = Vec2::new(self.r[j] * self.cos[j], self.r[j] * self.sin[j]);
+        let disk = if ox == 0.0 && oy == 0.0 { Vec2::ZERO } else { disk };
+        let local = Vec3::new(disk.x, disk.y, (1.0 - disk.length_squared()).max(0.0).sqrt());
+        let wo = self.wo.get(j);
+        let (ng, ns) = oriented(self.ng.get(j), self.ns.get(j), wo);
+        let wi = Frame::from_normal(ns).to_world(local);
+        let cos = wi.dot(ns);
+        self.bsdf_ok[j] = !(wi.dot(ng) <= 0.0 || cos <= 0.0 || wo.dot(ns) <= 0.0);
+        self.wi.set(j, wi);
+        self.pdf_w[j] = cos * INV_PI;
+    }
+}
+
+/// `ShadingPoint::oriented`: the normals flipped to `wo`'s geometric side.
+#[inline(always)]
+fn oriented(ng: Vec3, ns: Vec3, wo: Vec3) -> (Vec3, Vec3) {
+    if wo.dot(ng) >= 0.0 {
+        (ng, ns)
+    } else {
+        (-ng, -ns)
+    }
+}
+
+/// `bsdf::eval` of `Material::Diffuse`.
+#[inline(always)]
+fn diffuse_eval(albedo: Rgb, ng: Vec3, ns: Vec3, wo: Vec3, wi: Vec3) -> Rgb {
+    let (ng, ns) = oriented(ng, ns, wo);
+    if wi.dot(ng) <= 0.0 || wi.dot(ns) <= 0.0 || wo.dot(ns) <= 0.0 {
+        Rgb::ZERO
+    } else {
+        albedo * INV_PI
+    }
+}
+
+/// `bsdf::pdf_w` of `Material::Diffuse`.
+#[inline(always)]
+fn diffuse_pdf_w(ng: Vec3, ns: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+    let (ng, ns) = oriented(ng, ns, wo);
+    if wi.dot(ng) <= 0.0 {
+        0.0
+    } else {
+        wi.dot(ns).max(0.0) * INV_PI
+    }
+}
