@@ -382,6 +382,7 @@ fn barycentrics(t: [Vec3; 3], p: Vec3) -> (f32, f32) {
 /// bit for bit, the same operations in the same order, its branches as selects, so that LLVM runs
 /// the lanes as one vector (the Embree back end's loop over a few spheres,
 /// `results/2026-12-05-lane-spheres.md`).
+#[cfg(feature = "embree")]
 #[inline]
 fn sphere_t16(c: Vec3, r: f32, o: [&[f32; 16]; 3], d: [&[f32; 16]; 3], tmax: &[f32; 16]) -> [f32; 16] {
     let mut out = [0.0f32; 16];

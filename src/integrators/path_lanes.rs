@@ -185,7 +185,9 @@ impl Lanes {
         let seg = offset_origin(y, ny, -dir) - o;
         let len = seg.length();
         let value = self.le.get(j) * f * (wi.dot(ns).abs() / pdf_light) * power_heuristic(pdf_light, pdf_bsdf);
-        self.nee_ok[j] = !(dist2 <= 0.0) && !(cos_l <= 0.0) && f != Rgb::ZERO && !(dist <= 0.0);
+        // where the scalar code returns `None` (a NaN passes, as there)
+        let rejected = dist2 <= 0.0 || cos_l <= 0.0 || f == Rgb::ZERO || dist <= 0.0;
+        self.nee_ok[j] = !rejected;
         self.value.set(j, value);
         self.shadow_o.set(j, o);
         self.shadow_d.set(j, seg / len.max(1e-30));
