@@ -22,7 +22,7 @@ use crate::profile::Profile;
 use crate::sampling::rng::{stream, Rng};
 use crate::transport::context::Context;
 use film::Film;
-pub use pixel::{PixelSampler, TileBuffers, MAX_EMISSION_SPLIT};
+pub use pixel::{PixelSampler, TileBuffers, Worker, MAX_EMISSION_SPLIT};
 use rayon::prelude::*;
 
 /// Tile edge in pixels.
@@ -100,22 +100,28 @@ pub fn camera_tiles(
     let (w, h) = (w as usize, h as usize);
     let (tiles_x, tiles_y) = tile_counts(w, h);
     let fresh = || Rng::keyed(seed, stream::CAMERA, passes[0], 0);
-    // one context and buffer set per rayon split, reused by its tiles (what carries over is
-    // capacity: the rng is rekeyed and the profile taken per tile)
+    // one worker (context and buffers) per rayon split, reused by its tiles and kept by the
+    // pixel sampler for the next call (what carries over is capacity: the rng is rekeyed and
+    // the profile taken per tile)
     let init = || {
-        let mut ctx = Context::new(fresh());
-        ctx.camera = Some(pixels.camera().clone());
-        (ctx, TileBuffers::default(), Vec::with_capacity(TILE * TILE))
+        let w = pixels.take_worker().unwrap_or_else(|| {
+            let mut ctx = Context::new(fresh());
+            ctx.camera = Some(pixels.camera().clone());
+            Worker { ctx, buf: TileBuffers::default(), px: Vec::with_capacity(TILE * TILE) }
+        });
+        Lease { pixels, w: Some(w) }
     };
     (0..tiles_x * tiles_y)
         .into_par_iter()
-        .map_init(init, |(ctx, buf, px), tile| {
+        .map_init(init, |lease, tile| {
+            let Worker { ctx, buf, px } = lease.w.as_mut().expect("a lease holds its worker until dropped");
             let _ = take_ray_counts();
             let mut c = PassCounters::default();
             ctx.rng = fresh();
             px.clear();
             px.extend(tile_pixels(tile, (w, h)).map(|(x, y)| (x, y, (y * w + x) as u64)));
-            let mut out = Vec::with_capacity(px.len() * passes.len());
+            let mut out = pixels.take_out();
+            out.reserve(px.len() * passes.len());
             pixels.sample_tile((world, integrator), px, (seed, passes), (ctx, buf), &mut out);
             for l in out.iter_mut().filter(|l| !l.is_finite()) {
                 c.nonfinite += 1;
@@ -192,7 +198,22 @@ pub fn render_passes(
         total.closest_rays += s.closest_rays;
         total.shadow_rays += s.shadow_rays;
     }
+    pixels.put_outs(results.into_iter().map(|(_, out, _)| out));
     total
+}
+
+/// A worker borrowed from a pixel sampler for one rayon split; given back when the split ends.
+struct Lease<'a, 'b> {
+    pixels: &'a PixelSampler<'b>,
+    w: Option<Worker>,
+}
+
+impl Drop for Lease<'_, '_> {
+    fn drop(&mut self) {
+        if let Some(w) = self.w.take() {
+            self.pixels.put_worker(w);
+        }
+    }
 }
 
 /// A pixel's sample of the pass: its camera estimate plus the pass's light splats there, if the

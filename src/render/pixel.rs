@@ -63,6 +63,54 @@ pub struct PixelSampler<'a> {
     /// Row-major, one flag per pixel; empty when `k = 1`.
     split: Vec<bool>,
     stats: SplitStats,
+    /// The workers' contexts and buffers, kept from one call of `render::camera_tiles` to the
+    /// next (capacity only): made afresh per call, their growth cost 5% of `pt`'s CPU time on
+    /// `ring` in page faults (`results/2026-12-05-diffuse-lanes.md`).
+    workers: Pool<Worker>,
+    /// The tiles' sample buffers, kept from one call to the next as the workers are.
+    outs: Pool<Vec<Rgb>>,
+}
+
+/// Values kept for reuse across calls; a clone of the sampler starts with none.
+struct Pool<T>(std::sync::Mutex<Vec<T>>);
+
+impl<T> Pool<T> {
+    fn take(&self) -> Option<T> {
+        self.0.lock().ok()?.pop()
+    }
+    fn put(&self, items: impl IntoIterator<Item = T>) {
+        if let Ok(mut v) = self.0.lock() {
+            v.extend(items);
+        }
+    }
+}
+
+impl<T> Default for Pool<T> {
+    fn default() -> Self {
+        Pool(std::sync::Mutex::new(Vec::new()))
+    }
+}
+
+impl<T> Clone for Pool<T> {
+    fn clone(&self) -> Self {
+        Pool::default()
+    }
+}
+
+impl<T> std::fmt::Debug for Pool<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Pool")
+    }
+}
+
+/// A worker's context, tile buffers and pixel list (`render::camera_tiles`).
+pub struct Worker {
+    /// Its context (rng rekeyed per tile, profile taken per tile).
+    pub ctx: Context,
+    /// `sample_tile`'s buffers.
+    pub buf: TileBuffers,
+    /// The tile's pixels as (x, y, index).
+    pub px: Vec<(usize, usize, u64)>,
 }
 
 /// The buffers of [`PixelSampler::sample_tile`], kept by a worker from one tile to the next
@@ -77,11 +125,68 @@ pub struct TileBuffers {
     est: Vec<CameraEstimate>,
 }
 
+/// Passes whose camera rays `camera_lanes` draws at once.
+const LANES: usize = 16;
+
+/// The camera rays and streams of pixel `(x, y)` in the passes keyed by `keys` (at most
+/// [`LANES`]), pass `j` in lane `j`: what one pass at a time draws (`Rng::indexed`, the jitter,
+/// `Camera::direction`), operation for operation, as loops over the lanes that LLVM runs as
+/// vectors (`results/2026-12-05-diffuse-lanes.md`). Not inlined, so that it stays vectorized.
+#[inline(never)]
+fn camera_lanes(
+    cam: &Camera,
+    keys: &[u64],
+    (x, y, pixel): (usize, usize, u64),
+    rays: &mut Vec<Ray>,
+    rngs: &mut Vec<Rng>,
+) {
+    let n = keys.len();
+    // lanes past n repeat the last key; only the first n are kept
+    let keys: [u64; LANES] = std::array::from_fn(|j| keys[j.min(n - 1)]);
+    let (st, u) = Rng::indexed_2d_lanes(&keys, pixel);
+    let mut d = [crate::math::Vec3::ZERO; LANES];
+    for j in 0..LANES {
+        d[j] = cam.direction(x as f32 + u[j][0], y as f32 + u[j][1]);
+    }
+    rays.extend(d[..n].iter().map(|&d| Ray { o: cam.position, d, tmax: f32::INFINITY }));
+    rngs.extend(st.into_iter().take(n));
+}
+
 impl<'a> PixelSampler<'a> {
+    /// A kept worker, or `None` (the caller makes one).
+    pub(crate) fn take_worker(&self) -> Option<Worker> {
+        self.workers.take()
+    }
+
+    /// Keeps `w` for a later [`PixelSampler::take_worker`].
+    pub(crate) fn put_worker(&self, w: Worker) {
+        self.workers.put([w]);
+    }
+
+    /// An empty sample buffer, with the capacity of one given back before if any.
+    pub(crate) fn take_out(&self) -> Vec<Rgb> {
+        let mut v = self.outs.take().unwrap_or_default();
+        v.clear();
+        v
+    }
+
+    /// Keeps sample buffers for later [`PixelSampler::take_out`]s.
+    pub(crate) fn put_outs(&self, outs: impl IntoIterator<Item = Vec<Rgb>>) {
+        self.outs.put(outs);
+    }
+
     /// One camera ray per pixel sample.
     pub fn plain(camera: &'a Camera) -> PixelSampler<'a> {
         let stats = SplitStats { emission_split: 1, ..SplitStats::default() };
-        PixelSampler { camera, k: 1, cap: MAX_VERTICES, split: Vec::new(), stats }
+        PixelSampler {
+            camera,
+            k: 1,
+            cap: MAX_VERTICES,
+            split: Vec::new(),
+            stats,
+            workers: Pool::default(),
+            outs: Pool::default(),
+        }
     }
 
     /// `k` rays per sample (clamped to 1..=[`MAX_EMISSION_SPLIT`]) in the pixels where the probe
@@ -101,7 +206,7 @@ impl<'a> PixelSampler<'a> {
             split_fraction: n as f64 / split.len().max(1) as f64,
             probe_s: t0.elapsed().as_secs_f64(),
         };
-        PixelSampler { camera, k, cap, split, stats }
+        PixelSampler { camera, k, cap, split, stats, workers: Pool::default(), outs: Pool::default() }
     }
 
     /// `k` rays per sample in every pixel, no probe (tests and ablations: the estimator must be
@@ -110,7 +215,15 @@ impl<'a> PixelSampler<'a> {
         let k = k.clamp(1, MAX_EMISSION_SPLIT);
         let n = camera.width as u64 * camera.height as u64;
         let stats = SplitStats { emission_split: k, split_pixels: n, split_fraction: 1.0, probe_s: 0.0 };
-        PixelSampler { camera, k, cap, split: vec![true; n as usize], stats }
+        PixelSampler {
+            camera,
+            k,
+            cap,
+            split: vec![true; n as usize],
+            stats,
+            workers: Pool::default(),
+            outs: Pool::default(),
+        }
     }
 
     /// The image size, `(width, height)`.
@@ -151,20 +264,20 @@ impl<'a> PixelSampler<'a> {
         keys.clear();
         keys.extend(passes.iter().map(|&q| Rng::pass_key(seed, stream::CAMERA, q)));
         for &(x, y, pixel) in tile {
+            if self.k == 1 || !self.split[pixel as usize] {
+                for keys in keys.chunks(LANES) {
+                    camera_lanes(cam, keys, (x, y, pixel), rays, rngs);
+                }
+                slots.extend(out.len()..out.len() + keys.len());
+                out.resize(out.len() + keys.len(), Rgb::ZERO);
+                continue;
+            }
             for (&pass, &key) in passes.iter().zip(keys.iter()) {
                 let mut rng = Rng::indexed(key, pixel);
                 let [jx, jy] = rng.next_2d();
-                if self.k == 1 || !self.split[pixel as usize] {
-                    let d = cam.direction(x as f32 + jx, y as f32 + jy);
-                    rays.push(Ray { o: cam.position, d, tmax: f32::INFINITY });
-                    rngs.push(rng);
-                    slots.push(out.len());
-                    out.push(Rgb::ZERO);
-                } else {
-                    ctx.rng = rng;
-                    let key = (seed, pass);
-                    out.push(self.split_sample(world, integrator, (x, y, pixel), key, [jx, jy], ctx));
-                }
+                ctx.rng = rng;
+                let key = (seed, pass);
+                out.push(self.split_sample(world, integrator, (x, y, pixel), key, [jx, jy], ctx));
             }
         }
         integrator.estimate_batch(world, rays, rngs, ctx, est);
@@ -240,3 +353,35 @@ fn probe_edges(world: &World, camera: &Camera, cap: u32) -> Vec<bool> {
     }
     split
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Vec3;
+
+    /// `camera_lanes` gives, for 1, 5 and 16 passes, the rays and streams of one pass at a time
+    /// (`Rng::indexed`, the jitter, `Camera::direction`), as bits, and streams that go on alike.
+    #[test]
+    fn camera_lanes_are_one_pass_at_a_time() {
+        let cam = Camera::new(Vec3::new(0.3, 1.0, 4.0), Vec3::ZERO, Vec3::Y, 40.0, 64, 48);
+        let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+        for n in [1usize, 5, 16] {
+            let keys: Vec<u64> = (0..n as u64).map(|q| Rng::pass_key(11, stream::CAMERA, q)).collect();
+            for (x, y) in [(0usize, 0usize), (17, 9), (63, 47)] {
+                let pixel = (y * 64 + x) as u64;
+                let (mut rays, mut rngs) = (Vec::new(), Vec::new());
+                camera_lanes(&cam, &keys, (x, y, pixel), &mut rays, &mut rngs);
+                assert_eq!((rays.len(), rngs.len()), (n, n));
+                for (j, &key) in keys.iter().enumerate() {
+                    let mut rng = Rng::indexed(key, pixel);
+                    let [jx, jy] = rng.next_2d();
+                    let d = cam.direction(x as f32 + jx, y as f32 + jy);
+                    assert_eq!(bits(rays[j].d), bits(d), "{n} passes, pixel {pixel}, lane {j}");
+                    assert_eq!(bits(rays[j].o), bits(cam.position));
+                    assert_eq!(rngs[j].next_u32(), rng.next_u32(), "{n} passes, pixel {pixel}, lane {j}");
+                }
+            }
+        }
+    }
+}
+

@@ -70,6 +70,20 @@ impl Rng {
         r
     }
 
+    /// `Rng::indexed(keys[j], index)` for sixteen keys, each followed by its first two
+    /// `next_f32` (a camera ray's jitter): operation for operation what one key at a time gives,
+    /// in loops over the lanes that LLVM runs as vectors (`render::pixel`'s pass groups).
+    #[inline]
+    pub fn indexed_2d_lanes(keys: &[u64; 16], index: u64) -> ([Rng; 16], [[f32; 2]; 16]) {
+        let (mut state, mut inc, mut u) = ([0u64; 16], [0u64; 16], [[0.0f32; 2]; 16]);
+        for j in 0..16 {
+            let mut r = Rng::indexed(keys[j], index);
+            u[j] = r.next_2d();
+            (state[j], inc[j]) = (r.state, r.inc);
+        }
+        (std::array::from_fn(|j| Rng { state: state[j], inc: inc[j] }), u)
+    }
+
     /// Next uniform 32-bit word.
     #[inline]
     pub fn next_u32(&mut self) -> u32 {
