@@ -131,7 +131,8 @@ const LANES: usize = 16;
 /// The camera rays and streams of pixel `(x, y)` in the passes keyed by `keys` (at most
 /// [`LANES`]), pass `j` in lane `j`: what one pass at a time draws (`Rng::indexed`, the jitter,
 /// `Camera::direction`), operation for operation, as loops over the lanes that LLVM runs as
-/// vectors (`results/2026-12-05-diffuse-lanes.md`). Not inlined, so that it stays vectorized.
+/// vectors (`results/2026-12-05-diffuse-lanes.md`), or one at a time for fewer than 4 passes.
+/// Not inlined, so that it stays vectorized.
 #[inline(never)]
 fn camera_lanes(
     cam: &Camera,
@@ -141,6 +142,16 @@ fn camera_lanes(
     rngs: &mut Vec<Rng>,
 ) {
     let n = keys.len();
+    if n < LANES / 4 {
+        // a few passes (one, in the IWS family's passes): one at a time is cheaper than 16 lanes
+        for &key in keys {
+            let mut rng = Rng::indexed(key, pixel);
+            let [jx, jy] = rng.next_2d();
+            rays.push(Ray { o: cam.position, d: cam.direction(x as f32 + jx, y as f32 + jy), tmax: f32::INFINITY });
+            rngs.push(rng);
+        }
+        return;
+    }
     // lanes past n repeat the last key; only the first n are kept
     let keys: [u64; LANES] = std::array::from_fn(|j| keys[j.min(n - 1)]);
     let (st, u) = Rng::indexed_2d_lanes(&keys, pixel);
@@ -359,13 +370,13 @@ mod tests {
     use super::*;
     use crate::math::Vec3;
 
-    /// `camera_lanes` gives, for 1, 5 and 16 passes, the rays and streams of one pass at a time
+    /// `camera_lanes` gives, for 1 to 16 passes (both of its paths), the rays and streams of one pass at a time
     /// (`Rng::indexed`, the jitter, `Camera::direction`), as bits, and streams that go on alike.
     #[test]
     fn camera_lanes_are_one_pass_at_a_time() {
         let cam = Camera::new(Vec3::new(0.3, 1.0, 4.0), Vec3::ZERO, Vec3::Y, 40.0, 64, 48);
         let bits = |v: Vec3| v.to_array().map(f32::to_bits);
-        for n in [1usize, 5, 16] {
+        for n in [1usize, 3, 4, 5, 16] {
             let keys: Vec<u64> = (0..n as u64).map(|q| Rng::pass_key(11, stream::CAMERA, q)).collect();
             for (x, y) in [(0usize, 0usize), (17, 9), (63, 47)] {
                 let pixel = (y * 64 + x) as u64;
@@ -384,4 +395,3 @@ mod tests {
         }
     }
 }
-
