@@ -10,11 +10,13 @@
 //! - each lane evaluates the scalar formulas with the same operations in the same order (glam's
 //!   `Vec3` methods, `offset_origin`, `power_heuristic`, `Frame`); a branch that returns `None`
 //!   there is a lane mask here, and a lane whose mask is off adds `β·0`, as the scalar code does;
-//! - `sin` and `cos` are libm's, called lane by lane between two vector loops.
+//! - the concentric map's sine and cosine are `warp::sin_cos_quarter_pi`, plain arithmetic in
+//!   both.
 
 use crate::accel::{offset_origin, Ray};
-use crate::math::{Frame, Rgb, Vec2, Vec3, INV_PI, PI};
+use crate::math::{Frame, Rgb, Vec2, Vec3, INV_PI};
 use crate::sampling::power_heuristic;
+use crate::sampling::warp::sin_cos_quarter_pi;
 use crate::scene::Triangle;
 
 /// Lanes per record.
@@ -81,11 +83,6 @@ pub(super) struct Lanes {
     le: V3,
     u_light: [L; 2],
     u_bsdf: [L; 2],
-    /// The concentric map's radius and angle, then libm's sin and cos of the angle.
-    r: L,
-    theta: L,
-    sin: L,
-    cos: L,
     nee_ok: [bool; W],
     value: V3,
     shadow_o: V3,
@@ -138,12 +135,6 @@ impl Lanes {
             self.nee_lane(j);
         }
         for j in 0..W {
-            self.disk_lane(j);
-        }
-        for j in 0..W {
-            (self.sin[j], self.cos[j]) = (self.theta[j].sin(), self.theta[j].cos());
-        }
-        for j in 0..W {
             self.bsdf_lane(j);
         }
     }
@@ -194,21 +185,16 @@ impl Lanes {
         self.shadow_t[j] = len;
     }
 
-    /// `warp::sample_concentric_disk` up to its sine and cosine.
-    #[inline(always)]
-    fn disk_lane(&mut self, j: usize) {
-        let ox = 2.0 * self.u_bsdf[0][j] - 1.0;
-        let oy = 2.0 * self.u_bsdf[1][j] - 1.0;
-        let (r, theta) =
-            if ox.abs() > oy.abs() { (ox, (PI / 4.0) * (oy / ox)) } else { (oy, PI / 2.0 - (PI / 4.0) * (ox / oy)) };
-        (self.r[j], self.theta[j]) = (r, theta);
-    }
-
-    /// The rest of `bsdf::sample` for `Material::Diffuse` in radiance mode.
+    /// `bsdf::sample` for `Material::Diffuse` in radiance mode.
     #[inline(always)]
     fn bsdf_lane(&mut self, j: usize) {
-        let (ox, oy) = (2.0 * self.u_bsdf[0][j] - 1.0, 2.0 * self.u_bsdf[1][j] - 1.0);
-        let disk = Vec2::new(self.r[j] * self.cos[j], self.r[j] * self.sin[j]);
+        // warp::sample_concentric_disk, both octant pairs computed and one kept
+        let ox = 2.0 * self.u_bsdf[0][j] - 1.0;
+        let oy = 2.0 * self.u_bsdf[1][j] - 1.0;
+        let wide = ox.abs() > oy.abs();
+        let (r, t) = if wide { (ox, oy / ox) } else { (oy, ox / oy) };
+        let (s, c) = sin_cos_quarter_pi(t);
+        let disk = if wide { Vec2::new(r * c, r * s) } else { Vec2::new(r * s, r * c) };
         let disk = if ox == 0.0 && oy == 0.0 { Vec2::ZERO } else { disk };
         let local = Vec3::new(disk.x, disk.y, (1.0 - disk.length_squared()).max(0.0).sqrt());
         let wo = self.wo.get(j);

@@ -6,7 +6,9 @@
 
 use crate::math::{Vec2, Vec3, INV_PI, PI};
 
-/// Shirley–Chiu concentric map of the square onto the unit disk.
+/// Shirley–Chiu concentric map of the square onto the unit disk. The angle is (π/4)·t in one
+/// octant pair and π/2 − (π/4)·t in the other, so its sine and cosine are those of (π/4)·t,
+/// from [`sin_cos_quarter_pi`], swapped in the second case.
 #[inline]
 pub fn sample_concentric_disk(u: [f32; 2]) -> Vec2 {
     let ox = 2.0 * u[0] - 1.0;
@@ -14,9 +16,27 @@ pub fn sample_concentric_disk(u: [f32; 2]) -> Vec2 {
     if ox == 0.0 && oy == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, theta) =
-        if ox.abs() > oy.abs() { (ox, (PI / 4.0) * (oy / ox)) } else { (oy, PI / 2.0 - (PI / 4.0) * (ox / oy)) };
-    Vec2::new(r * theta.cos(), r * theta.sin())
+    if ox.abs() > oy.abs() {
+        let (s, c) = sin_cos_quarter_pi(oy / ox);
+        Vec2::new(ox * c, ox * s)
+    } else {
+        let (s, c) = sin_cos_quarter_pi(ox / oy);
+        Vec2::new(oy * s, oy * c)
+    }
+}
+
+/// (sin x, cos x) of x = (π/4)·t for t ∈ [−1, 1]: Cephes' single-precision minimax
+/// polynomials on [−π/4, π/4] (`sinf.c`, `cosf.c`), within 2 ulp of the exact values (tested).
+/// Plain arithmetic, so that LLVM can run it 16 lanes wide (`integrators::path_lanes`) with the
+/// scalar code's bits; libm's `sincosf` was 3.8% of `pt` on `ring`, called lane by lane
+/// (`results/2026-12-05-diffuse-lanes.md`).
+#[inline(always)]
+pub fn sin_cos_quarter_pi(t: f32) -> (f32, f32) {
+    let x = (PI / 4.0) * t;
+    let z = x * x;
+    let s = x + x * z * ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1);
+    let c = 1.0 - 0.5 * z + z * z * ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2);
+    (s, c)
 }
 
 /// Cosine-weighted hemisphere direction (Malley's method).
@@ -79,4 +99,31 @@ pub fn sample_triangle(u: [f32; 2]) -> (f32, f32) {
         (u[0] - b1, b1)
     };
     (b0, b1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The polynomial sine and cosine stay within 2 ulp of the exact values of the same f32
+    /// angle over the whole range the concentric map uses, and are exact at 0.
+    #[test]
+    fn sin_cos_quarter_pi_is_within_two_ulp() {
+        let ulp = |y: f64| {
+            let f = (y as f32).abs();
+            (f32::from_bits(f.to_bits() + 1) - f) as f64
+        };
+        let mut worst = 0.0f64;
+        for k in -200_000..=200_000 {
+            let t = k as f32 / 200_000.0;
+            let x = ((PI / 4.0) * t) as f64;
+            let (s, c) = sin_cos_quarter_pi(t);
+            for (got, exact) in [(s, x.sin()), (c, x.cos())] {
+                let e = (got as f64 - exact).abs() / ulp(exact).max(f64::MIN_POSITIVE);
+                worst = worst.max(e);
+            }
+        }
+        assert!(worst <= 2.0, "worst error {worst} ulp");
+        assert_eq!(sin_cos_quarter_pi(0.0), (0.0, 1.0));
+    }
 }
