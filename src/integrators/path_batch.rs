@@ -54,6 +54,8 @@ pub(super) struct Wave {
     occluded: Vec<bool>,
     /// The diffuse vertices of this bounce, sixteen at a time (`path_lanes`).
     lanes: Box<Lanes>,
+    /// Whether the lanes apply to this batch's scene (`lanes_apply`).
+    lanes_on: bool,
     scratch: BatchScratch,
 }
 
@@ -90,9 +92,9 @@ impl PathTracer {
         debug_assert!(self.filter.is_none() && rays.len() == rngs.len());
         out.clear();
         out.resize(rays.len(), CameraEstimate::default());
-        let lanes = lanes_apply(&world.scene);
         let start = Live { i: 0, t: Throughput::new(Rgb::ONE), prefix: true, prev_delta: true, prev_pdf_w: 0.0 };
         w.reset(rays.len());
+        w.lanes_on = lanes_apply(&world.scene);
         w.live.extend((0..rays.len() as u32).map(|i| Live { i, ..start }));
         w.rays.extend_from_slice(rays);
         for depth in 0..self.max_depth {
@@ -102,7 +104,7 @@ impl PathTracer {
             // the camera rays (depth 0) of a pass group run pixel by pixel, side by side
             world.intersect_batch(&w.rays, &mut w.scratch, &mut w.hits, depth == 0);
             for k in 0..w.live.len() {
-                if self.shade(world, w, k, depth, rngs, out, lanes) {
+                if self.shade(world, w, k, depth, rngs, out) {
                     self.flush(w, depth, rngs, out);
                 }
             }
@@ -124,10 +126,9 @@ impl PathTracer {
 
     /// One vertex of live path `k` (the body of `trace`'s loop): its emitter hit, its NEE
     /// sample (queued with its shadow ray), its BSDF sample and roulette (queued as the next ray).
-    /// With `lanes`, a diffuse vertex draws its numbers and goes to `w.lanes` instead; true when
-    /// that record is full.
+    /// Where the lanes apply, a diffuse vertex draws its numbers and goes to `w.lanes` instead;
+    /// true when that record is full.
     #[inline]
-    #[allow(clippy::too_many_arguments)]
     fn shade(
         &self,
         world: &World,
@@ -136,7 +137,6 @@ impl PathTracer {
         depth: u32,
         rngs: &mut [Rng],
         out: &mut [CameraEstimate],
-        lanes: bool,
     ) -> bool {
         let s = &world.scene;
         let (mut p, d) = (w.live[k], w.rays[k].d);
@@ -153,7 +153,7 @@ impl PathTracer {
         let m = s.material_of(hit.prim);
         let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
         let wo = -d;
-        if let (true, &Material::Diffuse { albedo }) = (lanes, m) {
+        if let (true, &Material::Diffuse { albedo }) = (w.lanes_on, m) {
             w.live[k].prefix = false;
             // light_sample_mis's numbers, then bsdf::sample's
             let (li, pmf, _) = s.light_pick.sample(rng.next_f32());
