@@ -156,7 +156,9 @@ fn bin() -> &'static str {
 /// with the same command line by each intended change of `pt-cf`'s camera side since: the
 /// roulette after guided vertices (`results/2026-12-04-guided-roulette.md`) and the targeted
 /// emission's cone per Dirac object (`results/2026-12-05-targeted-cones.md`), both z-tested against
-/// `pt` by `tests/pt_cf.rs`. Regenerate it only for such a change, and say so there.
+/// `pt` by `tests/pt_cf.rs`, and the concentric map's polynomial sine and cosine, which moved the
+/// last bits of every cosine-sampled direction (`results/2026-12-05-diffuse-lanes.md`, z-tested
+/// against the images before). Regenerate it only for such a change, and say so there.
 #[test]
 fn light_paths_zero_is_the_old_pt_cf_bit_for_bit() {
     let d = tmp_dir("light-paths-0");
