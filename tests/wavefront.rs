@@ -105,9 +105,15 @@ fn batch_queries_equal_single_queries() {
 /// then a group of 16 passes (the camera rays traced as coherent runs).
 /// `min_lit`: the fraction of camera rays whose estimate is not 0 (the test is not vacuous).
 fn wavefront_equals_scalar(w: &World, label: &str, res: u32, min_lit: f64) {
+    method_wavefront_equals_scalar(w, Method::Pt, label, res, min_lit);
+}
+
+/// [`wavefront_equals_scalar`] for `method` (`pt`, or `pt-cf` with its light side on: the
+/// camera's MIS ratio is tracked through the wavefront too).
+fn method_wavefront_equals_scalar(w: &World, method: Method, label: &str, res: u32, min_lit: f64) {
     let mut args = MethodArgs::default();
     args.settings.max_depth = Some(64);
-    let pt = Method::Pt.build(w, &args, &Method::Pt.preprocess(w, &args, 1).expect("no preprocess")).expect("pt");
+    let pt = method.build(w, &args, &method.preprocess(w, &args, 1).expect("preprocess")).expect("build");
     let cam = w.scene.camera.with_resolution(res, res);
     // one pass, then a pass group of 16 (each pixel's 16 camera rays side by side)
     for passes in [vec![0u64], (1..17).collect::<Vec<u64>>()] {
@@ -124,6 +130,7 @@ fn wavefront_equals_scalar(w: &World, label: &str, res: u32, min_lit: f64) {
         let pass = passes[0];
         let mut scalar_rngs = rngs.clone();
         let mut ctx = Context::new(Rng::keyed(0, stream::MISC, 0, 0));
+        ctx.camera = Some(cam.clone());
         let (mut batch, mut scalar) = (Vec::new(), Vec::new());
         pt.estimate_batch(w, &rays, &mut rngs, &mut ctx, &mut batch);
         estimate_each(pt.as_ref(), w, &rays, &mut scalar_rngs, &mut ctx, &mut scalar);
@@ -147,5 +154,36 @@ fn pt_wavefront_is_bit_identical_to_the_scalar_loop() {
         // a point light: the diffuse lanes do not apply (`path_lanes`), every vertex is scalar;
         // the light reaches a fifth of this view (the floor it lights)
         wavefront_equals_scalar(&world("tests/scenes/point-mirror.toml", kind), "point mirror", 32, 0.1);
+    }
+}
+
+/// `pt-cf`'s wavefront (`integrators::pt_cf::batch`) against `trace`, bit for bit: guided and
+/// split vertices (`cornell-box`'s glass caustic, `ring`'s cardioid), the MIS ratio against the
+/// light paths at lane and scalar vertices, and a point light (no lanes).
+#[test]
+fn pt_cf_wavefront_is_bit_identical_to_the_scalar_loop() {
+    for kind in backends() {
+        method_wavefront_equals_scalar(
+            &world("scenes/cornell-box.toml", kind),
+            Method::PtCf,
+            "pt-cf cornell-box",
+            48,
+            0.25,
+        );
+        method_wavefront_equals_scalar(&world("scenes/ring.toml", kind), Method::PtCf, "pt-cf ring", 48, 0.25);
+        method_wavefront_equals_scalar(
+            &world("scenes/figurines.toml", kind),
+            Method::PtCf,
+            "pt-cf figurines",
+            32,
+            0.25,
+        );
+        method_wavefront_equals_scalar(
+            &world("tests/scenes/point-mirror.toml", kind),
+            Method::PtCf,
+            "pt-cf point mirror",
+            32,
+            0.1,
+        );
     }
 }

@@ -25,7 +25,7 @@ use crate::transport::roulette::Throughput;
 
 /// One live path of the wavefront.
 #[derive(Clone, Copy)]
-struct Live {
+pub(super) struct Live {
     /// Index of the camera ray (and of its stream and estimate).
     i: u32,
     /// Its throughput (with roulette's η² scale).
@@ -39,29 +39,57 @@ struct Live {
 }
 
 /// Per-batch buffers, reused across bounces and, through `Context::take_scratch`, across the
-/// batches of a worker (a bounce never has more rays than the batch).
-#[derive(Default)]
-pub(super) struct Wave {
-    live: Vec<Live>,
-    rays: Vec<Ray>,
+/// batches of a worker (a bounce never has more rays than the batch). `P`: a live path's state
+/// (`Live` here, `pt-cf`'s own in `pt_cf::batch`).
+pub(super) struct Wave<P = Live> {
+    pub(super) live: Vec<P>,
+    pub(super) rays: Vec<Ray>,
     /// The closest hits of `rays` as (primitive, t) (`World::hit_at` builds the record).
-    hits: Vec<Option<(u32, f32)>>,
-    next_live: Vec<Live>,
-    next_rays: Vec<Ray>,
+    pub(super) hits: Vec<Option<(u32, f32)>>,
+    pub(super) next_live: Vec<P>,
+    pub(super) next_rays: Vec<Ray>,
     /// NEE of this bounce: (path index, β at the vertex, the unoccluded value).
     nee: Vec<(u32, Rgb, Rgb)>,
     shadow: Vec<Ray>,
     occluded: Vec<bool>,
     /// The diffuse vertices of this bounce, sixteen at a time (`path_lanes`).
-    lanes: Box<Lanes>,
+    pub(super) lanes: Box<Lanes>,
     /// Whether the lanes apply to this batch's scene (`lanes_apply`).
-    lanes_on: bool,
+    pub(super) lanes_on: bool,
     scratch: BatchScratch,
 }
 
-impl Wave {
-    /// Empties every buffer and makes room for `n` paths.
-    fn reset(&mut self, n: usize) {
+impl<P> Default for Wave<P> {
+    fn default() -> Self {
+        Wave {
+            live: Vec::new(),
+            rays: Vec::new(),
+            hits: Vec::new(),
+            next_live: Vec::new(),
+            next_rays: Vec::new(),
+            nee: Vec::new(),
+            shadow: Vec::new(),
+            occluded: Vec::new(),
+            lanes: Box::default(),
+            lanes_on: false,
+            scratch: BatchScratch::default(),
+        }
+    }
+}
+
+impl<P: Copy> Wave<P> {
+    /// Empties every buffer and starts one path per camera ray (`start(i)` its state), and
+    /// `out` as one zero estimate per ray.
+    pub(super) fn start(
+        &mut self,
+        world: &World,
+        rays: &[Ray],
+        start: impl Fn(u32) -> P,
+        out: &mut Vec<CameraEstimate>,
+    ) {
+        let n = rays.len();
+        out.clear();
+        out.resize(n, CameraEstimate::default());
         for v in [&mut self.live, &mut self.next_live] {
             v.clear();
             v.reserve(n);
@@ -76,6 +104,43 @@ impl Wave {
         self.nee.reserve(n);
         self.occluded.clear();
         self.occluded.reserve(n);
+        self.lanes_on = lanes_apply(&world.scene);
+        self.live.extend((0..n as u32).map(start));
+        self.rays.extend_from_slice(rays);
+    }
+
+    /// Traces the bounce's rays (the camera rays, `depth` 0, of a pass group run pixel by
+    /// pixel, side by side).
+    pub(super) fn intersect(&mut self, world: &World, depth: u32) {
+        world.intersect_batch(&self.rays, &mut self.scratch, &mut self.hits, depth == 0);
+    }
+
+    /// Queues path `i`'s NEE sample: `β·value` if its segment is unoccluded, `β·0` for `None`
+    /// (as `direct::sample_light` returns), added at the end of the bounce.
+    #[inline]
+    pub(super) fn queue_nee(&mut self, (i, beta): (u32, Rgb), ls: Option<(Rgb, Ray)>, out: &mut [CameraEstimate]) {
+        match ls {
+            Some((value, shadow)) => {
+                self.nee.push((i, beta, value));
+                self.shadow.push(shadow);
+            }
+            None => out[i as usize].rest += beta * Rgb::ZERO,
+        }
+    }
+
+    /// Ends a bounce: its shadow rays traced and their NEE added, the next bounce's paths made
+    /// live.
+    pub(super) fn finish_bounce(&mut self, world: &World, out: &mut [CameraEstimate]) {
+        world.occluded_batch(&self.shadow, &mut self.scratch, &mut self.occluded);
+        for (&(i, beta, value), &blocked) in self.nee.iter().zip(&self.occluded) {
+            out[i as usize].rest += beta * if blocked { Rgb::ZERO } else { value };
+        }
+        self.nee.clear();
+        self.shadow.clear();
+        std::mem::swap(&mut self.live, &mut self.next_live);
+        std::mem::swap(&mut self.rays, &mut self.next_rays);
+        self.next_live.clear();
+        self.next_rays.clear();
     }
 }
 
@@ -90,19 +155,13 @@ impl PathTracer {
         out: &mut Vec<CameraEstimate>,
     ) {
         debug_assert!(self.filter.is_none() && rays.len() == rngs.len());
-        out.clear();
-        out.resize(rays.len(), CameraEstimate::default());
         let start = Live { i: 0, t: Throughput::new(Rgb::ONE), prefix: true, prev_delta: true, prev_pdf_w: 0.0 };
-        w.reset(rays.len());
-        w.lanes_on = lanes_apply(&world.scene);
-        w.live.extend((0..rays.len() as u32).map(|i| Live { i, ..start }));
-        w.rays.extend_from_slice(rays);
+        w.start(world, rays, |i| Live { i, ..start }, out);
         for depth in 0..self.max_depth {
             if w.live.is_empty() {
                 break;
             }
-            // the camera rays (depth 0) of a pass group run pixel by pixel, side by side
-            world.intersect_batch(&w.rays, &mut w.scratch, &mut w.hits, depth == 0);
+            w.intersect(world, depth);
             for k in 0..w.live.len() {
                 if self.shade(world, w, k, depth, rngs, out) {
                     self.flush(w, depth, rngs, out);
@@ -111,16 +170,7 @@ impl PathTracer {
             if w.lanes.n > 0 {
                 self.flush(w, depth, rngs, out);
             }
-            world.occluded_batch(&w.shadow, &mut w.scratch, &mut w.occluded);
-            for (&(i, beta, value), &blocked) in w.nee.iter().zip(&w.occluded) {
-                out[i as usize].rest += beta * if blocked { Rgb::ZERO } else { value };
-            }
-            w.nee.clear();
-            w.shadow.clear();
-            std::mem::swap(&mut w.live, &mut w.next_live);
-            std::mem::swap(&mut w.rays, &mut w.next_rays);
-            w.next_live.clear();
-            w.next_rays.clear();
+            w.finish_bounce(world, out);
         }
     }
 
@@ -155,38 +205,12 @@ impl PathTracer {
         let wo = -d;
         if let (true, &Material::Diffuse { albedo }) = (w.lanes_on, m) {
             w.live[k].prefix = false;
-            // light_sample_mis's numbers, then bsdf::sample's
-            let (li, pmf, _) = s.light_pick.sample(rng.next_f32());
-            let u_light = rng.next_2d();
-            let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
-            let LightRef::Area(e) = s.lights[li] else { unreachable!("lanes_apply checked the lights") };
-            let em = &s.emitters[e as usize];
-            let light = &s.triangles[em.prim as usize];
-            let (p, ng, ns) = (sp.p, sp.ng, sp.ns);
-            let v = Vertex {
-                k: k as u32,
-                p,
-                ng,
-                ns,
-                wo,
-                albedo,
-                light,
-                pmf,
-                le: em.radiance,
-                u_light,
-                u_bsdf: [u[0], u[1]],
-            };
-            return w.lanes.push(v);
+            return w.lanes.push(Vertex::draw(world, k, (&sp, wo, albedo), rng));
         }
         if !m.is_dirac() {
             p.prefix = false;
-            match direct::light_sample_mis(world, &sp, m, wo, rng, |wi| bsdf::pdf_w(m, &sp, wo, wi)) {
-                Some(ls) => {
-                    w.nee.push((p.i, p.t.beta, ls.value));
-                    w.shadow.push(ls.shadow);
-                }
-                None => out[i].rest += p.t.beta * Rgb::ZERO,
-            }
+            let ls = direct::light_sample_mis(world, &sp, m, wo, rng, |wi| bsdf::pdf_w(m, &sp, wo, wi));
+            w.queue_nee((p.i, p.t.beta), ls.map(|ls| (ls.value, ls.shadow)), out);
         }
         let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
         let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { return false };
@@ -206,13 +230,7 @@ impl PathTracer {
         w.lanes.run();
         for j in 0..w.lanes.n {
             let (mut p, r) = (w.live[w.lanes.k[j] as usize], w.lanes.out(j));
-            match r.nee {
-                Some((value, shadow)) => {
-                    w.nee.push((p.i, p.t.beta, value));
-                    w.shadow.push(shadow);
-                }
-                None => out[p.i as usize].rest += p.t.beta * Rgb::ZERO,
-            }
+            w.queue_nee((p.i, p.t.beta), r.nee, out);
             let Some((wi, pdf_w)) = r.bsdf else { continue };
             let bs = BsdfSample { wi, weight: r.albedo, pdf_w, is_delta: false, eta: 1.0 };
             if !p.t.scatter(&bs, depth, &mut rngs[p.i as usize]) {
@@ -227,6 +245,6 @@ impl PathTracer {
 }
 
 /// Whether the lanes apply: every light is a triangle emitter (`path_lanes` samples those).
-fn lanes_apply(s: &Scene) -> bool {
+pub(super) fn lanes_apply(s: &Scene) -> bool {
     s.lights.iter().all(|l| matches!(*l, LightRef::Area(e) if s.emitters[e as usize].prim < s.ntri()))
 }

@@ -13,10 +13,13 @@
 //! - the concentric map's sine and cosine are `warp::sin_cos_quarter_pi`, plain arithmetic in
 //!   both.
 
-use crate::accel::{offset_origin, Ray};
+use crate::accel::{offset_origin, Ray, World};
+use crate::bsdf::ShadingPoint;
 use crate::math::{Frame, Rgb, Vec2, Vec3, INV_PI};
 use crate::sampling::power_heuristic;
+use crate::sampling::rng::Rng;
 use crate::sampling::warp::sin_cos_quarter_pi;
+use crate::scene::LightRef;
 use crate::scene::Triangle;
 
 /// Lanes per record.
@@ -62,6 +65,34 @@ pub(super) struct Vertex<'a> {
     pub u_bsdf: [f32; 2],
 }
 
+impl<'a> Vertex<'a> {
+    /// The record of live path `k`'s vertex at `sp` (`wo`, `albedo`), its numbers drawn from
+    /// `rng` in the scalar order: the light pick, the point on the light, then the BSDF's three
+    /// (`direct::light_sample_mis`, then `bsdf::sample`). Requires `path_batch::lanes_apply`.
+    #[inline]
+    pub fn draw(world: &'a World, k: usize, (sp, wo, albedo): (&ShadingPoint, Vec3, Rgb), rng: &mut Rng) -> Self {
+        let s = &world.scene;
+        let (li, pmf, _) = s.light_pick.sample(rng.next_f32());
+        let u_light = rng.next_2d();
+        let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+        let LightRef::Area(e) = s.lights[li] else { unreachable!("lanes_apply checked the lights") };
+        let em = &s.emitters[e as usize];
+        Vertex {
+            k: k as u32,
+            p: sp.p,
+            ng: sp.ng,
+            ns: sp.ns,
+            wo,
+            albedo,
+            light: &s.triangles[em.prim as usize],
+            pmf,
+            le: em.radiance,
+            u_light,
+            u_bsdf: [u[0], u[1]],
+        }
+    }
+}
+
 /// Sixteen queued vertices and, after `run`, their NEE samples and scattered directions.
 #[derive(Default)]
 pub(super) struct Lanes {
@@ -99,9 +130,11 @@ pub(super) struct LaneOut {
     pub nee: Option<(Rgb, Ray)>,
     /// The sampled direction and its pdf_w (`None` where `bsdf::sample` returns `None`).
     pub bsdf: Option<(Vec3, f32)>,
-    /// The vertex's position, geometric normal and albedo.
+    /// The vertex's position, normals, direction toward the previous vertex and albedo.
     pub p: Vec3,
     pub ng: Vec3,
+    pub ns: Vec3,
+    pub wo: Vec3,
     pub albedo: Rgb,
 }
 
@@ -148,6 +181,8 @@ impl Lanes {
             bsdf: self.bsdf_ok[j].then(|| (self.wi.get(j), self.pdf_w[j])),
             p: self.p.get(j),
             ng: self.ng.get(j),
+            ns: self.ns.get(j),
+            wo: self.wo.get(j),
             albedo: self.albedo.get(j),
         }
     }

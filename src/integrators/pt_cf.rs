@@ -37,13 +37,15 @@
 //!
 //! CLI: `forecast render scenes/cornell-box.toml --method pt-cf --time 1m`.
 
+mod batch;
+
 use super::iws_forecast::{targeted_emission, IwsCf};
 use super::pt_cf_light::{self, LightSide};
 use super::path::emitter_hit;
 use super::path_class::{kept, PathClass, PathFilter};
 use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
 use crate::progress::Phases;
-use crate::accel::{offset_origin, Hit, World};
+use crate::accel::{offset_origin, Hit, Ray, World};
 use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
 use crate::forecast::cluster::Cluster;
 use crate::forecast::direction_table::ForecastTables;
@@ -53,6 +55,7 @@ use crate::forecast::share::{min_share, parse_min_share};
 use crate::forecast::subset_grid::SubsetGrid;
 use crate::math::{Frame, Rgb, Vec3};
 use crate::profile::{Phase, Profile};
+use crate::sampling::rng::Rng;
 use crate::scene::{Camera, Material, NO_EMITTER};
 use crate::transport::particle::MAX_VERTICES;
 use crate::transport::context::ShadingQuery;
@@ -200,6 +203,23 @@ struct PathState {
     mis: Option<f32>,
 }
 
+impl PathState {
+    /// A camera path starting along `ray`.
+    fn camera(ray: Ray) -> Self {
+        PathState {
+            o: ray.o,
+            d: ray.d,
+            t: Throughput::new(Rgb::ONE),
+            vertex: 0,
+            diffuse: 0,
+            prev_delta: true,
+            prev_pdf_w: 0.0,
+            class: PathClass::default(),
+            mis: None,
+        }
+    }
+}
+
 /// The guide at one vertex: tables, their frame, the mixture weights and the split count.
 struct Guide {
     tables: Arc<ForecastTables>,
@@ -312,7 +332,7 @@ impl GuidedPathTracer {
                 }
                 let u = [ctx.rng.next_f32(), ctx.rng.next_f32(), ctx.rng.next_f32()];
                 let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { break };
-                if !continue_path(&mut st, (depth, hit.p, hit.ng), &bs, ctx) {
+                if !continue_path(&mut st, (depth, hit.p, hit.ng), &bs, &mut ctx.rng) {
                     break;
                 }
                 self.track_mis(&mut st, (m, &sp, wo, hit.t), depth, ctx);
@@ -326,7 +346,7 @@ impl GuidedPathTracer {
             if g.n == 1 {
                 let Some(ms) = mix.sample(&mut ctx.rng) else { break };
                 st.t.guided(ms.pdf_w, ms.bsdf_pdf_w);
-                if !continue_path(&mut st, (depth, hit.p, hit.ng), &ms.as_bsdf_sample(), ctx) {
+                if !continue_path(&mut st, (depth, hit.p, hit.ng), &ms.as_bsdf_sample(), &mut ctx.rng) {
                     break;
                 }
                 self.track_mis(&mut st, (m, &sp, wo, hit.t), depth, ctx);
@@ -356,7 +376,7 @@ impl GuidedPathTracer {
             let bs = BsdfSample { weight: ms.weight * (1.0 / nf), pdf_w: nf * ms.pdf_w, ..ms.as_bsdf_sample() };
             // roulette sees the branch as one BSDF-sampled path (`Throughput::guided`)
             b.t.guided(bs.pdf_w, ms.bsdf_pdf_w);
-            if continue_path(&mut b, at, &bs, ctx) {
+            if continue_path(&mut b, at, &bs, &mut ctx.rng) {
                 self.track_mis(&mut b, v, at.0, ctx);
                 *rest += self.trace(world, b, ctx).total();
             }
@@ -366,8 +386,8 @@ impl GuidedPathTracer {
 
 /// Applies a sampled continuation `bs` at vertex `(index, p, ng)`: throughput and `pt`'s
 /// roulette ([`Throughput::scatter`]), the next ray. False when the path ends.
-fn continue_path(st: &mut PathState, (index, p, ng): (u32, Vec3, Vec3), bs: &BsdfSample, ctx: &mut Context) -> bool {
-    if !st.t.scatter(bs, index, &mut ctx.rng) {
+fn continue_path(st: &mut PathState, (index, p, ng): (u32, Vec3, Vec3), bs: &BsdfSample, rng: &mut Rng) -> bool {
+    if !st.t.scatter(bs, index, rng) {
         return false;
     }
     st.prev_delta = bs.is_delta;
@@ -385,21 +405,24 @@ impl Integrator for GuidedPathTracer {
 
     fn estimate(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
         let t0 = ctx.profile.start(Phase::Radiance);
-        let st = PathState {
-            o: origin,
-            d: dir,
-            t: Throughput::new(Rgb::ONE),
-            vertex: 0,
-            diffuse: 0,
-            prev_delta: true,
-            prev_pdf_w: 0.0,
-            class: PathClass::default(),
-            mis: None,
-        };
-        let l = self.trace(world, st, ctx);
+        let l = self.trace(world, PathState::camera(Ray { o: origin, d: dir, tmax: f32::INFINITY }), ctx);
         ctx.profile.samples += 1;
         ctx.profile.record(Phase::Radiance, t0);
         l
+    }
+
+    /// The wavefront (`pt_cf::batch`), bit for bit `estimate` ray by ray; `--path-filter` runs
+    /// `estimate` ray by ray.
+    fn estimate_batch(&self, world: &World, rays: &[Ray], rngs: &mut [Rng], ctx: &mut Context, out: &mut Vec<CameraEstimate>) {
+        if self.filter.is_some() {
+            return super::estimate_each(self, world, rays, rngs, ctx, out);
+        }
+        let t0 = std::time::Instant::now();
+        let mut wave = ctx.take_scratch::<batch::CfWave>();
+        self.trace_batch(world, (rays, rngs), &mut wave, ctx, out);
+        ctx.put_scratch(wave);
+        ctx.profile.samples += rays.len() as u64;
+        ctx.profile.add_exact(Phase::Radiance, t0.elapsed().as_nanos() as u64);
     }
 
     fn prefix_cap(&self) -> u32 {
