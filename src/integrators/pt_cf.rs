@@ -386,6 +386,7 @@ impl GuidedPathTracer {
 
 /// Applies a sampled continuation `bs` at vertex `(index, p, ng)`: throughput and `pt`'s
 /// roulette ([`Throughput::scatter`]), the next ray. False when the path ends.
+#[inline]
 fn continue_path(st: &mut PathState, (index, p, ng): (u32, Vec3, Vec3), bs: &BsdfSample, rng: &mut Rng) -> bool {
     if !st.t.scatter(bs, index, rng) {
         return false;
