@@ -152,14 +152,14 @@ impl GuidedPathTracer {
     /// scattering, roulette and MIS ratio.
     fn flush(&self, w: &mut Wave<Live>, lane_t: &[f32; W], (rngs, ctx): (&mut [Rng], &mut Context), out: &mut [CameraEstimate]) {
         w.lanes.run();
-        for j in 0..w.lanes.n {
+        for (j, &t) in lane_t.iter().enumerate().take(w.lanes.n) {
             let (Live { i, st }, r) = (w.live[w.lanes.k[j] as usize], w.lanes.out(j));
             w.queue_nee((i, st.t.beta), r.nee, out);
             let Some((wi, pdf_w)) = r.bsdf else { continue };
             let bs = BsdfSample { wi, weight: r.albedo, pdf_w, is_delta: false, eta: 1.0 };
             let (m, sp) = (Material::Diffuse { albedo: r.albedo }, ShadingPoint { p: r.p, ng: r.ng, ns: r.ns });
             let at = (st.vertex - 1, r.p, r.ng);
-            self.step(w, (i, st), (at, &bs), (&m, &sp, r.wo, lane_t[j]), (&mut rngs[i as usize], ctx));
+            self.step(w, (i, st), (at, &bs), (&m, &sp, r.wo, t), (&mut rngs[i as usize], ctx));
         }
         w.lanes.n = 0;
     }
