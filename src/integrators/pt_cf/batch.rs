@@ -13,7 +13,7 @@
 //!   against the light paths (`track_mis`) is updated from the lane's result;
 //! - `--path-filter` runs `trace` ray by ray (`estimate_each`).
 
-use super::{continue_path, GuidedPathTracer, PathState};
+use super::{continue_path, Guide, GuidedPathTracer, PathState};
 use crate::accel::{Ray, World};
 use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
 use crate::forecast::mixture::DefensiveMixture;
@@ -128,24 +128,39 @@ impl GuidedPathTracer {
             self.step(w, (i, st), (at, &bs), (m, &sp, wo, hit.t), (rng, ctx));
             return false;
         };
+        self.guided(world, w, (i, st, g), (m, &sp, wo, hit.t), (rng, ctx), out);
+        false
+    }
+
+    /// A guided vertex `v` of path `i` (its guide `g`): `trace`'s, with its NEE shadow ray
+    /// queued; a split vertex runs its NEE and its branches on the spot, on the path's stream.
+    fn guided(
+        &self,
+        world: &World,
+        w: &mut Wave<Live>,
+        (i, mut st, g): (u32, PathState, Guide),
+        v: At,
+        (rng, ctx): (&mut Rng, &mut Context),
+        out: &mut [CameraEstimate],
+    ) {
+        let (m, sp, wo, _) = v;
+        let at = (st.vertex - 1, sp.p, sp.ng);
         st.diffuse += 1;
-        let mix = DefensiveMixture::new(m, &sp, wo, &g.tables, g.frame, g.weights);
+        let mix = DefensiveMixture::new(m, sp, wo, &g.tables, g.frame, g.weights);
         let n = g.n as f32;
         if g.n > 1 {
-            // `trace`'s split vertex, on the path's stream
             let l = &mut out[i as usize];
-            l.rest += st.t.beta * direct::sample_light_mis(world, &sp, m, wo, rng, |wi| n * mix.pdf_w(wi));
+            l.rest += st.t.beta * direct::sample_light_mis(world, sp, m, wo, rng, |wi| n * mix.pdf_w(wi));
             std::mem::swap(&mut ctx.rng, rng);
-            self.split(world, (&st, at), (&mix, g.n), (m, &sp, wo, hit.t), &mut l.rest, ctx);
+            self.split(world, (&st, at), (&mix, g.n), v, &mut l.rest, ctx);
             std::mem::swap(&mut ctx.rng, rng);
-            return false;
+            return;
         }
-        let ls = direct::light_sample_mis(world, &sp, m, wo, rng, |wi| n * mix.pdf_w(wi));
+        let ls = direct::light_sample_mis(world, sp, m, wo, rng, |wi| n * mix.pdf_w(wi));
         w.queue_nee((i, st.t.beta), ls.map(|ls| (ls.value, ls.shadow)), out);
-        let Some(ms) = mix.sample(rng) else { return false };
+        let Some(ms) = mix.sample(rng) else { return };
         st.t.guided(ms.pdf_w, ms.bsdf_pdf_w);
-        self.step(w, (i, st), (at, &ms.as_bsdf_sample()), (m, &sp, wo, hit.t), (rng, ctx));
-        false
+        self.step(w, (i, st), (at, &ms.as_bsdf_sample()), v, (rng, ctx));
     }
 
     /// Runs the queued diffuse vertices and finishes each as `trace` does: its NEE queued, its
