@@ -298,6 +298,24 @@ impl GuidedPathTracer {
         kept(self.filter.as_ref(), class, v)
     }
 
+    /// Enters the non-emitter vertex `hit` (material `m`) of `st`, counting it: its shading
+    /// point, the direction toward the previous vertex, its index, and its guide (`None` at a
+    /// Dirac vertex and at a `pt` vertex).
+    #[inline]
+    fn enter(&self, st: &mut PathState, m: &Material, hit: &Hit, ctx: &mut Context) -> (ShadingPoint, Vec3, u32, Option<Guide>) {
+        let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
+        let wo = -st.d;
+        let depth = st.vertex;
+        st.vertex += 1;
+        st.class.push(m.is_dirac());
+        let guide = if m.is_dirac() {
+            None
+        } else {
+            self.guide_at(&ShadingQuery { x: &sp, m, wo, depth: st.diffuse }, ctx)
+        };
+        (sp, wo, depth, guide)
+    }
+
     /// Radiance along `st` (a whole path, or one branch of a split).
     fn trace(&self, world: &World, mut st: PathState, ctx: &mut Context) -> CameraEstimate {
         let s = &world.scene;
@@ -314,16 +332,7 @@ impl GuidedPathTracer {
                 break; // emitters reflect nothing
             }
             let m = s.material_of(hit.prim);
-            let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
-            let wo = -st.d;
-            let depth = st.vertex;
-            st.vertex += 1;
-            st.class.push(m.is_dirac());
-            let guide = if m.is_dirac() {
-                None
-            } else {
-                self.guide_at(&ShadingQuery { x: &sp, m, wo, depth: st.diffuse }, ctx)
-            };
+            let (sp, wo, depth, guide) = self.enter(&mut st, m, &hit, ctx);
             let Some(g) = guide else {
                 // a `pt` vertex, operation for operation
                 if !m.is_dirac() {

@@ -24,7 +24,6 @@ use crate::integrators::{CameraEstimate, Context};
 use crate::math::Vec3;
 use crate::sampling::rng::Rng;
 use crate::scene::{Material, NO_EMITTER};
-use crate::transport::context::ShadingQuery;
 use crate::transport::direct;
 
 /// One live path: its camera ray's index (of its stream and estimate) and its state.
@@ -100,17 +99,8 @@ impl GuidedPathTracer {
             return false; // emitters reflect nothing
         }
         let m = s.material_of(hit.prim);
-        let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
-        let wo = -st.d;
-        let depth = st.vertex;
-        st.vertex += 1;
-        st.class.push(m.is_dirac());
+        let (sp, wo, depth, guide) = self.enter(&mut st, m, &hit, ctx);
         let at = (depth, hit.p, hit.ng);
-        let guide = if m.is_dirac() {
-            None
-        } else {
-            self.guide_at(&ShadingQuery { x: &sp, m, wo, depth: st.diffuse }, ctx)
-        };
         let Some(g) = guide else {
             if let (true, &Material::Diffuse { albedo }) = (w.lanes_on, m) {
                 st.diffuse += 1;
