@@ -108,13 +108,23 @@ fn wavefront_equals_scalar(w: &World, label: &str, res: u32, min_lit: f64) {
     method_wavefront_equals_scalar(w, Method::Pt, label, res, min_lit);
 }
 
+/// Asserts that `label`'s run reached guided vertices, split ones among them (more
+/// continuations than guided vertices).
+fn assert_guided(label: &str, (inside, samples): (u64, u64)) {
+    eprintln!("{label}: {inside} guided vertices, {samples} continuations");
+    assert!(inside > 0, "{label}: no guided vertex: the test does not reach the guided code");
+    assert!(samples > inside, "{label}: no split vertex ({samples} continuations at {inside})");
+}
+
 /// [`wavefront_equals_scalar`] for `method` (`pt`, or `pt-cf` with its light side on: the
-/// camera's MIS ratio is tracked through the wavefront too).
-fn method_wavefront_equals_scalar(w: &World, method: Method, label: &str, res: u32, min_lit: f64) {
+/// camera's MIS ratio is tracked through the wavefront too). Returns the guide's counters of
+/// both runs (`pt-cf`): (vertices inside a guided cluster, continuations drawn there).
+fn method_wavefront_equals_scalar(w: &World, method: Method, label: &str, res: u32, min_lit: f64) -> (u64, u64) {
     let mut args = MethodArgs::default();
     args.settings.max_depth = Some(64);
     let pt = method.build(w, &args, &method.preprocess(w, &args, 1).expect("preprocess")).expect("build");
     let cam = w.scene.camera.with_resolution(res, res);
+    let mut guided = (0, 0);
     // one pass, then a pass group of 16 (each pixel's 16 camera rays side by side)
     for passes in [vec![0u64], (1..17).collect::<Vec<u64>>()] {
         let (mut rays, mut rngs) = (Vec::new(), Vec::new());
@@ -134,6 +144,7 @@ fn method_wavefront_equals_scalar(w: &World, method: Method, label: &str, res: u
         let (mut batch, mut scalar) = (Vec::new(), Vec::new());
         pt.estimate_batch(w, &rays, &mut rngs, &mut ctx, &mut batch);
         estimate_each(pt.as_ref(), w, &rays, &mut scalar_rngs, &mut ctx, &mut scalar);
+        guided = (guided.0 + ctx.profile.cf.inside, guided.1 + ctx.profile.cf.samples);
         let key = |e: &CameraEstimate| (bits(e.prefix_le), bits(e.rest));
         let lit = scalar.iter().filter(|e| e.total() != Vec3::ZERO).count();
         assert!(lit as f64 > min_lit * rays.len() as f64, "{label}: the test image is lit ({lit} of {})", rays.len());
@@ -141,6 +152,7 @@ fn method_wavefront_equals_scalar(w: &World, method: Method, label: &str, res: u
             assert_eq!(key(b), key(s), "{label} ({:?}), pass {pass}, pixel {i}", w.accel());
         }
     }
+    guided
 }
 
 #[test]
@@ -158,32 +170,22 @@ fn pt_wavefront_is_bit_identical_to_the_scalar_loop() {
 }
 
 /// `pt-cf`'s wavefront (`integrators::pt_cf::batch`) against `trace`, bit for bit: guided and
-/// split vertices (`cornell-box`'s glass caustic, `ring`'s cardioid), the MIS ratio against the
-/// light paths at lane and scalar vertices, and a point light (no lanes).
+/// split vertices (`cornell-box`'s glass caustic, `ring`'s cardioid, `figurines`, the mirror's caustic; each reached,
+/// `assert_guided`), the MIS ratio against the light paths at lane and scalar vertices, and a
+/// point light (no lanes).
 #[test]
 fn pt_cf_wavefront_is_bit_identical_to_the_scalar_loop() {
+    let cases = [
+        ("scenes/cornell-box.toml", 48, 0.25),
+        ("scenes/ring.toml", 48, 0.25),
+        ("scenes/figurines.toml", 32, 0.25),
+        ("tests/scenes/point-mirror.toml", 32, 0.1),
+    ];
     for kind in backends() {
-        method_wavefront_equals_scalar(
-            &world("scenes/cornell-box.toml", kind),
-            Method::PtCf,
-            "pt-cf cornell-box",
-            48,
-            0.25,
-        );
-        method_wavefront_equals_scalar(&world("scenes/ring.toml", kind), Method::PtCf, "pt-cf ring", 48, 0.25);
-        method_wavefront_equals_scalar(
-            &world("scenes/figurines.toml", kind),
-            Method::PtCf,
-            "pt-cf figurines",
-            32,
-            0.25,
-        );
-        method_wavefront_equals_scalar(
-            &world("tests/scenes/point-mirror.toml", kind),
-            Method::PtCf,
-            "pt-cf point mirror",
-            32,
-            0.1,
-        );
+        for (path, res, min_lit) in cases {
+            let label = format!("pt-cf {path}");
+            let counts = method_wavefront_equals_scalar(&world(path, kind), Method::PtCf, &label, res, min_lit);
+            assert_guided(&label, counts);
+        }
     }
 }

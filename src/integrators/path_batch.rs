@@ -77,7 +77,7 @@ impl<P> Default for Wave<P> {
     }
 }
 
-impl<P: Copy> Wave<P> {
+impl<P> Wave<P> {
     /// Empties every buffer and starts one path per camera ray (`start(i)` its state), and
     /// `out` as one zero estimate per ray.
     pub(super) fn start(

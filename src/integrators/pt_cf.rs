@@ -298,6 +298,17 @@ impl GuidedPathTracer {
         kept(self.filter.as_ref(), class, v)
     }
 
+    /// Adds to `l` the emission `st` reaches at the emitter `hit`, weighted by MIS against NEE
+    /// and against the light paths (to `prefix_le` while no non-Dirac vertex came before).
+    #[inline]
+    fn add_emitted(&self, world: &World, st: &PathState, hit: &Hit, ctx: &Context, l: &mut CameraEstimate) {
+        if let Some((le, w)) = emitter_hit(world, hit, st.d, st.prev_delta, st.prev_pdf_w) {
+            let w = w * self.camera_weight(world, st, hit, ctx);
+            let v = self.kept(st.class, st.t.beta * le * w);
+            *if st.diffuse == 0 { &mut l.prefix_le } else { &mut l.rest } += v;
+        }
+    }
+
     /// Enters the non-emitter vertex `hit` (material `m`) of `st`, counting it: its shading
     /// point, the direction toward the previous vertex, its index, and its guide (`None` at a
     /// Dirac vertex and at a `pt` vertex).
@@ -323,12 +334,7 @@ impl GuidedPathTracer {
         while st.vertex < self.max_depth {
             let Some(hit) = world.intersect(st.o, st.d, f32::INFINITY) else { break };
             if s.emitter_of(hit.prim) != NO_EMITTER {
-                if let Some((le, w)) = emitter_hit(world, &hit, st.d, st.prev_delta, st.prev_pdf_w) {
-                    // no non-Dirac vertex yet: the camera's Dirac prefix
-                    let w = w * self.camera_weight(world, &st, &hit, ctx);
-                    let v = self.kept(st.class, st.t.beta * le * w);
-                    *if st.diffuse == 0 { &mut l.prefix_le } else { &mut l.rest } += v;
-                }
+                self.add_emitted(world, &st, &hit, ctx, &mut l);
                 break; // emitters reflect nothing
             }
             let m = s.material_of(hit.prim);

@@ -17,7 +17,6 @@ use super::{continue_path, Guide, GuidedPathTracer, PathState};
 use crate::accel::{Ray, World};
 use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
 use crate::forecast::mixture::DefensiveMixture;
-use crate::integrators::path::emitter_hit;
 use crate::integrators::path_batch::Wave;
 use crate::integrators::path_lanes::{Vertex, W};
 use crate::integrators::{CameraEstimate, Context};
@@ -91,11 +90,7 @@ impl GuidedPathTracer {
         let hit = world.hit_at(&w.rays[k], found);
         let rng = &mut rngs[i as usize];
         if s.emitter_of(hit.prim) != NO_EMITTER {
-            if let Some((le, mis)) = emitter_hit(world, &hit, st.d, st.prev_delta, st.prev_pdf_w) {
-                let mis = mis * self.camera_weight(world, &st, &hit, ctx);
-                let l = &mut out[i as usize];
-                *if st.diffuse == 0 { &mut l.prefix_le } else { &mut l.rest } += st.t.beta * le * mis;
-            }
+            self.add_emitted(world, &st, &hit, ctx, &mut out[i as usize]);
             return false; // emitters reflect nothing
         }
         let m = s.material_of(hit.prim);
