@@ -230,6 +230,7 @@ struct Guide {
 
 impl GuidedPathTracer {
     /// The guide at a non-Dirac vertex, or `None` for a `pt` vertex (a pure function of it).
+    #[inline(always)]
     fn guide_at(&self, q: &ShadingQuery, ctx: &mut Context) -> Option<Guide> {
         if q.depth >= self.guide_depth {
             return None;
@@ -238,6 +239,14 @@ impl GuidedPathTracer {
         // the guided clusters' grid answers the cluster map's query for them (`SubsetGrid`)
         let c = self.cf.cluster_at(q, ctx, Some(&self.guided_grid))?;
         let weights = self.per_cluster.get(c).copied().flatten()?;
+        // the (rare) guide itself out of line: a `None` stays in registers
+        self.guide_in(c, weights, q, ctx)
+    }
+
+    /// The guide in guided cluster `c` (its mixture `weights`) at `q`, or `None` where its
+    /// tables are empty.
+    #[inline(never)]
+    fn guide_in(&self, c: usize, weights: MixtureWeights, q: &ShadingQuery, ctx: &mut Context) -> Option<Guide> {
         let (tables, frame) = self.cf.tables_in(c, q, ctx, Some(&self.cache));
         if tables.t1.is_none() && tables.t2.is_none() {
             return None;
@@ -267,7 +276,7 @@ impl GuidedPathTracer {
 
     /// Updates the path's MIS ratio after its vertex `index` (`(m, sp, wo, t)`: material, point,
     /// toward the previous vertex, distance from it) drew the continuation now in `st`.
-    #[inline]
+    #[inline(always)]
     fn track_mis(&self, st: &mut PathState, (m, sp, wo, t): (&Material, &ShadingPoint, Vec3, f32), index: u32, ctx: &Context) {
         let (Some(_), Some(cam)) = (&self.light, &ctx.camera) else { return };
         if m.is_dirac() {
@@ -310,21 +319,23 @@ impl GuidedPathTracer {
     }
 
     /// Enters the non-emitter vertex `hit` (material `m`) of `st`, counting it: its shading
-    /// point, the direction toward the previous vertex, its index, and its guide (`None` at a
-    /// Dirac vertex and at a `pt` vertex).
-    #[inline]
-    fn enter(&self, st: &mut PathState, m: &Material, hit: &Hit, ctx: &mut Context) -> (ShadingPoint, Vec3, u32, Option<Guide>) {
-        let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
-        let wo = -st.d;
+    /// point, the direction toward the previous vertex and its index.
+    #[inline(always)]
+    fn enter(&self, st: &mut PathState, m: &Material, hit: &Hit) -> (ShadingPoint, Vec3, u32) {
         let depth = st.vertex;
         st.vertex += 1;
         st.class.push(m.is_dirac());
-        let guide = if m.is_dirac() {
-            None
-        } else {
-            self.guide_at(&ShadingQuery { x: &sp, m, wo, depth: st.diffuse }, ctx)
-        };
-        (sp, wo, depth, guide)
+        (ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns }, -st.d, depth)
+    }
+
+    /// The guide at the vertex `(m, sp, wo)` that `st` entered: `None` at a Dirac vertex and at
+    /// a `pt` vertex. (Not a field of `enter`'s result: a `None` then stays out of memory.)
+    #[inline(always)]
+    fn guide_of(&self, st: &PathState, (m, sp, wo): (&Material, &ShadingPoint, Vec3), ctx: &mut Context) -> Option<Guide> {
+        if m.is_dirac() {
+            return None;
+        }
+        self.guide_at(&ShadingQuery { x: sp, m, wo, depth: st.diffuse }, ctx)
     }
 
     /// Radiance along `st` (a whole path, or one branch of a split).
@@ -338,8 +349,8 @@ impl GuidedPathTracer {
                 break; // emitters reflect nothing
             }
             let m = s.material_of(hit.prim);
-            let (sp, wo, depth, guide) = self.enter(&mut st, m, &hit, ctx);
-            let Some(g) = guide else {
+            let (sp, wo, depth) = self.enter(&mut st, m, &hit);
+            let Some(g) = self.guide_of(&st, (m, &sp, wo), ctx) else {
                 // a `pt` vertex, operation for operation
                 if !m.is_dirac() {
                     l.rest += self.kept(st.class, st.t.beta * direct::sample_light(world, &sp, m, wo, &mut ctx.rng));

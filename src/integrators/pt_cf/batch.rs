@@ -85,35 +85,38 @@ impl GuidedPathTracer {
         out: &mut [CameraEstimate],
     ) -> bool {
         let s = &world.scene;
-        let Live { i, mut st } = w.live[k];
         let Some(found) = w.hits[k] else { return false };
         let hit = world.hit_at(&w.rays[k], found);
+        let i = w.live[k].i;
         let rng = &mut rngs[i as usize];
         if s.emitter_of(hit.prim) != NO_EMITTER {
-            self.add_emitted(world, &st, &hit, ctx, &mut out[i as usize]);
+            self.add_emitted(world, &w.live[k].st, &hit, ctx, &mut out[i as usize]);
             return false; // emitters reflect nothing
         }
         let m = s.material_of(hit.prim);
-        let (sp, wo, depth, guide) = self.enter(&mut st, m, &hit, ctx);
+        // the state is updated in place, not copied out and back (a copy right after a field's
+        // store stalls on store forwarding)
+        let (sp, wo, depth) = self.enter(&mut w.live[k].st, m, &hit);
         let at = (depth, hit.p, hit.ng);
-        let Some(g) = guide else {
-            if let (true, &Material::Diffuse { albedo }) = (w.lanes_on, m) {
-                st.diffuse += 1;
-                w.live[k].st = st;
-                lane_t[w.lanes.n] = hit.t;
-                return w.lanes.push(Vertex::draw(world, k, (&sp, wo, albedo), rng));
-            }
-            if !m.is_dirac() {
-                let ls = direct::light_sample_mis(world, &sp, m, wo, rng, |wi| bsdf::pdf_w(m, &sp, wo, wi));
-                w.queue_nee((i, st.t.beta), ls.map(|ls| (ls.value, ls.shadow)), out);
-                st.diffuse += 1;
-            }
-            let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
-            let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { return false };
-            self.step(w, (i, st), (at, &bs), (m, &sp, wo, hit.t), (rng, ctx));
+        if let Some(g) = self.guide_of(&w.live[k].st, (m, &sp, wo), ctx) {
+            let st = w.live[k].st;
+            self.guided(world, w, (i, st, g), (m, &sp, wo, hit.t), (rng, ctx), out);
             return false;
-        };
-        self.guided(world, w, (i, st, g), (m, &sp, wo, hit.t), (rng, ctx), out);
+        }
+        if let (true, &Material::Diffuse { albedo }) = (w.lanes_on, m) {
+            w.live[k].st.diffuse += 1;
+            lane_t[w.lanes.n] = hit.t;
+            return w.lanes.push(Vertex::draw(world, k, (&sp, wo, albedo), rng));
+        }
+        let mut st = w.live[k].st;
+        if !m.is_dirac() {
+            let ls = direct::light_sample_mis(world, &sp, m, wo, rng, |wi| bsdf::pdf_w(m, &sp, wo, wi));
+            w.queue_nee((i, st.t.beta), ls.map(|ls| (ls.value, ls.shadow)), out);
+            st.diffuse += 1;
+        }
+        let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+        let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { return false };
+        self.step(w, (i, st), (at, &bs), (m, &sp, wo, hit.t), (rng, ctx));
         false
     }
 
@@ -166,7 +169,7 @@ impl GuidedPathTracer {
 
     /// Applies the continuation `bs` drawn at vertex `at` (`continue_path`, then `track_mis`)
     /// and queues the path for the next bounce if it goes on.
-    #[inline]
+    #[inline(always)]
     fn step(
         &self,
         w: &mut Wave<Live>,
