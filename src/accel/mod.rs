@@ -302,7 +302,7 @@ impl World {
     }
 
     /// The hit record of primitive `prim` at `t` along the ray.
-    #[inline]
+    #[inline(always)]
     fn hit(&self, origin: Vec3, dir: Vec3, prim: u32, t: f32) -> Hit {
         let p = origin + t * dir;
         let ntri = self.scene.ntri();
