@@ -158,7 +158,10 @@ fn bin() -> &'static str {
 /// emission's cone per Dirac object (`results/2026-12-05-targeted-cones.md`), both z-tested against
 /// `pt` by `tests/pt_cf.rs`, and the concentric map's polynomial sine and cosine, which moved the
 /// last bits of every cosine-sampled direction (`results/2026-12-05-diffuse-lanes.md`, z-tested
-/// against the images before). Regenerate it only for such a change, and say so there.
+/// against the images before); and the emission-split probe's chains at mirror and glass points,
+/// which split one more of its pixels (`results/2026-12-06-glass-probe.md`; with
+/// `--emission-split 1` the image was the same bit for bit). Regenerate it only for such a
+/// change, and say so there.
 #[test]
 fn light_paths_zero_is_the_old_pt_cf_bit_for_bit() {
     let d = tmp_dir("light-paths-0");

@@ -18,12 +18,15 @@
 //! (on `cornell-box` at 60 s, the light's edges, direct and in the mirror ball, and the pixels
 //! next to them, 0.7% of the image, hold half of `pt`'s squared error and three quarters of
 //! `iws-cf`'s). So a probe traces the prefix emission at the corners, edge midpoints and centre
-//! of every pixel (a lattice of (2W+1)×(2H+1) points, one ray or chain each, from a fixed
-//! stream, band by band) and splits exactly the pixels whose 9 values are not all equal (0.22%
-//! of `cornell-box`'s). The set is a pure function of the scene, the camera, the resolution and
-//! the cap, not of the samples, so the estimator stays unbiased whatever it marks; a pixel it
-//! misses (an edge thinner than half a pixel) is merely not split. `K = 1` draws exactly the
-//! random numbers of the plain sampler and traces no probe.
+//! of every pixel (a lattice of (2W+1)×(2H+1) points, from a fixed stream, band by band) and
+//! splits exactly the pixels whose 9 values are not all equal, or random at one point: a point
+//! whose prefix meets a mirror or glass is traced [`PROBE_CHAINS`] times, and chains that differ
+//! (the light seen through glass along some Fresnel choices only) mark it. On `figurines` those
+//! ~100 glints held nearly all of the camera side's `E S+ L` variance and a single chain per
+//! point found few of them (`results/2026-12-06-glass-probe.md`). The set is a pure function of
+//! the scene, the camera, the resolution and the cap, not of the samples, so the estimator stays
+//! unbiased whatever it marks; a pixel it misses (an edge thinner than half a pixel) is merely
+//! not split. `K = 1` draws exactly the random numbers of the plain sampler and traces no probe.
 
 use super::Context;
 use crate::accel::{Ray, World};
@@ -336,9 +339,27 @@ impl<'a> PixelSampler<'a> {
 /// Pixel rows per probe band (bounds the probe's memory to 2·(2W+1)·BAND colours).
 const PROBE_BAND: usize = 64;
 
+/// Chains traced at a lattice point whose prefix meets a mirror or glass.
+pub const PROBE_CHAINS: usize = 16;
+
+/// The prefix emission at the image-plane point `[u, v]`, or `None` where it is random: a
+/// prefix that meets a Dirac vertex draws numbers (its Fresnel choices), and is traced up to
+/// [`PROBE_CHAINS`] times from the same stream; any two that differ make the point random (the
+/// light seen through glass along some choices only). A prefix that draws nothing is certain.
+fn probe_point(world: &World, camera: &Camera, [u, v]: [f32; 2], cap: u32, rng: &mut Rng) -> Option<Rgb> {
+    let d = camera.direction(u, v);
+    let before = rng.clone();
+    let first = prefix_emission(world, camera.position, d, cap, rng);
+    if *rng == before {
+        return Some(first);
+    }
+    (1..PROBE_CHAINS).all(|_| prefix_emission(world, camera.position, d, cap, rng) == first).then_some(first)
+}
+
 /// The pixels whose prefix emission differs among their 9 lattice points (corners, edge
-/// midpoints, centre), from a fixed stream keyed by the lattice index: a pure function of scene,
-/// camera, resolution and cap. Band by band, so the lattice never needs to be held whole.
+/// midpoints, centre) or is random at one of them ([`probe_point`]), from a fixed stream keyed
+/// by the lattice index: a pure function of scene, camera, resolution and cap. Band by band, so
+/// the lattice never needs to be held whole.
 fn probe_edges(world: &World, camera: &Camera, cap: u32) -> Vec<bool> {
     let (w, h) = (camera.width as usize, camera.height as usize);
     let lw = 2 * w + 1;
@@ -347,18 +368,19 @@ fn probe_edges(world: &World, camera: &Camera, cap: u32) -> Vec<bool> {
         let y1 = (y0 + PROBE_BAND).min(h);
         // lattice rows 2·y0 ..= 2·y1
         let base = 2 * y0 * lw;
-        let lattice: Vec<Rgb> = (base..(2 * y1 + 1) * lw)
+        let lattice: Vec<Option<Rgb>> = (base..(2 * y1 + 1) * lw)
             .into_par_iter()
             .map(|i| {
                 let (u, v) = ((i % lw) as f32 * 0.5, (i / lw) as f32 * 0.5);
                 let mut rng = Rng::keyed(0, stream::PIXEL_SPLIT, u64::MAX, i as u64);
-                prefix_emission(world, camera.position, camera.direction(u, v), cap, &mut rng)
+                probe_point(world, camera, [u, v], cap, &mut rng)
             })
             .collect();
         let band = (y0 * w..y1 * w).into_par_iter().map(|p| {
             let (x, y) = (2 * (p % w), 2 * (p / w - y0));
             let first = lattice[y * lw + x];
-            (0..9).any(|j| lattice[(y + j / 3) * lw + x + j % 3] != first)
+            // a random point (`None`) differs from every value, itself included
+            first.is_none() || (0..9).any(|j| lattice[(y + j / 3) * lw + x + j % 3] != first)
         });
         split.par_extend(band);
     }

@@ -36,8 +36,8 @@ fn splitmix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// PCG32 generator.
-#[derive(Clone, Debug)]
+/// PCG32 generator (equal states draw equal numbers).
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Rng {
     state: u64,
     inc: u64,
