@@ -116,14 +116,21 @@ fn probe_marks_the_edges_and_split_removes_their_variance_in_every_integrator() 
     eprintln!("probe: {} edge pixels", found.split_pixels);
     assert!((20..=60).contains(&found.split_pixels), "probe found {} edge pixels", found.split_pixels);
     for &m in Method::ALL {
-        let one = render(&w, m, (16, 512, 5), Split::Probed(1));
-        let split = render(&w, m, (16, 512, 6), Split::Probed(16));
-        let (v1, v16) = (summed_variance(&one), summed_variance(&split));
-        eprintln!("{}: summed variance K=1 {v1:.3e}, K=16 {v16:.3e}, ratio {:.4}", m.name(), v16 / v1);
-        assert!(v1 > 0.0, "{}: the edges must be noisy without splitting", m.name());
-        assert!(v16 <= v1 / 8.0, "{}: K = 16 kept {:.3} of the edge variance", m.name(), v16 / v1);
+        let (one, split) = split_removes_variance(&w, m, "edges");
         assert_agrees(&split, &one, &format!("{} emitter edges, K = 16 vs 1", m.name()));
     }
+}
+
+/// Renders `m` at `K = 1` and `K = 16` (16², 512 passes each) and asserts that splitting kept at
+/// most 1/8 of the summed variance of `what` (the bound in the module docs); returns both films.
+fn split_removes_variance(w: &World, m: Method, what: &str) -> (Film, Film) {
+    let one = render(w, m, (16, 512, 5), Split::Probed(1));
+    let split = render(w, m, (16, 512, 6), Split::Probed(16));
+    let (v1, v16) = (summed_variance(&one), summed_variance(&split));
+    eprintln!("{} {what}: summed variance K=1 {v1:.3e}, K=16 {v16:.3e}, ratio {:.4}", m.name(), v16 / v1);
+    assert!(v1 > 0.0, "{}: the {what} must be noisy without splitting", m.name());
+    assert!(v16 <= v1 / 8.0, "{}: K = 16 kept {:.3} of the {what}' variance", m.name(), v16 / v1);
+    (one, split)
 }
 
 /// A glass ball whose only light is an 8×8 emitter behind the camera, seen in the ball's
@@ -159,12 +166,7 @@ fn probe_marks_light_seen_through_glass_and_split_removes_its_variance() {
     let cam = w.scene.camera.with_resolution(16, 16);
     eprintln!("probe: {} pixels", PixelSampler::new(&w, &cam, 16, 64).stats().split_pixels);
     for m in [Method::Pt, Method::PtCf] {
-        let one = render(&w, m, (16, 512, 5), Split::Probed(1));
-        let split = render(&w, m, (16, 512, 6), Split::Probed(16));
-        let (v1, v16) = (summed_variance(&one), summed_variance(&split));
-        eprintln!("{}: summed variance K=1 {v1:.3e}, K=16 {v16:.3e}, ratio {:.4}", m.name(), v16 / v1);
-        assert!(v1 > 0.0, "{}: the reflections must be noisy without splitting", m.name());
-        assert!(v16 <= v1 / 8.0, "{}: K = 16 kept {:.3} of the reflections' variance", m.name(), v16 / v1);
+        let (_, split) = split_removes_variance(&w, m, "reflections");
         // the reference at 16× the passes: the rare chains (two internal reflections, p ≈ 0.002)
         // must be sampled often enough for its variance estimate
         let reference = render(&w, m, (16, 8192, 7), Split::Probed(1));
