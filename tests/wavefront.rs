@@ -170,9 +170,9 @@ fn pt_wavefront_is_bit_identical_to_the_scalar_loop() {
 }
 
 /// `pt-cf`'s wavefront (`integrators::pt_cf::batch`) against `trace`, bit for bit: guided and
-/// split vertices (`cornell-box`'s glass caustic, `ring`'s cardioid, `figurines`, the mirror's caustic; each reached,
-/// `assert_guided`), the MIS ratio against the light paths at lane and scalar vertices, and a
-/// point light (no lanes).
+/// split vertices (`cornell-box`'s glass caustic, `ring`'s cardioid, `figurines`, the mirror's
+/// caustic; each reached, `assert_guided`), the MIS ratio against the light paths at lane and
+/// scalar vertices, and a point light (no lanes).
 #[test]
 fn pt_cf_wavefront_is_bit_identical_to_the_scalar_loop() {
     let cases = [
