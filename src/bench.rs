@@ -132,7 +132,8 @@ pub fn profile_method(
     let product = method.preprocess(world, &args, 7)?;
     let mut integ = method.build(world, &args, &product)?;
     let camera = world.scene.camera.with_resolution(w, h);
-    let pixels = PixelSampler::new(world, &camera, args.emission_split(), integ.prefix_cap());
+    let pixels = PixelSampler::new(world, &camera, args.emission_split(), integ.prefix_cap())
+        .with_sampler(args.settings.sampler);
     let mut profile = crate::profile::Profile::default();
     for pass in 0..spp.max(1) {
         integ.begin_pass(world, 7, pass);

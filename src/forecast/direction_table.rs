@@ -252,7 +252,7 @@ impl ForecastTables {
         for (ti, t) in [&self.t1, &self.t2].into_iter().enumerate() {
             let Some(t) = t else { continue };
             for _ in 0..s {
-                let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+                let u = rng.next_3d();
                 let (dir, pdf) = t.sample(u);
                 f(TableSample { dir, weight: 1.0 / (s as f32 * pdf), table: ti as u8 });
             }

@@ -371,7 +371,7 @@ impl CausticForecast {
         let Some((c, (tables, frame))) = found else {
             // outside valid clusters: one BSDF (cosine for Lambert) sample
             ctx.profile.cf.samples += 1;
-            let u = [ctx.rng.next_f32(), ctx.rng.next_f32(), ctx.rng.next_f32()];
+            let u = ctx.rng.next_3d();
             let Some(bs) = bsdf::sample(m, sp, wo, u, Mode::Radiance) else { return Rgb::ZERO };
             if bs.pdf_w <= 0.0 {
                 return Rgb::ZERO;

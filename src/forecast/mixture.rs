@@ -183,11 +183,11 @@ impl<'a> DefensiveMixture<'a> {
     /// `bsdf::sample` would get), else 4 (the first picks the component).
     pub fn sample(&self, rng: &mut Rng) -> Option<MixtureSample> {
         if self.is_bsdf_only() {
-            let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+            let u = rng.next_3d();
             return self.sample_u(0.0, u);
         }
         let pick = rng.next_f32();
-        self.sample_u(pick, [rng.next_f32(), rng.next_f32(), rng.next_f32()])
+        self.sample_u(pick, rng.next_3d())
     }
 
     /// [`Self::sample`] with explicit uniforms: `pick` chooses the component (unused when

@@ -63,7 +63,7 @@ impl CausticEstimator for BsdfCaustics {
         if q.depth + 1 >= MAX_VERTICES {
             return Rgb::ZERO;
         }
-        let u = [ctx.rng.next_f32(), ctx.rng.next_f32(), ctx.rng.next_f32()];
+        let u = ctx.rng.next_3d();
         let Some(bs) = bsdf::sample(q.m, q.x, q.wo, u, Mode::Radiance) else {
             return Rgb::ZERO;
         };

@@ -286,7 +286,7 @@ impl Iws {
     /// Bias compensation `C(x, ω_o, d)` (spec §2): one BSDF ray, weight `(G−b)/G` if `G > b`.
     fn compensate(&self, world: &World, q: &ShadingQuery, ctx: &mut Context) -> Rgb {
         let (x, m, wo, depth) = (q.x, q.m, q.wo, q.depth);
-        let u = [ctx.rng.next_f32(), ctx.rng.next_f32(), ctx.rng.next_f32()];
+        let u = ctx.rng.next_3d();
         if self.b.is_infinite() || depth + 1 >= MAX_VERTICES {
             return Rgb::ZERO;
         }

@@ -164,7 +164,7 @@ impl PathTracer {
                 // a filtered-out sample still draws its random numbers (filters partition the image)
                 l.rest += self.kept(class, t.beta * direct::sample_light(world, &sp, m, wo, rng));
             }
-            let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+            let u = rng.next_3d();
             let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { break };
             if !t.scatter(&bs, depth, rng) {
                 break;

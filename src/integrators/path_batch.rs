@@ -212,7 +212,7 @@ impl PathTracer {
             let ls = direct::light_sample_mis(world, &sp, m, wo, rng, |wi| bsdf::pdf_w(m, &sp, wo, wi));
             w.queue_nee((p.i, p.t.beta), ls.map(|ls| (ls.value, ls.shadow)), out);
         }
-        let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+        let u = rng.next_3d();
         let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { return false };
         if !p.t.scatter(&bs, depth, rng) {
             return false;

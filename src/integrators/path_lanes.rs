@@ -74,7 +74,7 @@ impl<'a> Vertex<'a> {
         let s = &world.scene;
         let (li, pmf, _) = s.light_pick.sample(rng.next_f32());
         let u_light = rng.next_2d();
-        let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+        let u = rng.next_3d();
         let LightRef::Area(e) = s.lights[li] else { unreachable!("lanes_apply checked the lights") };
         let em = &s.emitters[e as usize];
         Vertex {

@@ -356,7 +356,7 @@ impl GuidedPathTracer {
                     l.rest += self.kept(st.class, st.t.beta * direct::sample_light(world, &sp, m, wo, &mut ctx.rng));
                     st.diffuse += 1;
                 }
-                let u = [ctx.rng.next_f32(), ctx.rng.next_f32(), ctx.rng.next_f32()];
+                let u = ctx.rng.next_3d();
                 let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { break };
                 if !continue_path(&mut st, (depth, hit.p, hit.ng), &bs, &mut ctx.rng) {
                     break;

@@ -283,7 +283,7 @@ impl<'a> Tracer<'a> {
                     self.connect(&sp, m, w_in, beta, density, ctx);
                 }
             }
-            let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+            let u = rng.next_3d();
             let Some(bs) = bsdf::sample(m, &sp, w_in, u, Mode::Importance) else { return };
             let Some(w) = roulette(bs.weight, q_particle(bs.weight), &mut rng) else { return };
             if !m.is_dirac() {

@@ -1,6 +1,7 @@
 //! The render settings every method reads: the path-vertex safety cap (`--max-depth`), the
-//! pixel sampler's emission split (`--emission-split`, `render::pixel`) and the ray-tracing back
-//! end (`--accel`, `accel::AccelKind`). They are not a method's
+//! pixel sampler's emission split (`--emission-split`, `render::pixel`), the ray-tracing back
+//! end (`--accel`, `accel::AccelKind`) and the camera streams' sampler (`--sampler`,
+//! `sampling::qmc`). They are not a method's
 //! options: every method accepts them, and the JSON report records them for every method.
 //!
 //! Invariants: `max_depth` is `None` only before the pipeline resolves it against the scene's
@@ -8,6 +9,7 @@
 //! MAX_EMISSION_SPLIT` (clap checks the flag; the pixel sampler clamps API values).
 
 use crate::accel::AccelKind;
+use crate::sampling::qmc::SamplerKind;
 use crate::transport::particle::MAX_VERTICES;
 
 /// The most camera rays per pixel sample (`--emission-split`; `render::pixel` clamps to it).
@@ -28,6 +30,12 @@ pub struct RenderSettings {
     /// build with `--features embree`).
     #[arg(long, value_enum, default_value_t = AccelKind::Obvhs)]
     pub accel: AccelKind,
+    /// The camera paths' random numbers across passes: `independent` (every pass independent;
+    /// the EXR variance layer is exact) or `sobol` (a pixel's jitter and first light and BSDF
+    /// samples stratified over its passes by a scrambled Sobol sequence: lower error, a variance
+    /// layer that over-states it). Both unbiased; see docs/sampling.md.
+    #[arg(long, value_enum, default_value_t = SamplerKind::Independent)]
+    pub sampler: SamplerKind,
 }
 
 impl RenderSettings {

@@ -200,7 +200,8 @@ pub fn choose(
     pilot_args.ptcf.light_paths = Some(paths(CANDIDATES[0]));
     let mut integrator = Method::PtCf.build(world, &pilot_args, product)?;
     let camera = world.scene.camera.with_resolution(pw, ph);
-    let pixels = PixelSampler::new(world, &camera, args.emission_split(), integrator.prefix_cap());
+    let pixels = PixelSampler::new(world, &camera, args.emission_split(), integrator.prefix_cap())
+        .with_sampler(args.settings.sampler);
     let measured: Option<Vec<Measured>> = CANDIDATES
         .iter()
         .map(|&nu| {

@@ -37,7 +37,8 @@ pub(super) fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: D
     let (w, h) = run.plan.resolution;
     let camera = run.world.scene.camera.with_resolution(w, h);
     let (k, cap) = (run.plan.args.emission_split(), integrator.prefix_cap());
-    let pixels = run.pool.install(|| PixelSampler::new(run.world, &camera, k, cap));
+    let pixels =
+        run.pool.install(|| PixelSampler::new(run.world, &camera, k, cap).with_sampler(run.plan.args.settings.sampler));
     let progress = Progress::new(run.job.progress && rank == 0, total.map(|t| t - first_pass), run.plan.time);
     let mut p = Passes {
         film: Film::new(w as usize, h as usize),

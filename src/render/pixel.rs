@@ -33,6 +33,7 @@ use crate::accel::{Ray, World};
 use crate::integrators::{CameraEstimate, Integrator};
 use crate::math::Rgb;
 use crate::profile::Phase;
+use crate::sampling::qmc::SamplerKind;
 use crate::sampling::rng::{stream, Rng};
 use crate::scene::Camera;
 use crate::transport::dirac::prefix_emission;
@@ -72,6 +73,8 @@ pub struct PixelSampler<'a> {
     workers: Pool<Worker>,
     /// The tiles' sample buffers, kept from one call to the next as the workers are.
     outs: Pool<Vec<Rgb>>,
+    /// Camera streams led by a scrambled Sobol prefix (`sampling::qmc`), or PCG alone.
+    sobol: bool,
 }
 
 /// Values kept for reuse across calls; a clone of the sampler starts with none.
@@ -131,15 +134,16 @@ pub struct TileBuffers {
 /// Passes whose camera rays `camera_lanes` draws at once.
 const LANES: usize = 16;
 
-/// The camera rays and streams of pixel `(x, y)` in the passes keyed by `keys` (at most
-/// [`LANES`]), pass `j` in lane `j`: what one pass at a time draws (`Rng::indexed`, the jitter,
-/// `Camera::direction`), operation for operation, as loops over the lanes that LLVM runs as
+/// The camera rays and streams of pixel `(x, y)` in the passes `passes` keyed by `keys` (at
+/// most [`LANES`]), pass `j` in lane `j`, led by the Sobol prefix of pixel key `qkey` if any:
+/// what one pass at a time draws (`Rng::indexed`, the prefix, the jitter, `Camera::direction`),
+/// operation for operation, the streams' PCG set-up as loops over the lanes that LLVM runs as
 /// vectors (`results/2026-12-05-diffuse-lanes.md`), or one at a time for fewer than 4 passes.
 /// Not inlined, so that it stays vectorized.
 #[inline(never)]
 fn camera_lanes(
     cam: &Camera,
-    keys: &[u64],
+    (keys, passes, qkey): (&[u64], &[u64], Option<u32>),
     (x, y, pixel): (usize, usize, u64),
     rays: &mut Vec<Ray>,
     rngs: &mut Vec<Rng>,
@@ -147,8 +151,8 @@ fn camera_lanes(
     let n = keys.len();
     if n < LANES / 4 {
         // a few passes (one, in the IWS family's passes): one at a time is cheaper than 16 lanes
-        for &key in keys {
-            let mut rng = Rng::indexed(key, pixel);
+        for (&key, &pass) in keys.iter().zip(passes) {
+            let mut rng = camera_stream(Rng::indexed(key, pixel), qkey, pass);
             let [jx, jy] = rng.next_2d();
             rays.push(Ray { o: cam.position, d: cam.direction(x as f32 + jx, y as f32 + jy), tmax: f32::INFINITY });
             rngs.push(rng);
@@ -157,13 +161,22 @@ fn camera_lanes(
     }
     // lanes past n repeat the last key; only the first n are kept
     let keys: [u64; LANES] = std::array::from_fn(|j| keys[j.min(n - 1)]);
-    let (st, u) = Rng::indexed_2d_lanes(&keys, pixel);
-    let mut d = [crate::math::Vec3::ZERO; LANES];
-    for j in 0..LANES {
-        d[j] = cam.direction(x as f32 + u[j][0], y as f32 + u[j][1]);
+    let st = Rng::indexed_lanes(&keys, pixel);
+    for (rng, &pass) in st.into_iter().zip(passes) {
+        let mut rng = camera_stream(rng, qkey, pass);
+        let [jx, jy] = rng.next_2d();
+        rays.push(Ray { o: cam.position, d: cam.direction(x as f32 + jx, y as f32 + jy), tmax: f32::INFINITY });
+        rngs.push(rng);
     }
-    rays.extend(d[..n].iter().map(|&d| Ray { o: cam.position, d, tmax: f32::INFINITY }));
-    rngs.extend(st.into_iter().take(n));
+}
+
+/// Pass `pass`'s camera stream `pcg`, led by the Sobol prefix of pixel key `qkey` if any.
+#[inline]
+fn camera_stream(pcg: Rng, qkey: Option<u32>, pass: u64) -> Rng {
+    match qkey {
+        Some(k) => pcg.with_qmc(k, pass),
+        None => pcg,
+    }
 }
 
 impl<'a> PixelSampler<'a> {
@@ -200,7 +213,13 @@ impl<'a> PixelSampler<'a> {
             stats,
             workers: Pool::default(),
             outs: Pool::default(),
+            sobol: false,
         }
+    }
+
+    /// This sampler with the camera streams of `kind` (default [`SamplerKind::Independent`]).
+    pub fn with_sampler(self, kind: SamplerKind) -> Self {
+        PixelSampler { sobol: kind == SamplerKind::Sobol, ..self }
     }
 
     /// `k` rays per sample (clamped to 1..=[`MAX_EMISSION_SPLIT`]) in the pixels where the probe
@@ -220,7 +239,7 @@ impl<'a> PixelSampler<'a> {
             split_fraction: n as f64 / split.len().max(1) as f64,
             probe_s: t0.elapsed().as_secs_f64(),
         };
-        PixelSampler { camera, k, cap, split, stats, workers: Pool::default(), outs: Pool::default() }
+        PixelSampler { camera, k, cap, split, stats, workers: Pool::default(), outs: Pool::default(), sobol: false }
     }
 
     /// `k` rays per sample in every pixel, no probe (tests and ablations: the estimator must be
@@ -237,6 +256,7 @@ impl<'a> PixelSampler<'a> {
             stats,
             workers: Pool::default(),
             outs: Pool::default(),
+            sobol: false,
         }
     }
 
@@ -277,17 +297,19 @@ impl<'a> PixelSampler<'a> {
         out.clear();
         keys.clear();
         keys.extend(passes.iter().map(|&q| Rng::pass_key(seed, stream::CAMERA, q)));
+        let qbase = Rng::pass_key(seed, stream::CAMERA_QMC, 0);
         for &(x, y, pixel) in tile {
+            let qkey = self.sobol.then(|| Rng::qmc_key(qbase, pixel));
             if self.k == 1 || !self.split[pixel as usize] {
-                for keys in keys.chunks(LANES) {
-                    camera_lanes(cam, keys, (x, y, pixel), rays, rngs);
+                for (keys, passes) in keys.chunks(LANES).zip(passes.chunks(LANES)) {
+                    camera_lanes(cam, (keys, passes, qkey), (x, y, pixel), rays, rngs);
                 }
                 slots.extend(out.len()..out.len() + keys.len());
                 out.resize(out.len() + keys.len(), Rgb::ZERO);
                 continue;
             }
             for (&pass, &key) in passes.iter().zip(keys.iter()) {
-                let mut rng = Rng::indexed(key, pixel);
+                let mut rng = camera_stream(Rng::indexed(key, pixel), qkey, pass);
                 let [jx, jy] = rng.next_2d();
                 ctx.rng = rng;
                 let key = (seed, pass);
@@ -392,26 +414,32 @@ mod tests {
     use super::*;
     use crate::math::Vec3;
 
-    /// `camera_lanes` gives, for 1 to 16 passes (both of its paths), the rays and streams of one pass at a time
-    /// (`Rng::indexed`, the jitter, `Camera::direction`), as bits, and streams that go on alike.
+    /// `camera_lanes` gives, for 1 to 16 passes (both of its paths) and both samplers, the rays
+    /// and streams of one pass at a time (`Rng::indexed`, the Sobol prefix if any, the jitter,
+    /// `Camera::direction`), as bits, and streams that go on alike.
     #[test]
     fn camera_lanes_are_one_pass_at_a_time() {
         let cam = Camera::new(Vec3::new(0.3, 1.0, 4.0), Vec3::ZERO, Vec3::Y, 40.0, 64, 48);
         let bits = |v: Vec3| v.to_array().map(f32::to_bits);
         for n in [1usize, 3, 4, 5, 16] {
             let keys: Vec<u64> = (0..n as u64).map(|q| Rng::pass_key(11, stream::CAMERA, q)).collect();
-            for (x, y) in [(0usize, 0usize), (17, 9), (63, 47)] {
+            let passes: Vec<u64> = (0..n as u64).collect();
+            for ((x, y), qkey) in [(0usize, 0usize), (17, 9), (63, 47)].into_iter().zip([None, Some(7), Some(0xfeed)]) {
                 let pixel = (y * 64 + x) as u64;
                 let (mut rays, mut rngs) = (Vec::new(), Vec::new());
-                camera_lanes(&cam, &keys, (x, y, pixel), &mut rays, &mut rngs);
+                camera_lanes(&cam, (&keys, &passes, qkey), (x, y, pixel), &mut rays, &mut rngs);
                 assert_eq!((rays.len(), rngs.len()), (n, n));
                 for (j, &key) in keys.iter().enumerate() {
                     let mut rng = Rng::indexed(key, pixel);
+                    if let Some(k) = qkey {
+                        rng = rng.with_qmc(k, j as u64);
+                    }
                     let [jx, jy] = rng.next_2d();
                     let d = cam.direction(x as f32 + jx, y as f32 + jy);
                     assert_eq!(bits(rays[j].d), bits(d), "{n} passes, pixel {pixel}, lane {j}");
                     assert_eq!(bits(rays[j].o), bits(cam.position));
                     assert_eq!(rngs[j].next_u32(), rng.next_u32(), "{n} passes, pixel {pixel}, lane {j}");
+                    assert_eq!(rngs[j].next_2d(), rng.next_2d(), "{n} passes, pixel {pixel}, lane {j}");
                 }
             }
         }

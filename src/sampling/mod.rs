@@ -2,6 +2,7 @@
 
 pub mod alias;
 pub mod distribution;
+pub mod qmc;
 pub mod rng;
 pub mod warp;
 

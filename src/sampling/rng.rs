@@ -6,6 +6,8 @@
 //! into a state and an odd increment (a distinct sequence per key). It implements
 //! `rand::TryRng` so rand's adaptors work on it.
 
+use super::qmc;
+
 /// Named stream ids, so that preprocess and render randomness never overlap.
 pub mod stream {
     /// Camera/eye paths of pixel samples.
@@ -26,21 +28,33 @@ pub mod stream {
     pub const GUIDE: u64 = 8;
     /// `pt-cf`'s light paths connected to the camera (`integrators::pt_cf_light`).
     pub const LIGHT_PATHS: u64 = 9;
+    /// The scrambling keys of the camera streams' Sobol prefixes (`sampling::qmc`).
+    pub const CAMERA_QMC: u64 = 10;
+}
+
+/// A 32-bit word's top 24 bits as a uniform in [0, 1) (never 1.0).
+#[inline]
+fn to_f32(w: u32) -> f32 {
+    (w >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
 #[inline]
-fn splitmix64(mut z: u64) -> u64 {
+pub(crate) fn splitmix64(mut z: u64) -> u64 {
     z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
 }
 
-/// PCG32 generator (equal states draw equal numbers).
+/// PCG32 generator (equal states draw equal numbers), optionally led by a scrambled Sobol
+/// prefix (`Rng::with_qmc`, `sampling::qmc`).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Rng {
     state: u64,
     inc: u64,
+    /// The Sobol prefix: pixel key (high 32 bits), sample index (26 bits), next slot (6 bits);
+    /// slot [`qmc::SLOTS`] or above: the prefix is spent (or was never there).
+    q: u64,
 }
 
 impl Rng {
@@ -59,32 +73,54 @@ impl Rng {
         splitmix64(h1 ^ splitmix64(pass.wrapping_add(0x632B_E59B_D9B4_E019)))
     }
 
+    /// Pixel `pixel`'s Sobol scrambling key under `base` (`Rng::pass_key(seed,
+    /// stream::CAMERA_QMC, 0)`): the same in every pass, so its passes share one sequence.
+    #[inline]
+    pub fn qmc_key(base: u64, pixel: u64) -> u32 {
+        (splitmix64(base ^ pixel.wrapping_mul(0xD6E8_FEB8_6659_FD93)) >> 32) as u32
+    }
+
     /// Stream `index` under a [`Rng::pass_key`].
     #[inline]
     pub fn indexed(pass_key: u64, index: u64) -> Self {
         let h3 = splitmix64(pass_key ^ index.wrapping_mul(0x9FB2_1C65_1E98_DF25));
-        let mut r = Rng { state: 0, inc: (splitmix64(h3 ^ 0xD1B5_4A32_D192_ED03) << 1) | 1 };
+        let mut r = Rng { state: 0, inc: (splitmix64(h3 ^ 0xD1B5_4A32_D192_ED03) << 1) | 1, q: qmc::OFF };
         r.next_u32();
         r.state = r.state.wrapping_add(h3);
         r.next_u32();
         r
     }
 
-    /// `Rng::indexed(keys[j], index)` for sixteen keys, each followed by its first two
-    /// `next_f32` (a camera ray's jitter): operation for operation what one key at a time gives,
-    /// in loops over the lanes that LLVM runs as vectors (`render::pixel`'s pass groups).
+    /// `Rng::indexed(keys[j], index)` for sixteen keys, in loops over the lanes that LLVM runs as
+    /// vectors (the camera streams before their Sobol prefix, `render::pixel`'s pass groups).
     #[inline]
-    pub fn indexed_2d_lanes(keys: &[u64; 16], index: u64) -> ([Rng; 16], [[f32; 2]; 16]) {
-        let (mut state, mut inc, mut u) = ([0u64; 16], [0u64; 16], [[0.0f32; 2]; 16]);
+    pub fn indexed_lanes(keys: &[u64; 16], index: u64) -> [Rng; 16] {
+        let (mut state, mut inc) = ([0u64; 16], [0u64; 16]);
         for j in 0..16 {
-            let mut r = Rng::indexed(keys[j], index);
-            u[j] = r.next_2d();
+            let r = Rng::indexed(keys[j], index);
             (state[j], inc[j]) = (r.state, r.inc);
         }
-        (std::array::from_fn(|j| Rng { state: state[j], inc: inc[j] }), u)
+        std::array::from_fn(|j| Rng { state: state[j], inc: inc[j], q: qmc::OFF })
     }
 
-    /// Next uniform 32-bit word.
+    /// This stream led by `qmc::SLOTS` slots of the scrambled Sobol sequence of pixel key `key`
+    /// at sample `index` (`sampling::qmc`): each of the first `qmc::SLOTS` `next_2d` calls
+    /// takes a slot; every other draw comes from the PCG stream as without the prefix.
+    #[inline]
+    pub fn with_qmc(mut self, key: u32, index: u64) -> Self {
+        self.q = ((key as u64) << 32) | ((index & qmc::INDEX_MASK) << 6);
+        self
+    }
+
+    /// The next slot of the Sobol prefix (out of line: the hot loops inline only the test).
+    #[inline(never)]
+    fn qmc_2d(&mut self) -> [f32; 2] {
+        let [a, b] = qmc::sample_2d(self.q);
+        self.q += 1;
+        [to_f32(a), to_f32(b)]
+    }
+
+    /// Next uniform 32-bit word (PCG, also under a Sobol prefix).
     #[inline]
     pub fn next_u32(&mut self) -> u32 {
         let old = self.state;
@@ -97,13 +133,24 @@ impl Rng {
     /// Uniform in [0, 1), with 24 bits of precision (never returns 1.0).
     #[inline]
     pub fn next_f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
+        to_f32(self.next_u32())
     }
 
-    /// Two uniforms in [0, 1).
+    /// Two uniforms in [0, 1) (a slot of the Sobol prefix while one is left).
     #[inline]
     pub fn next_2d(&mut self) -> [f32; 2] {
+        if self.q & 63 < qmc::SLOTS {
+            return self.qmc_2d();
+        }
         [self.next_f32(), self.next_f32()]
+    }
+
+    /// Three uniforms in [0, 1): a 2-D pair then one (a BSDF's direction, then its lobe), as
+    /// `next_2d` then `next_f32`.
+    #[inline]
+    pub fn next_3d(&mut self) -> [f32; 3] {
+        let [a, b] = self.next_2d();
+        [a, b, self.next_f32()]
     }
 
     /// Uniform integer in [0, n) (n > 0), Lemire's multiply-shift.

@@ -50,7 +50,7 @@ fn follow_chain(
             return Some((hit, d, t.beta));
         }
         let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
-        let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+        let u = rng.next_3d();
         let bs = bsdf::sample(m, &sp, -d, u, Mode::Radiance)?;
         if !t.scatter(&bs, v, rng) {
             return None;

@@ -286,7 +286,7 @@ fn follow(
 /// direction, the throughput factor and whether the bounce was Dirac; `None` ends the path.
 #[inline]
 fn scatter(m: &Material, sp: &ShadingPoint, w_in: Vec3, rng: &mut Rng) -> Option<(Vec3, Rgb, bool)> {
-    let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+    let u = rng.next_3d();
     let bs = bsdf::sample(m, sp, w_in, u, Mode::Importance)?;
     let w = roulette(bs.weight, q_particle(bs.weight), rng)?;
     Some((bs.wi, w, bs.is_delta))

@@ -114,7 +114,7 @@ impl GuidedPathTracer {
             w.queue_nee((i, st.t.beta), ls.map(|ls| (ls.value, ls.shadow)), out);
             st.diffuse += 1;
         }
-        let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+        let u = rng.next_3d();
         let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { return false };
         self.step(w, (i, st), (at, &bs), (m, &sp, wo, hit.t), (rng, ctx));
         false
