@@ -137,8 +137,9 @@ const LANES: usize = 16;
 /// The camera rays and streams of pixel `(x, y)` in the passes `passes` keyed by `keys` (at
 /// most [`LANES`]), pass `j` in lane `j`, led by the Sobol prefix of pixel key `qkey` if any:
 /// what one pass at a time draws (`Rng::indexed`, the prefix, the jitter, `Camera::direction`),
-/// operation for operation, the streams' PCG set-up as loops over the lanes that LLVM runs as
-/// vectors (`results/2026-12-05-diffuse-lanes.md`), or one at a time for fewer than 4 passes.
+/// operation for operation, the streams' PCG set-up (and without a prefix the jitter and the
+/// directions) as loops over the lanes that LLVM runs as vectors
+/// (`results/2026-12-05-diffuse-lanes.md`), or one at a time for fewer than 4 passes.
 /// Not inlined, so that it stays vectorized.
 #[inline(never)]
 fn camera_lanes(
@@ -161,9 +162,19 @@ fn camera_lanes(
     }
     // lanes past n repeat the last key; only the first n are kept
     let keys: [u64; LANES] = std::array::from_fn(|j| keys[j.min(n - 1)]);
+    let Some(qkey) = qkey else {
+        let (st, u) = Rng::indexed_2d_lanes(&keys, pixel);
+        let mut d = [crate::math::Vec3::ZERO; LANES];
+        for j in 0..LANES {
+            d[j] = cam.direction(x as f32 + u[j][0], y as f32 + u[j][1]);
+        }
+        rays.extend(d[..n].iter().map(|&d| Ray { o: cam.position, d, tmax: f32::INFINITY }));
+        rngs.extend(st.into_iter().take(n));
+        return;
+    };
     let st = Rng::indexed_lanes(&keys, pixel);
     for (rng, &pass) in st.into_iter().zip(passes) {
-        let mut rng = camera_stream(rng, qkey, pass);
+        let mut rng = rng.with_qmc(qkey, pass);
         let [jx, jy] = rng.next_2d();
         rays.push(Ray { o: cam.position, d: cam.direction(x as f32 + jx, y as f32 + jy), tmax: f32::INFINITY });
         rngs.push(rng);

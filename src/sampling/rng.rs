@@ -91,8 +91,22 @@ impl Rng {
         r
     }
 
-    /// `Rng::indexed(keys[j], index)` for sixteen keys, in loops over the lanes that LLVM runs as
-    /// vectors (the camera streams before their Sobol prefix, `render::pixel`'s pass groups).
+    /// `Rng::indexed(keys[j], index)` for sixteen keys, each followed by its first two
+    /// `next_f32` (a camera ray's jitter): operation for operation what one key at a time gives,
+    /// in loops over the lanes that LLVM runs as vectors (`render::pixel`'s pass groups).
+    #[inline]
+    pub fn indexed_2d_lanes(keys: &[u64; 16], index: u64) -> ([Rng; 16], [[f32; 2]; 16]) {
+        let (mut state, mut inc, mut u) = ([0u64; 16], [0u64; 16], [[0.0f32; 2]; 16]);
+        for j in 0..16 {
+            let mut r = Rng::indexed(keys[j], index);
+            u[j] = [r.next_f32(), r.next_f32()];
+            (state[j], inc[j]) = (r.state, r.inc);
+        }
+        (std::array::from_fn(|j| Rng { state: state[j], inc: inc[j], q: qmc::OFF }), u)
+    }
+
+    /// `Rng::indexed(keys[j], index)` for sixteen keys, in the same vector loops, before their
+    /// Sobol prefix (`with_qmc`) and first draw.
     #[inline]
     pub fn indexed_lanes(keys: &[u64; 16], index: u64) -> [Rng; 16] {
         let (mut state, mut inc) = ([0u64; 16], [0u64; 16]);
