@@ -135,7 +135,7 @@ pub struct TileBuffers {
 const LANES: usize = 16;
 
 /// The camera rays and streams of pixel `(x, y)` in the passes `passes` keyed by `keys` (at
-/// most [`LANES`]), pass `j` in lane `j`, led by the Sobol prefix of pixel key `qkey` if any:
+/// most [`LANES`]), pass `j` in lane `j`, led by the Sobol prefix of seed `sobol` if any:
 /// what one pass at a time draws (`Rng::indexed`, the prefix, the jitter, `Camera::direction`),
 /// operation for operation, the streams' PCG set-up (and without a prefix the jitter and the
 /// directions) as loops over the lanes that LLVM runs as vectors
@@ -144,7 +144,7 @@ const LANES: usize = 16;
 #[inline(never)]
 fn camera_lanes(
     cam: &Camera,
-    (keys, passes, qkey): (&[u64], &[u64], Option<u32>),
+    (keys, passes, sobol): (&[u64], &[u64], Option<u64>),
     (x, y, pixel): (usize, usize, u64),
     rays: &mut Vec<Ray>,
     rngs: &mut Vec<Rng>,
@@ -153,7 +153,7 @@ fn camera_lanes(
     if n < LANES / 4 {
         // a few passes (one, in the IWS family's passes): one at a time is cheaper than 16 lanes
         for (&key, &pass) in keys.iter().zip(passes) {
-            let mut rng = camera_stream(Rng::indexed(key, pixel), qkey, pass);
+            let mut rng = camera_stream(Rng::indexed(key, pixel), sobol, pass, pixel);
             let [jx, jy] = rng.next_2d();
             rays.push(Ray { o: cam.position, d: cam.direction(x as f32 + jx, y as f32 + jy), tmax: f32::INFINITY });
             rngs.push(rng);
@@ -162,7 +162,7 @@ fn camera_lanes(
     }
     // lanes past n repeat the last key; only the first n are kept
     let keys: [u64; LANES] = std::array::from_fn(|j| keys[j.min(n - 1)]);
-    let Some(qkey) = qkey else {
+    let Some(seed) = sobol else {
         let (st, u) = Rng::indexed_2d_lanes(&keys, pixel);
         let mut d = [crate::math::Vec3::ZERO; LANES];
         for j in 0..LANES {
@@ -174,18 +174,19 @@ fn camera_lanes(
     };
     let st = Rng::indexed_lanes(&keys, pixel);
     for (rng, &pass) in st.into_iter().zip(passes) {
-        let mut rng = rng.with_qmc(qkey, pass);
+        let mut rng = rng.with_qmc(Rng::qmc_key(seed, pass, pixel), pass);
         let [jx, jy] = rng.next_2d();
         rays.push(Ray { o: cam.position, d: cam.direction(x as f32 + jx, y as f32 + jy), tmax: f32::INFINITY });
         rngs.push(rng);
     }
 }
 
-/// Pass `pass`'s camera stream `pcg`, led by the Sobol prefix of pixel key `qkey` if any.
+/// Pass `pass`'s camera stream `pcg` of pixel `pixel`, led by its Sobol prefix under seed
+/// `sobol` if any.
 #[inline]
-fn camera_stream(pcg: Rng, qkey: Option<u32>, pass: u64) -> Rng {
-    match qkey {
-        Some(k) => pcg.with_qmc(k, pass),
+fn camera_stream(pcg: Rng, sobol: Option<u64>, pass: u64, pixel: u64) -> Rng {
+    match sobol {
+        Some(seed) => pcg.with_qmc(Rng::qmc_key(seed, pass, pixel), pass),
         None => pcg,
     }
 }
@@ -308,19 +309,18 @@ impl<'a> PixelSampler<'a> {
         out.clear();
         keys.clear();
         keys.extend(passes.iter().map(|&q| Rng::pass_key(seed, stream::CAMERA, q)));
-        let qbase = Rng::pass_key(seed, stream::CAMERA_QMC, 0);
         for &(x, y, pixel) in tile {
-            let qkey = self.sobol.then(|| Rng::qmc_key(qbase, pixel));
+            let sobol = self.sobol.then_some(seed);
             if self.k == 1 || !self.split[pixel as usize] {
                 for (keys, passes) in keys.chunks(LANES).zip(passes.chunks(LANES)) {
-                    camera_lanes(cam, (keys, passes, qkey), (x, y, pixel), rays, rngs);
+                    camera_lanes(cam, (keys, passes, sobol), (x, y, pixel), rays, rngs);
                 }
                 slots.extend(out.len()..out.len() + keys.len());
                 out.resize(out.len() + keys.len(), Rgb::ZERO);
                 continue;
             }
             for (&pass, &key) in passes.iter().zip(keys.iter()) {
-                let mut rng = camera_stream(Rng::indexed(key, pixel), qkey, pass);
+                let mut rng = camera_stream(Rng::indexed(key, pixel), sobol, pass, pixel);
                 let [jx, jy] = rng.next_2d();
                 ctx.rng = rng;
                 let key = (seed, pass);
@@ -435,15 +435,15 @@ mod tests {
         for n in [1usize, 3, 4, 5, 16] {
             let keys: Vec<u64> = (0..n as u64).map(|q| Rng::pass_key(11, stream::CAMERA, q)).collect();
             let passes: Vec<u64> = (0..n as u64).collect();
-            for ((x, y), qkey) in [(0usize, 0usize), (17, 9), (63, 47)].into_iter().zip([None, Some(7), Some(0xfeed)]) {
+            for ((x, y), sobol) in [(0usize, 0usize), (17, 9), (63, 47)].into_iter().zip([None, Some(11), Some(12)]) {
                 let pixel = (y * 64 + x) as u64;
                 let (mut rays, mut rngs) = (Vec::new(), Vec::new());
-                camera_lanes(&cam, (&keys, &passes, qkey), (x, y, pixel), &mut rays, &mut rngs);
+                camera_lanes(&cam, (&keys, &passes, sobol), (x, y, pixel), &mut rays, &mut rngs);
                 assert_eq!((rays.len(), rngs.len()), (n, n));
                 for (j, &key) in keys.iter().enumerate() {
                     let mut rng = Rng::indexed(key, pixel);
-                    if let Some(k) = qkey {
-                        rng = rng.with_qmc(k, j as u64);
+                    if let Some(seed) = sobol {
+                        rng = rng.with_qmc(Rng::qmc_key(seed, j as u64, pixel), j as u64);
                     }
                     let [jx, jy] = rng.next_2d();
                     let d = cam.direction(x as f32 + jx, y as f32 + jy);

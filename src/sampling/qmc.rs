@@ -6,17 +6,21 @@
 //!
 //! A slot is one `Rng::next_2d` call and takes the next two dimensions. One-dimensional draws
 //! (`next_f32`, `next_u32`: a light pick, a lobe, roulette) come from the PCG stream throughout,
-//! so the slots line up with the 2-D decisions of every path: the jitter, then each vertex's point
-//! on a light and its BSDF direction. Each dimension of each pixel is Owen-scrambled (hash-based,
+//! so on diffuse paths the slots line up with the same 2-D decisions in every pass: the jitter,
+//! then each vertex's point on a light and its BSDF direction. (A Dirac vertex draws no light
+//! sample and a forecast table several, so on such paths a slot serves different decisions in
+//! different passes: less stratification, no bias.) Each dimension of each pixel is Owen-scrambled (hash-based,
 //! pbrt-v4's `FastOwenScrambler`) and then XORed with its own 32-bit hash (a random digital
 //! shift). Scrambling keeps every realization a (t, s)-sequence, so a pixel's own passes
 //! converge. (A padded sampler, independent 2-D sequences per slot with a hashed index shuffle,
 //! failed the suite's per-pixel z-tests at 4,096 passes: its slots' pairings were too regular;
 //! `results/2026-12-06-sobol-prefix.md`.)
 //!
-//! Invariants: the shift makes every coordinate exactly uniform whatever the point, and the
-//! dimensions' seeds are independent hashes, so for any one sample every draw is uniform and
-//! independent of the others, as with PCG: an estimator stays unbiased pass by pass. Only the
+//! Invariants: over pixels, the shift makes every coordinate as uniform as the hash of its seed,
+//! whatever the point, and the dimensions' seeds are separate hashes of the pixel key, so for
+//! any one sample the draws are uniform and independent to the quality of that hashing, as PCG's
+//! keyed streams are: an estimator stays unbiased pass by pass. (The keys have 32 bits: two
+//! pixels of a large image may share one, correlating their errors, not biasing either.) Only the
 //! joint distribution *across* passes changes. Randomness stays a pure function of
 //! (seed, pass, pixel).
 
@@ -36,7 +40,8 @@ pub enum SamplerKind {
 pub const SLOTS: u64 = 7;
 /// The slot field of a stream without a prefix (at or above [`SLOTS`]: spent).
 pub const OFF: u64 = 63;
-/// The sample index bits kept (passes beyond 2^26 wrap: still uniform, less stratified).
+/// The sample index bits kept: each block of 2^26 passes is its own sequence, under its own
+/// pixel keys (`Rng::qmc_key`).
 pub const INDEX_MASK: u64 = (1 << 26) - 1;
 
 /// The reversed-bit mixing of pbrt-v4's `FastOwenScrambler`: in the reversed domain each step
@@ -54,7 +59,7 @@ fn mix(mut v: u32, seed: u32) -> u32 {
 /// Owen scrambling of a 32-bit fixed-point value (hash-based nested uniform scrambling: a bit
 /// flips with a hash of the bits above it and the seed).
 #[inline]
-pub fn owen(v: u32, seed: u32) -> u32 {
+fn owen(v: u32, seed: u32) -> u32 {
     mix(v.reverse_bits(), seed).reverse_bits()
 }
 
@@ -119,7 +124,7 @@ const fn directions() -> [[u32; 32]; DIMS] {
 
 /// Sobol dimension `d` (0-based) at index `i`: the XOR of the direction numbers of `i`'s set bits.
 #[inline]
-pub fn sobol(d: usize, mut i: u32) -> u32 {
+fn sobol(d: usize, mut i: u32) -> u32 {
     let mut x = 0;
     while i != 0 {
         x ^= DIRECTIONS[d][i.trailing_zeros() as usize];
@@ -222,7 +227,7 @@ mod tests {
         for index in [0u64, 37, 1 << 20] {
             let (mut own, mut pair) = (vec![0.0; 64], vec![0.0; 64]);
             for key in 0..n {
-                let mut r = Rng::keyed(9, 1, index, key as u64).with_qmc(Rng::qmc_key(11, key as u64), index);
+                let mut r = Rng::keyed(9, 1, index, key as u64).with_qmc(Rng::qmc_key(11, 0, key as u64), index);
                 let ([x0, y0], [x1, _]) = (r.next_2d(), r.next_2d());
                 let cell = |u: f32, v: f32| (u * 8.0) as usize * 8 + (v * 8.0) as usize;
                 own[cell(x0, y0)] += 1.0;
@@ -248,13 +253,25 @@ mod tests {
         let mc = p * (1.0 - p) / n as f64;
         let var = (0..pixels)
             .map(|key| {
-                let mean = points(Rng::qmc_key(3, key as u64), 1, 0, n).into_iter().map(f).sum::<f64>() / n as f64;
+                let mean = points(Rng::qmc_key(3, 0, key as u64), 1, 0, n).into_iter().map(f).sum::<f64>() / n as f64;
                 (mean - p).powi(2)
             })
             .sum::<f64>()
             / pixels as f64;
         eprintln!("variance {var:.3e}, Monte Carlo's {mc:.3e}: ratio {:.3}", var / mc);
         assert!(var < mc / 4.0, "ratio {}", var / mc);
+    }
+
+    /// The light pilot's passes (from 2^62 on) and the render's share their low index bits but
+    /// not their pixel keys, so they never draw the same points.
+    #[test]
+    fn each_block_of_2_to_the_26_passes_has_its_own_keys() {
+        for (pixel, pass) in [(0u64, 0u64), (9, 3), (4095, 77)] {
+            let (a, b) = (Rng::qmc_key(5, pass, pixel), Rng::qmc_key(5, (1 << 62) + pass, pixel));
+            assert_ne!(a, b);
+            assert_ne!(points(a, 0, pass, 1), points(b, 0, pass, 1), "pixel {pixel} pass {pass}");
+        }
+        assert_eq!(Rng::qmc_key(5, 3, 9), Rng::qmc_key(5, (1 << 26) - 1, 9), "one block, one key");
     }
 
     /// A stream with a prefix draws its 1-D numbers from PCG and, once its slots are spent, its
@@ -266,6 +283,7 @@ mod tests {
         assert_eq!(a.next_f32(), b.next_f32());
         let slots: Vec<[f32; 2]> = (0..SLOTS).map(|_| b.next_2d()).collect();
         assert_eq!(slots[0], points(77, 0, 9, 1)[0]);
+        assert_eq!(a, b, "a spent prefix is no prefix");
         assert_eq!(a.next_2d(), b.next_2d());
         assert_eq!(a.next_3d(), b.next_3d());
     }

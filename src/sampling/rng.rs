@@ -4,7 +4,11 @@
 //!
 //! `Rng` is PCG32 (O'Neill 2014, XSH-RR 64/32). `Rng::keyed` hashes the key with SplitMix64
 //! into a state and an odd increment (a distinct sequence per key). It implements
-//! `rand::TryRng` so rand's adaptors work on it.
+//! `rand::TryRng` so rand's adaptors work on it (they draw PCG words: `next_u32`).
+//!
+//! A camera stream may be led by a Sobol prefix (`Rng::with_qmc`, `sampling::qmc`,
+//! `--sampler sobol`): its first `qmc::SLOTS` `next_2d` calls then return the pass's point of
+//! the pixel's scrambled sequence, without touching the PCG state; every other draw is PCG's.
 
 use super::qmc;
 
@@ -39,7 +43,7 @@ fn to_f32(w: u32) -> f32 {
 }
 
 #[inline]
-pub(crate) fn splitmix64(mut z: u64) -> u64 {
+fn splitmix64(mut z: u64) -> u64 {
     z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
@@ -73,10 +77,12 @@ impl Rng {
         splitmix64(h1 ^ splitmix64(pass.wrapping_add(0x632B_E59B_D9B4_E019)))
     }
 
-    /// Pixel `pixel`'s Sobol scrambling key under `base` (`Rng::pass_key(seed,
-    /// stream::CAMERA_QMC, 0)`): the same in every pass, so its passes share one sequence.
+    /// Pixel `pixel`'s Sobol scrambling key for pass `pass` under `seed`: the same in every
+    /// pass of one block of 2^26 (`qmc::INDEX_MASK`), so those passes share one sequence, and
+    /// another in the next block (the light pilot's passes, from 2^62 on, get their own).
     #[inline]
-    pub fn qmc_key(base: u64, pixel: u64) -> u32 {
+    pub fn qmc_key(seed: u64, pass: u64, pixel: u64) -> u32 {
+        let base = Self::pass_key(seed, stream::CAMERA_QMC, pass >> 26);
         (splitmix64(base ^ pixel.wrapping_mul(0xD6E8_FEB8_6659_FD93)) >> 32) as u32
     }
 
@@ -130,7 +136,8 @@ impl Rng {
     #[inline(never)]
     fn qmc_2d(&mut self) -> [f32; 2] {
         let [a, b] = qmc::sample_2d(self.q);
-        self.q += 1;
+        // a spent prefix is no prefix (equal streams compare equal)
+        self.q = if (self.q & 63) + 1 < qmc::SLOTS { self.q + 1 } else { qmc::OFF };
         [to_f32(a), to_f32(b)]
     }
 
