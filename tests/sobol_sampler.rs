@@ -11,6 +11,7 @@
 mod common;
 
 use common::{global_z, render_sampled, scaled, world};
+use forecast::image_io::Image;
 use forecast::integrators::{Method, MethodArgs};
 use forecast::render::film::Film;
 use forecast::render::PixelSampler;
@@ -28,11 +29,11 @@ fn render(sampler: SamplerKind, passes: u64, seed: u64) -> Film {
     render_sampled(&w, pt.as_mut(), &PixelSampler::plain(&cam).with_sampler(sampler), passes, seed).0
 }
 
-/// Mean over pixels and channels of the squared difference of two films' means.
+/// Mean over pixels and channels of the squared difference of two films' means
+/// (`metrics::mse`, as `forecast diff`).
 fn mse(a: &Film, b: &Film) -> f64 {
-    let (a, b) = (a.mean(), b.mean());
-    let n = (a.len() * 3) as f64;
-    a.iter().zip(&b).flat_map(|(p, q)| (0..3).map(move |c| ((p[c] - q[c]) as f64).powi(2))).sum::<f64>() / n
+    let image = |f: &Film| Image { width: f.width, height: f.height, pixels: f.mean() };
+    forecast::metrics::mse(&image(a), &image(b), None).expect("equal sizes")
 }
 
 /// Half the mean over consecutive seed pairs of the MSE between them: the error variance of one

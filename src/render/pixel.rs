@@ -137,9 +137,9 @@ const LANES: usize = 16;
 /// The camera rays and streams of pixel `(x, y)` in the passes `passes` keyed by `keys` (at
 /// most [`LANES`]), pass `j` in lane `j`, led by the Sobol prefix of seed `sobol` if any:
 /// what one pass at a time draws (`Rng::indexed`, the prefix, the jitter, `Camera::direction`),
-/// operation for operation, the streams' PCG set-up (and without a prefix the jitter and the
-/// directions) as loops over the lanes that LLVM runs as vectors
-/// (`results/2026-12-05-diffuse-lanes.md`), or one at a time for fewer than 4 passes.
+/// operation for operation. Without a prefix and for 4 passes or more, as loops over the lanes
+/// that LLVM runs as vectors (`results/2026-12-05-diffuse-lanes.md`); otherwise one at a time
+/// (a few passes, as in the IWS family's, or the prefix's jitter, drawn lane by lane anyway).
 /// Not inlined, so that it stays vectorized.
 #[inline(never)]
 fn camera_lanes(
@@ -150,8 +150,7 @@ fn camera_lanes(
     rngs: &mut Vec<Rng>,
 ) {
     let n = keys.len();
-    if n < LANES / 4 {
-        // a few passes (one, in the IWS family's passes): one at a time is cheaper than 16 lanes
+    if n < LANES / 4 || sobol.is_some() {
         for (&key, &pass) in keys.iter().zip(passes) {
             let mut rng = camera_stream(Rng::indexed(key, pixel), sobol, pass, pixel);
             let [jx, jy] = rng.next_2d();
@@ -162,23 +161,13 @@ fn camera_lanes(
     }
     // lanes past n repeat the last key; only the first n are kept
     let keys: [u64; LANES] = std::array::from_fn(|j| keys[j.min(n - 1)]);
-    let Some(seed) = sobol else {
-        let (st, u) = Rng::indexed_2d_lanes(&keys, pixel);
-        let mut d = [crate::math::Vec3::ZERO; LANES];
-        for j in 0..LANES {
-            d[j] = cam.direction(x as f32 + u[j][0], y as f32 + u[j][1]);
-        }
-        rays.extend(d[..n].iter().map(|&d| Ray { o: cam.position, d, tmax: f32::INFINITY }));
-        rngs.extend(st.into_iter().take(n));
-        return;
-    };
-    let st = Rng::indexed_lanes(&keys, pixel);
-    for (rng, &pass) in st.into_iter().zip(passes) {
-        let mut rng = rng.with_qmc(Rng::qmc_key(seed, pass, pixel), pass);
-        let [jx, jy] = rng.next_2d();
-        rays.push(Ray { o: cam.position, d: cam.direction(x as f32 + jx, y as f32 + jy), tmax: f32::INFINITY });
-        rngs.push(rng);
+    let (st, u) = Rng::indexed_2d_lanes(&keys, pixel);
+    let mut d = [crate::math::Vec3::ZERO; LANES];
+    for j in 0..LANES {
+        d[j] = cam.direction(x as f32 + u[j][0], y as f32 + u[j][1]);
     }
+    rays.extend(d[..n].iter().map(|&d| Ray { o: cam.position, d, tmax: f32::INFINITY }));
+    rngs.extend(st.into_iter().take(n));
 }
 
 /// Pass `pass`'s camera stream `pcg` of pixel `pixel`, led by its Sobol prefix under seed
@@ -309,8 +298,8 @@ impl<'a> PixelSampler<'a> {
         out.clear();
         keys.clear();
         keys.extend(passes.iter().map(|&q| Rng::pass_key(seed, stream::CAMERA, q)));
+        let sobol = self.sobol.then_some(seed);
         for &(x, y, pixel) in tile {
-            let sobol = self.sobol.then_some(seed);
             if self.k == 1 || !self.split[pixel as usize] {
                 for (keys, passes) in keys.chunks(LANES).zip(passes.chunks(LANES)) {
                     camera_lanes(cam, (keys, passes, sobol), (x, y, pixel), rays, rngs);

@@ -9,9 +9,9 @@
 //! so on diffuse paths the slots line up with the same 2-D decisions in every pass: the jitter,
 //! then each vertex's point on a light and its BSDF direction. (A Dirac vertex draws no light
 //! sample and a forecast table several, so on such paths a slot serves different decisions in
-//! different passes: less stratification, no bias.) Each dimension of each pixel is Owen-scrambled (hash-based,
-//! pbrt-v4's `FastOwenScrambler`) and then XORed with its own 32-bit hash (a random digital
-//! shift). Scrambling keeps every realization a (t, s)-sequence, so a pixel's own passes
+//! different passes: less stratification, no bias.) Each dimension of each pixel is
+//! Owen-scrambled (hash-based, pbrt-v4's `FastOwenScrambler`) and then XORed with its own 32-bit
+//! hash (a random digital shift). Scrambling keeps every realization a (t, s)-sequence, so a pixel's own passes
 //! converge. (A padded sampler, independent 2-D sequences per slot with a hashed index shuffle,
 //! failed the suite's per-pixel z-tests at 4,096 passes: its slots' pairings were too regular;
 //! `results/2026-12-06-sobol-prefix.md`.)
@@ -38,11 +38,35 @@ pub enum SamplerKind {
 /// 2-D slots of a camera stream's Sobol prefix: the jitter, then a light sample and a BSDF
 /// direction at each of three vertices.
 pub const SLOTS: u64 = 7;
-/// The slot field of a stream without a prefix (at or above [`SLOTS`]: spent).
+/// The prefix word of a stream without a prefix, or whose prefix is spent (slot field 63).
 pub const OFF: u64 = 63;
 /// The sample index bits kept: each block of 2^26 passes is its own sequence, under its own
 /// pixel keys (`Rng::qmc_key`).
-pub const INDEX_MASK: u64 = (1 << 26) - 1;
+const INDEX_MASK: u64 = (1 << 26) - 1;
+
+/// The prefix word (`Rng`'s `q`) of pixel key `key` at sample `index`, at its first slot: the key
+/// in the high 32 bits, the index in the next 26, the slot in the low 6.
+#[inline]
+pub fn prefix(key: u32, index: u64) -> u64 {
+    ((key as u64) << 32) | ((index & INDEX_MASK) << 6)
+}
+
+/// True while prefix word `q` has a slot left.
+#[inline]
+pub fn has_slot(q: u64) -> bool {
+    q & 63 < SLOTS
+}
+
+/// Prefix word `q` after its slot is drawn: the next slot, or [`OFF`] once the last is spent (a
+/// spent prefix is no prefix, so equal streams compare equal).
+#[inline]
+pub fn advance(q: u64) -> u64 {
+    if (q & 63) + 1 < SLOTS {
+        q + 1
+    } else {
+        OFF
+    }
+}
 
 /// The reversed-bit mixing of pbrt-v4's `FastOwenScrambler`: in the reversed domain each step
 /// lets only lower bits change higher ones, so in the value domain a bit depends on those above.

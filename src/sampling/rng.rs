@@ -56,8 +56,8 @@ fn splitmix64(mut z: u64) -> u64 {
 pub struct Rng {
     state: u64,
     inc: u64,
-    /// The Sobol prefix: pixel key (high 32 bits), sample index (26 bits), next slot (6 bits);
-    /// slot [`qmc::SLOTS`] or above: the prefix is spent (or was never there).
+    /// The Sobol prefix word (`qmc::prefix`: pixel key, sample index, next slot), or
+    /// [`qmc::OFF`] when there is none or it is spent.
     q: u64,
 }
 
@@ -111,24 +111,12 @@ impl Rng {
         (std::array::from_fn(|j| Rng { state: state[j], inc: inc[j], q: qmc::OFF }), u)
     }
 
-    /// `Rng::indexed(keys[j], index)` for sixteen keys, in the same vector loops, before their
-    /// Sobol prefix (`with_qmc`) and first draw.
-    #[inline]
-    pub fn indexed_lanes(keys: &[u64; 16], index: u64) -> [Rng; 16] {
-        let (mut state, mut inc) = ([0u64; 16], [0u64; 16]);
-        for j in 0..16 {
-            let r = Rng::indexed(keys[j], index);
-            (state[j], inc[j]) = (r.state, r.inc);
-        }
-        std::array::from_fn(|j| Rng { state: state[j], inc: inc[j], q: qmc::OFF })
-    }
-
     /// This stream led by `qmc::SLOTS` slots of the scrambled Sobol sequence of pixel key `key`
     /// at sample `index` (`sampling::qmc`): each of the first `qmc::SLOTS` `next_2d` calls
     /// takes a slot; every other draw comes from the PCG stream as without the prefix.
     #[inline]
     pub fn with_qmc(mut self, key: u32, index: u64) -> Self {
-        self.q = ((key as u64) << 32) | ((index & qmc::INDEX_MASK) << 6);
+        self.q = qmc::prefix(key, index);
         self
     }
 
@@ -136,8 +124,7 @@ impl Rng {
     #[inline(never)]
     fn qmc_2d(&mut self) -> [f32; 2] {
         let [a, b] = qmc::sample_2d(self.q);
-        // a spent prefix is no prefix (equal streams compare equal)
-        self.q = if (self.q & 63) + 1 < qmc::SLOTS { self.q + 1 } else { qmc::OFF };
+        self.q = qmc::advance(self.q);
         [to_f32(a), to_f32(b)]
     }
 
@@ -160,7 +147,7 @@ impl Rng {
     /// Two uniforms in [0, 1) (a slot of the Sobol prefix while one is left).
     #[inline]
     pub fn next_2d(&mut self) -> [f32; 2] {
-        if self.q & 63 < qmc::SLOTS {
+        if qmc::has_slot(self.q) {
             return self.qmc_2d();
         }
         [self.next_f32(), self.next_f32()]
