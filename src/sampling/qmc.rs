@@ -41,8 +41,9 @@ pub const SLOTS: u64 = 7;
 /// The prefix word of a stream without a prefix, or whose prefix is spent (slot field 63).
 pub const OFF: u64 = 63;
 /// The sample index bits kept: each block of 2^26 passes is its own sequence, under its own
-/// pixel keys (`Rng::qmc_key`).
-const INDEX_MASK: u64 = (1 << 26) - 1;
+/// pixel keys (`Rng::qmc_key` keys them by `pass >> INDEX_BITS`).
+pub const INDEX_BITS: u32 = 26;
+const INDEX_MASK: u64 = (1 << INDEX_BITS) - 1;
 
 /// The prefix word (`Rng`'s `q`) of pixel key `key` at sample `index`, at its first slot: the key
 /// in the high 32 bits, the index in the next 26, the slot in the low 6.

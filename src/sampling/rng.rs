@@ -78,11 +78,11 @@ impl Rng {
     }
 
     /// Pixel `pixel`'s Sobol scrambling key for pass `pass` under `seed`: the same in every
-    /// pass of one block of 2^26 (`qmc::INDEX_MASK`), so those passes share one sequence, and
+    /// pass of one block of 2^26 (`qmc::INDEX_BITS`), so those passes share one sequence, and
     /// another in the next block (the light pilot's passes, from 2^62 on, get their own).
     #[inline]
     pub fn qmc_key(seed: u64, pass: u64, pixel: u64) -> u32 {
-        let base = Self::pass_key(seed, stream::CAMERA_QMC, pass >> 26);
+        let base = Self::pass_key(seed, stream::CAMERA_QMC, pass >> qmc::INDEX_BITS);
         (splitmix64(base ^ pixel.wrapping_mul(0xD6E8_FEB8_6659_FD93)) >> 32) as u32
     }
 

@@ -217,20 +217,14 @@ pub fn global_z(a: &Film, b: &Film) -> f64 {
     d / (va + vb).sqrt()
 }
 
-/// How far scaling `img` by `1 − frac` moves its [`global_z`] against `reference`:
-/// `frac · |Σ img| / √v`, the expected size of a negative control's shift.
-pub fn global_shift(img: &Film, reference: &Film, frac: f64) -> f64 {
-    let total: f64 = img.mean().iter().map(|p| p.iter().map(|&x| x as f64).sum::<f64>()).sum();
-    let [va, vb] = global_sums(img, reference).1;
-    frac * total.abs() / (va + vb).sqrt()
-}
-
 /// A negative control with power: scaling `img` by `1 − frac` moves [`global_z`] by more than
 /// twice the threshold `thr`, so every image that passes fails once scaled. Asserted from the
-/// variances, not from one scaled realization, so it does not pass by luck.
+/// variances (the expected shift `frac · |Σ img| / √v`), not from one scaled realization, so it
+/// does not pass by luck.
 pub fn assert_detects(img: &Film, reference: &Film, frac: f64, thr: f64, label: &str) {
-    let shift = global_shift(img, reference, frac);
+    let total: f64 = img.mean().iter().map(|p| p.iter().map(|&x| x as f64).sum::<f64>()).sum();
     let [va, vb] = global_sums(img, reference).1;
+    let shift = frac * total.abs() / (va + vb).sqrt();
     eprintln!(
         "{label}: a {:.0}% error moves the global z by {shift:.2} (needs > {:.2}; the image holds {:.0}% of the variance)",
         100.0 * frac,
