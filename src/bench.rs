@@ -42,11 +42,15 @@ pub struct BenchReport {
     pub threads: usize,
 }
 
-/// Runs the benchmark on the current rayon pool; `repeats` must be at least 1.
-pub fn run(world: &World, resolution: (u32, u32), repeats: usize) -> Result<BenchReport, String> {
-    if repeats == 0 {
-        return Err("--repeats 0: the medians need at least one repeat".into());
-    }
+/// A ray's origin and direction.
+type Ray = (Vec3, Vec3);
+/// A shadow segment: origin, unit direction, length.
+type Segment = (Vec3, Vec3, f32);
+
+/// The benchmark's `n` closest-hit rays (cosine-distributed from the first hits of a 256²
+/// jittered view) and `n` shadow segments between pairs of those hits; an error if the camera
+/// sees fewer than two hits.
+fn ray_set(world: &World, n_rays: usize) -> Result<(Vec<Ray>, Vec<Segment>), String> {
     let cam = world.scene.camera.with_resolution(256, 256);
     // Build the ray set: origins and normals of first hits.
     let mut pts: Vec<(Vec3, Vec3)> = Vec::new();
@@ -63,15 +67,14 @@ pub fn run(world: &World, resolution: (u32, u32), repeats: usize) -> Result<Benc
     if pts.len() < 2 {
         return Err("bench: the camera sees no geometry".into());
     }
-    let n_rays = 400_000usize;
-    let rays: Vec<(Vec3, Vec3)> = (0..n_rays)
+    let rays: Vec<Ray> = (0..n_rays)
         .map(|i| {
             let (p, n) = pts[i % pts.len()];
             let d = Frame::from_normal(n).to_world(sample_cosine_hemisphere(rng.next_2d()));
             (offset_origin(p, n, d), d)
         })
         .collect();
-    let segs: Vec<(Vec3, Vec3, f32)> = (0..n_rays)
+    let segs: Vec<Segment> = (0..n_rays)
         .map(|i| {
             let (a, na) = pts[i % pts.len()];
             let (b, _) = pts[rng.below(pts.len() as u32) as usize];
@@ -82,6 +85,16 @@ pub fn run(world: &World, resolution: (u32, u32), repeats: usize) -> Result<Benc
             (o, dir, (len - 2e-4).max(0.0))
         })
         .collect();
+    Ok((rays, segs))
+}
+
+/// Runs the benchmark on the current rayon pool; `repeats` must be at least 1.
+pub fn run(world: &World, resolution: (u32, u32), repeats: usize) -> Result<BenchReport, String> {
+    if repeats == 0 {
+        return Err("--repeats 0: the medians need at least one repeat".into());
+    }
+    let n_rays = 400_000usize;
+    let (rays, segs) = ray_set(world, n_rays)?;
     let mut closest = Vec::new();
     let mut shadow = Vec::new();
     let mut pt = Vec::new();

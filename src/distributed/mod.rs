@@ -234,28 +234,46 @@ pub fn shared_deadline(c: &dyn Cluster, local_start: Instant, budget_secs: Optio
 /// with per-rank lengths (rank 0's blob is empty) and `barrier`.
 pub fn self_test(c: &dyn Cluster) -> Result<(), String> {
     let (rank, size) = (c.rank(), c.size());
-    let mut errs: Vec<String> = Vec::new();
     if size == 0 || rank >= size {
         return Err(format!("bad topology: rank {rank}, size {size}"));
     }
+    let mut errs: Vec<String> = Vec::new();
+    check_broadcast(c, &mut errs);
+    check_sums(c, &mut errs);
+    // all_reduce_max with negative values: the max is the last rank's value.
+    let m = c.all_reduce_max(rank as f64 * 1.5 - 1000.0);
+    let want = (size - 1) as f64 * 1.5 - 1000.0;
+    if m != want {
+        errs.push(format!("all_reduce_max: {m} != {want}"));
+    }
+    check_gather(c, &mut errs);
+    c.barrier();
+    self_test_verdict(c, &errs)
+}
 
-    // 1. Broadcast 3 MB from rank 0; other ranks start with a short, different buffer.
+/// `self_test`'s broadcasts: 3 MB from rank 0 (other ranks start with a short, different
+/// buffer), then an empty one.
+fn check_broadcast(c: &dyn Cluster, errs: &mut Vec<String>) {
     let pattern = |i: usize| ((i.wrapping_mul(31) + 7) % 251) as u8;
     let n = 3 * 1024 * 1024 + 17;
-    let mut buf: Vec<u8> = if rank == 0 { (0..n).map(pattern).collect() } else { vec![0xAB; 5] };
+    let mut buf: Vec<u8> = if c.rank() == 0 { (0..n).map(pattern).collect() } else { vec![0xAB; 5] };
     c.broadcast_bytes(&mut buf);
     if buf.len() != n {
         errs.push(format!("broadcast: length {} != {n}", buf.len()));
     } else if let Some(i) = (0..n).find(|&i| buf[i] != pattern(i)) {
         errs.push(format!("broadcast: byte {i} is {} != {}", buf[i], pattern(i)));
     }
-    let mut empty: Vec<u8> = if rank == 0 { Vec::new() } else { vec![1, 2, 3] };
+    let mut empty: Vec<u8> = if c.rank() == 0 { Vec::new() } else { vec![1, 2, 3] };
     c.broadcast_bytes(&mut empty);
     if !empty.is_empty() {
         errs.push(format!("broadcast of empty buffer left {} bytes", empty.len()));
     }
+}
 
-    // 2. reduce_sum / all_reduce_sum: integers, so the f64 sums are exact.
+/// `self_test`'s `reduce_sum` and `all_reduce_sum`: integers (and halves), so the f64 sums are
+/// exact.
+fn check_sums(c: &dyn Cluster, errs: &mut Vec<String>) {
+    let (rank, size) = (c.rank(), c.size());
     let len = 100_003;
     let local: Vec<f64> = (0..len).map(|i| (rank + 1) as f64 * i as f64 - 0.5).collect();
     let tri = (size * (size + 1) / 2) as f64;
@@ -281,36 +299,30 @@ pub fn self_test(c: &dyn Cluster) -> Result<(), String> {
     if !c.all_reduce_sum(&[]).is_empty() {
         errs.push("all_reduce_sum of an empty slice is not empty".into());
     }
+}
 
-    // 3. all_reduce_max with negative values: max is the last rank's value.
-    let m = c.all_reduce_max(rank as f64 * 1.5 - 1000.0);
-    let want = (size - 1) as f64 * 1.5 - 1000.0;
-    if m != want {
-        errs.push(format!("all_reduce_max: {m} != {want}"));
-    }
-
-    // 4. gather_bytes with different lengths per rank (rank 0 sends nothing).
+/// `self_test`'s `gather_bytes` with different lengths per rank (rank 0 sends nothing).
+fn check_gather(c: &dyn Cluster, errs: &mut Vec<String>) {
+    let (rank, size) = (c.rank(), c.size());
     let blob = |r: usize| -> Vec<u8> { (0..r * 3).map(|k| (r * 7 + k) as u8).collect() };
     match (rank, c.gather_bytes(&blob(rank))) {
         (0, Some(v)) => {
             if v.len() != size {
                 errs.push(format!("gather_bytes: {} blobs for {size} ranks", v.len()));
-            } else {
-                for (r, b) in v.iter().enumerate() {
-                    if *b != blob(r) {
-                        errs.push(format!("gather_bytes: blob of rank {r} wrong ({} bytes)", b.len()));
-                    }
-                }
+            }
+            for (r, b) in v.iter().enumerate().filter(|(r, b)| **b != blob(*r)) {
+                errs.push(format!("gather_bytes: blob of rank {r} wrong ({} bytes)", b.len()));
             }
         }
         (0, None) => errs.push("gather_bytes returned None on rank 0".into()),
         (_, Some(_)) => errs.push("gather_bytes returned Some on a non-root rank".into()),
         (_, None) => {}
     }
+}
 
-    c.barrier();
-
-    // 5. Agree on the verdict and bring every rank's messages to rank 0.
+/// Agrees on `self_test`'s verdict and brings every rank's messages to rank 0.
+fn self_test_verdict(c: &dyn Cluster, errs: &[String]) -> Result<(), String> {
+    let rank = c.rank();
     let text = errs.iter().map(|e| format!("rank {rank}: {e}")).collect::<Vec<_>>().join("\n");
     let all_text = c.gather_bytes(text.as_bytes());
     let failures = c.all_reduce_sum(&[errs.len() as f64])[0];

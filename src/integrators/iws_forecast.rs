@@ -61,7 +61,7 @@ pub struct CfArgs {
     /// 0 = never, so pt-cf is pt).
     #[arg(long, default_value_t = 1)]
     pub table_depth: u32,
-    /// iws-cf, pt-cf: table-cache cell edge as a fraction of the search radius (0 = build per point).
+    /// iws-cf, pt-cf: table-cache cell edge as a fraction of the cluster's radius r_c (0 = build per point).
     #[arg(long, default_value_t = 1.0, value_parser = parse_table_cache)]
     pub table_cache: f32,
     /// The run's time budget (set by the pipeline from `--time`, not a flag): without an explicit
