@@ -151,7 +151,8 @@ pub fn sample(m: &Material, sp: &ShadingPoint, wo: Vec3, u: [f32; 3], mode: Mode
         Material::Glass { ior } => dielectric::sample(ior, sp, wo, u[0], mode)?,
         Material::Black => return None,
     };
-    let corr =
-        if s.is_delta && matches!(m, Material::Glass { .. }) { 1.0 } else { shading_correction(mode, sp, wo, s.wi) };
+    // Veach's adjoint factor on light paths, Dirac glass included (pbrt-v3's
+    // `CorrectShadingNormal`): 1 where ns = ng.
+    let corr = shading_correction(mode, sp, wo, s.wi);
     Some(BsdfSample { weight: s.weight * corr, ..s })
 }

@@ -136,6 +136,8 @@ pub fn estimate_each<I: Integrator + ?Sized>(
 pub struct LightSplats {
     /// Row-major, one value per pixel (already divided by the pass's light paths).
     pub image: Vec<Rgb>,
+    /// Splats dropped because they were not finite.
+    pub nonfinite: u64,
     /// Closest-hit rays traced by the light paths.
     pub closest_rays: u64,
     /// Shadow (camera-connection) rays.

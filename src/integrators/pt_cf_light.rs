@@ -207,6 +207,7 @@ fn launch(world: &World, emission: Emission, rng: &mut Rng) -> Option<Start> {
 /// What one chunk of light paths produced.
 struct Chunk {
     splats: Vec<(u32, Rgb)>,
+    nonfinite: u64,
     closest: u64,
     shadow: u64,
 }
@@ -225,12 +226,12 @@ pub fn light_splats(
         .map(|c| {
             let _ = take_ray_counts();
             let mut ctx = Context::new(Rng::keyed(seed, stream::LIGHT_PATHS, pass, u64::MAX));
-            let mut t = Tracer { pt, light, world, camera, n, splats: Vec::new(), verts: Vec::new() };
+            let mut t = Tracer { pt, light, world, camera, n, splats: Vec::new(), nonfinite: 0, verts: Vec::new() };
             for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
                 t.path(Rng::keyed(seed, stream::LIGHT_PATHS, pass, i), &mut ctx);
             }
             let (closest, shadow) = take_ray_counts();
-            Chunk { splats: t.splats, closest, shadow }
+            Chunk { splats: t.splats, nonfinite: t.nonfinite, closest, shadow }
         })
         .collect();
     let mut out = LightSplats {
@@ -241,6 +242,7 @@ pub fn light_splats(
         for (p, v) in c.splats {
             out.image[p as usize] += v;
         }
+        out.nonfinite += c.nonfinite;
         out.closest_rays += c.closest;
         out.shadow_rays += c.shadow;
     }
@@ -256,6 +258,8 @@ struct Tracer<'a> {
     /// `N_L`.
     n: u64,
     splats: Vec<(u32, Rgb)>,
+    /// Splats dropped as non-finite (counted in the pass's `nonfinite`, as camera estimates are).
+    nonfinite: u64,
     /// The current path's non-Dirac vertices so far (scratch).
     verts: Vec<Vertex<'a>>,
 }
@@ -331,7 +335,9 @@ impl<'a> Tracer<'a> {
             density.map_or(1.0, |p0| light_weight(self.n, &self.verts, (sp, m), (wc, w_in), p0 * dist2 / imp, &mut q));
         let corr = sp.ns.dot(w_in).abs() / cos_in;
         let v = beta * f * (w_l * corr * sp.ng.dot(wc).abs() * imp / (dist2 * self.n as f32));
-        if v.is_finite() && v != Rgb::ZERO {
+        if !v.is_finite() {
+            self.nonfinite += 1;
+        } else if v != Rgb::ZERO {
             self.splats.push((pixel, v));
         }
     }

@@ -195,6 +195,7 @@ pub fn render_passes(
             a
         });
     for s in splats.iter().flatten() {
+        total.nonfinite += s.nonfinite;
         total.closest_rays += s.closest_rays;
         total.shadow_rays += s.shadow_rays;
     }
