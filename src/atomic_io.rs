@@ -50,7 +50,8 @@ pub struct RealFs;
 
 impl FileOps for RealFs {
     fn write(&mut self, path: &Path, bytes: &[u8]) -> io::Result<()> {
-        let mut f = std::fs::File::create(path)?;
+        // never truncates a file that is not ours (`OutputSet::check` refused it up front)
+        let mut f = std::fs::OpenOptions::new().write(true).create_new(true).open(path)?;
         f.write_all(bytes)?;
         f.sync_all()
     }
@@ -58,8 +59,13 @@ impl FileOps for RealFs {
         std::fs::rename(from, to)
     }
     fn backup(&mut self, path: &Path, backup: &Path) -> io::Result<()> {
-        let _ = std::fs::remove_file(backup); // a stale backup of an interrupted write
-        std::fs::hard_link(path, backup).or_else(|_| std::fs::copy(path, backup).map(|_| ()))
+        match std::fs::hard_link(path, backup) {
+            Err(e) if e.kind() != io::ErrorKind::AlreadyExists => {
+                let mut to = std::fs::OpenOptions::new().write(true).create_new(true).open(backup)?;
+                io::copy(&mut std::fs::File::open(path)?, &mut to).map(|_| ())
+            }
+            r => r,
+        }
     }
     fn remove(&mut self, path: &Path) -> io::Result<()> {
         std::fs::remove_file(path)
@@ -141,7 +147,9 @@ pub fn write_set_with(fs: &mut dyn FileOps, files: &[(PathBuf, Vec<u8>)]) -> Res
     let tmps: Vec<PathBuf> = files.iter().map(|(p, _)| atomic_path(p)).collect();
     for (i, (_, bytes)) in files.iter().enumerate() {
         if let Err(e) = fs.write(&tmps[i], bytes) {
-            remove_all(fs, &tmps[..=i]);
+            // a temporary that was already there is not ours to remove
+            let ours = if e.kind() == io::ErrorKind::AlreadyExists { i } else { i + 1 };
+            remove_all(fs, &tmps[..ours]);
             return Err(format!("cannot write {}: {e}", tmps[i].display()));
         }
     }
@@ -181,7 +189,9 @@ fn make_backups(fs: &mut dyn FileOps, files: &[(PathBuf, Vec<u8>)]) -> Result<Ve
         }
         let b = backup_path(p);
         if let Err(e) = fs.backup(p, &b) {
-            backups.push(Some(b.clone()));
+            if e.kind() != io::ErrorKind::AlreadyExists {
+                backups.push(Some(b.clone()));
+            }
             remove_all(fs, &backups.iter().flatten().cloned().collect::<Vec<_>>());
             return Err(format!("cannot keep the previous {} as {}: {e}", p.display(), b.display()));
         }
@@ -304,6 +314,23 @@ pub fn resolve(p: &Path) -> PathBuf {
     out
 }
 
+/// Refuses, before any work, an output that cannot be written: a file output that is a
+/// directory, a directory output that is a file, or one whose nearest existing ancestor is not a
+/// directory.
+fn writable(flag: &str, out: &Path, want_dir: bool) -> Result<(), String> {
+    if out.is_dir() != want_dir && out.exists() {
+        let (is, want) = if want_dir { ("a file", "directory") } else { ("a directory", "file") };
+        return Err(format!("{flag} `{}` is {is}; name a {want}", out.display()));
+    }
+    let abs = std::path::absolute(out).unwrap_or_else(|_| out.to_path_buf());
+    match abs.ancestors().skip(1).find(|a| a.symlink_metadata().is_ok()) {
+        Some(a) if !a.is_dir() => {
+            Err(format!("{flag} `{}` cannot be created: `{}` is not a directory", out.display(), a.display()))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// True when `a` and `b` name the same file (see [`OutputSet`] for what "same" means).
 pub fn same_file(a: &Path, b: &Path) -> bool {
     file_id(a) == file_id(b) || resolve(a) == resolve(b)
@@ -314,7 +341,11 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
 /// * an output that is one of the inputs (the scene, its meshes, `--reference`, `--resume`, the
 ///   images given to `diff`): writing it would destroy that input;
 /// * an output named twice (two outputs of the same run would overwrite each other);
-/// * an input inside an output directory (compare's `DIR/charts/`, …).
+/// * an input inside an output directory (compare's `DIR/charts/`, …);
+/// * an output written through a temporary (`PATH.tmp`) or backup (`PATH.old`) that is an input,
+///   another output or an existing file (the write would replace it and then delete it);
+/// * an output that cannot be created: a directory, or under a path that is not a directory
+///   (except [`OutputSet::best_effort`] ones, whose failure is only a warning).
 ///
 /// Two paths are the same file when they are the same existing file (device and inode: hard
 /// links, symbolic links and `..` spellings included) or resolve to the same absolute path
@@ -326,6 +357,8 @@ pub struct OutputSet {
     inputs: Vec<(String, PathBuf)>,
     outputs: Vec<(String, PathBuf, Option<PathBuf>)>,
     dirs: Vec<(String, PathBuf)>,
+    /// Outputs whose failed write is only a warning (checkpoints): not checked for writability.
+    best_effort: Vec<PathBuf>,
 }
 
 impl OutputSet {
@@ -368,9 +401,53 @@ impl OutputSet {
         self
     }
 
+    /// Marks the output `path` as best effort: the command warns and goes on if it cannot be
+    /// written (a checkpoint), so an unwritable path is not refused up front.
+    pub fn best_effort(&mut self, path: &Path) -> &mut Self {
+        self.best_effort.push(path.to_path_buf());
+        self
+    }
+
     /// The outputs, in the order they were added.
     pub fn outputs(&self) -> impl Iterator<Item = &Path> {
         self.outputs.iter().map(|(_, p, _)| p.as_path())
+    }
+
+    /// Every output is written through its temporary `PATH.tmp` and, in a set, a backup
+    /// `PATH.old` ([`atomic_path`], [`backup_path`]): neither may be an input or another output,
+    /// nor an existing file, which the write would replace and then delete.
+    fn check_siblings(&self, inputs: &[(FileId, PathBuf)]) -> Result<(), String> {
+        let outs: Vec<PathBuf> = self.outputs.iter().map(|(_, p, _)| resolve(p)).collect();
+        for (flag, out, _) in &self.outputs {
+            for (role, sib) in [("temporary", atomic_path(out)), ("backup", backup_path(out))] {
+                let (id, r) = (file_id(&sib), resolve(&sib));
+                let why = |which: String| {
+                    format!(
+                        "{flag} `{}` is written through its {role} `{}`, which {which}",
+                        out.display(),
+                        sib.display()
+                    )
+                };
+                if let Some(((w, p), _)) = self.inputs.iter().zip(inputs).find(|(_, (iid, ir))| *iid == id || *ir == r)
+                {
+                    return Err(why(format!(
+                        "is {w} `{}`: writing would destroy it (name another output)",
+                        p.display()
+                    )));
+                }
+                if outs.contains(&r) {
+                    return Err(why("is also an output of this run (name another output)".into()));
+                }
+                if sib.symlink_metadata().is_ok() {
+                    return Err(why(
+                        "exists (left by an interrupted write?): it would be replaced and then deleted; move it \
+                         away, or name another output"
+                            .into(),
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The rules of [`OutputSet`]; the error names the output, where it comes from, and the file
@@ -400,8 +477,13 @@ impl OutputSet {
                 ));
             }
             seen.push((id, r));
+            if !self.best_effort.contains(out) {
+                writable(flag, out, false)?;
+            }
         }
+        self.check_siblings(&inputs)?;
         for (flag, dir) in &self.dirs {
+            writable(flag, dir, true)?;
             let d = resolve(dir);
             if let Some(((what, input), _)) = self.inputs.iter().zip(&inputs).find(|(_, (_, ir))| ir.starts_with(&d)) {
                 return Err(format!(
@@ -477,6 +559,48 @@ mod tests {
         let mut g = OutputSet::new();
         g.input("--reference", &dir.join("sub/ref.exr")).output_dir("compare --out", &dir.join("sub"));
         assert!(g.check().unwrap_err().contains("--reference"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn temporaries_backups_and_unwritable_outputs_are_refused() {
+        let dir = std::env::temp_dir().join(format!("forecast-siblings-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(dir.join("isdir/x.exr")).unwrap();
+        let (scene, out) = (dir.join("t.exr.old"), dir.join("t.exr"));
+        std::fs::write(&scene, b"scene").unwrap();
+        std::fs::write(dir.join("afile"), b"x").unwrap();
+        let check = |outs: &[&Path]| {
+            let mut g = OutputSet::new();
+            g.input("the scene", &scene);
+            outs.iter().for_each(|o| {
+                g.output("--out", o);
+            });
+            g.check()
+        };
+        // the scene is the backup of an output: refused, and kept
+        let e = check(&[&out]).unwrap_err();
+        assert!(e.contains("backup") && e.contains("the scene"), "{e}");
+        // a user's file where a temporary goes is refused, not replaced
+        let notes = dir.join("r.json.tmp");
+        std::fs::write(&notes, b"notes").unwrap();
+        let e = check(&[&dir.join("r.json")]).unwrap_err();
+        assert!(e.contains("r.json.tmp") && e.contains("exists"), "{e}");
+        // an output that is another output's temporary
+        let e = check(&[&dir.join("c.exr"), &dir.join("c.exr.tmp")]).unwrap_err();
+        assert!(e.contains("also an output"), "{e}");
+        // a directory, and a path under a file
+        assert!(check(&[&dir.join("isdir/x.exr")]).unwrap_err().contains("is a directory"));
+        assert!(check(&[&dir.join("afile/x.exr")]).unwrap_err().contains("is not a directory"));
+        let mut g = OutputSet::new();
+        g.output("--checkpoint-path", &dir.join("afile/x.ckpt")).best_effort(&dir.join("afile/x.ckpt"));
+        g.check().unwrap(); // a checkpoint that cannot be written only warns
+        check(&[&dir.join("new/sub/r.exr")]).unwrap(); // missing directories are created
+                                                       // the writer itself never truncates a temporary it did not create, nor removes it
+        let e = write_set_with(&mut RealFs, &[(dir.join("r.json"), b"{}".to_vec())]).unwrap_err();
+        assert!(e.contains("r.json.tmp"), "{e}");
+        assert_eq!(std::fs::read(&notes).unwrap(), b"notes");
+        assert_eq!(std::fs::read(&scene).unwrap(), b"scene");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

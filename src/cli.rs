@@ -8,6 +8,12 @@
 //! ([`check_foreign_flags`], from clap's `ArgMatches::value_source`): at parse time when
 //! `--method` names the method, else once the pipeline knows it (the scene's `render.method`),
 //! from the explicit flags [`Cli::parse_checked`] records in `MethodArgs::explicit`.
+//!
+//! The commands that reuse `render`'s options check them the same way, at parse time:
+//! `reference` renders `pt` only (a flag of another method, or `--method` other than `pt`, is
+//! refused); `compare` refuses `--method` (it takes `--methods`) and a method flag that none of
+//! the compared methods takes; `forecast-map` accepts only the options it uses
+//! ([`FORECAST_MAP_USES`], [`FORECAST_MAP_GROUPS`]), so a flag added later is refused by default.
 
 use crate::compare::stability::StabilityConfig;
 use crate::compare::CompareConfig;
@@ -34,15 +40,22 @@ pub struct Cli {
 impl Cli {
     /// Parses the command line as [`Parser::try_parse`] does, then records in `render`'s
     /// `MethodArgs::explicit` the method options given explicitly and, when `--method` names the
-    /// method, refuses a flag of another one ([`check_foreign_flags`]).
+    /// method, refuses a flag of another one ([`check_foreign_flags`]); `reference`, `compare`
+    /// and `forecast-map` refuse, the same way, a flag they do not use.
     pub fn parse_checked() -> Result<Cli, clap::Error> {
         let matches = Cli::command().try_get_matches()?;
         let mut cli = Cli::from_arg_matches(&matches)?;
-        if let (Command::Render(a), Some(("render", sub))) = (&mut cli.command, matches.subcommand()) {
-            a.method_args.explicit = explicit_method_flags(sub);
-            if let Some(crate::integrators::auto::MethodChoice::Named(m)) = a.method {
-                check_foreign_flags(m, sub)?;
+        match (&mut cli.command, matches.subcommand()) {
+            (Command::Render(a), Some(("render", sub))) => {
+                a.method_args.explicit = explicit_method_flags(sub);
+                if let Some(MethodChoice::Named(m)) = a.method {
+                    check_foreign_flags(m, sub)?;
+                }
             }
+            (Command::Reference(a), Some(("reference", sub))) => check_reference(a, sub)?,
+            (Command::Compare(a), Some(("compare", sub))) => check_compare(a, sub)?,
+            (Command::ForecastMap(_), Some(("forecast-map", sub))) => check_forecast_map(sub)?,
+            _ => {}
         }
         Ok(cli)
     }
@@ -65,12 +78,98 @@ pub fn check_foreign_flags(resolved: Method, matches: &ArgMatches) -> Result<(),
     }
 }
 
+/// `reference` renders `pt` only: `--method` other than `pt` and a flag of another method are
+/// usage errors (`--light-paths belongs to pt-cf, not pt`), as under `render --method pt`.
+fn check_reference(a: &RenderArgs, matches: &ArgMatches) -> Result<(), clap::Error> {
+    let other = match a.method {
+        Some(MethodChoice::Named(Method::Pt)) | None => None,
+        Some(MethodChoice::Named(m)) => Some(m.name()),
+        Some(MethodChoice::Auto) => Some("auto"),
+    };
+    if let Some(name) = other {
+        let msg = format!("reference renders pt only (the unbiased reference), not {name}");
+        return Err(usage_error("reference", msg));
+    }
+    match MethodArgs::foreign_flag(Method::Pt, &explicit_method_flags(matches)) {
+        Some(msg) => Err(usage_error("reference", msg)),
+        None => Ok(()),
+    }
+}
+
+/// `compare` takes `--methods`, not `--method`, and hands its method flags to every compared
+/// method: a flag that none of them takes is a usage error (`--vpl-paths belongs to
+/// iws/iws-pm/iws-cf, none of the compared methods pt-cf,pt`); one that some take is kept.
+fn check_compare(a: &CompareArgs, matches: &ArgMatches) -> Result<(), clap::Error> {
+    if matches.value_source("method") == Some(ValueSource::CommandLine) {
+        let msg = "compare takes --methods M1,M2,... (the methods compared), not --method".to_string();
+        return Err(usage_error("compare", msg));
+    }
+    let explicit = explicit_method_flags(matches);
+    for (group, flags) in MethodArgs::group_flags() {
+        if a.methods.iter().any(|m| m.groups().contains(&group)) {
+            continue;
+        }
+        if let Some((_, long)) = flags.iter().find(|(id, _)| explicit.contains(id)) {
+            let names = a.methods.iter().map(|m| m.name()).collect::<Vec<_>>().join(",");
+            let msg = format!("{long} belongs to {}, none of the compared methods {names}", owners(group));
+            return Err(usage_error("compare", msg));
+        }
+    }
+    Ok(())
+}
+
+/// The arguments `forecast-map` uses besides [`FORECAST_MAP_GROUPS`] (clap ids): the scene,
+/// the view (`--resolution`), the preprocess's seed, threads and back end, the output, the
+/// progress display and the untargeted-yield comparison. Any other is refused.
+pub const FORECAST_MAP_USES: &[&str] =
+    &["scene", "resolution", "seed", "threads", "out", "quiet", "accel", "compare_paths", "define"];
+
+/// The method option groups `forecast-map` uses: the Caustic Forecasting preprocess (`cf`) and
+/// `iws-cf`'s `--variant` (its table and split rule, `MethodArgs::forecast_options`).
+pub const FORECAST_MAP_GROUPS: &[&str] = &["cf", "iwscf"];
+
+/// `forecast-map` runs the CF preprocess only: a flag given on the command line that it does not
+/// use ([`FORECAST_MAP_USES`], [`FORECAST_MAP_GROUPS`]) is a usage error naming it.
+fn check_forecast_map(matches: &ArgMatches) -> Result<(), clap::Error> {
+    let groups = MethodArgs::group_flags();
+    let group_of = |id: &str| groups.iter().find(|(_, f)| f.iter().any(|(i, _)| i == id)).map(|(g, _)| *g);
+    let cmd = Cli::command();
+    let Some(map) = cmd.find_subcommand("forecast-map") else { return Ok(()) };
+    for arg in map.get_arguments() {
+        let id = arg.get_id().as_str();
+        let given = matches.value_source(id) == Some(ValueSource::CommandLine);
+        let group = group_of(id);
+        if !given || FORECAST_MAP_USES.contains(&id) || group.is_some_and(|g| FORECAST_MAP_GROUPS.contains(&g)) {
+            continue;
+        }
+        let flag = arg.get_long().map_or_else(|| id.to_string(), |l| format!("--{l}"));
+        let owner = group.map_or(String::new(), |g| format!(" (it belongs to {})", owners(g)));
+        let msg = format!(
+            "forecast-map does not use {flag}{owner}: it runs the Caustic Forecasting preprocess only, \
+             and takes SCENE, --resolution, --seed, --threads, --out, --quiet, --accel, --compare-paths \
+             and the CF options of iws-cf/pt-cf (--forecast-photons, --clusters, ..., --variant)"
+        );
+        return Err(usage_error("forecast-map", msg));
+    }
+    Ok(())
+}
+
+/// The methods that take option group `group`, as `a/b` (e.g. `iws-cf/pt-cf`).
+fn owners(group: &str) -> String {
+    Method::ALL.iter().filter(|m| m.groups().contains(&group)).map(|m| m.name()).collect::<Vec<_>>().join("/")
+}
+
 /// `message` as a usage error of `forecast render` (clap's format and exit status 2).
 pub fn render_usage_error(message: String) -> clap::Error {
+    usage_error("render", message)
+}
+
+/// `message` as a usage error of `forecast SUBCOMMAND` (clap's format and exit status 2).
+pub fn usage_error(subcommand: &str, message: String) -> clap::Error {
     let mut cmd = Cli::command();
     cmd.build();
-    match cmd.find_subcommand_mut("render") {
-        Some(render) => render.error(ErrorKind::ArgumentConflict, message),
+    match cmd.find_subcommand_mut(subcommand) {
+        Some(sub) => sub.error(ErrorKind::ArgumentConflict, message),
         None => cmd.error(ErrorKind::ArgumentConflict, message),
     }
 }

@@ -74,6 +74,10 @@ fn run(cli: Cli) -> Result<(), Failure> {
         Command::Reference(a) => on_cluster(|c| {
             let job = pipeline::RenderJob { defines: opts.defines.clone(), ..a.job() };
             if let Some(r) = compare::reference::run_reference(&job, c, started)? {
+                if r.halves.iter().all(|h| nothing_resumed_added(h, &a)) {
+                    let held = r.halves[0].first_pass + r.halves[1].first_pass;
+                    warn_nothing_added("the checkpoints already hold", held, a.spp);
+                }
                 errln!("reference: {} spp -> {}.{{exr,json}} + .half0/.half1", r.spp, a.out.display());
             }
             Ok(())
@@ -120,6 +124,9 @@ fn render(
     let job = pipeline::RenderJob { defines: opts.defines.clone(), ..a.job() };
     let res = pipeline::render(&job, cluster, started)?;
     if let Some(r) = res {
+        if nothing_resumed_added(&r.report, a) {
+            warn_nothing_added("the checkpoint already holds", r.report.first_pass, a.spp);
+        }
         if !a.quiet {
             let rep = &r.report;
             errln!(
@@ -134,6 +141,21 @@ fn render(
         }
     }
     Ok(())
+}
+
+/// Whether a `--resume` render added no pass: its checkpoint already held the requested total
+/// (`--spp N`, or the scene's `render.spp`), so the run stops at once (docs/cli.md, "Checkpoints").
+fn nothing_resumed_added(rep: &pipeline::RenderReport, a: &forecast::cli::RenderArgs) -> bool {
+    rep.resumed && rep.passes == rep.first_pass && rep.time_budget_s.is_none() && a.max_rounds.is_none()
+}
+
+/// The warning (stderr, even under `--quiet`) of a resume that added nothing.
+fn warn_nothing_added(what: &str, held: u64, spp: Option<u64>) {
+    let asked = spp.map_or_else(|| "the scene's render.spp".to_string(), |n| format!("--spp {n}"));
+    errln!(
+        "warning: --resume: {what} {held} passes, at least the requested total ({asked}), so no pass was \
+         added; give a larger --spp (or --time) to add passes"
+    );
 }
 
 fn diff(a: &forecast::cli::DiffArgs) -> Result<(), String> {

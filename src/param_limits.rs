@@ -7,7 +7,8 @@
 //! Invariants: every limit is inclusive; a refused value is refused before any work starts (no
 //! preprocess, no pass, no file written). The upper bounds stop values that cannot finish or
 //! cannot be allocated (`--split 4294967295` is 4·10⁹ table samples per camera sample,
-//! `--vpl-paths 4294967295` 4·10⁹ light paths per pass); they are far above any useful setting.
+//! `--vpl-paths 4294967295` 4·10⁹ light paths per pass, `--light-paths 1e13` a pass of days);
+//! they are far above any useful setting.
 
 /// An inclusive range for one integer parameter.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,6 +54,10 @@ pub const MAX_THREADS: usize = 4096;
 pub const SPLIT: Limit = Limit { name: "split", min: 1, max: 1024 };
 /// IWS light paths per pass N (`--vpl-paths`).
 pub const VPL_PATHS: Limit = Limit { name: "vpl paths", min: 1, max: 65_536 };
+
+/// `pt-cf`'s light paths per pass (`--light-paths`): 0 (the camera side alone) up to 2³⁰, 16,384
+/// per pixel of a 256² image; the defaults are ⅛ to 2 per pixel.
+pub const LIGHT_PATHS: Limit = Limit { name: "light paths", min: 0, max: 1 << 30 };
 
 /// A time budget in seconds (`--time`, `render.time`): positive and finite.
 pub fn check_time(secs: f64) -> Result<(), String> {

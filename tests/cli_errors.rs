@@ -261,6 +261,10 @@ fn invalid_render_options_are_refused_before_any_work() {
             &["--method", "iws", "--vpl-paths", "4294967295"],
             "--vpl-paths 4294967295: vpl paths must be between 1 and 65536",
         ),
+        (
+            &["--method", "pt-cf", "--light-paths", "18446744073709551615"],
+            "--light-paths 18446744073709551615: light paths must be between 0 and 1073741824",
+        ),
     ];
     let sc = scene();
     for (opts, want) in cases {
@@ -368,4 +372,121 @@ fn accel_embree_without_the_feature_is_refused() {
         assert!(err.contains("rebuild with --features embree"), "{args:?}: {err}");
     }
     assert!(!Path::new(&format!("{prefix}.json")).exists(), "nothing is written");
+}
+
+/// Runs each of `cases` (extra flags after `base`) and checks a usage error of `forecast SUB`
+/// (exit 2, clap's format) holding the expected words, before any work and writing nothing.
+fn refused_as_usage(sub: &str, base: &[&str], cases: &[(&[&str], &str)], dir: &Path) {
+    for (opts, want) in cases {
+        let t = Instant::now();
+        let args = [&[sub][..], base, opts].concat();
+        let (code, _, err) = run(&args);
+        assert_eq!(code, 2, "{opts:?}: {err}");
+        assert!(err.starts_with("error: ") && err.contains(want), "{opts:?}: expected `{want}` in: {err}");
+        assert!(err.contains(&format!("Usage: forecast {sub}")), "{opts:?}: clap's usage format: {err}");
+        assert!(t.elapsed() < Duration::from_secs(10), "{opts:?} refused only after {:?}", t.elapsed());
+        assert_eq!(std::fs::read_dir(dir).unwrap().count(), 0, "{opts:?} wrote files into {}", dir.display());
+    }
+}
+
+/// `reference` renders `pt` only: a flag of another method is the usage error it is under
+/// `render --method pt`, and so is `--method` naming another method.
+#[test]
+fn reference_refuses_a_flag_that_pt_does_not_take() {
+    let d = tmp_dir("cli-reference-foreign");
+    let (sc, prefix) = (scene(), d.join("r").display().to_string());
+    let base = [sc.as_str(), "--resolution", "8x8", "--threads", "2", "--quiet", "--out", &prefix];
+    let cases: &[(&[&str], &str)] = &[
+        (&["--time", "1s", "--light-paths", "1"], "--light-paths belongs to pt-cf, not pt"),
+        (&["--spp", "1", "--vpl-paths", "4"], "--vpl-paths belongs to iws/iws-pm/iws-cf, not pt"),
+        (&["--spp", "1", "--clusters", "5"], "--clusters belongs to iws-cf/pt-cf, not pt"),
+        (&["--spp", "1", "--method", "iws"], "reference renders pt only"),
+    ];
+    refused_as_usage("reference", &base, cases, &d);
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// `forecast-map` runs the CF preprocess only: every flag it does not use (render budgets,
+/// checkpoints, snapshots, `--method`, other methods' options) is a usage error naming it; the
+/// CF options, `--variant` and the general settings are accepted.
+#[test]
+fn forecast_map_refuses_the_flags_it_does_not_use() {
+    let d = tmp_dir("cli-forecast-map");
+    let (sc, prefix) = (scene(), d.join("m").display().to_string());
+    let base = [sc.as_str(), "--resolution", "8x8", "--threads", "2", "--quiet", "--out", &prefix];
+    let cases: &[(&[&str], &str)] = &[
+        (&["--method", "pt"], "forecast-map does not use --method"),
+        (&["--method", "iws-pm"], "forecast-map does not use --method"),
+        (&["--vpl-paths", "3"], "forecast-map does not use --vpl-paths (it belongs to iws/iws-pm/iws-cf)"),
+        (&["--light-paths", "3"], "forecast-map does not use --light-paths (it belongs to pt-cf)"),
+        (&["--photons", "5"], "forecast-map does not use --photons (it belongs to iws-pm)"),
+        (&["--spp", "3"], "forecast-map does not use --spp"),
+        (&["--time", "3s"], "forecast-map does not use --time"),
+        (&["--snapshots", "1s"], "forecast-map does not use --snapshots"),
+        (&["--checkpoint-every", "1s"], "forecast-map does not use --checkpoint-every"),
+        (&["--max-depth", "5"], "forecast-map does not use --max-depth"),
+    ];
+    refused_as_usage("forecast-map", &base, cases, &d);
+    let cf = ["--forecast-photons", "2000", "--clusters", "8", "--variant", "baj08", "--compare-paths", "1000"];
+    let (code, _, err) = run(&[&["forecast-map"][..], &base, &cf, &["--seed", "3", "--accel", "obvhs"]].concat());
+    assert_eq!(code, 0, "the CF options are forecast-map's: {err}");
+    assert!(Path::new(&format!("{prefix}.json")).exists(), "forecast-map wrote its JSON");
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// `compare` takes `--methods`, not `--method`, and refuses a method flag that none of the
+/// compared methods takes; a flag of at least one compared method is accepted (the run then
+/// fails only on the missing reference: exit 1, not a usage error).
+#[test]
+fn compare_refuses_a_flag_of_none_of_the_compared_methods() {
+    let d = tmp_dir("cli-compare-foreign");
+    let (sc, out) = (scene(), d.join("c").display().to_string());
+    let missing = d.join("missing.exr").display().to_string();
+    let base =
+        [sc.as_str(), "--resolution", "8x8", "--threads", "2", "--quiet", "--reference", &missing, "--out", &out];
+    let cases: &[(&[&str], &str)] = &[
+        (&["--methods", "pt", "--light-paths", "2"], "--light-paths belongs to pt-cf, none of the compared methods pt"),
+        (
+            &["--methods", "pt-cf,pt", "--vpl-paths", "4"],
+            "--vpl-paths belongs to iws/iws-pm/iws-cf, none of the compared methods pt-cf,pt",
+        ),
+        (&["--methods", "pt", "--method", "iws"], "compare takes --methods"),
+    ];
+    refused_as_usage("compare", &base, cases, &d);
+    for opts in [&["--methods", "pt-cf,pt", "--light-paths", "2"][..], &["--methods", "iws,pt", "--vpl-paths", "4"]] {
+        let (code, _, err) = run(&[&["compare"][..], &base, opts].concat());
+        assert_eq!(code, 1, "{opts:?}: a compared method takes the flag: {err}");
+        assert!(err.contains("missing.exr"), "{opts:?}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// `--resume` with `--spp N` stops at N passes in total: a checkpoint that already holds N or
+/// more adds none, and says so on stderr (even under `--quiet`); a larger N adds passes silently.
+#[test]
+fn resume_of_a_checkpoint_past_the_requested_spp_warns() {
+    let d = tmp_dir("cli-resume-spp");
+    let (sc, prefix) = (scene(), d.join("a").display().to_string());
+    let ckpt = format!("{prefix}.ckpt");
+    let base = ["render", sc.as_str(), "--method", "pt", "--resolution", "8x8", "--threads", "2", "--quiet"];
+    let first = [&base[..], &["--spp", "8", "--checkpoint-every", "1h", "--out", &prefix]].concat();
+    let (code, _, err) = run(&first);
+    assert_eq!(code, 0, "{err}");
+    let spp = |p: &str| -> u64 {
+        let j: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(format!("{p}.json")).unwrap()).unwrap();
+        j["spp"].as_u64().expect("spp")
+    };
+    let again = d.join("b").display().to_string();
+    let (code, _, err) = run(&[&base[..], &["--spp", "2", "--resume", &ckpt, "--out", &again]].concat());
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("warning: --resume: the checkpoint already holds 8 passes"), "{err}");
+    assert!(err.contains("--spp 2") && err.contains("no pass was added"), "{err}");
+    assert_eq!(spp(&again), 8, "the checkpoint's passes, nothing added");
+    let more = d.join("c").display().to_string();
+    let (code, _, err) = run(&[&base[..], &["--spp", "10", "--resume", &ckpt, "--out", &more]].concat());
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("warning"), "passes were added: {err}");
+    assert_eq!(spp(&more), 10);
+    let _ = std::fs::remove_dir_all(d);
 }

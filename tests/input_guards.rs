@@ -394,3 +394,63 @@ fn pt_cf_forecast_photons_are_held_to_the_memory_estimate() {
     }
     let _ = std::fs::remove_dir_all(d);
 }
+
+/// A valid scene (a floor and a light at lines 17-22) for the scene-error cases below.
+const SCENE_BASE: &str = "[camera]\nposition = [0.0, 1.0, 3.0]\nlook_at = [0.0, 1.0, 0.0]\nfov = 40.0\nresolution = [8, 8]\n\n\
+[materials.white]\ntype = \"diffuse\"\nalbedo = [0.5, 0.5, 0.5]\n\n\
+[[shape]]\ntype = \"quad\"\ncorner = [-1.0, 0.0, -1.0]\nu = [2.0, 0.0, 0.0]\nv = [0.0, 0.0, 2.0]\nmaterial = \"white\"\n\
+[[shape]]\ntype = \"quad\"\ncorner = [-0.2, 1.9, -0.2]\nu = [0.4, 0.0, 0.0]\nv = [0.0, 0.0, 0.4]\nemission = [1.0, 1.0, 1.0]\n";
+
+/// `render` of `SCENE_BASE` + `extra` exits 1 with `FILE:line: key `key`:` and every one of `words`.
+fn scene_refused(name: &str, extra: &str, (line, key): (usize, &str), words: &[&str]) {
+    let d = tmp_dir(&format!("guards-scene-{name}"));
+    let (file, out) = (d.join(format!("{name}.toml")), s(&d.join("out")));
+    std::fs::write(&file, format!("{SCENE_BASE}{extra}")).unwrap();
+    let args = ["render", &s(&file), "--spp", "1", "--resolution", "8x8", "--threads", "2", "--quiet", "--out", &out];
+    let (code, err) = run(&args);
+    assert_eq!(code, 1, "{name}: {err}");
+    let at = format!("{}:{line}: key `{key}`: ", s(&file));
+    assert!(err.contains(&at), "{name}: `{at}` not in {err}");
+    for w in words {
+        assert!(err.contains(w), "{name}: `{w}` not in {err}");
+    }
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// An emitter's `material` must exist too (it was ignored when `emission` was given).
+#[test]
+fn an_emitters_unknown_material_is_refused() {
+    scene_refused("emitter-material", "material = \"x\"\n", (23, "shape[1].material"), &["unknown material `x`"]);
+}
+
+/// Two ROIs with one name, or a ROI named `full`, would write over each other's `compare` files.
+#[test]
+fn duplicate_and_reserved_roi_names_are_refused() {
+    let roi = |n: &str, r: &str| format!("\n[[roi]]\nname = \"{n}\"\nrect = {r}\n");
+    let two = roi("a", "[0, 0, 4, 4]") + &roi("a", "[0, 0, 2, 2]");
+    let words = ["duplicate roi name `a`", "`roi[0].name` (line 25)"];
+    scene_refused("roi-twice", &two, (29, "roi[1].name"), &words);
+    let alike = roi("a b", "[0, 0, 4, 4]") + &roi("a_b", "[0, 0, 2, 2]");
+    scene_refused("roi-alike", &alike, (29, "roi[1].name"), &["duplicate roi name `a_b`", "`a b`"]);
+    scene_refused("roi-full", &roi("full", "[0, 0, 4, 4]"), (25, "roi[0].name"), &["`full` is reserved"]);
+}
+
+/// toml's bare "duplicate key" names the table or key and its first definition.
+#[test]
+fn a_table_or_key_defined_twice_is_named() {
+    let camera = "[camera]\nposition = [0.0, 1.0, 3.0]\nlook_at = [0.0, 1.0, 0.0]\nfov = 40.0\nresolution = [8, 8]\n";
+    let words = ["the table `camera` is defined twice (first at line 1)"];
+    scene_refused("camera-twice", &format!("\n{camera}"), (24, "camera"), &words);
+    let white = "\n[materials.white]\ntype = \"diffuse\"\nalbedo = [0.5, 0.5, 0.5]\n";
+    let words = ["the table `materials.white` is defined twice (first at line 7)"];
+    scene_refused("material-twice", white, (24, "materials.white"), &words);
+    let words = ["`shape[1].emission` is given twice (first at line 22)"];
+    scene_refused("key-twice", "emission = [2.0, 2.0, 2.0]\n", (23, "shape[1].emission"), &words);
+}
+
+/// A tiny light quad is too small (area and limit given), not "zero-area".
+#[test]
+fn a_tiny_quad_is_too_small_not_zero_area() {
+    let tiny = "\n[[shape]]\ntype = \"quad\"\ncorner = [0.0, 1.0, 0.0]\nu = [1e-7, 0.0, 0.0]\nv = [0.0, 0.0, 1e-7]\nemission = [1.0, 1.0, 1.0]\n";
+    scene_refused("tiny-quad", tiny, (28, "shape[2].v"), &["quad too small: area |u × v| = 1e-14", "limit 1e-12"]);
+}

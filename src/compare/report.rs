@@ -51,10 +51,7 @@ pub fn aggregate(values: impl IntoIterator<Item = f64>) -> Option<Agg> {
     })
 }
 
-/// A file-name-safe version of `s` (ASCII letters, digits, `-`, `_`; others become `_`).
-pub fn safe_name(s: &str) -> String {
-    s.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect()
-}
+pub use crate::scene::safe_name;
 
 /// Escapes `&`, `<`, `>` and `"` for HTML.
 pub fn esc(s: &str) -> String {

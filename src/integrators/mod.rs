@@ -367,6 +367,7 @@ impl MethodArgs {
         self.pt.validate()?;
         self.iws.validate()?;
         self.pm.validate()?;
+        self.ptcf.validate()?;
         self.cf.validate()
     }
 }

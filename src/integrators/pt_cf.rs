@@ -81,6 +81,13 @@ pub struct PtCfArgs {
     pub light_paths: Option<u64>,
 }
 
+impl PtCfArgs {
+    /// The limits of `crate::param_limits`.
+    pub fn validate(&self) -> Result<(), String> {
+        self.light_paths.map_or(Ok(()), |n| crate::param_limits::LIGHT_PATHS.check_flag("--light-paths", n))
+    }
+}
+
 fn parse_guide_fraction(s: &str) -> Result<f32, String> {
     let c: f32 = s.trim().parse().map_err(|e| format!("`{s}` is not a number: {e}"))?;
     MixtureWeights::guide_fraction(c).map(|_| c)

@@ -56,6 +56,9 @@ use rayon::prelude::*;
 
 /// Light paths per parallel work item.
 pub const CHUNK: u64 = 1024;
+/// Chunks traced in parallel before their splats are summed (in chunk order): a pass holds at
+/// most `BATCH · CHUNK` paths' splats at once.
+const BATCH: u64 = 256;
 
 /// Light paths per pass per pixel of an integrator built without a count and without the
 /// pipeline's pilot (`pipeline::light_pilot`, which picks the count of every render that does
@@ -221,30 +224,34 @@ pub fn light_splats(
     (seed, pass): (u64, u64),
 ) -> LightSplats {
     let n = light.n_paths(camera);
-    let chunks: Vec<Chunk> = (0..n.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|c| {
-            let _ = take_ray_counts();
-            let mut ctx = Context::new(Rng::keyed(seed, stream::LIGHT_PATHS, pass, u64::MAX));
-            let mut t = Tracer { pt, light, world, camera, n, splats: Vec::new(), nonfinite: 0, verts: Vec::new() };
-            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
-                t.path(Rng::keyed(seed, stream::LIGHT_PATHS, pass, i), &mut ctx);
-            }
-            let (closest, shadow) = take_ray_counts();
-            Chunk { splats: t.splats, nonfinite: t.nonfinite, closest, shadow }
-        })
-        .collect();
     let mut out = LightSplats {
         image: vec![Rgb::ZERO; camera.width as usize * camera.height as usize],
         ..LightSplats::default()
     };
-    for c in chunks {
-        for (p, v) in c.splats {
-            out.image[p as usize] += v;
+    // batches of chunks, so that a pass's pending splats stay bounded whatever `n`
+    let n_chunks = n.div_ceil(CHUNK);
+    for first in (0..n_chunks).step_by(BATCH as usize) {
+        let chunks: Vec<Chunk> = (first..(first + BATCH).min(n_chunks))
+            .into_par_iter()
+            .map(|c| {
+                let _ = take_ray_counts();
+                let mut ctx = Context::new(Rng::keyed(seed, stream::LIGHT_PATHS, pass, u64::MAX));
+                let mut t = Tracer { pt, light, world, camera, n, splats: Vec::new(), nonfinite: 0, verts: Vec::new() };
+                for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                    t.path(Rng::keyed(seed, stream::LIGHT_PATHS, pass, i), &mut ctx);
+                }
+                let (closest, shadow) = take_ray_counts();
+                Chunk { splats: t.splats, nonfinite: t.nonfinite, closest, shadow }
+            })
+            .collect();
+        for c in chunks {
+            for (p, v) in c.splats {
+                out.image[p as usize] += v;
+            }
+            out.nonfinite += c.nonfinite;
+            out.closest_rays += c.closest;
+            out.shadow_rays += c.shadow;
         }
-        out.nonfinite += c.nonfinite;
-        out.closest_rays += c.closest;
-        out.shadow_rays += c.shadow;
     }
     out
 }

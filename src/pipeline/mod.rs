@@ -142,6 +142,7 @@ impl RenderJob {
             }
             (_, false) => {}
         }
+        g.best_effort(&ckpt); // a checkpoint that cannot be written is a warning
         g
     }
 

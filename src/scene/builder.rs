@@ -11,13 +11,14 @@
 //!   whose triangles were all dropped;
 //! - lights: radiance ≤ `MAX_RADIANCE`, intensity ≤ `MAX_INTENSITY`, point lights inside the
 //!   extent, each light's power finite; at least one light with positive power;
-//! - render options: the `param_limits` shared with the command line; ROIs inside the image.
+//! - render options: the `param_limits` shared with the command line; ROIs inside the image,
+//!   each with a name of its own (not `full`).
 //!
 //! Invariants of the result: material 0 is black; triangles in the order given, then spheres;
 //! emitters in primitive order (emissive triangles, then emissive spheres); lights = the area
 //! emitters then the point lights, picked ∝ power (`light_power`).
 
-use super::limits::{extent_message, light_value_error, within_extent, MAX_INTENSITY, MAX_RADIANCE};
+use super::limits::{extent_message, light_value_error, roi_name_error, within_extent, MAX_INTENSITY, MAX_RADIANCE};
 use super::{
     light_power, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere, Triangle,
     NO_EMITTER,
@@ -128,6 +129,7 @@ pub(super) struct SceneBuilder {
     shapes: Vec<ShapeRec>,
     point_lights: Vec<(PointLight, Origin)>,
     rois: Vec<Roi>,
+    roi_names_at: Vec<Origin>,
     forecast_target: Option<(Vec3, Vec3)>,
     forecast_photons: Option<u64>,
 }
@@ -150,6 +152,7 @@ impl SceneBuilder {
             shapes: Vec::new(),
             point_lights: Vec::new(),
             rois: Vec::new(),
+            roi_names_at: Vec::new(),
             forecast_target: None,
             forecast_photons: None,
         }
@@ -367,8 +370,13 @@ impl SceneBuilder {
         Ok(())
     }
 
-    /// A region of interest, non-empty and inside the image (the camera comes first).
-    pub fn roi(&mut self, name: String, rect: [u32; 4], at: &Origin) -> Result<(), SceneError> {
+    /// A region of interest: a name of its own (`roi_name_error`), non-empty and inside the image
+    /// (the camera comes first).
+    pub fn roi(&mut self, (name, nat): (String, &Origin), (rect, at): ([u32; 4], &Origin)) -> Result<(), SceneError> {
+        let earlier = self.rois.iter().map(|r| r.name.as_str()).zip(&self.roi_names_at);
+        if let Some(m) = roi_name_error(&name, earlier) {
+            return Err(self.err(nat, m));
+        }
         let (cw, ch) = self.camera.as_ref().map_or((0, 0), |c| (c.width, c.height));
         let [x, y, w, h] = rect;
         let inside = |o: u32, len: u32, size: u32| o.checked_add(len).is_some_and(|e| e <= size);
@@ -376,6 +384,7 @@ impl SceneBuilder {
             return Err(self.err(at, format!("rect {rect:?} must be non-empty and inside the {cw}x{ch} image")));
         }
         self.rois.push(Roi { name, rect });
+        self.roi_names_at.push(nat.clone());
         Ok(())
     }
 

@@ -67,6 +67,9 @@ impl Ctx<'_> {
     }
 }
 
+/// The smallest quad area |u × v| (its two triangles' doubled area; `make_triangle` drops less).
+const MIN_QUAD_AREA: f32 = 1e-12;
+
 fn finite3(v: [f32; 3]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
@@ -122,6 +125,12 @@ fn parse_doc(cx: &Ctx) -> Result<Doc, SceneError> {
             .unwrap_or("")
             .to_string();
         let from = e.span().map_or(0, |s| s.start);
+        if msg == "duplicate key" {
+            // toml names neither the key nor the table: the span is the repeated key's
+            if let Some((l, path, m)) = e.span().and_then(|_| locate::duplicate_at(src, from)) {
+                return SceneError { file: cx.file.clone(), line: l, key: path, message: m };
+            }
+        }
         if msg.contains("unknown field") && !key.is_empty() {
             // the span may cover a whole table (or array of tables): find the key's own line
             if let Some(l) = locate::key_line_after(src, from, &key) {
@@ -234,8 +243,8 @@ fn materials<'d>(cx: &Ctx, b: &mut SceneBuilder, doc: &'d Doc) -> Result<BTreeMa
     Ok(names)
 }
 
-/// A shape's material index and emission: emitters reflect nothing (material 0); a zero
-/// emission without a material is a black absorber.
+/// A shape's material index and emission: emitters reflect nothing (material 0) but a material
+/// they name must exist; a zero emission without a material is a black absorber.
 fn material_and_emission(
     cx: &Ctx,
     b: &SceneBuilder,
@@ -245,6 +254,8 @@ fn material_and_emission(
     emission: &Option<[f32; 3]>,
 ) -> Result<(u32, Option<(Vec3, Origin)>), SceneError> {
     let key = |k: &str| format!("shape[{idx}].{k}");
+    let unknown = |m: &str| cx.err(ss.clone(), &key("material"), format!("unknown material `{m}`"));
+    let known = mat.as_ref().map(|m| names.get(m.as_str()).copied().ok_or_else(|| unknown(m))).transpose()?;
     let e = match emission {
         Some(e) => {
             let at = cx.at(ss.clone(), &key("emission"));
@@ -255,13 +266,7 @@ fn material_and_emission(
     if e.is_some() || (emission.is_some() && mat.is_none()) {
         return Ok((0, e));
     }
-    match mat {
-        Some(m) => names
-            .get(m.as_str())
-            .map(|&i| (i, None))
-            .ok_or_else(|| cx.err(ss.clone(), &key("material"), format!("unknown material `{m}`"))),
-        None => Err(cx.err(ss, &key("material"), "a shape needs `material` (or `emission`)")),
-    }
+    known.map(|i| (i, None)).ok_or_else(|| cx.err(ss, &key("material"), "a shape needs `material` (or `emission`)"))
 }
 
 fn shape(
@@ -297,8 +302,14 @@ fn shape(
                     return Err(cx.err(ss, &key(k), extent_message("quad vertex", p)));
                 }
             }
-            if u.cross(v).length() < 1e-12 {
-                return Err(cx.err(ss, &key("v"), "zero-area quad (u × v = 0)"));
+            let area = u.cross(v).length();
+            if area < MIN_QUAD_AREA {
+                let m = if area == 0.0 {
+                    "zero-area quad (u × v = 0)".to_string()
+                } else {
+                    format!("quad too small: area |u × v| = {area:e} is below the limit {MIN_QUAD_AREA:e}")
+                };
+                return Err(cx.err(ss, &key("v"), m));
             }
             for p in [[c, c + u, c + u + v], [c, c + u + v, c + v]] {
                 b.triangle(id, (p, p), None, &at("v"), None)?;
@@ -373,8 +384,8 @@ fn mesh(
 /// Regions of interest and the `[forecast]` options.
 fn extras(cx: &Ctx, b: &mut SceneBuilder, doc: &Doc) -> Result<(), SceneError> {
     for (i, r) in doc.roi.iter().enumerate() {
-        let rd = r.get_ref();
-        b.roi(rd.name.clone(), rd.rect, &cx.at(r.span(), &format!("roi[{i}].rect")))?;
+        let (rd, at) = (r.get_ref(), |k: &str| cx.at(r.span(), &format!("roi[{i}].{k}")));
+        b.roi((rd.name.clone(), &at("name")), (rd.rect, &at("rect")))?;
     }
     if let Some(f) = &doc.forecast {
         if let Some(n) = f.get_ref().photons {

@@ -23,18 +23,22 @@ fn leading_key(line: &str) -> Option<&str> {
     (end > 0 && t[end..].trim_start().starts_with('=')).then(|| &t[..end])
 }
 
-/// 1-based line and dotted key path of the `key = value` that byte `offset` lies in.
-pub(super) fn key_path_at(src: &str, offset: usize) -> Option<(usize, String)> {
-    let lines: Vec<&str> = src.split_inclusive('\n').collect();
+/// 0-based index of the line that byte `offset` lies in (the last line past the end).
+fn line_index(lines: &[&str], offset: usize) -> Option<usize> {
     let mut off = 0;
-    let mut at = lines.len().checked_sub(1)?;
     for (i, l) in lines.iter().enumerate() {
         if off + l.len() > offset {
-            at = i;
-            break;
+            return Some(i);
         }
         off += l.len();
     }
+    lines.len().checked_sub(1)
+}
+
+/// 1-based line and dotted key path of the `key = value` that byte `offset` lies in.
+pub(super) fn key_path_at(src: &str, offset: usize) -> Option<(usize, String)> {
+    let lines: Vec<&str> = src.split_inclusive('\n').collect();
+    let at = line_index(&lines, offset)?;
     let (ki, leaf) = (0..=at).rev().map_while(|i| header(lines[i]).is_none().then_some(i)).find_map(|i| {
         let k = leading_key(lines[i])?;
         Some((i, k))
@@ -48,6 +52,24 @@ pub(super) fn key_path_at(src: &str, offset: usize) -> Option<(usize, String)> {
         }
     });
     Some((ki + 1, format!("{}{leaf}", table.unwrap_or_default())))
+}
+
+/// toml's "duplicate key" at byte `offset` (the repeated key, in a header or a `key =` line):
+/// its 1-based line, dotted path and message, naming the earlier definition's line when found.
+pub(super) fn duplicate_at(src: &str, offset: usize) -> Option<(usize, String, String)> {
+    let lines: Vec<&str> = src.split_inclusive('\n').collect();
+    let at = line_index(&lines, offset)?;
+    let first = |i: Option<usize>| i.map_or(String::new(), |i| format!(" (first at line {})", i + 1));
+    if let Some((_, name)) = header(lines[at]) {
+        let before = (0..at).find(|&i| header(lines[i]).is_some_and(|(_, n)| n == name));
+        let m = format!("duplicate key: the table `{name}` is defined twice{}", first(before));
+        return Some((at + 1, name.to_string(), m));
+    }
+    let (line, path) = key_path_at(src, offset)?;
+    let leaf = leading_key(lines[line - 1])?;
+    let top = (0..line - 1).rev().find(|&i| header(lines[i]).is_some()).map_or(0, |i| i + 1);
+    let before = (top..line - 1).find(|&i| leading_key(lines[i]) == Some(leaf));
+    Some((line, path.clone(), format!("duplicate key: `{path}` is given twice{}", first(before))))
 }
 
 /// 1-based line of the first `key = …` at or after byte `from`.

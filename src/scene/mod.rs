@@ -75,6 +75,12 @@ pub const METHOD_NAMES: [&str; 5] = ["pt", "iws", "iws-pm", "iws-cf", "pt-cf"];
 /// `integrators::auto` picks the method from what the scene contains.
 pub const AUTO_METHOD: &str = "auto";
 
+/// `s` as a file-name part: ASCII letters, digits, `-` and `_` kept, anything else `_` (the
+/// names of `compare`'s per-ROI files; two ROIs equal under it would share them).
+pub fn safe_name(s: &str) -> String {
+    s.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect()
+}
+
 /// True for a name a scene may give as its method: [`AUTO_METHOD`] or one of [`METHOD_NAMES`].
 pub fn is_method_name(s: &str) -> bool {
     s == AUTO_METHOD || METHOD_NAMES.contains(&s)

@@ -47,7 +47,7 @@ pub(super) fn forecast_defaults(cx: &mut Cx, root: &Node, vars: &BTreeMap<String
     // ROIs in their index order (forecast_roi_0, _1, ...; the map orders `_10` before `_2`)
     rois.sort_by_key(|r| r.0);
     for (_, name, rect, at) in rois {
-        cx.b.roi(name, rect, &at)?;
+        cx.b.roi((name, &at), (rect, &at))?;
     }
     Ok(())
 }
