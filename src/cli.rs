@@ -283,6 +283,7 @@ impl RenderArgs {
             threads: self.threads,
             defines: Vec::new(),
             snapshots: self.snapshots.clone(),
+            interrupt: Default::default(),
         }
     }
 }

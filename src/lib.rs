@@ -22,6 +22,7 @@ pub mod distributed;
 pub mod forecast;
 pub mod image_io;
 pub mod integrators;
+pub mod interrupt;
 pub mod math;
 pub mod metrics;
 pub mod output;

@@ -12,20 +12,22 @@ struct Failure {
     message: String,
     print: bool,
     usage: bool,
+    /// A render ended by Ctrl-C/SIGTERM after writing what was done (exit 130, nothing printed).
+    interrupted: bool,
 }
 
 impl From<String> for Failure {
     fn from(message: String) -> Failure {
-        Failure { message, print: true, usage: false }
+        Failure { message, print: true, usage: false, interrupted: false }
     }
 }
 
 /// Runs `f` on the cluster; an error is printed by rank 0 only (the pipeline agrees errors
 /// across ranks, so rank 0's message names every failing rank).
-fn on_cluster(f: impl FnOnce(&dyn distributed::Cluster) -> Result<(), String>) -> Result<(), Failure> {
+fn on_cluster<T>(f: impl FnOnce(&dyn distributed::Cluster) -> Result<T, String>) -> Result<T, Failure> {
     let cluster = distributed::try_init()?;
     let print = cluster.rank() == 0;
-    f(cluster.as_ref()).map_err(|message| Failure { message, print, usage: false })
+    f(cluster.as_ref()).map_err(|message| Failure { message, print, usage: false, interrupted: false })
 }
 
 /// Parses the command line with `try_parse`, so that `--help`/`--version` text that cannot be
@@ -55,7 +57,11 @@ fn run(cli: Cli) -> Result<(), Failure> {
     let started = Instant::now();
     let opts = forecast::scene::LoadOptions { defines: cli.define };
     match cli.command {
-        Command::Render(a) => on_cluster(|c| render(&a, &opts, c, started)).map_err(|f| foreign_flag_usage(&a, f)),
+        Command::Render(a) => match on_cluster(|c| render(&a, &opts, c, started)) {
+            Ok(false) => Ok(()),
+            Ok(true) => Err(Failure { message: String::new(), print: false, usage: false, interrupted: true }),
+            Err(f) => Err(foreign_flag_usage(&a, f)),
+        },
         Command::Diff(a) => Ok(diff(&a)?),
         Command::Bench(a) => Ok(bench_cmd(&a, &opts)?),
         Command::ExportMitsuba { scene, out } => {
@@ -115,15 +121,27 @@ fn foreign_flag_usage(a: &forecast::cli::RenderArgs, f: Failure) -> Failure {
     Failure { usage: foreign, ..f }
 }
 
+/// `forecast render`; `Ok(true)` when a signal ended it early (its outputs are written).
 fn render(
     a: &forecast::cli::RenderArgs,
     opts: &forecast::scene::LoadOptions,
     cluster: &dyn distributed::Cluster,
     started: Instant,
-) -> Result<(), String> {
-    let job = pipeline::RenderJob { defines: opts.defines.clone(), ..a.job() };
+) -> Result<bool, String> {
+    let interrupt = forecast::interrupt::Interrupt::install()?;
+    let job = pipeline::RenderJob { defines: opts.defines.clone(), interrupt, ..a.job() };
     let res = pipeline::render(&job, cluster, started)?;
+    let mut interrupted = false;
     if let Some(r) = res {
+        if r.report.interrupted {
+            interrupted = true;
+            errln!(
+                "interrupted: the {} passes done are in {}.{{exr,png,json}}{}",
+                r.report.passes,
+                a.out.display(),
+                if job.checkpoint_every.is_some() { " and the checkpoint (--resume adds passes)" } else { "" }
+            );
+        }
         if nothing_resumed_added(&r.report, a) {
             warn_nothing_added("the checkpoint already holds", r.report.first_pass, a.spp);
         }
@@ -140,7 +158,7 @@ fn render(
             );
         }
     }
-    Ok(())
+    Ok(interrupted)
 }
 
 /// Whether a `--resume` render added no pass: its checkpoint already held the requested total
@@ -329,6 +347,7 @@ fn main() -> ExitCode {
     };
     match run(cli) {
         Ok(()) => ExitCode::from(output::EXIT_OK),
+        Err(f) if f.interrupted => ExitCode::from(forecast::interrupt::EXIT_INTERRUPTED),
         Err(f) if f.usage => {
             if f.print {
                 let text = forecast::cli::render_usage_error(f.message).render().to_string();

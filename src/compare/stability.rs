@@ -215,6 +215,7 @@ fn job(scene: &Path, run: RunSpec, cfg: &StabilityConfig, out: PathBuf) -> Rende
         threads: cfg.threads,
         defines: Vec::new(),
         snapshots: Vec::new(),
+        interrupt: Default::default(),
     }
 }
 

@@ -184,6 +184,11 @@ pub fn agree_round(c: &dyn Cluster, go: bool, failure: Option<String>) -> Result
     Ok(all == 0.0)
 }
 
+/// True on every rank when `flag` is true on any (collective).
+pub fn agree_any(c: &dyn Cluster, flag: bool) -> bool {
+    c.all_reduce_max(if flag { 1.0 } else { 0.0 }) > 0.0
+}
+
 /// The least of every rank's `v` (collective; exact below 2^53).
 pub fn agree_min(c: &dyn Cluster, v: u64) -> u64 {
     let m = -c.all_reduce_max(-(v.min(1 << 53) as f64));

@@ -93,6 +93,9 @@ pub struct RenderJob {
     /// Snapshot times in seconds since the process started (`PREFIX.snap-LABEL.{exr,json}`);
     /// each must be earlier than the time budget.
     pub snapshots: Vec<f64>,
+    /// Ctrl-C/SIGTERM: once set, the render stops after the round in flight and writes its
+    /// outputs (`interrupt`).
+    pub interrupt: crate::interrupt::Interrupt,
 }
 
 /// A job with every default resolved against its scene.
@@ -478,6 +481,7 @@ impl Run<'_> {
             pixel_sampler: p.pixel_sampler,
             light_path_rule: self.light_path_rule.clone(),
             complete,
+            interrupted: p.interrupted,
             image_mean: image.mean(),
         }
     }

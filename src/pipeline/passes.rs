@@ -27,6 +27,8 @@ pub(super) struct Passes {
     pub(super) snaps: snapshots::Snapshots,
     /// The emission-split probe's findings.
     pub(super) pixel_sampler: SplitStats,
+    /// Whether a signal ended the render early (`interrupt`).
+    pub(super) interrupted: bool,
 }
 
 /// Stage 4: rounds of interleaved passes until the spp or the time box is reached, with
@@ -50,6 +52,7 @@ pub(super) fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: D
         preprocess_over_budget: false,
         snaps: snapshots::Snapshots::new(&run.job.snapshots),
         pixel_sampler: pixels.stats(),
+        interrupted: false,
     };
     let (t_render, mut last_ckpt, mut timer) = (Instant::now(), Instant::now(), PassTimer::new());
     let mut failure: Option<String> = None;
@@ -63,9 +66,12 @@ pub(super) fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: D
             // the first round always runs, so a time-boxed image is never empty
             None => round == 0 || deadline.should_start_next(Instant::now(), timer.mean_secs()),
         };
-        let go = more && run.job.max_rounds.is_none_or(|m| round < m);
-        // one agreement per round: a stop (time box) or an error on any rank ends every rank's loop
+        let stop = run.job.interrupt.is_set();
+        let go = more && !stop && run.job.max_rounds.is_none_or(|m| round < m);
+        // one agreement per round: a stop (time box, signal) or an error on any rank ends every
+        // rank's loop
         if !distributed::agree_round(run.cluster, go, failure.take())? {
+            p.interrupted = distributed::agree_any(run.cluster, stop);
             break;
         }
         // the round's pass group, the same on every rank: passes round_start + rank + j·size
@@ -90,6 +96,9 @@ pub(super) fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: D
     run.unreached_snapshots(&mut p);
     p.render_s = secs(t_render);
     progress.finish();
+    if p.interrupted && p.passes_done == 0 {
+        return Err("interrupted before the first pass: nothing was written".into());
+    }
     Ok(p)
 }
 

@@ -119,6 +119,9 @@ pub struct RenderReport {
     pub light_path_rule: Option<super::LightPathRule>,
     /// `false` in the JSON written with a checkpoint (a render still running), `true` at the end.
     pub complete: bool,
+    /// Whether Ctrl-C or SIGTERM ended the render before its spp or time box (`interrupt`): the
+    /// image holds the passes done.
+    pub interrupted: bool,
     /// Mean of the image, per channel.
     pub image_mean: [f64; 3],
 }

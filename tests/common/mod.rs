@@ -51,6 +51,7 @@ pub fn job(
         threads: Some(threads),
         defines: Vec::new(),
         snapshots: Vec::new(),
+        interrupt: Default::default(),
     }
 }
 
