@@ -143,10 +143,15 @@ fn unknown_keys() {
         &insert_after("[render]", "").replacen("[camera]", "colour = 3 #<\n[camera]", 1),
         "colour",
     );
-    case(&mut f, "camera", &with("fov", "fov = 40.0\nfocus = 2.0 #<"), "focus");
-    case(&mut f, "render", &with("spp", "spp = 4\nsamples = 16 #<"), "samples");
-    case(&mut f, "material", &with("albedo   = [0.3", "albedo   = [0.3, 0.3, 0.3]\nroughness = 0.1 #<"), "roughness");
-    case(&mut f, "shape", &with("radius", "radius = 0.5\nradious = 0.5 #<"), "radious");
+    case(&mut f, "camera", &with("fov", "fov = 40.0\nfocus = 2.0 #<"), "camera.focus");
+    case(&mut f, "render", &with("spp", "spp = 4\nsamples = 16 #<"), "render.samples");
+    case(
+        &mut f,
+        "material",
+        &with("albedo   = [0.3", "albedo   = [0.3, 0.3, 0.3]\nroughness = 0.1 #<"),
+        "materials.plastic.roughness",
+    );
+    case(&mut f, "shape", &with("radius", "radius = 0.5\nradious = 0.5 #<"), "shape[1].radious");
     finish(f);
 }
 
@@ -514,4 +519,126 @@ fn every_method_is_a_valid_scene_default() {
         let s = load_str(&with("method", &format!("method = \"{n}\"")), "m.toml", Path::new(".")).expect(n);
         assert_eq!(s.render.method, n);
     }
+}
+
+// ---- OBJ and PLY errors name the mesh file and its line; XML names the parameter at fault ----
+
+/// The error of `BASE` plus a mesh shape reading `name` (written with `body`) in a fresh folder:
+/// it must point at the `file =` line and name the mesh file.
+fn mesh_err(name: &str, body: &str) -> String {
+    let dir = tmp_dir(&format!("bad-mesh-{}", name.replace('.', "-")));
+    std::fs::write(dir.join(name), body).unwrap();
+    let src = with_mesh(name, "");
+    let e = expect_err(name, &src, &dir, marked_line(&src), "shape[3].file");
+    assert!(e.message.contains(&format!("{name}`")), "must name the mesh file: {e}");
+    e.message
+}
+
+#[test]
+fn obj_errors_name_the_line_and_the_statement() {
+    let m = mesh_err("oob.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n# a comment\nf 1 2 9\n");
+    assert!(m.contains("line 5") && m.contains("`f`") && m.contains("index 9 out of range"), "{m}");
+    let m = mesh_err("zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n");
+    assert!(m.contains("line 4") && m.contains("`f`") && m.contains("index 0"), "{m}");
+    let m = mesh_err("pos.obj", "v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n");
+    assert!(m.contains("line 2") && m.contains("`v`") && m.contains("position"), "{m}");
+}
+
+const PLY_HEAD: &str = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+
+#[test]
+fn ascii_ply_is_read_line_by_line() {
+    // one value too many on vertex line 11 (it was read as the face's count, line 12)
+    let m = mesh_err("extra.ply", &format!("{PLY_HEAD}0 0 0\n1 0 0 5\n0 1 0\n3 0 1 2\n"));
+    assert!(m.contains("line 11") && m.contains("element `vertex`") && m.contains("`z`"), "{m}");
+    // one too few: the line ends before `z`
+    let m = mesh_err("short.ply", &format!("{PLY_HEAD}0 0 0\n1 0\n0 1 0\n3 0 1 2\n"));
+    assert!(m.contains("line 11") && m.contains("element `vertex`") && m.contains("property `z`"), "{m}");
+    // a list longer than its count
+    let m = mesh_err("list.ply", &format!("{PLY_HEAD}0 0 0\n1 0 0\n0 1 0\n3 0 1 2 2\n"));
+    assert!(m.contains("line 13") && m.contains("element `face`") && m.contains("vertex_indices"), "{m}");
+    // trailing content after the last element
+    let m = mesh_err("tail.ply", &format!("{PLY_HEAD}0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n\n7 7\n"));
+    assert!(m.contains("line 15") && m.contains("7 7"), "{m}");
+    // blank lines between rows and a final blank line are fine
+    let dir = tmp_dir("ply-blank-lines");
+    std::fs::write(dir.join("ok.ply"), format!("{PLY_HEAD}0 0 0\n\n1 0 0\n0 1 0\r\n3 0 1 2\n\n")).unwrap();
+    load_str(&with_mesh("ok.ply", ""), "ok.toml", &dir).unwrap_or_else(|e| panic!("{e}"));
+}
+
+#[test]
+fn array_table_keys_are_named_with_their_table() {
+    let mut f = Vec::new();
+    let missing_type = with("type     = \"quad\"", "[[shape]] #<").replacen("[[shape]]\n[[shape]]", "[[shape]]", 1);
+    case(&mut f, "missing shape type", &missing_type, "shape[0].type");
+    case(&mut f, "unknown field in shape[1]", &with("radius", "radius = 0.5\nradious = 1 #<"), "shape[1].radious");
+    let light = "[[light]]\ntype = \"point\"\nposition = [0.0, 1.0, 0.0]\nintensity = [1.0, 1.0, 1.0]\nradius = 1.0 #<";
+    case(&mut f, "unknown field in light[0]", &format!("{BASE}\n{light}\n"), "light[0].radius");
+    case(&mut f, "missing roi name", &format!("{BASE}\n[[roi]] #<\nrect = [0, 0, 4, 4]\n"), "roi[0].name");
+    case(
+        &mut f,
+        "missing camera key",
+        &BASE.replacen("[camera]", "[camera] #<", 1).replace("fov        = 40.0\n", ""),
+        "camera.fov",
+    );
+    finish(f);
+}
+
+/// A Mitsuba scene whose sensor holds `sensor` and whose top level holds `body`.
+fn xml_scene(sensor: &str, body: &str) -> String {
+    format!(
+        "<scene version=\"3.0.0\">\n<sensor type=\"perspective\">\n<float name=\"fov\" value=\"40\"/>\n\
+<transform name=\"to_world\"><lookat origin=\"0, 1, 3\" target=\"0, 1, 0\" up=\"0, 1, 0\"/></transform>\n\
+{sensor}\n</sensor>\n<emitter type=\"point\"><point name=\"position\" x=\"0\" y=\"1\" z=\"2\"/></emitter>\n\
+<shape type=\"rectangle\">\n{body}\n</shape>\n</scene>\n"
+    )
+}
+
+fn xml_load(src: &str) -> Result<forecast::scene::Scene, SceneError> {
+    forecast::scene::mitsuba::load_str(src, "t.xml", Path::new("."), &[])
+}
+
+/// The line (1-based) of the first line of `src` holding `pat`.
+fn line_with(src: &str, pat: &str) -> usize {
+    src.lines().position(|l| l.contains(pat)).expect("test bug: pattern not found") + 1
+}
+
+#[test]
+fn phong_energy_error_names_the_reflectances() {
+    let bsdf = "<bsdf type=\"phong\">\n<rgb name=\"diffuseReflectance\" value=\"0.7\"/>\n\
+<rgb name=\"specularReflectance\" value=\"0.5\"/>\n<float name=\"exponent\" value=\"20\"/>\n</bsdf>";
+    let src = xml_scene("", bsdf);
+    let e = xml_load(&src).err().expect("refused");
+    assert_eq!(
+        (e.file.as_str(), e.line, e.key.as_str()),
+        ("t.xml", line_with(&src, "specularRefl"), "phong.specular_reflectance"),
+        "{e}"
+    );
+    assert!(e.message.contains("diffuse_reflectance") && !e.key.contains("exponent"), "{e}");
+    let src =
+        xml_scene("", &bsdf.replace("\n<rgb name=\"specularReflectance\" value=\"0.5\"/>", "").replace("0.7", "0.9"));
+    let e = xml_load(&src).err().expect("refused: 0.9 + the default 0.2");
+    assert_eq!((e.line, e.key.as_str()), (line_with(&src, "diffuseRefl"), "phong.diffuse_reflectance"), "{e}");
+}
+
+#[test]
+fn xml_second_film_duplicate_parameters_and_film_sampler_types() {
+    let film = |w: u32| format!("<film type=\"hdrfilm\"><integer name=\"width\" value=\"{w}\"/></film>");
+    let src = xml_scene(&format!("{}\n{}", film(8), film(16)), "");
+    let e = xml_load(&src).err().expect("a second film is refused");
+    assert_eq!((e.file.as_str(), e.line, e.key.as_str()), ("t.xml", 5 + 1, "perspective.film"), "{e}");
+    assert!(e.message.contains("line 5"), "must name the first film's line: {e}");
+    // a repeated parameter: which value is used, which line is ignored
+    let src = xml_scene("<float name=\"fov\" value=\"60\"/>", "");
+    let s = xml_load(&src).unwrap_or_else(|e| panic!("{e}"));
+    let w = s.warnings.iter().find(|w| w.contains("`fov`")).unwrap_or_else(|| panic!("{:?}", s.warnings));
+    assert!(w.starts_with("t.xml:5:") && w.contains("line 3 is used") && w.contains("twice"), "{w}");
+    // specfilm changes the output: refused; stratified only changes the noise: a warning
+    let src = xml_scene("<film type=\"specfilm\"/>", "");
+    let e = xml_load(&src).err().expect("specfilm is refused");
+    assert_eq!((e.line, e.key.as_str()), (5, "film.specfilm"), "{e}");
+    let src = xml_scene("<sampler type=\"stratified\"><integer name=\"sample_count\" value=\"4\"/></sampler>", "");
+    let s = xml_load(&src).unwrap_or_else(|e| panic!("{e}"));
+    assert!(s.warnings.iter().any(|w| w.starts_with("t.xml:5:") && w.contains("stratified")), "{:?}", s.warnings);
 }

@@ -291,3 +291,38 @@ fn stability_suite_finishes_finite_with_warnings() {
     assert!(md.contains(&format!("{} of {} runs ok", recs.len(), recs.len())), "{md}");
     assert!(d.join("stability.html").exists() && d.join("stability.json").exists());
 }
+
+/// `compare` checks before any rendering that the reference was rendered from the scene being
+/// compared (the scene its `REF.json` records): a Cornell reference against `ring.toml` is
+/// refused with both scenes and the JSON named; the same scene (under another spelling) passes;
+/// a recorded path that no longer exists is matched by file name; without a JSON it warns.
+#[test]
+fn reference_of_another_scene_is_refused() {
+    let d = tmp_dir("compare-ref-scene");
+    let (cornell, ring) = (root().join("scenes/cornell-box.toml"), root().join("scenes/ring.toml"));
+    common::render_film(&common::job(&cornell, Method::Pt, 2, 1, (8, 8), 2, &d.join("ref")));
+    let refp = d.join("ref.exr");
+    let out = d.join("cmp");
+    let args = ["compare", ring.to_str().unwrap(), "--methods", "pt", "--budgets", "1s", "--seeds", "1"];
+    let rest = ["--threads", "2", "--reference", refp.to_str().unwrap(), "--out", out.to_str().unwrap()];
+    let Command::Compare(ca) = cli(&[&args[..], &rest[..]].concat()) else { panic!("not a compare command") };
+    let e = compare::run_compare(&ca.config(), &Local::new()).expect_err("another scene's reference must fail");
+    assert!(e.contains("cornell-box.toml") && e.contains("ring.toml") && e.contains("ref.json"), "{e}");
+    assert!(!out.join("runs").exists(), "refused before any rendering");
+
+    let check = |scene: &Path, reference: &Path| compare::reference::check_scene(reference, scene);
+    let respelled = root().join("scenes/../scenes/./cornell-box.toml");
+    assert_eq!(check(&cornell, &refp), Ok(None));
+    assert_eq!(check(&respelled, &refp), Ok(None), "paths are resolved");
+    // A recorded scene that no longer exists: compared by file name, and said so.
+    std::fs::copy(&refp, d.join("moved.exr")).unwrap();
+    std::fs::write(d.join("moved.json"), r#"{"scene": "/gone/scenes/cornell-box.toml"}"#).unwrap();
+    let w = check(&cornell, &d.join("moved.exr")).unwrap().expect("a note that only the name was compared");
+    assert!(w.contains("no longer exists") && w.contains("file name"), "{w}");
+    let e = check(&ring, &d.join("moved.exr")).expect_err("another file name must fail");
+    assert!(e.contains("/gone/scenes/cornell-box.toml") && e.contains("ring.toml") && e.contains("moved.json"), "{e}");
+    // No JSON beside the reference (a Mitsuba EXR): one warning line, no error.
+    let mitsuba = root().join("tests/reference/cornell-box-mitsuba-256.exr");
+    let w = check(&cornell, &mitsuba).unwrap().expect("a warning");
+    assert!(w.contains("could not be checked") && !w.contains('\n'), "{w}");
+}

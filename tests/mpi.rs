@@ -126,16 +126,17 @@ fn checkpoint_and_resume_across_ranks() {
 }
 
 /// Issue #9 §3: an error on one rank inside the pass loop used to leave rank 0 in `MPI_Finalize`
-/// and rank 1 spinning in the round's all-reduce. Here every checkpoint write fails (the output
-/// "directory" is a regular file, which stops root too), which is a warning printed once per
-/// interval by rank 0, and the final image write fails on rank 0, which every rank learns at
-/// the agreement after it: the job ends non-zero, well before a hang could be mistaken for
-/// work, with the error printed exactly once.
+/// and rank 1 spinning in the round's all-reduce. Here the output directory is replaced by a
+/// regular file once the first checkpoint is in it (an unwritable `--out` is refused before any
+/// work, so it must break during the render; a regular file stops root too): every later
+/// checkpoint write fails, which is a warning printed once per interval by rank 0, and the final
+/// image write fails on rank 0, which every rank learns at the agreement after it: the job ends
+/// non-zero, well before a hang could be mistaken for work, with the error printed exactly once.
 #[test]
 fn an_error_on_rank_0_ends_every_rank_and_is_printed_once() {
     let d = tmp_dir("mpi-error");
     let blocker = d.join("not-a-dir");
-    std::fs::write(&blocker, b"x").unwrap();
+    std::fs::create_dir_all(&blocker).unwrap();
     let out = blocker.join("x");
     let mut child = Command::new("mpirun")
         .args(["-n", "2"])
@@ -147,7 +148,7 @@ fn an_error_on_rank_0_ends_every_rank_and_is_printed_once() {
             "--method",
             "pt",
             "--time",
-            "4s",
+            "6s",
             "--checkpoint-every",
             "1s",
             "--resolution",
@@ -160,6 +161,19 @@ fn an_error_on_rank_0_ends_every_rank_and_is_printed_once() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .expect("mpirun not found: install MPICH (.ci/install-mpi.sh)");
+    let t0 = Instant::now();
+    while !blocker.join("x.ckpt").exists() && t0.elapsed() < std::time::Duration::from_secs(30) {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    // a checkpoint being written at that moment may refill the directory: retry
+    let removed = (0..100).any(|_| {
+        std::fs::remove_dir_all(&blocker).is_ok() || {
+            std::thread::sleep(std::time::Duration::from_millis(10));
+            false
+        }
+    });
+    assert!(removed, "could not remove {}", blocker.display());
+    std::fs::write(&blocker, b"x").unwrap();
     let t = Instant::now();
     let limit = std::time::Duration::from_secs(60);
     let status = loop {

@@ -5,6 +5,9 @@
 //!   inside the budget) and measures each result against a reference EXR: RMSE and relMSE
 //!   (`metrics`, ε = 0.01) of the whole image and of every `[[roi]]` of the scene, spp reached
 //!   and the preprocess share `preprocess_s / total_s`.
+//! * Before any rendering, the reference must belong to the scene: the `REF.json` beside
+//!   `REF.exr` must name the same scene file ([`reference::check_scene`]); without one (a Mitsuba
+//!   EXR) a warning says the reference's scene could not be checked.
 //! * Under MPI every rank runs the same loop (each render is collective and the whole job shares
 //!   the budget); only rank 0 measures and writes. Failed runs are recorded, not fatal.
 //! * ROIs are given at the scene camera's resolution; [`scale_roi`] maps them to the render
@@ -185,25 +188,35 @@ pub struct CompareOutcome {
     pub warnings: Vec<String>,
 }
 
-/// Rank 0 reads the reference and decides the resolution; every rank learns it (or the error).
+/// Rank 0: reads the reference, after checking that its JSON names this scene
+/// ([`reference::check_scene`], whose warning is printed here), and decides the resolution: the
+/// reference's, which `--resolution` must match.
+fn load_reference(cfg: &CompareConfig) -> Result<(Image, (u32, u32)), String> {
+    let img = image_io::read_exr(&cfg.reference)?;
+    if let Some(line) = reference::check_scene(&cfg.reference, &cfg.base.scene)? {
+        crate::errln!("{line}");
+    }
+    let rr = (img.width as u32, img.height as u32);
+    match cfg.base.resolution {
+        Some(r) if r != rr => Err(format!(
+            "{}: reference is {}x{} but --resolution is {}x{}; render the reference at the same resolution",
+            cfg.reference.display(),
+            rr.0,
+            rr.1,
+            r.0,
+            r.1
+        )),
+        _ => Ok((img, rr)),
+    }
+}
+
+/// Rank 0 reads the reference and decides the resolution ([`load_reference`]); every rank learns
+/// it (or the error).
 fn agree_resolution(cfg: &CompareConfig, cluster: &dyn Cluster) -> Result<(Option<Image>, (u32, u32)), String> {
     let mut payload = Vec::new();
     let mut reference = None;
     if cluster.rank() == 0 {
-        let decided = image_io::read_exr(&cfg.reference).and_then(|img| {
-            let rr = (img.width as u32, img.height as u32);
-            match cfg.base.resolution {
-                Some(r) if r != rr => Err(format!(
-                    "{}: reference is {}x{} but --resolution is {}x{}; render the reference at the same resolution",
-                    cfg.reference.display(),
-                    rr.0,
-                    rr.1,
-                    r.0,
-                    r.1
-                )),
-                _ => Ok((img, rr)),
-            }
-        });
+        let decided = load_reference(cfg);
         payload = match decided {
             Ok((img, (w, h))) => {
                 reference = Some(img);

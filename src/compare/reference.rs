@@ -207,3 +207,59 @@ fn write_mean(
     outputs.commit()?;
     Ok(report)
 }
+
+/// Checks, before any rendering, that the reference EXR `reference` was rendered from `scene`:
+/// its `REF.json` (the `render` report or the `reference` summary beside `REF.exr`) records the
+/// scene path, which must name the same file as `scene` (`atomic_io::same_file`: resolved paths,
+/// links, inodes; a relative recorded path is taken from the current directory). A recorded path
+/// that no longer exists is compared by file name. A mismatch is an error naming both scenes and
+/// the JSON. `Ok(Some(line))` is a line to print: no readable JSON beside the reference (e.g. a
+/// Mitsuba EXR), so the scene could not be checked, or the check was by file name only.
+pub fn check_scene(reference: &Path, scene: &Path) -> Result<Option<String>, String> {
+    let json = reference.with_extension("json");
+    let unchecked = |why: String| {
+        let r = reference.display();
+        Ok(Some(format!("warning: compare: {why}; the scene of the reference {r} could not be checked")))
+    };
+    if !json.exists() {
+        return unchecked(format!("no {} beside the reference", json.display()));
+    }
+    let recorded = match recorded_scene(&json) {
+        Ok(s) => s,
+        Err(e) => return unchecked(e),
+    };
+    let rec = Path::new(&recorded);
+    let mismatch = |how: &str| {
+        Err(format!(
+            "compare: the reference {} was rendered from the scene {recorded} (as {} records{how}), not from {}; \
+             compare against a reference of this scene (`forecast reference {} --out PREFIX`)",
+            reference.display(),
+            json.display(),
+            scene.display(),
+            scene.display()
+        ))
+    };
+    if rec.exists() {
+        return if crate::atomic_io::same_file(rec, scene) { Ok(None) } else { mismatch("") };
+    }
+    if rec.file_name().is_some() && rec.file_name() == scene.file_name() {
+        return Ok(Some(format!(
+            "warning: compare: the scene {recorded} recorded in {} no longer exists; the reference was matched \
+             to {} by file name only",
+            json.display(),
+            scene.display()
+        )));
+    }
+    mismatch("; that path no longer exists, so the file names were compared")
+}
+
+/// The `scene` a render report or reference summary (`PREFIX.json`) records.
+fn recorded_scene(json: &Path) -> Result<String, String> {
+    let bytes = crate::atomic_io::read_regular(json).map_err(|e| format!("{}: {e}", json.display()))?;
+    let v: serde_json::Value =
+        serde_json::from_slice(&bytes).map_err(|e| format!("{}: not a JSON report ({e})", json.display()))?;
+    match v.get("scene").and_then(|s| s.as_str()) {
+        Some(s) => Ok(s.to_string()),
+        None => Err(format!("{} records no `scene`", json.display())),
+    }
+}

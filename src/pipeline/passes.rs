@@ -31,6 +31,25 @@ pub(super) struct Passes {
     pub(super) interrupted: bool,
 }
 
+impl Passes {
+    /// No pass yet: an empty film, rendering resumes at `first_pass`.
+    fn new(run: &Run, first_pass: u64, pixel_sampler: SplitStats) -> Passes {
+        let (w, h) = run.plan.resolution;
+        Passes {
+            film: Film::new(w as usize, h as usize),
+            counters: PassCounters::default(),
+            my_passes: 0,
+            passes_done: first_pass,
+            render_s: 0.0,
+            warnings: Vec::new(),
+            preprocess_over_budget: false,
+            snaps: snapshots::Snapshots::new(&run.job.snapshots),
+            pixel_sampler,
+            interrupted: false,
+        }
+    }
+}
+
 /// Stage 4: rounds of interleaved passes until the spp or the time box is reached, with
 /// checkpoints at round boundaries.
 pub(super) fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) -> Result<Passes, String> {
@@ -42,18 +61,7 @@ pub(super) fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: D
     let pixels =
         run.pool.install(|| PixelSampler::new(run.world, &camera, k, cap).with_sampler(run.plan.args.settings.sampler));
     let progress = Progress::new(run.job.progress && rank == 0, total.map(|t| t - first_pass), run.plan.time);
-    let mut p = Passes {
-        film: Film::new(w as usize, h as usize),
-        counters: PassCounters::default(),
-        my_passes: 0,
-        passes_done: first_pass,
-        render_s: 0.0,
-        warnings: Vec::new(),
-        preprocess_over_budget: false,
-        snaps: snapshots::Snapshots::new(&run.job.snapshots),
-        pixel_sampler: pixels.stats(),
-        interrupted: false,
-    };
+    let mut p = Passes::new(run, first_pass, pixels.stats());
     let (t_render, mut last_ckpt, mut timer) = (Instant::now(), Instant::now(), PassTimer::new());
     let mut failure: Option<String> = None;
     // `--max-rounds` (testing) counts rounds of one pass per rank

@@ -116,7 +116,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
 fn parse_doc(cx: &Ctx) -> Result<Doc, SceneError> {
     let src = cx.src;
     toml::from_str(src).map_err(|e| {
-        let mut line = e.span().map(|s| cx.line_of(s.start)).unwrap_or(0);
+        let line = e.span().map(|s| cx.line_of(s.start)).unwrap_or(0);
         let msg = in_words(e.message().trim());
         let key = msg
             .split('`')
@@ -131,10 +131,12 @@ fn parse_doc(cx: &Ctx) -> Result<Doc, SceneError> {
                 return SceneError { file: cx.file.clone(), line: l, key: path, message: m };
             }
         }
-        if msg.contains("unknown field") && !key.is_empty() {
+        if !key.is_empty() {
             // the span may cover a whole table (or array of tables): find the key's own line
-            if let Some(l) = locate::key_line_after(src, from, &key) {
-                line = l;
+            // (a missing key: the table's header) and name the key with its table's path
+            let missing = msg.contains("missing field") && key != "camera"; // `camera`: the document's
+            if let Some((l, path)) = e.span().and_then(|_| locate::field_at(src, from, &key, missing)) {
+                return SceneError { file: cx.file.clone(), line: l, key: path, message: msg };
             }
         } else if let Some((l, path)) = e.span().and_then(|_| locate::key_path_at(src, from)) {
             // a value error (wrong type, bad length): the span is the value's; name its key

@@ -72,6 +72,32 @@ pub(super) fn duplicate_at(src: &str, offset: usize) -> Option<(usize, String, S
     Some((line, path.clone(), format!("duplicate key: `{path}` is given twice{}", first(before))))
 }
 
+/// The dotted path of the table whose header is on the line of byte `offset` (`shape[0]`,
+/// `materials.white`): the table a "missing field" error's span starts at.
+pub(super) fn table_at(src: &str, offset: usize) -> Option<String> {
+    let lines: Vec<&str> = src.split_inclusive('\n').collect();
+    let at = line_index(&lines, offset)?;
+    let (arr, name) = header(lines[at])?;
+    if !arr {
+        return Some(name.to_string());
+    }
+    let n = lines[..at].iter().filter(|l| header(l) == Some((true, name))).count();
+    Some(format!("{name}[{n}]"))
+}
+
+/// serde's unknown or missing field `key` (toml's span starting at byte `from`): the 1-based
+/// line and the key's dotted path (`shape[0].type`, `camera.look_at`; a top-level key as is).
+pub(super) fn field_at(src: &str, from: usize, key: &str, missing: bool) -> Option<(usize, String)> {
+    if missing {
+        let line = src[..from.min(src.len())].matches('\n').count() + 1;
+        return Some((line, table_at(src, from).map_or(key.to_string(), |t| format!("{t}.{key}"))));
+    }
+    let line = key_line_after(src, from, key)?;
+    let start: usize = src.split_inclusive('\n').take(line - 1).map(str::len).sum();
+    let (_, path) = key_path_at(src, start)?;
+    Some((line, path))
+}
+
 /// 1-based line of the first `key = …` at or after byte `from`.
 pub(super) fn key_line_after(src: &str, from: usize, key: &str) -> Option<usize> {
     let mut off = 0usize;

@@ -88,7 +88,61 @@ fn read_models(path: &Path) -> Result<(Vec<tobj::Model>, u64), String> {
     let bytes_hash = crate::math::fnv1a(0xcbf2_9ce4_8422_2325, &bytes);
     let opts = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
     let mut reader = std::io::BufReader::new(&bytes[..]);
-    let (models, _) = tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed))
-        .map_err(|e| format!("cannot parse OBJ `{}`: {e}", path.display()))?;
+    let (models, _) =
+        tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed)).map_err(|e| {
+            // tobj names no line: find the first statement at fault ourselves
+            let at = first_bad_line(&bytes).unwrap_or_else(|| format!("{e}"));
+            format!("cannot parse OBJ `{}`: {at}", path.display())
+        })?;
     Ok((models, bytes_hash))
+}
+
+/// The first `v`/`vn`/`vt` line whose numbers do not parse, or `f`/`l`/`p` line with an index
+/// that is zero, unparsable or past the vertices defined before it, as `line N: `f`: ...`.
+fn first_bad_line(bytes: &[u8]) -> Option<String> {
+    let text = String::from_utf8_lossy(bytes);
+    let mut counts = [0usize; 3]; // v, vt, vn
+    for (i, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("");
+        let mut w = line.split_whitespace();
+        let Some(kw) = w.next() else { continue };
+        let bad = |m: String| Some(format!("line {}: `{kw}` statement: {m}: `{}`", i + 1, raw.trim()));
+        let need = match kw {
+            "v" => (0, 3, "position"),
+            "vt" => (1, 1, "texture coordinate"),
+            "vn" => (2, 3, "normal"),
+            "f" | "l" | "p" => {
+                if let Some(m) = w.find_map(|t| bad_face_vertex(t, &counts)) {
+                    return bad(m);
+                }
+                continue;
+            }
+            _ => continue,
+        };
+        let nums: Vec<&str> = w.take(need.1).collect();
+        if nums.len() < need.1 || nums.iter().any(|t| t.parse::<f32>().is_err()) {
+            return bad(format!("{} parse error (needs {} numbers)", need.2, need.1));
+        }
+        counts[need.0] += 1;
+    }
+    None
+}
+
+/// What is wrong with one `v/vt/vn` reference of a face, given the counts defined so far.
+fn bad_face_vertex(t: &str, counts: &[usize; 3]) -> Option<String> {
+    for (k, part) in t.split('/').enumerate().take(3) {
+        if part.is_empty() {
+            continue;
+        }
+        let what = ["v", "vt", "vn"][k];
+        let n = counts[k];
+        let Ok(i) = part.parse::<i64>() else { return Some(format!("`{part}` is not an index")) };
+        if i == 0 {
+            return Some(format!("face {what} index 0 (OBJ indices start at 1)"));
+        }
+        if i.unsigned_abs() > n as u64 {
+            return Some(format!("face {what} index {i} out of range ({n} `{what}` before this line)"));
+        }
+    }
+    None
 }

@@ -68,12 +68,15 @@ struct Element {
     props: Vec<Property>,
 }
 
-/// Reads the body of a PLY file value by value.
+/// Reads the body of a PLY file value by value; ASCII row by row, one row a line.
 struct Body<'a> {
     bytes: &'a [u8],
     pos: usize,
     format: Format,
+    /// ASCII: the line of the row being read (of `pos` between rows).
     line: usize,
+    /// ASCII: the end of the row being read (its line's `\n` or the end of the file).
+    row_end: usize,
 }
 
 impl Body<'_> {
@@ -103,14 +106,9 @@ impl Body<'_> {
         })
     }
 
+    /// Skips white space inside the ASCII row.
     fn skip_ws(&mut self) {
-        while let Some(&c) = self.bytes.get(self.pos) {
-            if c == b'\n' {
-                self.line += 1;
-            }
-            if !c.is_ascii_whitespace() {
-                break;
-            }
+        while self.pos < self.row_end && self.bytes[self.pos].is_ascii_whitespace() {
             self.pos += 1;
         }
     }
@@ -118,23 +116,76 @@ impl Body<'_> {
     fn read_ascii(&mut self) -> Result<f64, String> {
         self.skip_ws();
         let start = self.pos;
-        while self.bytes.get(self.pos).is_some_and(|c| !c.is_ascii_whitespace()) {
+        while self.pos < self.row_end && !self.bytes[self.pos].is_ascii_whitespace() {
             self.pos += 1;
         }
         if start == self.pos {
-            return Err(format!("line {}: file ends before the last element", self.line));
+            return Err(format!("line {}: the line ends before this value (a line holds one row)", self.line));
         }
         let tok = String::from_utf8_lossy(&self.bytes[start..self.pos]);
         tok.parse::<f64>().map_err(|_| format!("line {}: `{tok}` is not a number", self.line))
     }
 
-    /// Where the next row starts: its line (ASCII) or byte offset (binary), for `describe`.
+    /// The end of the line starting at `from` (its `\n`, or the end of the file).
+    fn line_end(&self, from: usize) -> usize {
+        self.bytes[from..].iter().position(|&b| b == b'\n').map_or(self.bytes.len(), |i| from + i)
+    }
+
+    /// ASCII: moves to the next non-blank line, the row of element `el` to read.
+    fn begin_row(&mut self, el: &Element) -> Result<(), String> {
+        if self.format != Format::Ascii {
+            return Ok(());
+        }
+        loop {
+            if self.pos >= self.bytes.len() {
+                return Err(format!("line {}: file ends before the rows of element `{}` end", self.line, el.name));
+            }
+            let end = self.line_end(self.pos);
+            if self.bytes[self.pos..end].iter().any(|c| !c.is_ascii_whitespace()) {
+                self.row_end = end;
+                return Ok(());
+            }
+            (self.pos, self.line) = (end + 1, self.line + 1);
+        }
+    }
+
+    /// ASCII: the row of `el` read, its line must hold nothing more; moves past it.
+    fn end_row(&mut self, el: &Element) -> Result<(), String> {
+        if self.format != Format::Ascii {
+            return Ok(());
+        }
+        self.skip_ws();
+        if self.pos < self.row_end {
+            let extra = String::from_utf8_lossy(&self.bytes[self.pos..self.row_end]);
+            let last = el.props.last().map_or("", |p| p.name.as_str());
+            return Err(format!(
+                "line {}: element `{}`: extra values `{}` after its last property `{last}` (a line holds exactly one row)",
+                self.line,
+                el.name,
+                extra.trim()
+            ));
+        }
+        (self.pos, self.line) = (self.row_end + 1, self.line + 1);
+        Ok(())
+    }
+
+    /// ASCII: anything but white space after the last element's rows is an error.
+    fn check_end(&mut self) -> Result<(), String> {
+        while self.format == Format::Ascii && self.pos < self.bytes.len() {
+            let end = self.line_end(self.pos);
+            let rest = String::from_utf8_lossy(&self.bytes[self.pos..end]);
+            if !rest.trim().is_empty() {
+                return Err(format!("line {}: `{}` after the last element's rows", self.line, rest.trim()));
+            }
+            (self.pos, self.line) = (end + 1, self.line + 1);
+        }
+        Ok(())
+    }
+
+    /// Where the row being read starts: its line (ASCII) or byte offset (binary), for `describe`.
     fn at(&mut self) -> usize {
         match self.format {
-            Format::Ascii => {
-                self.skip_ws();
-                self.line
-            }
+            Format::Ascii => self.line,
             _ => self.pos,
         }
     }
@@ -277,14 +328,13 @@ pub fn load_indexed(path: &Path) -> Result<IndexedMesh, String> {
 pub fn parse(bytes: &[u8]) -> Result<IndexedMesh, String> {
     let bytes_hash = crate::math::fnv1a(0xcbf2_9ce4_8422_2325, bytes);
     let (format, elements, start, header_lines) = parse_header(bytes)?;
-    let mut body = Body { bytes, pos: start, format, line: header_lines + 1 };
+    let mut body = Body { bytes, pos: start, format, line: header_lines + 1, row_end: start };
     let mut positions: Vec<Vec3> = Vec::new();
     let mut normals = Vec::new();
     let mut has_normals = false;
     let mut vertex_read = false;
     let mut faces: Vec<[u32; 3]> = Vec::new();
     let mut vals = Vec::new();
-    let mut poly: Vec<u32> = Vec::new();
     for el in &elements {
         let (xyz, nxyz, face_list) = columns(el)?;
         if el.name == "vertex" {
@@ -297,29 +347,9 @@ pub fn parse(bytes: &[u8]) -> Result<IndexedMesh, String> {
         // the vertex count, when the vertex element came first (face indices are checked as read)
         let nv = vertex_read.then_some(positions.len());
         for _ in 0..el.count {
-            vals.clear();
-            let at = body.at();
-            for (k, p) in el.props.iter().enumerate() {
-                vals.push(0.0);
-                let Some(ct) = p.list else {
-                    vals[k] = body.read(p.ty)?;
-                    continue;
-                };
-                let n = body.list_len(ct, p.ty)?;
-                let is_face = el.name == "face" && Some(k) == face_list;
-                if is_face && n < 3 {
-                    return Err(format!("{}: face with {n} vertices (a face needs at least 3)", body.describe(at)));
-                }
-                poly.clear();
-                for _ in 0..n {
-                    let i = body.read(p.ty)?;
-                    if is_face {
-                        poly.push(face_index(i, nv).map_err(|m| format!("{}: {m}", body.describe(at)))?);
-                    }
-                }
-                // a fan, as Mitsuba splits polygons
-                faces.extend((1..poly.len().saturating_sub(1)).map(|j| [poly[0], poly[j], poly[j + 1]]));
-            }
+            body.begin_row(el)?;
+            read_row(&mut body, el, (face_list, nv), &mut vals, &mut faces)?;
+            body.end_row(el)?;
             if el.name == "vertex" {
                 let v = |c: [Option<usize>; 3]| c.map(|c| c.map_or(0.0, |c| vals[c] as f32));
                 positions.push(Vec3::from_array(v(xyz)));
@@ -330,6 +360,7 @@ pub fn parse(bytes: &[u8]) -> Result<IndexedMesh, String> {
         }
         vertex_read |= el.name == "vertex";
     }
+    body.check_end()?;
     // faces read before the vertex element: their indices are checked now
     let nv = positions.len();
     if let Some((k, i)) =
@@ -341,6 +372,42 @@ pub fn parse(bytes: &[u8]) -> Result<IndexedMesh, String> {
         return Err("no faces".into());
     }
     Ok(IndexedMesh { positions, normals: has_normals.then_some(normals), faces, bytes_hash })
+}
+
+/// Reads one row of `el` into `vals` (a list's value: 0), its faces (the element's list `face`
+/// of the `(face list, vertex count)`) into `faces`; errors name the element and the property.
+fn read_row(
+    body: &mut Body,
+    el: &Element,
+    (face_list, nv): (Option<usize>, Option<usize>),
+    vals: &mut Vec<f64>,
+    faces: &mut Vec<[u32; 3]>,
+) -> Result<(), String> {
+    vals.clear();
+    let at = body.at();
+    for (k, p) in el.props.iter().enumerate() {
+        let ctx = |m: String| format!("{m} (element `{}`, property `{}`)", el.name, p.name);
+        vals.push(0.0);
+        let Some(ct) = p.list else {
+            vals[k] = body.read(p.ty).map_err(ctx)?;
+            continue;
+        };
+        let n = body.list_len(ct, p.ty).map_err(ctx)?;
+        let is_face = el.name == "face" && Some(k) == face_list;
+        if is_face && n < 3 {
+            return Err(format!("{}: face with {n} vertices (a face needs at least 3)", body.describe(at)));
+        }
+        let mut poly = Vec::with_capacity(if is_face { n } else { 0 });
+        for _ in 0..n {
+            let i = body.read(p.ty).map_err(ctx)?;
+            if is_face {
+                poly.push(face_index(i, nv).map_err(|m| format!("{}: {m}", body.describe(at)))?);
+            }
+        }
+        // a fan, as Mitsuba splits polygons
+        faces.extend((1..poly.len().saturating_sub(1)).map(|j| [poly[0], poly[j], poly[j + 1]]));
+    }
+    Ok(())
 }
 
 /// An element's x, y, z and nx, ny, nz columns and its face list (`vertex` needs x, y, z;

@@ -74,9 +74,11 @@ pub(super) fn material(cx: &mut Cx, n: &Node) -> Result<Material, SceneError> {
             let s = p.color(cx, "specular_reflectance")?.unwrap_or(Rgb::splat(0.2));
             let s = refl(cx, &p, s, "specular_reflectance")?;
             let e = p.float(cx, "exponent")?.unwrap_or(30.0);
-            if (a + s).max_element() > 1.0 + 1e-6 || !(0.0..=1e6).contains(&e) {
-                let msg = "diffuse + specular must be <= 1 and the exponent in [0, 1e6]";
-                return Err(p.err(cx, n.line, "exponent", msg));
+            if (a + s).max_element() > 1.0 + 1e-6 {
+                return Err(phong_sum(cx, &p, a, s));
+            }
+            if !(0.0..=1e6).contains(&e) {
+                return Err(p.err(cx, p.line_of("exponent"), "exponent", format!("exponent {e} must be in [0, 1e6]")));
             }
             Material::Glossy { albedo: a, specular: s, exponent: e }
         }
@@ -128,9 +130,27 @@ fn ior(cx: &Cx, p: &mut Plugin, name: &str, default: f32) -> Result<f32, SceneEr
     x.ok_or_else(|| p.err(cx, n.line, name, format!("`{v}` is neither a positive number nor a known IOR preset")))
 }
 
+/// phong's diffuse + specular > 1: the error names the specular reflectance (as the TOML glossy's
+/// `specular`) at its line, or the diffuse one when only that is written, and both values.
+fn phong_sum(cx: &Cx, p: &Plugin, a: Rgb, s: Rgb) -> SceneError {
+    let given = |k: &str| p.node.children.iter().any(|c| c.name() == k);
+    let k = if given("specular_reflectance") || !given("diffuse_reflectance") {
+        "specular_reflectance"
+    } else {
+        "diffuse_reflectance"
+    };
+    let (da, sa) = (a.to_array(), s.to_array());
+    let msg = format!(
+        "diffuse_reflectance {da:?} (line {}) + specular_reflectance {sa:?} (line {}) must be <= 1 per channel (energy conservation)",
+        p.line_of("diffuse_reflectance"),
+        p.line_of("specular_reflectance")
+    );
+    p.err(cx, p.line_of(k), k, msg)
+}
+
 fn refl(cx: &Cx, p: &Plugin, c: Rgb, name: &str) -> Result<Rgb, SceneError> {
     if c.min_element() < 0.0 || c.max_element() > 1.0 {
-        return Err(p.err(cx, p.node.line, name, "reflectance must be in [0, 1]"));
+        return Err(p.err(cx, p.line_of(name), name, "reflectance must be in [0, 1]"));
     }
     Ok(c)
 }

@@ -78,16 +78,17 @@ pub fn load_str(src: &str, file: &str, dir: &Path, defines: &[(String, String)])
         default_diffuse: None,
     };
     let (root, _version, vars) = xml::parse(src, defines).map_err(|(l, m)| cx.err(l, "", m))?;
-    let mut sensors = 0;
+    let mut sensor_line = None;
     for n in &root.children {
         match n.tag.as_str() {
             "default" => {}
             "integrator" => integrator(&mut cx, n)?,
             "sensor" => {
-                sensors += 1;
-                if sensors > 1 {
-                    return Err(cx.err(n.line, "sensor", "only one sensor is supported"));
+                if let Some(first) = sensor_line {
+                    let m = format!("only one sensor is supported (the first is on line {first})");
+                    return Err(cx.err(n.line, "sensor", m));
                 }
+                sensor_line = Some(n.line);
                 sensor(&mut cx, n)?;
             }
             "bsdf" => {
@@ -101,7 +102,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path, defines: &[(String, String)])
             }
         }
     }
-    if sensors == 0 {
+    if sensor_line.is_none() {
         return Err(cx.err(root.line, "sensor", "the scene has no `<sensor>`"));
     }
     options::forecast_defaults(&mut cx, &root, &vars)?;
@@ -177,7 +178,10 @@ fn sensor(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
 /// The film's `width`, `height` (Mitsuba's defaults 768 × 576).
 fn film(cx: &mut Cx, p: &mut Plugin) -> Result<(u32, u32), SceneError> {
     let (mut w, mut h) = (768u32, 576u32);
-    for f in p.objects(&["film"]) {
+    let films = p.objects(&["film"]);
+    only_one(cx, p, &films, "film")?;
+    for f in films {
+        film_type(cx, f)?;
         let mut fp = Plugin::new(f);
         fp.reject(cx, &["crop_offset_x", "crop_offset_y", "crop_width", "crop_height"], "crop the output instead")?;
         let dim = |v: Option<i64>, d: u32| v.map_or(Ok(d), |v| u32::try_from(v).map_err(|_| ()));
@@ -196,9 +200,41 @@ fn film(cx: &mut Cx, p: &mut Plugin) -> Result<(u32, u32), SceneError> {
     Ok((w, h))
 }
 
+/// A second `<film>` or `<sampler>` in the sensor is an error naming both lines (as a second
+/// `<sensor>` is): Mitsuba would take one of them, silently.
+fn only_one(cx: &Cx, p: &Plugin, nodes: &[&Node], tag: &str) -> Result<(), SceneError> {
+    let [first, second, ..] = nodes else { return Ok(()) };
+    let msg = format!("a second `<{tag}>` (the first is on line {}): a sensor has one {tag}", first.line);
+    Err(p.err(cx, second.line, tag, msg))
+}
+
+/// The film's type: `hdrfilm` (the output is HDR whatever it is); `ldrfilm` (0.5/0.6) is read for
+/// its size with a warning; `specfilm` (spectral sensitivities: other channels) and any other
+/// film would change the image: an error.
+fn film_type(cx: &mut Cx, f: &Node) -> Result<(), SceneError> {
+    match f.ty() {
+        "hdrfilm" => Ok(()),
+        "ldrfilm" => {
+            cx.warn(f.line, "film `ldrfilm`: read for its size only (the output is HDR, not tonemapped)".into());
+            Ok(())
+        }
+        t => {
+            let why =
+                if t == "specfilm" { "its channels are spectral sensitivities, not RGB" } else { "only `hdrfilm`" };
+            Err(cx.err(f.line, &format!("film.{t}"), format!("film `{t}` is not supported ({why})")))
+        }
+    }
+}
+
 /// The sampler's `sample_count` (Mitsuba's default 4) → the default spp, if there is a sampler.
 fn sampler(cx: &mut Cx, p: &mut Plugin) -> Result<(), SceneError> {
-    for s in p.objects(&["sampler"]) {
+    let samplers = p.objects(&["sampler"]);
+    only_one(cx, p, &samplers, "sampler")?;
+    for s in samplers {
+        if s.ty() != "independent" {
+            let m = format!("sampler `{}`: only its `sample_count` is read (forecast draws its own samples; the converged image is the same)", s.ty());
+            cx.warn(s.line, m);
+        }
         let mut sp = Plugin::new(s);
         let line = sp.line_of("sample_count");
         let c = sp.int(cx, "sample_count")?.unwrap_or(4);

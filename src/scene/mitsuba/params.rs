@@ -210,11 +210,24 @@ impl<'a> Plugin<'a> {
 
     /// Warns about every child that was not read (unknown or ignored parameters).
     pub fn finish(self, cx: &mut Cx) {
-        for (c, used) in self.node.children.iter().zip(&self.used) {
-            if !used {
-                let what = if c.name().is_empty() { format!("`<{}>`", c.tag) } else { format!("`{}`", c.name()) };
-                cx.warn(c.line, format!("{}: parameter {what} ignored", self.what()));
+        let kids = &self.node.children;
+        for (c, used) in kids.iter().zip(&self.used) {
+            if *used {
+                continue;
             }
+            let what = if c.name().is_empty() { format!("`<{}>`", c.tag) } else { format!("`{}`", c.name()) };
+            // a repeated parameter: the first is read (`find`), this one is not
+            let first = kids.iter().zip(&self.used).find(|(k, u)| **u && !c.name().is_empty() && k.name() == c.name());
+            let m = match first {
+                Some((f, _)) => format!(
+                    "{}: parameter {what} given twice: line {} ignored, the value on line {} is used",
+                    self.what(),
+                    c.line,
+                    f.line
+                ),
+                None => format!("{}: parameter {what} ignored", self.what()),
+            };
+            cx.warn(c.line, m);
         }
     }
 }
