@@ -609,7 +609,7 @@ fn phong_energy_error_names_the_reflectances() {
     let bsdf = "<bsdf type=\"phong\">\n<rgb name=\"diffuseReflectance\" value=\"0.7\"/>\n\
 <rgb name=\"specularReflectance\" value=\"0.5\"/>\n<float name=\"exponent\" value=\"20\"/>\n</bsdf>";
     let src = xml_scene("", bsdf);
-    let e = xml_load(&src).err().expect("refused");
+    let Err(e) = xml_load(&src) else { panic!("refused") };
     assert_eq!(
         (e.file.as_str(), e.line, e.key.as_str()),
         ("t.xml", line_with(&src, "specularRefl"), "phong.specular_reflectance"),
@@ -618,7 +618,7 @@ fn phong_energy_error_names_the_reflectances() {
     assert!(e.message.contains("diffuse_reflectance") && !e.key.contains("exponent"), "{e}");
     let src =
         xml_scene("", &bsdf.replace("\n<rgb name=\"specularReflectance\" value=\"0.5\"/>", "").replace("0.7", "0.9"));
-    let e = xml_load(&src).err().expect("refused: 0.9 + the default 0.2");
+    let Err(e) = xml_load(&src) else { panic!("refused: 0.9 + the default 0.2") };
     assert_eq!((e.line, e.key.as_str()), (line_with(&src, "diffuseRefl"), "phong.diffuse_reflectance"), "{e}");
 }
 
@@ -626,7 +626,7 @@ fn phong_energy_error_names_the_reflectances() {
 fn xml_second_film_duplicate_parameters_and_film_sampler_types() {
     let film = |w: u32| format!("<film type=\"hdrfilm\"><integer name=\"width\" value=\"{w}\"/></film>");
     let src = xml_scene(&format!("{}\n{}", film(8), film(16)), "");
-    let e = xml_load(&src).err().expect("a second film is refused");
+    let Err(e) = xml_load(&src) else { panic!("a second film is refused") };
     assert_eq!((e.file.as_str(), e.line, e.key.as_str()), ("t.xml", 5 + 1, "perspective.film"), "{e}");
     assert!(e.message.contains("line 5"), "must name the first film's line: {e}");
     // a repeated parameter: which value is used, which line is ignored
@@ -636,7 +636,7 @@ fn xml_second_film_duplicate_parameters_and_film_sampler_types() {
     assert!(w.starts_with("t.xml:5:") && w.contains("line 3 is used") && w.contains("twice"), "{w}");
     // specfilm changes the output: refused; stratified only changes the noise: a warning
     let src = xml_scene("<film type=\"specfilm\"/>", "");
-    let e = xml_load(&src).err().expect("specfilm is refused");
+    let Err(e) = xml_load(&src) else { panic!("specfilm is refused") };
     assert_eq!((e.line, e.key.as_str()), (5, "film.specfilm"), "{e}");
     let src = xml_scene("<sampler type=\"stratified\"><integer name=\"sample_count\" value=\"4\"/></sampler>", "");
     let s = xml_load(&src).unwrap_or_else(|e| panic!("{e}"));
