@@ -50,3 +50,22 @@ fn different_seeds_differ() {
     // With 4 spp of a noisy path tracer nearly every lit pixel differs; require most of them.
     assert!(differing > 32 * 32 / 2, "only {differing} pixels differ between seeds 1 and 2");
 }
+
+/// Every method, preprocess included (the CF photons and tables, the shared table cache, the IWS
+/// point lights, `pt-cf`'s light paths and pilot): the film is bit-identical for 1 and 3 threads.
+#[test]
+fn every_method_is_bit_identical_for_any_thread_count() {
+    for method in [Method::Iws, Method::IwsPm, Method::IwsCf, Method::PtCf] {
+        let film = |threads: usize| {
+            let dir = tmp_dir(&format!("det-{}-{threads}", method.name()));
+            let mut j = job(&root().join("scenes/cornell-box.toml"), method, 2, 5, (32, 32), threads, &dir.join("out"));
+            (j.args.cf.forecast_photons, j.args.cf.clusters, j.args.pm.photons) = (Some(20_000), 16, 20_000);
+            let f = render_film(&j);
+            let _ = std::fs::remove_dir_all(dir);
+            f
+        };
+        let a = film(1);
+        assert!(a.mean().iter().filter(|p| p[0] > 0.0).count() > 500, "{}: a black image", method.name());
+        assert!(bits(&a) == bits(&film(3)), "{}: threads=1 and threads=3 differ", method.name());
+    }
+}
