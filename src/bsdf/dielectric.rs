@@ -20,20 +20,33 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     0.5 * (r_par * r_par + r_perp * r_perp)
 }
 
+/// The normals on `wo`'s side: (geometric, shading), `entering` when `wo` is outside.
+#[inline]
+fn sided(sp: &ShadingPoint, wo: Vec3) -> (Vec3, Vec3, bool) {
+    let entering = wo.dot(sp.ng) > 0.0;
+    if entering {
+        (sp.ng, sp.ns, true)
+    } else {
+        (-sp.ng, -sp.ns, false)
+    }
+}
+
+/// True when `wo` lies below the shading normal on its side: the glass then reflects and
+/// refracts about the geometric normal (and light paths take no shading-normal factor).
+#[inline]
+pub fn falls_back(sp: &ShadingPoint, wo: Vec3) -> bool {
+    let (_, ns, _) = sided(sp, wo);
+    wo.dot(ns) <= 0.0
+}
+
 /// Samples reflection (probability F) or refraction (1 − F).
 #[inline]
 pub fn sample(ior: f32, sp: &ShadingPoint, wo: Vec3, u: f32, mode: Mode) -> Option<BsdfSample> {
-    let entering = wo.dot(sp.ng) > 0.0;
-    let (n, eta) = if entering { (sp.ns, ior) } else { (-sp.ns, 1.0 / ior) };
-    let ng = if entering { sp.ng } else { -sp.ng };
-    let mut cos_i = wo.dot(n);
-    let n = if cos_i <= 0.0 {
-        // shading normal disagrees with the geometry: fall back to the geometric normal
-        cos_i = wo.dot(ng);
-        ng
-    } else {
-        n
-    };
+    let (ng, ns, entering) = sided(sp, wo);
+    let eta = if entering { ior } else { 1.0 / ior };
+    // shading normal disagreeing with the geometry: fall back to the geometric normal
+    let n = if falls_back(sp, wo) { ng } else { ns };
+    let cos_i = wo.dot(n);
     let f = fresnel_dielectric(cos_i, eta);
     if u < f {
         let wi = reflect(wo, n);

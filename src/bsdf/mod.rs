@@ -153,7 +153,7 @@ pub fn sample(m: &Material, sp: &ShadingPoint, wo: Vec3, u: [f32; 3], mode: Mode
     };
     // Veach's adjoint factor on light paths, Dirac glass included (pbrt-v3's
     // `CorrectShadingNormal`): 1 where ns = ng, and where glass fell back to ng (wo below ns)
-    let fell_back = matches!(m, Material::Glass { .. }) && wo.dot(ns) <= 0.0;
+    let fell_back = matches!(m, Material::Glass { .. }) && dielectric::falls_back(sp, wo);
     let corr = if fell_back { 1.0 } else { shading_correction(mode, sp, wo, s.wi) };
     Some(BsdfSample { weight: s.weight * corr, ..s })
 }

@@ -128,8 +128,8 @@ pub(super) struct SceneBuilder {
     sph_shape: Vec<u32>,
     shapes: Vec<ShapeRec>,
     point_lights: Vec<(PointLight, Origin)>,
-    rois: Vec<Roi>,
-    roi_names_at: Vec<Origin>,
+    /// Each ROI with where its name was given.
+    rois: Vec<(Roi, Origin)>,
     forecast_target: Option<(Vec3, Vec3)>,
     forecast_photons: Option<u64>,
 }
@@ -152,7 +152,6 @@ impl SceneBuilder {
             shapes: Vec::new(),
             point_lights: Vec::new(),
             rois: Vec::new(),
-            roi_names_at: Vec::new(),
             forecast_target: None,
             forecast_photons: None,
         }
@@ -373,7 +372,7 @@ impl SceneBuilder {
     /// A region of interest: a name of its own (`roi_name_error`), non-empty and inside the image
     /// (the camera comes first).
     pub fn roi(&mut self, (name, nat): (String, &Origin), (rect, at): ([u32; 4], &Origin)) -> Result<(), SceneError> {
-        let earlier = self.rois.iter().map(|r| r.name.as_str()).zip(&self.roi_names_at);
+        let earlier = self.rois.iter().map(|(r, at)| (r.name.as_str(), at));
         if let Some(m) = roi_name_error(&name, earlier) {
             return Err(self.err(nat, m));
         }
@@ -383,8 +382,7 @@ impl SceneBuilder {
         if w == 0 || h == 0 || !inside(x, w, cw) || !inside(y, h, ch) {
             return Err(self.err(at, format!("rect {rect:?} must be non-empty and inside the {cw}x{ch} image")));
         }
-        self.rois.push(Roi { name, rect });
-        self.roi_names_at.push(nat.clone());
+        self.rois.push((Roi { name, rect }, nat.clone()));
         Ok(())
     }
 
@@ -480,7 +478,7 @@ impl SceneBuilder {
             point_lights,
             lights,
             light_pick,
-            rois: self.rois,
+            rois: self.rois.into_iter().map(|(r, _)| r).collect(),
             forecast_target: self.forecast_target,
             forecast_photons: self.forecast_photons,
             bounds,
