@@ -24,6 +24,8 @@
 //!   probe that traced one chain per lattice point marked a pixel only when one of its 9 points
 //!   happened to reflect (the pixels inside the highlight, about 1 − 0.96⁹ ≈ 0.3 of them at
 //!   normal incidence), which left most of the variance (ratio ≈ 0.7) and fails it.
+//! - The probe's lattice is finer below 640 pixels across: an emitter of 0.29 pixels between the
+//!   half-pixel lattice lines is split at 16² (one pixel), where half-pixel steps split none.
 //! - `K = 1` is the pixel sampler from before splitting bit for bit (written out in the test).
 //! - The furnaces of `tests/furnace.rs` stay exact with splitting in every pixel (mirror: every
 //!   sample 1; glass ball in an emissive enclosure: per-pixel z-tests against 1), every method.
@@ -122,6 +124,35 @@ fn probe_marks_the_edges_and_split_removes_their_variance_in_every_integrator() 
         let (one, split) = split_removes_variance(&w, m, "edges");
         assert_agrees(&split, &one, &format!("{} emitter edges, K = 16 vs 1", m.name()));
     }
+}
+
+/// An emitter 0.29 pixels wide (0.04 m at 3 m, 16², 40°), centred a quarter pixel off the image's
+/// centre in x and y: it lies between the half-pixel lattice lines (u, v ∈ k/2), so a probe of
+/// corners, edge midpoints and centre sees none of it; the lattice of 1/8 pixel that a 16² image
+/// gets (`probe_subdivision`) has points inside it.
+const SUB_PIXEL_EMITTER: &str = r#"
+[camera]
+position   = [0.0, 0.0, 3.0]
+look_at    = [0.0, 0.0, 0.0]
+fov        = 40.0
+resolution = [16, 16]
+
+[[shape]]
+type     = "quad"
+corner   = [0.01412, 0.01412, 0.0]
+u        = [0.04, 0.0, 0.0]
+v        = [0.0, 0.04, 0.0]
+emission = [1.0, 1.0, 1.0]
+"#;
+
+/// A light smaller than half a pixel is found at low resolution: the one pixel that holds it is
+/// split, and no other. (With half-pixel steps at every resolution the probe split none: a glint
+/// of the light in glass is such a light, and `figurines` at 256×144 lost most of its own.)
+#[test]
+fn probe_finds_a_light_smaller_than_half_a_pixel_at_low_resolution() {
+    let w = World::build(forecast::scene::load_str(SUB_PIXEL_EMITTER, "tiny.toml", Path::new(".")).unwrap()).unwrap();
+    let cam = w.scene.camera.with_resolution(16, 16);
+    assert_eq!(PixelSampler::new(&w, &cam, 16, 64).stats().split_pixels, 1);
 }
 
 /// Renders `m` at `K = 1` and `K = 16` (16², 512 passes each) and asserts that splitting kept at

@@ -17,16 +17,19 @@
 //! Which pixels. `K` rays everywhere would cost `K − 1` rays in every pixel for a gain in a few
 //! (on `cornell-box` at 60 s, the light's edges, direct and in the mirror ball, and the pixels
 //! next to them, 0.7% of the image, hold half of `pt`'s squared error and three quarters of
-//! `iws-cf`'s). So a probe traces the prefix emission at the corners, edge midpoints and centre
-//! of every pixel (a lattice of (2W+1)×(2H+1) points, from a fixed stream, band by band) and
-//! splits exactly the pixels whose 9 values are not all equal, or random at one point: a point
+//! `iws-cf`'s). So a probe traces the prefix emission on a lattice of `m` intervals per pixel side
+//! (`(mW+1)×(mH+1)` points, from a fixed stream, band by band; `m = 2` from 640 pixels across up,
+//! the corners, edge midpoints and centre, and up to 8 below, so that the lattice keeps its
+//! angular resolution: [`probe_subdivision`]) and splits exactly the pixels whose `(m+1)²` values
+//! are not all equal, or random at one point: a point
 //! whose prefix meets a mirror or glass is traced [`PROBE_CHAINS`] times, and chains that differ
 //! (the light seen through glass along some Fresnel choices only) mark it. On `figurines` those
 //! ~100 glints held nearly all of the camera side's `E S+ L` variance and a single chain per
 //! point found few of them (`results/2026-12-06-glass-probe.md`). The set is a pure function of
 //! the scene, the camera, the resolution and the cap, not of the samples, so the estimator stays
-//! unbiased whatever it marks; a pixel it misses (an edge thinner than half a pixel) is merely
-//! not split. `K = 1` draws exactly the random numbers of the plain sampler and traces no probe.
+//! unbiased whatever it marks; a pixel it misses (an edge thinner than `1/m` pixel) is merely
+//! not split. (With `m = 2` at every resolution the probe missed most of `figurines`' glints at
+//! 256×144: 28 pixels split against 163 at 640×360; `results/2026-12-06-probe-resolution.md`.) `K = 1` draws exactly the random numbers of the plain sampler and traces no probe.
 
 use super::Context;
 use crate::accel::{Ray, World};
@@ -358,7 +361,7 @@ impl<'a> PixelSampler<'a> {
     }
 }
 
-/// Pixel rows per probe band (bounds the probe's memory to 2·(2W+1)·BAND colours).
+/// Pixel rows per probe band (bounds the probe's memory to about m²·W·BAND colours).
 const PROBE_BAND: usize = 64;
 
 /// Chains traced at a lattice point whose prefix meets a mirror or glass.
@@ -378,31 +381,46 @@ fn probe_point(world: &World, camera: &Camera, [u, v]: [f32; 2], cap: u32, rng: 
     (1..PROBE_CHAINS).all(|_| prefix_emission(world, camera.position, d, cap, rng) == first).then_some(first)
 }
 
-/// The pixels whose prefix emission differs among their 9 lattice points (corners, edge
-/// midpoints, centre) or is random at one of them ([`probe_point`]), from a fixed stream keyed
-/// by the lattice index: a pure function of scene, camera, resolution and cap. Band by band, so
-/// the lattice never needs to be held whole.
+/// Lattice intervals across the image's wider side at least (the probe's angular resolution):
+/// a glint is found at any resolution where it was found at 640 pixels across.
+const PROBE_ACROSS: usize = 1280;
+
+/// The most lattice intervals per pixel side (bounds the probe's cost at tiny resolutions).
+const PROBE_MAX_SUBDIVISION: usize = 8;
+
+/// Lattice intervals per pixel side for a `w`×`h` image: 2 (corners, edge midpoints and centre)
+/// from 640 pixels across up, more below, so that the lattice keeps [`PROBE_ACROSS`] intervals.
+pub fn probe_subdivision(w: u32, h: u32) -> usize {
+    PROBE_ACROSS.div_ceil(w.max(h).max(1) as usize).clamp(2, PROBE_MAX_SUBDIVISION)
+}
+
+/// The pixels whose prefix emission differs among their `(m+1)²` lattice points (`m` =
+/// [`probe_subdivision`]: at `m = 2` corners, edge midpoints and centre) or is random at one of
+/// them ([`probe_point`]), from a fixed stream keyed by the lattice index: a pure function of
+/// scene, camera, resolution and cap. Band by band, so the lattice never needs to be held whole.
 fn probe_edges(world: &World, camera: &Camera, cap: u32) -> Vec<bool> {
     let (w, h) = (camera.width as usize, camera.height as usize);
-    let lw = 2 * w + 1;
+    let m = probe_subdivision(camera.width, camera.height);
+    let (lw, step) = (m * w + 1, 1.0 / m as f32);
     let mut split = Vec::with_capacity(w * h);
     for y0 in (0..h).step_by(PROBE_BAND) {
         let y1 = (y0 + PROBE_BAND).min(h);
-        // lattice rows 2·y0 ..= 2·y1
-        let base = 2 * y0 * lw;
-        let lattice: Vec<Option<Rgb>> = (base..(2 * y1 + 1) * lw)
+        // lattice rows m·y0 ..= m·y1
+        let base = m * y0 * lw;
+        let lattice: Vec<Option<Rgb>> = (base..(m * y1 + 1) * lw)
             .into_par_iter()
             .map(|i| {
-                let (u, v) = ((i % lw) as f32 * 0.5, (i / lw) as f32 * 0.5);
+                let (u, v) = ((i % lw) as f32 * step, (i / lw) as f32 * step);
                 let mut rng = Rng::keyed(0, stream::PIXEL_SPLIT, u64::MAX, i as u64);
                 probe_point(world, camera, [u, v], cap, &mut rng)
             })
             .collect();
         let band = (y0 * w..y1 * w).into_par_iter().map(|p| {
-            let (x, y) = (2 * (p % w), 2 * (p / w - y0));
+            let (x, y) = (m * (p % w), m * (p / w - y0));
             let first = lattice[y * lw + x];
             // a random point (`None`) differs from every value, itself included
-            first.is_none() || (0..9).any(|j| lattice[(y + j / 3) * lw + x + j % 3] != first)
+            first.is_none()
+                || (0..(m + 1) * (m + 1)).any(|j| lattice[(y + j / (m + 1)) * lw + x + j % (m + 1)] != first)
         });
         split.par_extend(band);
     }
@@ -413,6 +431,18 @@ fn probe_edges(world: &World, camera: &Camera, cap: u32) -> Vec<bool> {
 mod tests {
     use super::*;
     use crate::math::Vec3;
+
+    /// Half-pixel steps from 640 pixels across up (the probe of before, unchanged there); below,
+    /// at least `PROBE_ACROSS` intervals across the wider side, up to 8 per pixel.
+    #[test]
+    fn probe_subdivision_keeps_the_lattice_s_angular_resolution() {
+        let cases = [((640, 360), 2), ((640, 640), 2), ((1920, 1080), 2), ((360, 640), 2), ((639, 10), 3)];
+        let low = [((256, 256), 5), ((256, 144), 5), ((256, 192), 5), ((85, 48), 8), ((16, 16), 8), ((1, 1), 8)];
+        for ((w, h), m) in cases.into_iter().chain(low) {
+            assert_eq!(probe_subdivision(w, h), m, "{w}x{h}");
+            assert!(m == PROBE_MAX_SUBDIVISION || m * w.max(h) as usize >= PROBE_ACROSS, "{w}x{h}");
+        }
+    }
 
     /// `camera_lanes` gives, for 1 to 16 passes (both of its paths) and both samplers, the rays
     /// and streams of one pass at a time (`Rng::indexed`, the Sobol prefix if any, the jitter,
