@@ -165,7 +165,10 @@ fn bin() -> &'static str {
 /// last bits of every cosine-sampled direction (`results/2026-12-05-diffuse-lanes.md`, z-tested
 /// against the images before); and the emission-split probe's chains at mirror and glass points,
 /// which split one more of its pixels (`results/2026-12-06-glass-probe.md`; with
-/// `--emission-split 1` the image was the same bit for bit). It renders with `--sampler
+/// `--emission-split 1` the image was the same bit for bit); and the probe's finer lattice below
+/// 640 pixels across, which splits 12 of its pixels instead of 9
+/// (`results/2026-12-06-probe-resolution.md`; again the same bit for bit with `--emission-split
+/// 1`). It renders with `--sampler
 /// independent`, the camera streams as they were before the Sobol prefix (docs/sampling.md),
 /// which are the same bit for bit. Regenerate it only for such a change, and say so there.
 #[test]
