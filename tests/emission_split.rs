@@ -38,21 +38,15 @@ use forecast::render::film::Film;
 use forecast::render::PixelSampler;
 use std::path::Path;
 
-/// A 1 m emitter (Le = 1) tilted 20° about the view axis, facing the camera, nothing else.
-const EMITTER_IN_THE_VOID: &str = r#"
-[camera]
-position   = [0.0, 0.0, 3.0]
-look_at    = [0.0, 0.0, 0.0]
-fov        = 40.0
-resolution = [16, 16]
-
-[[shape]]
-type     = "quad"
-corner   = [-0.3277, -0.6408, 0.0]
-u        = [0.9397, 0.3420, 0.0]
-v        = [-0.3420, 0.9397, 0.0]
-emission = [1.0, 1.0, 1.0]
-"#;
+/// An emitter quad (`corner`, `u`, `v`; Le = 1) facing the camera 3 m away (40°, 16²), nothing
+/// else: the world of the probe tests.
+fn emitter_in_the_void(corner: [f32; 3], u: [f32; 3], v: [f32; 3]) -> World {
+    let toml = format!(
+        "[camera]\nposition = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 40.0\nresolution = [16, 16]\n\n\
+         [[shape]]\ntype = \"quad\"\ncorner = {corner:?}\nu = {u:?}\nv = {v:?}\nemission = [1.0, 1.0, 1.0]\n"
+    );
+    World::build(forecast::scene::load_str(&toml, "emitter.toml", Path::new(".")).unwrap()).unwrap()
+}
 
 fn world(path: &str) -> World {
     World::build(forecast::scene::load(Path::new(path)).expect("scene loads")).expect("BVH builds")
@@ -113,8 +107,8 @@ fn every_method_with_split_agrees_with_itself_unsplit_on_cornell_box() {
 
 #[test]
 fn probe_marks_the_edges_and_split_removes_their_variance_in_every_integrator() {
-    let w =
-        World::build(forecast::scene::load_str(EMITTER_IN_THE_VOID, "emitter.toml", Path::new(".")).unwrap()).unwrap();
+    // a 1 m emitter tilted 20° about the view axis
+    let w = emitter_in_the_void([-0.3277, -0.6408, 0.0], [0.9397, 0.3420, 0.0], [-0.3420, 0.9397, 0.0]);
     let cam = w.scene.camera.with_resolution(16, 16);
     let found = PixelSampler::new(&w, &cam, 16, 64).stats();
     // the quad covers about 7×7 of the 16×16 pixels: its edges cross ~30 of them
@@ -126,31 +120,15 @@ fn probe_marks_the_edges_and_split_removes_their_variance_in_every_integrator() 
     }
 }
 
-/// An emitter 0.29 pixels wide (0.04 m at 3 m, 16², 40°), centred a quarter pixel off the image's
-/// centre in x and y: it lies between the half-pixel lattice lines (u, v ∈ k/2), so a probe of
-/// corners, edge midpoints and centre sees none of it; the lattice of 1/8 pixel that a 16² image
-/// gets (`probe_subdivision`) has points inside it.
-const SUB_PIXEL_EMITTER: &str = r#"
-[camera]
-position   = [0.0, 0.0, 3.0]
-look_at    = [0.0, 0.0, 0.0]
-fov        = 40.0
-resolution = [16, 16]
-
-[[shape]]
-type     = "quad"
-corner   = [0.01412, 0.01412, 0.0]
-u        = [0.04, 0.0, 0.0]
-v        = [0.0, 0.04, 0.0]
-emission = [1.0, 1.0, 1.0]
-"#;
-
 /// A light smaller than half a pixel is found at low resolution: the one pixel that holds it is
 /// split, and no other. (With half-pixel steps at every resolution the probe split none: a glint
 /// of the light in glass is such a light, and `figurines` at 256×144 lost most of its own.)
 #[test]
 fn probe_finds_a_light_smaller_than_half_a_pixel_at_low_resolution() {
-    let w = World::build(forecast::scene::load_str(SUB_PIXEL_EMITTER, "tiny.toml", Path::new(".")).unwrap()).unwrap();
+    // 0.29 pixels wide (0.04 m at 3 m, 16², 40°), centred a quarter pixel off the image's centre
+    // in x and y: between the half-pixel lattice lines (u, v ∈ k/2), which see none of it; the
+    // lattice of 1/8 pixel that a 16² image gets (`probe_subdivision`) has points inside it
+    let w = emitter_in_the_void([0.01412, 0.01412, 0.0], [0.04, 0.0, 0.0], [0.0, 0.04, 0.0]);
     let cam = w.scene.camera.with_resolution(16, 16);
     assert_eq!(PixelSampler::new(&w, &cam, 16, 64).stats().split_pixels, 1);
 }
