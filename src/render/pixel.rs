@@ -21,15 +21,15 @@
 //! (`(mW+1)×(mH+1)` points, from a fixed stream, band by band; `m = 2` from 640 pixels across up,
 //! the corners, edge midpoints and centre, and up to 8 below, so that the lattice keeps its
 //! angular resolution: [`probe_subdivision`]) and splits exactly the pixels whose `(m+1)²` values
-//! are not all equal, or random at one point: a point
-//! whose prefix meets a mirror or glass is traced [`PROBE_CHAINS`] times, and chains that differ
-//! (the light seen through glass along some Fresnel choices only) mark it. On `figurines` those
-//! ~100 glints held nearly all of the camera side's `E S+ L` variance and a single chain per
-//! point found few of them (`results/2026-12-06-glass-probe.md`). The set is a pure function of
+//! are not all equal, or random at one point: a point whose prefix meets a mirror or glass is
+//! traced [`PROBE_CHAINS`] times, and chains that differ (the light seen through glass along some
+//! Fresnel choices only) mark it. On `figurines` those ~100 glints held nearly all of the camera
+//! side's `E S+ L` variance and a single chain per point found few of them (`results/2026-12-06-glass-probe.md`). The set is a pure function of
 //! the scene, the camera, the resolution and the cap, not of the samples, so the estimator stays
 //! unbiased whatever it marks; a pixel it misses (an edge thinner than `1/m` pixel) is merely
 //! not split. (With `m = 2` at every resolution the probe missed most of `figurines`' glints at
-//! 256×144: 28 pixels split against 163 at 640×360; `results/2026-12-06-probe-resolution.md`.) `K = 1` draws exactly the random numbers of the plain sampler and traces no probe.
+//! 256×144: 28 pixels split against 163 at 640×360; `results/2026-12-06-probe-resolution.md`.)
+//! `K = 1` draws exactly the random numbers of the plain sampler and traces no probe.
 
 use super::Context;
 use crate::accel::{Ray, World};
