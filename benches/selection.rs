@@ -7,8 +7,8 @@
 //! calls, the least disturbed by other processes). Not a test: it asserts nothing.
 
 use forecast::bsdf::{self, Mode, ShadingPoint};
-use forecast::forecast::direction_table::{ForecastTables, Splat, TableMode};
-use forecast::forecast::mixture::{DefensiveMixture, MixtureWeights};
+use forecast::cf::direction_table::{ForecastTables, Splat, TableMode};
+use forecast::cf::mixture::{DefensiveMixture, MixtureWeights};
 use forecast::math::{luminance, Frame, Rgb, Vec3, PI};
 use forecast::sampling::rng::{stream, Rng};
 use forecast::scene::Material;

@@ -280,7 +280,7 @@ fn stability(a: &forecast::cli::StabilityArgs) -> Result<(), String> {
 }
 
 fn forecast_map(a: &forecast::cli::ForecastMapArgs, opts: &forecast::scene::LoadOptions) -> Result<(), String> {
-    use forecast::integrators::iws_forecast::{self, build_forecast};
+    use forecast::integrators::iws_cf::{self, build_forecast};
     use forecast::transport::particle::Emission;
     let r = &a.render;
     forecast::atomic_io::check_output_prefix(&r.out)?;
@@ -316,15 +316,15 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs, opts: &forecast::scene::Load
     });
     let (w, h) = r.resolution.unwrap_or((world.scene.camera.width, world.scene.camera.height));
     let camera = world.scene.camera.with_resolution(w, h);
-    let img = forecast::forecast::view::render_view(&world, &camera, &cf);
-    forecast::forecast::view::write_view(&r.out, &img)?;
+    let img = forecast::cf::view::render_view(&world, &camera, &cf);
+    forecast::cf::view::write_view(&r.out, &img)?;
     let targeted_yield = cf.stats.yield_per_path;
     let untargeted_yield = untargeted.map(|(n, p)| n as f64 / p.max(1) as f64);
     let report = serde_json::json!({
         "scene": world.scene.path,
         "preprocess": cf.stats,
         "options": cf.opts,
-        "targeted_emission": format!("{:?}", iws_forecast::targeted_emission(&world)),
+        "targeted_emission": format!("{:?}", iws_cf::targeted_emission(&world)),
         "yield_targeted_per_path": targeted_yield,
         "yield_untargeted_per_path": untargeted_yield,
         "targeted_gain": untargeted_yield.map(|u| if u > 0.0 { targeted_yield / u } else { f64::INFINITY }),

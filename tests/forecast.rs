@@ -10,8 +10,8 @@
 mod common;
 use common::{assert_agrees, assert_furnace_is_one, max_z, render_passes as render};
 use forecast::accel::World;
-use forecast::forecast::estimator::{CausticForecast, SplitRule, TableKind};
-use forecast::integrators::iws_forecast::Variant;
+use forecast::cf::estimator::{CausticForecast, SplitRule, TableKind};
+use forecast::integrators::iws_cf::Variant;
 use forecast::integrators::{Integrator, Method, MethodArgs};
 use forecast::render::film::Film;
 use forecast::stats::z_test_threshold;
@@ -239,8 +239,8 @@ fn forecast_product_round_trips_through_bytes() {
 fn caustic_chain_roulette_sees_the_whole_sample_weight() {
     use forecast::accel::Hit;
     use forecast::bsdf::ShadingPoint;
-    use forecast::integrators::caustics::{BsdfCaustics, CausticEstimator, Context, Recurse, ShadingQuery};
-    use forecast::integrators::iws_forecast::ForecastCaustics;
+    use forecast::integrators::iws::caustics::{BsdfCaustics, CausticEstimator, Context, Recurse, ShadingQuery};
+    use forecast::integrators::iws_cf::ForecastCaustics;
     use forecast::math::{Rgb, Vec3};
     use forecast::sampling::rng::{stream, Rng};
     struct White;

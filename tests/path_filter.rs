@@ -1,4 +1,4 @@
-//! `pt --path-filter` (a biased diagnostic, `integrators::path_class`): which light paths carry
+//! `pt --path-filter` (a biased diagnostic, `integrators::pt::path_class`): which light paths carry
 //! an image's light and noise.
 //!
 //! - A filtered `pt` draws the random numbers of the unfiltered one, so filters that partition the

@@ -4,9 +4,9 @@
 //! visibility rules are the pipeline's; indicatif hides both when stderr is not a terminal).
 
 use forecast::accel::World;
-use forecast::forecast::estimator::CausticForecast;
-use forecast::integrators::iws_forecast::MIN_BUDGET_PHOTONS;
-use forecast::integrators::photon_map::PhotonMap;
+use forecast::cf::estimator::CausticForecast;
+use forecast::integrators::iws_cf::MIN_BUDGET_PHOTONS;
+use forecast::integrators::iws_pm::PhotonMap;
 use forecast::integrators::{Method, MethodArgs};
 use forecast::progress::Phases;
 use std::path::Path;

@@ -14,8 +14,8 @@ use common::{
     assert_agrees, assert_furnace_is_one, cf_test_opts as opts, max_z, render_passes as render, render_profiled, world,
 };
 use forecast::accel::World;
-use forecast::forecast::estimator::CausticForecast;
-use forecast::integrators::caustic_share::{caustic_shares, CausticShare};
+use forecast::cf::estimator::CausticForecast;
+use forecast::integrators::iws_cf::share::{caustic_shares, CausticShare};
 use forecast::integrators::{Integrator, Method, MethodArgs};
 use forecast::profile::Profile;
 use forecast::render::film::Film;

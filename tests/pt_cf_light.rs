@@ -1,4 +1,4 @@
-//! `pt-cf`'s light-traced caustics (issue #34, `integrators::pt_cf_light`): agreement with `pt`
+//! `pt-cf`'s light-traced caustics (issue #34, `integrators::pt_cf::light`): agreement with `pt`
 //! (Šidák per-pixel and whole-image z-tests, α = 1e-3, `common::assert_agrees`) with area lights
 //! on `cornell-box` and `ring`, with a light inside glass and through smooth-shaded glass; the
 //! glass furnace; the analytic point-light caustic of a planar mirror (which `pt` misses); `--light-paths 0` is the old

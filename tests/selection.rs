@@ -11,10 +11,10 @@
 //! The timings of these samplers are a bench, not a test: `cargo bench --bench selection`.
 
 use forecast::bsdf::{self, Mode, ShadingPoint};
-use forecast::forecast::direction_table::{
+use forecast::cf::direction_table::{
     bin_of, splat_histogram, DirectionTable, ForecastTables, Splat, TableMode, N_BINS, N_MU, N_PHI,
 };
-use forecast::forecast::mixture::{DefensiveMixture, MixtureWeights};
+use forecast::cf::mixture::{DefensiveMixture, MixtureWeights};
 use forecast::math::{luminance, Frame, Rgb, Vec3, PI};
 use forecast::sampling::alias::AliasTable;
 use forecast::sampling::rng::{stream, Rng};
@@ -429,7 +429,7 @@ fn mixture_estimator_is_unbiased() {
     let n = 300_000;
     for (k, c) in cases().iter().enumerate() {
         let mix = c.mix();
-        let lum = |s: Option<forecast::forecast::mixture::MixtureSample>| {
+        let lum = |s: Option<forecast::cf::mixture::MixtureSample>| {
             s.map_or(0.0, |s| luminance(s.weight) as f64 * radiance(s.wi) as f64)
         };
         let est = mean_se(n, 80 + k as u64, |rng| lum(mix.sample(rng)));

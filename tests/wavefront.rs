@@ -6,7 +6,7 @@
 //!   `common::random_ray`, batches of several sizes (1, 7, 256: the packets' remainders), with
 //!   and without the coherent hint, and the degenerate segments a path can produce (tmax 0,
 //!   negative, NaN).
-//! - `pt`'s `estimate_batch` (the wavefront, `integrators::path_batch`) must return exactly the
+//! - `pt`'s `estimate_batch` (the wavefront, `integrators::pt::wavefront`) must return exactly the
 //!   estimates of `estimate` ray by ray (`integrators::estimate_each`) on every camera ray of a
 //!   small image with its per-pixel streams, for one pass and for a pass group (each pixel's 16
 //!   camera rays side by side, traced with the coherent hint): the wavefront changes when a ray
@@ -169,7 +169,7 @@ fn pt_wavefront_is_bit_identical_to_the_scalar_loop() {
     }
 }
 
-/// `pt-cf`'s wavefront (`integrators::pt_cf::batch`) against `trace`, bit for bit: guided and
+/// `pt-cf`'s wavefront (`integrators::pt_cf::wavefront`) against `trace`, bit for bit: guided and
 /// split vertices (`cornell-box`'s glass caustic, `ring`'s cardioid, `figurines`, the mirror's
 /// caustic; each reached, `assert_guided`), the MIS ratio against the light paths at lane and
 /// scalar vertices, and a point light (no lanes).

@@ -20,17 +20,17 @@
 //! streams keyed by (seed, pass).
 
 pub mod auto;
-pub mod caustic_share;
-pub mod caustics;
-pub mod path_batch;
-pub mod path_class;
-mod path_lanes;
-pub mod pt_cf_light;
 pub mod settings;
-pub mod vpl;
+
+// The methods, one folder each (a new one also gets its line in `methods!` below).
+pub mod iws;
+pub mod iws_cf;
+pub mod iws_pm;
+pub mod pt;
+pub mod pt_cf;
 
 pub use auto::MethodChoice;
-pub use caustics::{BsdfCaustics, CausticEstimator, NoCaustics, Recurse, ShadingQuery};
+pub use iws::caustics::{BsdfCaustics, CausticEstimator, NoCaustics, Recurse, ShadingQuery};
 
 use crate::accel::World;
 use crate::math::{Rgb, Vec3};
@@ -78,7 +78,7 @@ pub trait Integrator: Send + Sync {
     /// [`Integrator::estimate`] along each ray of a batch (a tile's camera rays), ray `i`
     /// drawing from `rngs[i]`: `out[i]` is bit for bit what `estimate` returns with `ctx.rng =
     /// rngs[i]`. The default is that loop; `pt` traces the batch as a wavefront
-    /// (`path_batch`).
+    /// (`pt::wavefront`).
     fn estimate_batch(
         &self,
         world: &World,
@@ -101,7 +101,7 @@ pub trait Integrator: Send + Sync {
     fn stats(&self, _profile: &Profile) -> serde_json::Value {
         serde_json::json!({})
     }
-    /// The pass's light-traced splats (`pt-cf`'s light paths, `integrators::pt_cf_light`): a dense
+    /// The pass's light-traced splats (`pt-cf`'s light paths, `integrators::pt_cf::light`): a dense
     /// row-major image of `camera`'s size added to every pixel's camera sample of pass `pass`, a
     /// pure function of (seed, pass) and the scene. `None`: the method traces no light paths.
     fn light_splats(&self, _world: &World, _camera: &Camera, _seed: u64, _pass: u64) -> Option<LightSplats> {
@@ -167,8 +167,6 @@ macro_rules! methods {
         groups { $( $(#[$gdoc:meta])* $group:ident: $gty:ty, )* }
         methods { $( $(#[$doc:meta])* $variant:ident = $name:literal, [$($uses:ident),*] => $module:ident :: $spec:ident; )* }
     ) => {
-        $( pub mod $module; )*
-
         /// The rendering methods (`--method`).
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
         pub enum Method {
@@ -273,27 +271,27 @@ macro_rules! methods {
 methods! {
     groups {
         /// `pt`'s `--path-filter` (shared with `pt-cf`).
-        pt: path::PtArgs,
+        pt: pt::PtArgs,
         /// The IWS options (`iws`, `iws-pm`, `iws-cf`).
         iws: iws::IwsArgs,
         /// The photon map's (`iws-pm`).
-        pm: photon_map::PmArgs,
+        pm: iws_pm::PmArgs,
         /// The Caustic Forecasting preprocess and tables (`iws-cf`, `pt-cf`).
-        cf: iws_forecast::CfArgs,
+        cf: iws_cf::CfArgs,
         /// `iws-cf`'s own (`--variant`).
-        iwscf: iws_forecast::IwsCfArgs,
+        iwscf: iws_cf::IwsCfArgs,
         /// `pt-cf`'s own (`--guide-*`).
         ptcf: pt_cf::PtCfArgs,
     }
     methods {
         /// Path tracing with NEE and MIS: the unbiased reference.
-        Pt = "pt", [pt] => path::PathTracer;
+        Pt = "pt", [pt] => pt::PathTracer;
         /// Instant radiosity with bias compensation (Le + L_d); L_c left out by design.
         Iws = "iws", [iws] => iws::Iws;
         /// IWS with a caustic photon map for L_c (biased baseline).
-        IwsPm = "iws-pm", [iws, pm] => photon_map::IwsPm;
+        IwsPm = "iws-pm", [iws, pm] => iws_pm::IwsPm;
         /// IWS with Caustic Forecasting for L_c (BAJ08): unbiased.
-        IwsCf = "iws-cf", [iws, cf, iwscf] => iws_forecast::IwsCf;
+        IwsCf = "iws-cf", [iws, cf, iwscf] => iws_cf::IwsCf;
         /// Path tracing whose continuation is drawn from a defensive mixture of the BSDF and the CF tables: unbiased.
         PtCf = "pt-cf", [pt, cf, ptcf] => pt_cf::PtCf;
     }

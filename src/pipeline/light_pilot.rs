@@ -180,7 +180,7 @@ pub fn wanted(plan: &Plan) -> bool {
 /// default per pixel), broadcast to every rank (collective).
 pub fn broadcast_count(cluster: &dyn Cluster, plan: &Plan, rule: Option<&LightPathRule>) -> Result<u64, String> {
     let (w, h) = plan.resolution;
-    let n = rule.map_or(crate::integrators::pt_cf_light::default_paths(w, h), |r| r.light_paths);
+    let n = rule.map_or(crate::integrators::pt_cf::light::default_paths(w, h), |r| r.light_paths);
     crate::distributed::broadcast_u64(cluster, n, "light-path")
 }
 

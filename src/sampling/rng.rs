@@ -28,9 +28,9 @@ pub mod stream {
     pub const MISC: u64 = 6;
     /// The extra camera rays of emission splitting (`render::PixelSampler`).
     pub const PIXEL_SPLIT: u64 = 7;
-    /// The CF preprocess's caustic-share gather (`integrators::caustic_share`).
+    /// The CF preprocess's caustic-share gather (`integrators::iws_cf::share`).
     pub const GUIDE: u64 = 8;
-    /// `pt-cf`'s light paths connected to the camera (`integrators::pt_cf_light`).
+    /// `pt-cf`'s light paths connected to the camera (`integrators::pt_cf::light`).
     pub const LIGHT_PATHS: u64 = 9;
     /// The scrambling keys of the camera streams' Sobol prefixes (`sampling::qmc`).
     pub const CAMERA_QMC: u64 = 10;

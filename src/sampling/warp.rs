@@ -27,7 +27,7 @@ pub fn sample_concentric_disk(u: [f32; 2]) -> Vec2 {
 
 /// (sin x, cos x) of x = (π/4)·t for t ∈ [−1, 1]: Cephes' single-precision minimax
 /// polynomials on [−π/4, π/4] (`sinf.c`, `cosf.c`), within 2 ulp of the exact values (tested).
-/// Plain arithmetic, so that LLVM can run it 16 lanes wide (`integrators::path_lanes`) with the
+/// Plain arithmetic, so that LLVM can run it 16 lanes wide (`integrators::pt::lanes`) with the
 /// scalar code's bits; libm's `sincosf` was 3.8% of `pt` on `ring`, called lane by lane
 /// (`results/2026-12-05-diffuse-lanes.md`).
 #[inline(always)]

@@ -56,7 +56,7 @@ pub struct LightSample {
 }
 
 /// [`sample_light_mis`] without the shadow ray, for callers that trace shadow rays in batches
-/// (the wavefront `pt`, `integrators::path_batch`): the same random numbers, and `None`
+/// (the wavefront `pt`, `integrators::pt::wavefront`): the same random numbers, and `None`
 /// exactly where `sample_light_mis` returns 0 without tracing.
 pub fn light_sample_mis(
     world: &World,

@@ -171,8 +171,8 @@ impl TableCache {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::forecast::caustic_point::CausticPoint;
-    use crate::forecast::cluster::cluster_points;
+    use crate::cf::caustic_point::CausticPoint;
+    use crate::cf::cluster::cluster_points;
     use crate::sampling::rng::{stream, Rng};
 
     /// A dense 0.1 m caustic and a faint 4 m blob: the dense cluster's cells are much smaller.
@@ -188,7 +188,7 @@ mod tests {
             })
             .collect();
         let cl = cluster_points(&pts, 2, 1);
-        let r = crate::forecast::forecast_map::search_radius(&cl, 6, 128).unwrap();
+        let r = crate::cf::forecast_map::search_radius(&cl, 6, 128).unwrap();
         let cells = CellSizes::new(&cl, 6, (r, 128, 1.0));
         let (lo, hi) = cells.range();
         // 3000 points on 0.01 m² vs 16 m²: r_c ∝ 1/sqrt(ρ_c), a ratio of 40 in edge

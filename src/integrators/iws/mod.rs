@@ -16,32 +16,35 @@
 //!   `t_max = sqrt(cosθ_x/b)`; 0 on a miss or a Dirac hit; at a non-specular hit (or, with
 //!   `--direct vpl`, an emitter: `Le` is recovered here because emitter VPLs are clamped) it recurses into `L̂` with
 //!   `d+1`, with Russian roulette at `d+1 ≥ 2` (spec §4 "Termination").
-//! - `Ĺ_c`: a [`CausticEstimator`] (`integrators::caustics`); `iws` uses [`NoCaustics`] (L_c
+//! - `Ĺ_c`: a [`CausticEstimator`] (`integrators::iws::caustics`); `iws` uses [`NoCaustics`] (L_c
 //!   omitted by design), `iws-pm` a photon map, `iws-cf` Caustic Forecasting.
 //!
 //! Invariants: the same `G` function in `min(G,b)` and `(G−b)/G` (spec §10); every `b > 0` is
 //! unbiased; camera rays follow Dirac chains (Fresnel-weighted choice) to the first
 //! non-specular vertex. The only cut is the 64-vertex / 64-diffuse-depth safety cap.
-//! The point lights come from `integrators::vpl`; chains from `transport::dirac`; roulette from
+//! The point lights come from `integrators::iws::vpl`; chains from `transport::dirac`; roulette from
 //! `transport::roulette`; timings go to the worker's `profile::Profile`.
 //! Shading normals: the eye side carries `|ŵ·n_s|/|ŵ·n_g|` and indirect VPLs the adjoint factor
 //! `|ω_in·n_s|/|ω_in·n_g|` (Veach eq. 5.19), so `G` itself stays geometric.
 
-use super::caustics::{CausticEstimator, NoCaustics, Recurse, ShadingQuery};
-use super::vpl::{generate_vpls, Vpl, VplKind};
+pub mod caustics;
+pub mod vpl;
+
 use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
-use crate::progress::Phases;
 use crate::accel::{offset_origin, ray_epsilon, Hit, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::math::{Rgb, Vec3, PI};
 use crate::profile::{Phase, Profile};
+use crate::progress::Phases;
 use crate::scene::{Material, NO_EMITTER};
 use crate::transport::dirac::follow_dirac_chain;
 use crate::transport::direct;
+use crate::transport::light_select::{LightSelector, RisParams, MAX_CANDIDATES, MAX_SURVIVORS};
 use crate::transport::particle::MAX_VERTICES;
 use crate::transport::roulette::{q_recursion, roulette};
-use crate::transport::light_select::{LightSelector, RisParams, MAX_CANDIDATES, MAX_SURVIVORS};
+use caustics::{CausticEstimator, NoCaustics, Recurse, ShadingQuery};
 use std::time::Instant;
+use vpl::{generate_vpls, Vpl, VplKind};
 
 /// IWS parameters (shared by `iws`, `iws-pm` and `iws-cf`).
 #[derive(clap::Args, Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -158,8 +161,12 @@ impl Iws {
             c => c,
         };
         // out-of-range RIS parameters (API use; the CLI checks them) fall back to the nearest valid
-        let ris = RisParams::new(params.ris_candidates.min(MAX_CANDIDATES), params.ris_survivors.clamp(1, MAX_SURVIVORS), true)
-            .expect("clamped RIS parameters are valid");
+        let ris = RisParams::new(
+            params.ris_candidates.min(MAX_CANDIDATES),
+            params.ris_survivors.clamp(1, MAX_SURVIVORS),
+            true,
+        )
+        .expect("clamped RIS parameters are valid");
         Iws {
             params,
             max_depth,
@@ -250,7 +257,11 @@ impl Iws {
     pub fn gather_exact(&self, world: &World, q: &ShadingQuery) -> Rgb {
         let (x, m, wo) = (q.x, q.m, q.wo);
         let lit = |v: &&Vpl| world.visible(x.p, x.ng, v.p, v.ng);
-        self.vpls.iter().map(|v| (v, self.unshadowed(x, m, wo, v))).filter(|(v, c)| *c != Rgb::ZERO && lit(v)).fold(Rgb::ZERO, |a, (_, c)| a + c)
+        self.vpls
+            .iter()
+            .map(|v| (v, self.unshadowed(x, m, wo, v)))
+            .filter(|(v, c)| *c != Rgb::ZERO && lit(v))
+            .fold(Rgb::ZERO, |a, (_, c)| a + c)
     }
 
     /// `VPL_b` by RIS; 0 when no point light has power (then none contributes).

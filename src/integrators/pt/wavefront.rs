@@ -12,11 +12,11 @@
 //! otherwise, as `sample_light` returns; paths never interact. `--path-filter` runs the scalar
 //! loop (`Integrator::estimate_batch`'s default).
 
-use super::path::{emitter_hit, PathTracer};
-use super::path_lanes::{Lanes, Vertex};
-use super::CameraEstimate;
 use crate::accel::{offset_origin, BatchScratch, Ray, World};
 use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
+use crate::integrators::pt::lanes::{Lanes, Vertex};
+use crate::integrators::pt::{emitter_hit, PathTracer};
+use crate::integrators::CameraEstimate;
 use crate::math::Rgb;
 use crate::sampling::rng::Rng;
 use crate::scene::{LightRef, Material, Scene, NO_EMITTER};
@@ -25,7 +25,7 @@ use crate::transport::roulette::Throughput;
 
 /// One live path of the wavefront.
 #[derive(Clone, Copy)]
-pub(super) struct Live {
+pub(crate) struct Live {
     /// Index of the camera ray (and of its stream and estimate).
     i: u32,
     /// Its throughput (with roulette's η² scale).
@@ -40,22 +40,22 @@ pub(super) struct Live {
 
 /// Per-batch buffers, reused across bounces and, through `Context::take_scratch`, across the
 /// batches of a worker (a bounce never has more rays than the batch). `P`: a live path's state
-/// (`Live` here, `pt-cf`'s own in `pt_cf::batch`).
-pub(super) struct Wave<P = Live> {
-    pub(super) live: Vec<P>,
-    pub(super) rays: Vec<Ray>,
+/// (`Live` here, `pt-cf`'s own in `pt_cf::wavefront`).
+pub(crate) struct Wave<P = Live> {
+    pub(crate) live: Vec<P>,
+    pub(crate) rays: Vec<Ray>,
     /// The closest hits of `rays` as (primitive, t) (`World::hit_at` builds the record).
-    pub(super) hits: Vec<Option<(u32, f32)>>,
-    pub(super) next_live: Vec<P>,
-    pub(super) next_rays: Vec<Ray>,
+    pub(crate) hits: Vec<Option<(u32, f32)>>,
+    pub(crate) next_live: Vec<P>,
+    pub(crate) next_rays: Vec<Ray>,
     /// NEE of this bounce: (path index, β at the vertex, the unoccluded value).
     nee: Vec<(u32, Rgb, Rgb)>,
     shadow: Vec<Ray>,
     occluded: Vec<bool>,
     /// The diffuse vertices of this bounce, sixteen at a time (`path_lanes`).
-    pub(super) lanes: Box<Lanes>,
+    pub(crate) lanes: Box<Lanes>,
     /// Whether the lanes apply to this batch's scene (`lanes_apply`).
-    pub(super) lanes_on: bool,
+    pub(crate) lanes_on: bool,
     scratch: BatchScratch,
 }
 
@@ -80,7 +80,7 @@ impl<P> Default for Wave<P> {
 impl<P> Wave<P> {
     /// Empties every buffer and starts one path per camera ray (`start(i)` its state), and
     /// `out` as one zero estimate per ray.
-    pub(super) fn start(
+    pub(crate) fn start(
         &mut self,
         world: &World,
         rays: &[Ray],
@@ -111,14 +111,14 @@ impl<P> Wave<P> {
 
     /// Traces the bounce's rays (the camera rays, `depth` 0, of a pass group run pixel by
     /// pixel, side by side).
-    pub(super) fn intersect(&mut self, world: &World, depth: u32) {
+    pub(crate) fn intersect(&mut self, world: &World, depth: u32) {
         world.intersect_batch(&self.rays, &mut self.scratch, &mut self.hits, depth == 0);
     }
 
     /// Queues path `i`'s NEE sample: `β·value` if its segment is unoccluded, `β·0` for `None`
     /// (as `direct::sample_light` returns), added at the end of the bounce.
     #[inline]
-    pub(super) fn queue_nee(&mut self, (i, beta): (u32, Rgb), ls: Option<(Rgb, Ray)>, out: &mut [CameraEstimate]) {
+    pub(crate) fn queue_nee(&mut self, (i, beta): (u32, Rgb), ls: Option<(Rgb, Ray)>, out: &mut [CameraEstimate]) {
         match ls {
             Some((value, shadow)) => {
                 self.nee.push((i, beta, value));
@@ -130,7 +130,7 @@ impl<P> Wave<P> {
 
     /// Ends a bounce: its shadow rays traced and their NEE added, the next bounce's paths made
     /// live.
-    pub(super) fn finish_bounce(&mut self, world: &World, out: &mut [CameraEstimate]) {
+    pub(crate) fn finish_bounce(&mut self, world: &World, out: &mut [CameraEstimate]) {
         world.occluded_batch(&self.shadow, &mut self.scratch, &mut self.occluded);
         for (&(i, beta, value), &blocked) in self.nee.iter().zip(&self.occluded) {
             out[i as usize].rest += beta * if blocked { Rgb::ZERO } else { value };
@@ -147,7 +147,7 @@ impl<P> Wave<P> {
 impl PathTracer {
     /// `trace` for every ray of `rays`, path `i` drawing from `rngs[i]`; `out[i]` is bit for bit
     /// `trace(rays[i])` (the module's invariants). Requires no `--path-filter`.
-    pub(super) fn trace_batch(
+    pub(crate) fn trace_batch(
         &self,
         world: &World,
         (rays, rngs): (&[Ray], &mut [Rng]),
@@ -245,6 +245,6 @@ impl PathTracer {
 }
 
 /// Whether the lanes apply: every light is a triangle emitter (`path_lanes` samples those).
-pub(super) fn lanes_apply(s: &Scene) -> bool {
+pub(crate) fn lanes_apply(s: &Scene) -> bool {
     s.lights.iter().all(|l| matches!(*l, LightRef::Area(e) if s.emitters[e as usize].prim < s.ntri()))
 }

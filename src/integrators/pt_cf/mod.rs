@@ -10,7 +10,7 @@
 //! weighted by `f·|cos|/q`, so no sample is worth more than `1/c_k` BSDF samples.
 //!
 //! Per-cluster guiding. With the caustic share `s = E_c/(E_c + E_d)` of a
-//! cluster's indirect irradiance ([`CausticShare`](crate::forecast::share::CausticShare): `E_c` from its forecast photons, `E_d` from a
+//! cluster's indirect irradiance ([`CausticShare`](crate::cf::share::CausticShare): `E_c` from its forecast photons, `E_d` from a
 //! cosine `pt` gather in the preprocess), the mixture's second moment `E_d²/c + E_c²/(1−c)` (tables
 //! matching the caustic, the BSDF the rest) is smallest at `c = 1 − s`; so `c_k = max(c, 1 − s)`
 //! where `s ≥ --guide-min-share` and no guiding elsewhere. A `SubsetGrid` of the guided clusters
@@ -37,30 +37,31 @@
 //!
 //! CLI: `forecast render scenes/cornell-box.toml --method pt-cf --time 1m`.
 
-mod batch;
+pub mod light;
+mod wavefront;
 
-use super::iws_forecast::{targeted_emission, IwsCf};
-use super::pt_cf_light::{self, LightSide};
-use super::path::emitter_hit;
-use super::path_class::{kept, PathClass, PathFilter};
+use super::iws_cf::{targeted_emission, IwsCf};
+use super::pt::emitter_hit;
+use super::pt::path_class::{kept, PathClass, PathFilter};
 use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
-use crate::progress::Phases;
 use crate::accel::{offset_origin, Hit, Ray, World};
 use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
-use crate::forecast::cluster::Cluster;
-use crate::forecast::direction_table::ForecastTables;
-use crate::forecast::estimator::{energy_split, CausticForecast, TableCache};
-use crate::forecast::mixture::{DefensiveMixture, MixtureWeights};
-use crate::forecast::share::{min_share, parse_min_share};
-use crate::forecast::subset_grid::SubsetGrid;
+use crate::cf::cluster::Cluster;
+use crate::cf::direction_table::ForecastTables;
+use crate::cf::estimator::{energy_split, CausticForecast, TableCache};
+use crate::cf::mixture::{DefensiveMixture, MixtureWeights};
+use crate::cf::share::{min_share, parse_min_share};
+use crate::cf::subset_grid::SubsetGrid;
 use crate::math::{Frame, Rgb, Vec3};
 use crate::profile::{Phase, Profile};
+use crate::progress::Phases;
 use crate::sampling::rng::Rng;
 use crate::scene::{Camera, Material, NO_EMITTER};
-use crate::transport::particle::MAX_VERTICES;
 use crate::transport::context::ShadingQuery;
 use crate::transport::direct;
+use crate::transport::particle::MAX_VERTICES;
 use crate::transport::roulette::Throughput;
+use light::LightSide;
 use std::sync::Arc;
 
 /// `pt-cf`'s own options (the CF preprocess and table options are the group shared with
@@ -116,7 +117,9 @@ impl MethodSpec for PtCf {
             .iter()
             .map(|sh| {
                 let s = sh.share();
-                (s >= p.guide_min_share && s > 0.0).then(|| MixtureWeights::guide_fraction(c.max(1.0 - s)).ok()).flatten()
+                (s >= p.guide_min_share && s > 0.0)
+                    .then(|| MixtureWeights::guide_fraction(c.max(1.0 - s)).ok())
+                    .flatten()
             })
             .collect();
         let guided: Vec<usize> = (0..n_kept).filter(|&c| per_cluster[c].is_some()).collect();
@@ -184,7 +187,7 @@ pub struct GuidedPathTracer {
     cache: TableCache,
     /// `--path-filter` (a diagnostic; `None`: the unbiased estimate).
     filter: Option<PathFilter>,
-    /// The light paths (`integrators::pt_cf_light`); `None`: today's camera side alone.
+    /// The light paths (`integrators::pt_cf::light`); `None`: today's camera side alone.
     light: Option<LightSide>,
 }
 
@@ -205,7 +208,7 @@ struct PathState {
     prev_pdf_w: f32,
     /// The path's class so far (`--path-filter`).
     class: PathClass,
-    /// The running MIS ratio against the light paths (`pt_cf_light::first_ratio`, `next_ratio`)
+    /// The running MIS ratio against the light paths (`light::first_ratio`, `next_ratio`)
     /// while the path may be of class C (its first vertex non-Dirac); `None` otherwise.
     mis: Option<f32>,
 }
@@ -284,15 +287,21 @@ impl GuidedPathTracer {
     /// Updates the path's MIS ratio after its vertex `index` (`(m, sp, wo, t)`: material, point,
     /// toward the previous vertex, distance from it) drew the continuation now in `st`.
     #[inline(always)]
-    fn track_mis(&self, st: &mut PathState, (m, sp, wo, t): (&Material, &ShadingPoint, Vec3, f32), index: u32, ctx: &Context) {
+    fn track_mis(
+        &self,
+        st: &mut PathState,
+        (m, sp, wo, t): (&Material, &ShadingPoint, Vec3, f32),
+        index: u32,
+        ctx: &Context,
+    ) {
         let (Some(_), Some(cam)) = (&self.light, &ctx.camera) else { return };
         if m.is_dirac() {
             return;
         }
         if index == 0 {
-            st.mis = Some(pt_cf_light::first_ratio(cam, -wo, t, sp.ng, (wo, st.d), st.prev_pdf_w));
+            st.mis = Some(light::first_ratio(cam, -wo, t, sp.ng, (wo, st.d), st.prev_pdf_w));
         } else if let Some(r) = st.mis {
-            st.mis = Some(r * pt_cf_light::next_ratio(m, sp, (wo, st.d), st.prev_pdf_w));
+            st.mis = Some(r * light::next_ratio(m, sp, (wo, st.d), st.prev_pdf_w));
         }
     }
 
@@ -302,7 +311,7 @@ impl GuidedPathTracer {
     fn camera_weight(&self, world: &World, st: &PathState, hit: &Hit, ctx: &Context) -> f32 {
         match (&self.light, &ctx.camera, st.mis) {
             (Some(light), Some(cam), Some(ratio)) if st.prev_delta && st.vertex < MAX_VERTICES => {
-                pt_cf_light::camera_weight(world, light, cam, hit, st.d, ratio)
+                light::camera_weight(world, light, cam, hit, st.d, ratio)
             }
             _ => 1.0,
         }
@@ -338,7 +347,12 @@ impl GuidedPathTracer {
     /// The guide at the vertex `(m, sp, wo)` that `st` entered: `None` at a Dirac vertex and at
     /// a `pt` vertex. (Not a field of `enter`'s result: a `None` then stays out of memory.)
     #[inline(always)]
-    fn guide_of(&self, st: &PathState, (m, sp, wo): (&Material, &ShadingPoint, Vec3), ctx: &mut Context) -> Option<Guide> {
+    fn guide_of(
+        &self,
+        st: &PathState,
+        (m, sp, wo): (&Material, &ShadingPoint, Vec3),
+        ctx: &mut Context,
+    ) -> Option<Guide> {
         if m.is_dirac() {
             return None;
         }
@@ -445,14 +459,21 @@ impl Integrator for GuidedPathTracer {
         l
     }
 
-    /// The wavefront (`pt_cf::batch`), bit for bit `estimate` ray by ray; `--path-filter` runs
+    /// The wavefront (`pt_cf::wavefront`), bit for bit `estimate` ray by ray; `--path-filter` runs
     /// `estimate` ray by ray.
-    fn estimate_batch(&self, world: &World, rays: &[Ray], rngs: &mut [Rng], ctx: &mut Context, out: &mut Vec<CameraEstimate>) {
+    fn estimate_batch(
+        &self,
+        world: &World,
+        rays: &[Ray],
+        rngs: &mut [Rng],
+        ctx: &mut Context,
+        out: &mut Vec<CameraEstimate>,
+    ) {
         if self.filter.is_some() {
             return super::estimate_each(self, world, rays, rngs, ctx, out);
         }
         let t0 = std::time::Instant::now();
-        let mut wave = ctx.take_scratch::<batch::CfWave>();
+        let mut wave = ctx.take_scratch::<wavefront::CfWave>();
         self.trace_batch(world, (rays, rngs), &mut wave, ctx, out);
         ctx.put_scratch(wave);
         ctx.profile.samples += rays.len() as u64;
@@ -465,7 +486,7 @@ impl Integrator for GuidedPathTracer {
 
     fn light_splats(&self, world: &World, camera: &Camera, seed: u64, pass: u64) -> Option<super::LightSplats> {
         let light = self.light.as_ref()?;
-        Some(pt_cf_light::light_splats(self, light, world, camera, (seed, pass)))
+        Some(light::light_splats(self, light, world, camera, (seed, pass)))
     }
 
     fn set_light_paths(&mut self, n: u64) {
@@ -502,7 +523,7 @@ impl Integrator for GuidedPathTracer {
             "options": self.cf.opts,
             "light_paths": self.light.map(|l| serde_json::json!({
                 "per_pass": l.paths,
-                "per_pixel_without_pilot": pt_cf_light::PATHS_PER_PIXEL,
+                "per_pixel_without_pilot": light::PATHS_PER_PIXEL,
                 "emission": format!("{:?}", l.emission),
             })),
         })
@@ -515,7 +536,17 @@ mod tests {
 
     fn cluster(density: f32, rank: u32) -> Cluster {
         let z = [0.0; 3];
-        Cluster { centroid: z, normal: z, feature: [0.0; 6], power: density, area: 1.0, density, radius: 0.0, rank, members: vec![0] }
+        Cluster {
+            centroid: z,
+            normal: z,
+            feature: [0.0; 6],
+            power: density,
+            area: 1.0,
+            density,
+            radius: 0.0,
+            rank,
+            members: vec![0],
+        }
     }
 
     /// ρ_max is the densest *guided* cluster's (the densest kept cluster is unguided here), and

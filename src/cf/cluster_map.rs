@@ -140,7 +140,7 @@ impl ClusterMap {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::forecast::cluster::cluster_points;
+    use crate::cf::cluster::cluster_points;
     use crate::sampling::rng::{stream, Rng};
 
     fn scene(n: usize) -> Vec<CausticPoint> {

@@ -125,7 +125,7 @@ impl ForecastMaps {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::forecast::cluster::cluster_points;
+    use crate::cf::cluster::cluster_points;
     use crate::math::PI;
     use crate::sampling::rng::{stream, Rng};
 

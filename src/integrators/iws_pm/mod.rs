@@ -19,14 +19,14 @@
 //!
 //! The estimate is biased (blur, boundary darkening), consistent as `N → ∞, k/N → 0`.
 
-use crate::profile::{Phase, Profile};
-use super::caustics::{CausticEstimator, Recurse, ShadingQuery};
+use super::iws::caustics::{CausticEstimator, Recurse, ShadingQuery};
 use super::iws::Iws;
 use super::{Context, Integrator, MethodArgs, MethodSpec};
-use crate::progress::Phases;
 use crate::accel::World;
 use crate::bsdf::{self, ShadingPoint};
 use crate::math::{Rgb, Vec3, PI};
+use crate::profile::{Phase, Profile};
+use crate::progress::Phases;
 use crate::sampling::rng::stream;
 use crate::scene::Material;
 use crate::spatial::KdTree;
@@ -125,7 +125,14 @@ pub fn default_max_radius(world: &World) -> f32 {
 impl PhotonMap {
     /// Traces light paths until `target` caustic photons are stored (see the module doc).
     /// `stored(n)` is told the photons stored so far after every block of paths (display only).
-    pub fn build(world: &World, target: u64, k: u32, max_radius: Option<f32>, seed: u64, stored: &dyn Fn(u64)) -> PhotonMap {
+    pub fn build(
+        world: &World,
+        target: u64,
+        k: u32,
+        max_radius: Option<f32>,
+        seed: u64,
+        stored: &dyn Fn(u64),
+    ) -> PhotonMap {
         let t0 = Instant::now();
         let (verts, paths) =
             particle::collect_caustic_points(world, Emission::Cosine, target, seed, stream::PHOTON, stored);

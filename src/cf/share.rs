@@ -1,7 +1,7 @@
 //! The caustic share of a kept cluster: its indirect irradiance split into the part the forecast
 //! tables aim at (light through Dirac vertices, `E_c`) and the rest (`E_d`). `pt-cf` guides by it
 //! (`c_k = max(c, 1 − s)`, unguided below `--guide-min-share`). Measured in the preprocess
-//! (`integrators::caustic_share`), broadcast with the CF product. (`iws-cf`'s uses of it,
+//! (`integrators::iws_cf::share`), broadcast with the CF product. (`iws-cf`'s uses of it,
 //! `--split-rule share` and `--table-min-share`, were retired: `results/rejected/`.)
 //!
 //! Invariants: any value only steers pdfs and sample counts that are functions of the vertex, so

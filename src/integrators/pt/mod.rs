@@ -8,31 +8,35 @@
 //! below the noise (results/2026-11-30-roulette.md).
 //!
 //! `--path-filter` (a biased diagnostic, off by default) keeps only some path classes
-//! (`integrators::path_class`); without it the estimator is exactly the above.
+//! (`integrators::pt::path_class`); without it the estimator is exactly the above.
 //!
 //! CLI: `forecast render scenes/cornell-box.toml --method pt --spp 64`.
 
-use crate::profile::{Phase, Profile};
 use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
-use crate::progress::Phases;
 use crate::accel::{offset_origin, Hit, Ray, World};
-use crate::sampling::rng::Rng;
 use crate::bsdf::{self, Mode, ShadingPoint};
-use super::path_class::{kept, PathClass, PathFilter};
+use crate::profile::{Phase, Profile};
+use crate::progress::Phases;
+use crate::sampling::rng::Rng;
+pub mod lanes;
+pub mod path_class;
+pub mod wavefront;
+
 use crate::math::{Rgb, Vec3};
 use crate::sampling::power_heuristic;
 use crate::scene::NO_EMITTER;
 use crate::transport::direct;
 use crate::transport::roulette::Throughput;
+use path_class::{kept, PathClass, PathFilter};
 
 /// `pt`'s options (shared with `pt-cf`): `--path-filter`, the path tracers' diagnostic. The
 /// vertex cap and the emission split are render settings (`integrators::settings`).
 #[derive(clap::Args, Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PtArgs {
     /// A biased diagnostic: keep only light paths of these classes, e.g. `DSL,DD*` (D a
-    /// non-Dirac vertex, S a Dirac chain, L the light, `*` a prefix; `integrators::path_class`).
+    /// non-Dirac vertex, S a Dirac chain, L the light, `*` a prefix; `integrators::pt::path_class`).
     /// Turns emission splitting off (one camera ray per sample).
-    #[arg(long, value_name = "CLASSES", value_parser = super::path_class::check_filter)]
+    #[arg(long, value_name = "CLASSES", value_parser = path_class::check_filter)]
     pub path_filter: Option<String>,
 }
 
@@ -101,12 +105,19 @@ impl Integrator for PathTracer {
         l
     }
 
-    fn estimate_batch(&self, world: &World, rays: &[Ray], rngs: &mut [Rng], ctx: &mut Context, out: &mut Vec<CameraEstimate>) {
+    fn estimate_batch(
+        &self,
+        world: &World,
+        rays: &[Ray],
+        rngs: &mut [Rng],
+        ctx: &mut Context,
+        out: &mut Vec<CameraEstimate>,
+    ) {
         if self.filter.is_some() {
             return super::estimate_each(self, world, rays, rngs, ctx, out);
         }
         let t0 = std::time::Instant::now();
-        let mut wave = ctx.take_scratch::<super::path_batch::Wave>();
+        let mut wave = ctx.take_scratch::<wavefront::Wave>();
         self.trace_batch(world, (rays, rngs), &mut wave, out);
         ctx.put_scratch(wave);
         ctx.profile.samples += rays.len() as u64;
@@ -136,7 +147,7 @@ impl PathTracer {
 
     /// `pt`'s estimate along the ray `(origin, dir)`, emission reached before any non-Dirac
     /// vertex in `prefix_le`, the rest in `rest` (also the CF preprocess's caustic-share gather,
-    /// `integrators::caustic_share`).
+    /// `integrators::iws_cf::share`).
     pub fn trace(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
         let s = &world.scene;
         let rng = &mut ctx.rng;

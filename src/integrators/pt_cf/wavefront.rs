@@ -16,9 +16,9 @@
 use super::{continue_path, Guide, GuidedPathTracer, PathState};
 use crate::accel::{Ray, World};
 use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
-use crate::forecast::mixture::DefensiveMixture;
-use crate::integrators::path_batch::Wave;
-use crate::integrators::path_lanes::{Vertex, W};
+use crate::cf::mixture::DefensiveMixture;
+use crate::integrators::pt::lanes::{Vertex, W};
+use crate::integrators::pt::wavefront::Wave;
 use crate::integrators::{CameraEstimate, Context};
 use crate::math::Vec3;
 use crate::sampling::rng::Rng;
@@ -153,7 +153,13 @@ impl GuidedPathTracer {
 
     /// Runs the queued diffuse vertices and finishes each as `trace` does: its NEE queued, its
     /// scattering, roulette and MIS ratio.
-    fn flush(&self, w: &mut Wave<Live>, lane_t: &[f32; W], (rngs, ctx): (&mut [Rng], &mut Context), out: &mut [CameraEstimate]) {
+    fn flush(
+        &self,
+        w: &mut Wave<Live>,
+        lane_t: &[f32; W],
+        (rngs, ctx): (&mut [Rng], &mut Context),
+        out: &mut [CameraEstimate],
+    ) {
         w.lanes.run();
         for (j, &t) in lane_t.iter().enumerate().take(w.lanes.n) {
             let (Live { i, st }, r) = (w.live[w.lanes.k[j] as usize], w.lanes.out(j));

@@ -23,7 +23,7 @@ use crate::scene::LightRef;
 use crate::scene::Triangle;
 
 /// Lanes per record.
-pub(super) const W: usize = 16;
+pub(crate) const W: usize = 16;
 type L = [f32; W];
 
 /// A `Vec3` per lane.
@@ -46,7 +46,7 @@ impl V3 {
 }
 
 /// One diffuse vertex, as the scalar shade loop hands it over.
-pub(super) struct Vertex<'a> {
+pub(crate) struct Vertex<'a> {
     /// The wavefront's live index of the path.
     pub k: u32,
     /// Position, geometric and shading normal (`ShadingPoint`).
@@ -95,7 +95,7 @@ impl<'a> Vertex<'a> {
 
 /// Sixteen queued vertices and, after `run`, their NEE samples and scattered directions.
 #[derive(Default)]
-pub(super) struct Lanes {
+pub(crate) struct Lanes {
     /// Lanes filled.
     pub n: usize,
     /// Live index of each lane's path.
@@ -125,7 +125,7 @@ pub(super) struct Lanes {
 }
 
 /// What `run` computed for one lane.
-pub(super) struct LaneOut {
+pub(crate) struct LaneOut {
     /// The NEE contribution and its shadow segment (`None` where the scalar code returns `None`).
     pub nee: Option<(Rgb, Ray)>,
     /// The sampled direction and its pdf_w (`None` where `bsdf::sample` returns `None`).

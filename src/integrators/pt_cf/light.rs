@@ -43,10 +43,10 @@
 //! one i.i.d. sample, so the film's variance layer and checkpoints stay valid, and the image does
 //! not depend on threads or ranks (a pass, light paths included, is rendered by one rank).
 
-use super::pt_cf::GuidedPathTracer;
-use super::{Context, LightSplats};
 use crate::accel::{offset_origin, take_ray_counts, Hit, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
+use crate::integrators::pt_cf::GuidedPathTracer;
+use crate::integrators::{Context, LightSplats};
 use crate::math::{Rgb, Vec3};
 use crate::sampling::rng::{stream, Rng};
 use crate::scene::{Camera, LightRef, Material, NO_EMITTER};
@@ -392,7 +392,7 @@ fn pixel_of(camera: &Camera, p: Vec3) -> Option<u32> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::integrators::iws_forecast::targeted_emission;
+    use crate::integrators::iws_cf::targeted_emission;
     use std::path::Path;
 
     /// A glass ball over a diffuse floor, a glossy back wall, a small quad light above.

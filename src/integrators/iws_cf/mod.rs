@@ -14,21 +14,22 @@
 //!
 //! CLI: `forecast render scenes/cornell-box.toml --method iws-cf --time 4m`.
 
-use super::caustic_share::caustic_shares;
-use super::caustics::{caustic_chain, CausticEstimator, Recurse, ShadingQuery};
+pub mod share;
+use super::iws::caustics::{caustic_chain, CausticEstimator, Recurse, ShadingQuery};
 use super::iws::{DirectLight, Iws};
 use super::{Context, Integrator, MethodArgs, MethodSpec};
-use crate::profile::{CfCounts, Profile};
-use crate::progress::{Hidden, Phases};
 use crate::accel::World;
 use crate::bsdf;
-use crate::forecast::caustic_point::CausticPoint;
-use crate::forecast::subset_grid::SubsetGrid;
-use crate::forecast::estimator::{CausticForecast, ForecastOptions, PreprocessStats, SplitRule, TableCache, TableKind};
+use crate::cf::caustic_point::CausticPoint;
+use crate::cf::estimator::{CausticForecast, ForecastOptions, PreprocessStats, SplitRule, TableCache, TableKind};
+use crate::cf::subset_grid::SubsetGrid;
 use crate::math::{Rgb, Vec3};
+use crate::profile::{CfCounts, Profile};
+use crate::progress::{Hidden, Phases};
 use crate::sampling::rng::stream;
 use crate::transport::particle::{self, Emission, MAX_VERTICES};
 use crate::transport::target::Targets;
+use share::caustic_shares;
 use std::time::Instant;
 
 /// Default forecast photons to store when neither the CLI nor the scene sets it (the paper's
@@ -141,9 +142,9 @@ impl MethodArgs {
 impl CfArgs {
     /// The limits of `crate::param_limits` (the scene's `forecast.photons` has the same).
     pub fn validate(&self) -> Result<(), String> {
-        let photons = self.forecast_photons.map_or(Ok(()), |n| {
-            crate::param_limits::FORECAST_PHOTONS.check_flag("--forecast-photons", n)
-        });
+        let photons = self
+            .forecast_photons
+            .map_or(Ok(()), |n| crate::param_limits::FORECAST_PHOTONS.check_flag("--forecast-photons", n));
         photons.and_then(|()| crate::param_limits::SPLIT.check_flag("--split", self.split.into()))
     }
 

@@ -332,8 +332,8 @@ impl Builder<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::forecast::caustic_point::CausticPoint;
-    use crate::forecast::cluster::cluster_points;
+    use crate::cf::caustic_point::CausticPoint;
+    use crate::cf::cluster::cluster_points;
     use crate::sampling::rng::{stream, Rng};
 
     /// Caustic points in blobs on a floor and a wall, spread so that the reach stays small.

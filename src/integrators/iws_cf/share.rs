@@ -6,10 +6,10 @@
 //! Invariants: a pure function of (scene, product, seed): each gather path's random numbers are
 //! keyed by (cluster, path index), so the result does not depend on the thread count.
 
-use super::path::PathTracer;
 use crate::accel::{offset_origin, World};
-use crate::forecast::estimator::CausticForecast;
-pub use crate::forecast::share::CausticShare;
+use crate::cf::estimator::CausticForecast;
+pub use crate::cf::share::CausticShare;
+use crate::integrators::pt::PathTracer;
 use crate::math::{luminance, Frame, PI};
 use crate::sampling::rng::{stream, Rng};
 use crate::sampling::warp::sample_cosine_hemisphere;
