@@ -12,39 +12,16 @@
 
 mod common;
 
-use common::{root, tmp_dir};
+use common::cli::{cornell_box, finish, forecast, run};
+use common::tmp_dir;
 use forecast::image_io::{write_exr, Image};
 use std::fs::{File, OpenOptions};
 use std::path::Path;
-use std::process::{Command, Output, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
-
-fn forecast() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_forecast"));
-    c.current_dir(root()).env_remove("MPI_LOCALNRANKS").stdin(Stdio::null());
-    c
-}
-
-/// Runs `args`, returns (exit code, stdout, stderr); fails the test on a signal or a panic.
-fn run(args: &[&str]) -> (i32, String, String) {
-    let out = forecast().args(args).output().expect("spawn forecast");
-    check(args, out)
-}
-
-fn check(args: &[&str], out: Output) -> (i32, String, String) {
-    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
-    let code = out.status.code().unwrap_or_else(|| panic!("{args:?} ended by a signal; stderr: {stderr}"));
-    assert_ne!(code, 101, "{args:?} panicked: {stderr}");
-    assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
-    (code, String::from_utf8_lossy(&out.stdout).to_string(), stderr)
-}
 
 fn dev_full() -> Option<File> {
     OpenOptions::new().write(true).open("/dev/full").ok()
-}
-
-fn scene() -> String {
-    root().join("scenes/cornell-box.toml").display().to_string()
 }
 
 #[test]
@@ -71,8 +48,8 @@ fn full_stdout_and_stderr_are_an_error_not_a_panic() {
     write_exr(&a, &Image::new(4, 4)).unwrap();
     write_exr(&b, &Image::new(4, 4)).unwrap();
     let (sa, sb) = (a.display().to_string(), b.display().to_string());
-    let out = forecast().args(["diff", &sa, &sb]).stdout(full).output().unwrap();
-    let (code, _, stderr) = check(&["diff", &sa, &sb], out);
+    let child = forecast().args(["diff", &sa, &sb]).stdout(full).stderr(Stdio::piped()).spawn().unwrap();
+    let (code, _, stderr) = finish(&["diff", &sa, &sb], child);
     assert_eq!(code, 1, "{stderr}");
     assert!(stderr.contains("cannot write to stdout"), "{stderr}");
     let _ = std::fs::remove_dir_all(d);
@@ -97,8 +74,19 @@ fn an_output_prefix_without_a_file_name_is_refused() {
     let d = tmp_dir("cli-out-dir");
     let prefix = format!("{}/", d.display());
     let t = Instant::now();
-    let (code, _, err) =
-        run(&["render", &scene(), "--method", "pt", "--spp", "1", "--resolution", "8x8", "--out", &prefix, "--quiet"]);
+    let (code, _, err) = run(&[
+        "render",
+        &cornell_box(),
+        "--method",
+        "pt",
+        "--spp",
+        "1",
+        "--resolution",
+        "8x8",
+        "--out",
+        &prefix,
+        "--quiet",
+    ]);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("no file name"), "{err}");
     assert!(t.elapsed() < Duration::from_secs(20), "refused only after {:?}", t.elapsed());
@@ -108,7 +96,7 @@ fn an_output_prefix_without_a_file_name_is_refused() {
 
 #[test]
 fn bench_refuses_zero_repeats() {
-    let (code, out, err) = run(&["bench", &scene(), "--repeats", "0", "--resolution", "8x8"]);
+    let (code, out, err) = run(&["bench", &cornell_box(), "--repeats", "0", "--resolution", "8x8"]);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("--repeats"), "{err}");
     assert!(!out.contains("median of 0"), "{out}");
@@ -120,7 +108,7 @@ fn thread_counts_are_checked_up_front() {
         let t = Instant::now();
         let (code, _, err) = run(&[
             "render",
-            &scene(),
+            &cornell_box(),
             "--method",
             "pt",
             "--spp",
@@ -151,7 +139,7 @@ fn stability_only_with_an_unknown_case_lists_the_cases() {
 fn usage_errors_exit_2_and_other_errors_exit_1() {
     let (code, _, err) = run(&["render"]);
     assert_eq!(code, 2, "missing SCENE: {err}");
-    let (code, _, err) = run(&["render", &scene(), "--method", "pt", "--spp", "many"]);
+    let (code, _, err) = run(&["render", &cornell_box(), "--method", "pt", "--spp", "many"]);
     assert_eq!(code, 2, "malformed value: {err}");
     let (code, _, err) = run(&["no-such-command"]);
     assert_eq!(code, 2, "{err}");
@@ -167,7 +155,7 @@ fn usage_errors_exit_2_and_other_errors_exit_1() {
 fn a_flag_of_another_method_exits_2_naming_its_method() {
     let d = tmp_dir("cli-foreign");
     let prefix = d.join("x").display().to_string();
-    let sc = scene();
+    let sc = cornell_box();
     let cases: &[(&[&str], &str)] = &[
         (&["--method", "pt", "--clusters", "5"], "--clusters belongs to iws-cf/pt-cf, not pt"),
         // no --method: the scene names none, so `auto` resolves it (pt-cf on cornell-box)
@@ -201,7 +189,7 @@ fn a_flag_of_another_method_exits_2_naming_its_method() {
 #[test]
 fn the_json_records_only_the_chosen_methods_options() {
     let d = tmp_dir("cli-options");
-    let sc = scene();
+    let sc = cornell_box();
     let keys = |method: &str, extra: &[&str]| -> serde_json::Map<String, serde_json::Value> {
         let prefix = d.join(method).display().to_string();
         let base = ["render", sc.as_str(), "--method", method, "--resolution", "4x4", "--spp", "1"];
@@ -266,7 +254,7 @@ fn invalid_render_options_are_refused_before_any_work() {
             "--light-paths 18446744073709551615: light paths must be between 0 and 1073741824",
         ),
     ];
-    let sc = scene();
+    let sc = cornell_box();
     for (opts, want) in cases {
         let t = Instant::now();
         let args = [&["render", sc.as_str(), "--resolution", "8x8", "--quiet", "--out", &prefix][..], opts].concat();
@@ -279,34 +267,40 @@ fn invalid_render_options_are_refused_before_any_work() {
     let _ = std::fs::remove_dir_all(d);
 }
 
-/// The scene format applies the same limits with the same words (`render.spp = 0`).
-#[test]
-fn the_scene_format_refuses_the_same_values_with_the_same_words() {
-    let d = tmp_dir("cli-scene-spp");
-    let text = std::fs::read_to_string(root().join("scenes/cornell-box.toml")).unwrap();
-    let text: String =
-        text.lines().map(|l| if l.starts_with("spp") { "spp = 0\n".to_string() } else { format!("{l}\n") }).collect();
-    assert!(text.contains("spp = 0"), "the scene sets no spp");
-    let path = d.join("zero.toml");
-    std::fs::write(&path, text).unwrap();
-    let (code, _, err) = run(&["render", &path.display().to_string(), "--resolution", "8x8", "--quiet"]);
-    assert_eq!(code, 1, "{err}");
-    assert!(err.contains("render.spp") && err.contains("spp must be at least 1 (got 0)"), "{err}");
-    let _ = std::fs::remove_dir_all(d);
-}
-
 /// `--spp 0` used to exit 0 and replace an existing `PREFIX.{exr,png,json}` with a black image.
 #[test]
 fn spp_zero_leaves_an_existing_set_untouched() {
     let d = tmp_dir("cli-spp0");
     let prefix = d.join("keep").display().to_string();
-    let (code, _, err) =
-        run(&["render", &scene(), "--method", "pt", "--spp", "2", "--resolution", "8x8", "--quiet", "--out", &prefix]);
+    let (code, _, err) = run(&[
+        "render",
+        &cornell_box(),
+        "--method",
+        "pt",
+        "--spp",
+        "2",
+        "--resolution",
+        "8x8",
+        "--quiet",
+        "--out",
+        &prefix,
+    ]);
     assert_eq!(code, 0, "{err}");
     let read = |ext: &str| std::fs::read(format!("{prefix}.{ext}")).unwrap();
     let before: Vec<Vec<u8>> = ["exr", "png", "json"].iter().map(|e| read(e)).collect();
-    let (code, _, err) =
-        run(&["render", &scene(), "--method", "pt", "--spp", "0", "--resolution", "8x8", "--quiet", "--out", &prefix]);
+    let (code, _, err) = run(&[
+        "render",
+        &cornell_box(),
+        "--method",
+        "pt",
+        "--spp",
+        "0",
+        "--resolution",
+        "8x8",
+        "--quiet",
+        "--out",
+        &prefix,
+    ]);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("--spp 0"), "{err}");
     let after: Vec<Vec<u8>> = ["exr", "png", "json"].iter().map(|e| read(e)).collect();
@@ -327,7 +321,8 @@ fn an_impossible_film_is_refused_up_front() {
     let d = tmp_dir("cli-huge");
     let prefix = d.join("huge").display().to_string();
     let t = Instant::now();
-    let args = ["render", &scene(), "--method", "iws-pm", "--resolution", "65536x65536", "--quiet", "--out", &prefix];
+    let args =
+        ["render", &cornell_box(), "--method", "iws-pm", "--resolution", "65536x65536", "--quiet", "--out", &prefix];
     let (code, _, err) = run(&args);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("65536x65536") && err.contains("GiB") && err.contains("available"), "{err}");
@@ -343,8 +338,8 @@ fn help_into_a_full_stdout_is_an_error() {
         eprintln!("skipped: no /dev/full on this system");
         return;
     };
-    let out = forecast().arg("--help").stdout(full).output().unwrap();
-    let (code, _, err) = check(&["--help"], out);
+    let child = forecast().arg("--help").stdout(full).stderr(Stdio::piped()).spawn().unwrap();
+    let (code, _, err) = finish(&["--help"], child);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("cannot write to stdout"), "{err}");
     let (code, out, _) = run(&["--help"]);
@@ -361,7 +356,7 @@ fn help_into_a_full_stdout_is_an_error() {
 #[test]
 fn accel_embree_without_the_feature_is_refused() {
     let d = tmp_dir("cli-accel");
-    let sc = scene();
+    let sc = cornell_box();
     let prefix = d.join("r").display().to_string();
     for args in [
         vec!["render", sc.as_str(), "--accel", "embree", "--spp", "1", "--quiet", "--out", &prefix],
@@ -394,7 +389,7 @@ fn refused_as_usage(sub: &str, base: &[&str], cases: &[(&[&str], &str)], dir: &P
 #[test]
 fn reference_refuses_a_flag_that_pt_does_not_take() {
     let d = tmp_dir("cli-reference-foreign");
-    let (sc, prefix) = (scene(), d.join("r").display().to_string());
+    let (sc, prefix) = (cornell_box(), d.join("r").display().to_string());
     let base = [sc.as_str(), "--resolution", "8x8", "--threads", "2", "--quiet", "--out", &prefix];
     let cases: &[(&[&str], &str)] = &[
         (&["--time", "1s", "--light-paths", "1"], "--light-paths belongs to pt-cf, not pt"),
@@ -412,7 +407,7 @@ fn reference_refuses_a_flag_that_pt_does_not_take() {
 #[test]
 fn forecast_map_refuses_the_flags_it_does_not_use() {
     let d = tmp_dir("cli-forecast-map");
-    let (sc, prefix) = (scene(), d.join("m").display().to_string());
+    let (sc, prefix) = (cornell_box(), d.join("m").display().to_string());
     let base = [sc.as_str(), "--resolution", "8x8", "--threads", "2", "--quiet", "--out", &prefix];
     let cases: &[(&[&str], &str)] = &[
         (&["--method", "pt"], "forecast-map does not use --method"),
@@ -440,7 +435,7 @@ fn forecast_map_refuses_the_flags_it_does_not_use() {
 #[test]
 fn compare_refuses_a_flag_of_none_of_the_compared_methods() {
     let d = tmp_dir("cli-compare-foreign");
-    let (sc, out) = (scene(), d.join("c").display().to_string());
+    let (sc, out) = (cornell_box(), d.join("c").display().to_string());
     let missing = d.join("missing.exr").display().to_string();
     let base =
         [sc.as_str(), "--resolution", "8x8", "--threads", "2", "--quiet", "--reference", &missing, "--out", &out];
@@ -466,7 +461,7 @@ fn compare_refuses_a_flag_of_none_of_the_compared_methods() {
 #[test]
 fn resume_of_a_checkpoint_past_the_requested_spp_warns() {
     let d = tmp_dir("cli-resume-spp");
-    let (sc, prefix) = (scene(), d.join("a").display().to_string());
+    let (sc, prefix) = (cornell_box(), d.join("a").display().to_string());
     let ckpt = format!("{prefix}.ckpt");
     let base = ["render", sc.as_str(), "--method", "pt", "--resolution", "8x8", "--threads", "2", "--quiet"];
     let first = [&base[..], &["--spp", "8", "--checkpoint-every", "1h", "--out", &prefix]].concat();

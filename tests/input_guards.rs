@@ -14,53 +14,15 @@
 
 mod common;
 
+use common::cli::{cornell_box, forecast, run};
 use common::{root, tmp_dir};
 use forecast::image_io::{write_exr, write_exr_layers, Image};
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn forecast() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_forecast"));
-    c.current_dir(root()).env_remove("MPI_LOCALNRANKS").stdin(Stdio::null());
-    c
-}
-
-/// Runs `args` with captured output; (exit code, stderr). Fails on a signal, a panic, or a run
-/// past 30 s (it is killed: a blocked read must fail the test, not hang it).
-fn run(args: &[&str]) -> (i32, String) {
-    let mut child = forecast().args(args).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().expect("spawn forecast");
-    // stderr is drained on its own thread, so a chatty child never blocks on a full pipe
-    let mut pipe = child.stderr.take().expect("stderr");
-    let reader = std::thread::spawn(move || {
-        let mut buf = String::new();
-        let _ = std::io::Read::read_to_string(&mut pipe, &mut buf);
-        buf
-    });
-    let t = Instant::now();
-    let status = loop {
-        if let Some(st) = child.try_wait().expect("wait") {
-            break st;
-        }
-        if t.elapsed() > Duration::from_secs(30) {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("{args:?} still running after 30 s (blocked?)");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    let err = reader.join().expect("stderr reader");
-    let code = status.code().unwrap_or_else(|| panic!("{args:?} ended by a signal: {err}"));
-    assert!(code != 101 && !err.contains("panicked"), "{args:?} panicked: {err}");
-    (code, err)
-}
-
 fn s(p: &Path) -> String {
     p.display().to_string()
-}
-
-fn scene() -> String {
-    s(&root().join("scenes/cornell-box.toml"))
 }
 
 #[test]
@@ -76,7 +38,7 @@ fn fifo_and_device_inputs_are_refused_at_once() {
         vec!["diff".into(), s(&img), "/dev/zero".into()],
         [
             "render",
-            &scene(),
+            &cornell_box(),
             "--method",
             "pt",
             "--spp",
@@ -91,7 +53,7 @@ fn fifo_and_device_inputs_are_refused_at_once() {
         ]
         .map(String::from)
         .to_vec(),
-        ["compare", &scene(), "--methods", "pt", "--budgets", "1s", "--seeds", "1", "--out", &out, "--reference"]
+        ["compare", &cornell_box(), "--methods", "pt", "--budgets", "1s", "--seeds", "1", "--out", &out, "--reference"]
             .iter()
             .map(|a| a.to_string())
             .chain([s(&fifo)])
@@ -100,7 +62,7 @@ fn fifo_and_device_inputs_are_refused_at_once() {
     for args in cases {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let t = Instant::now();
-        let (code, err) = run(&args);
+        let (code, _, err) = run(&args);
         assert_eq!(code, 1, "{args:?}: {err}");
         assert!(err.contains("not a regular file"), "{args:?}: {err}");
         assert!(t.elapsed() < Duration::from_secs(20), "{args:?} took {:?}", t.elapsed());
@@ -126,23 +88,23 @@ fn outputs_never_overwrite_inputs_or_each_other() {
     let dotted = s(&d.join("sub").join("..").join("victim.toml"));
     std::fs::create_dir_all(d.join("sub")).unwrap();
     for ckpt in [s(&victim), dotted] {
-        let (code, err) = render(&ckpt);
+        let (code, _, err) = render(&ckpt);
         assert_eq!(code, 1, "{err}");
         assert!(err.contains("--checkpoint-path") && err.contains("destroy"), "{err}");
     }
-    let (code, err) = render(&format!("{prefix}.exr"));
+    let (code, _, err) = render(&format!("{prefix}.exr"));
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("overwrite"), "{err}");
-    let (code, err) = run(&["export-mitsuba", &s(&victim), "--out", &s(&victim)]);
+    let (code, _, err) = run(&["export-mitsuba", &s(&victim), "--out", &s(&victim)]);
     assert_eq!(code, 1, "{err}");
     assert_eq!(std::fs::read(&victim).unwrap(), before, "the scene was changed");
     // an XML scene is not exported again (it used to be parsed as TOML)
     let xml = s(&root().join("scenes/external/sms-ring/ring.xml"));
-    let (code, err) = run(&["export-mitsuba", &xml, "--out", &s(&d.join("again.xml"))]);
+    let (code, _, err) = run(&["export-mitsuba", &xml, "--out", &s(&d.join("again.xml"))]);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("TOML scenes"), "{err}");
     // a checkpoint beside the outputs is fine
-    let (code, err) = render(&format!("{prefix}.ckpt"));
+    let (code, _, err) = render(&format!("{prefix}.ckpt"));
     assert_eq!(code, 0, "{err}");
     let _ = std::fs::remove_dir_all(d);
 }
@@ -188,7 +150,7 @@ fn non_finite_images_and_checks_without_noise_are_refused() {
     bad.pixels[6] = [0.5, f32::NAN, 0.5];
     let nan = d.join("nan.exr");
     write_exr(&nan, &bad).unwrap();
-    let (code, err) = run(&["diff", &s(&nan), &s(&ok)]);
+    let (code, _, err) = run(&["diff", &s(&nan), &s(&ok)]);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("nan.exr") && err.contains("not finite") && err.contains("(2, 1)"), "{err}");
     // a negative variance layer
@@ -197,13 +159,13 @@ fn non_finite_images_and_checks_without_noise_are_refused() {
     let negvar = d.join("negvar.exr");
     write_exr_layers(&negvar, &img, Some(&var)).unwrap();
     let o = s(&ok);
-    let (code, err) = run(&["diff", &s(&negvar), &o, "--half0", &o, "--half1", &o]);
+    let (code, _, err) = run(&["diff", &s(&negvar), &o, "--half0", &o, "--half1", &o]);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("negative"), "{err}");
     // identical halves and zero variance: no noise estimate, so no pass
     let zero = d.join("zerovar.exr");
     write_exr_layers(&zero, &img, Some(&Image::new(4, 4))).unwrap();
-    let (code, err) = run(&["diff", &s(&zero), &o, "--half0", &o, "--half1", &o]);
+    let (code, _, err) = run(&["diff", &s(&zero), &o, "--half0", &o, "--half1", &o]);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("no noise estimate"), "{err}");
     let _ = std::fs::remove_dir_all(d);
@@ -213,7 +175,8 @@ fn non_finite_images_and_checks_without_noise_are_refused() {
 fn table_cache_takes_finite_values_only() {
     for bad in ["nan", "-1", "inf", "-inf", "1e39"] {
         let flag = format!("--table-cache={bad}");
-        let (code, err) = run(&["render", &scene(), "--method", "iws-cf", "--spp", "1", "--resolution", "8x8", &flag]);
+        let (code, _, err) =
+            run(&["render", &cornell_box(), "--method", "iws-cf", "--spp", "1", "--resolution", "8x8", &flag]);
         assert_eq!(code, 2, "--table-cache {bad}: {err}");
         assert!(err.contains("--table-cache"), "{err}");
     }
@@ -223,7 +186,7 @@ fn table_cache_takes_finite_values_only() {
 fn options_that_do_not_apply_are_refused() {
     let d = tmp_dir("guards-unused");
     let out = s(&d.join("c"));
-    let sc = scene();
+    let sc = cornell_box();
     let cases: [(&[&str], &str); 4] = [
         (&["-D", "spp=3", "render", &sc, "--spp", "1", "--resolution", "8x8", "--out", &out], "TOML scene"),
         (&["compare", &sc, "--spp", "1", "--reference", &sc, "--out", &out], "--spp is a `render` option"),
@@ -232,7 +195,7 @@ fn options_that_do_not_apply_are_refused() {
     ];
     for (args, want) in cases {
         let t = Instant::now();
-        let (code, err) = run(args);
+        let (code, _, err) = run(args);
         assert_eq!(code, 1, "{args:?}: {err}");
         assert!(err.contains(want), "{args:?}: {err}");
         assert!(t.elapsed() < Duration::from_secs(20), "{args:?} took {:?}", t.elapsed());
@@ -250,7 +213,7 @@ fn ring_copy(d: &Path) -> (String, std::path::PathBuf) {
 /// `args` exits 1 with every one of `words` in its message, and `file` is byte for byte as before.
 fn refused(args: &[&str], file: &Path, words: &[&str]) {
     let before = std::fs::read(file).unwrap();
-    let (code, err) = run(args);
+    let (code, _, err) = run(args);
     assert_eq!(code, 1, "{args:?}: {err}");
     for w in words {
         assert!(err.contains(w), "{args:?}: `{w}` not in {err}");
@@ -276,7 +239,7 @@ fn export_never_writes_over_the_scene_or_its_meshes() {
     // `--out ring.obj`: the scene's own mesh
     refused(&["export-mitsuba", &toml, "--out", &s(&obj)], &obj, &["--out", "the scene's mesh", "destroy"]);
     // an input mesh where the export writes its own, OUT_meshes/shape_001.ply
-    let (code, err) = run(&["export-mitsuba", &toml, "--out", &s(&d.join("r.xml"))]);
+    let (code, _, err) = run(&["export-mitsuba", &toml, "--out", &s(&d.join("r.xml"))]);
     assert_eq!(code, 0, "{err}");
     std::fs::create_dir_all(d.join("q_meshes")).unwrap();
     let ply = d.join("q_meshes/shape_001.ply");
@@ -294,7 +257,7 @@ fn a_failed_export_leaves_the_previous_export_whole() {
     let d = tmp_dir("guards-export-set");
     let (toml, _) = ring_copy(&d);
     let xml = d.join("r.xml");
-    let (code, err) = run(&["export-mitsuba", &toml, "--out", &s(&xml)]);
+    let (code, _, err) = run(&["export-mitsuba", &toml, "--out", &s(&xml)]);
     assert_eq!(code, 0, "{err}");
     let (meshes_before, xml_before) = (files_under(&d.join("r_meshes")), std::fs::read(&xml).unwrap());
     // another scene (the ring moved: other mesh bytes) whose export fails at its last file, the
@@ -304,14 +267,14 @@ fn a_failed_export_leaves_the_previous_export_whole() {
         .replace("file     = \"ring.obj\"", "file     = \"ring.obj\"\ntranslate = [0.0, 0.5, 0.0]");
     std::fs::write(d.join("moved.toml"), moved).unwrap();
     std::fs::create_dir_all(d.join("r.xml.tmp")).unwrap();
-    let (code, err) = run(&["export-mitsuba", &s(&d.join("moved.toml")), "--out", &s(&xml)]);
+    let (code, _, err) = run(&["export-mitsuba", &s(&d.join("moved.toml")), "--out", &s(&xml)]);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("r.xml.tmp"), "{err}");
     assert_eq!(files_under(&d.join("r_meshes")), meshes_before, "the previous meshes changed (or .tmp left)");
     assert_eq!(std::fs::read(&xml).unwrap(), xml_before);
     // and the same export without the obstacle replaces the set
     std::fs::remove_dir(d.join("r.xml.tmp")).unwrap();
-    let (code, err) = run(&["export-mitsuba", &s(&d.join("moved.toml")), "--out", &s(&xml)]);
+    let (code, _, err) = run(&["export-mitsuba", &s(&d.join("moved.toml")), "--out", &s(&xml)]);
     assert_eq!(code, 0, "{err}");
     assert_ne!(files_under(&d.join("r_meshes")), meshes_before);
     let _ = std::fs::remove_dir_all(d);
@@ -330,7 +293,7 @@ fn a_checkpoint_never_replaces_a_mesh_or_a_snapshot() {
     let snap = format!("{prefix}.snap-1ms.exr");
     let mut args = base.to_vec();
     args.extend(["--time", "1s", "--snapshots", "1ms", "--checkpoint-every", "1h", "--checkpoint-path", &snap]);
-    let (code, err) = run(&args);
+    let (code, _, err) = run(&args);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("--checkpoint-path") && err.contains("--snapshots") && err.contains("overwrite"), "{err}");
     assert!(!Path::new(&snap).exists() && !d.join("r.exr").exists(), "a refused render wrote files");
@@ -348,7 +311,7 @@ fn diff_png_never_replaces_an_input_image() {
     let dotted = s(&d.join("x").join("..").join("b.exr"));
     std::fs::create_dir_all(d.join("x")).unwrap();
     refused(&["diff", &s(&a), &s(&b), "--png", &dotted], &b, &["the image B"]);
-    let (code, err) = run(&["diff", &s(&a), &s(&b), "--png", &s(&d.join("d.png"))]);
+    let (code, _, err) = run(&["diff", &s(&a), &s(&b), "--png", &s(&d.join("d.png"))]);
     assert_eq!(code, 0, "{err}");
     let _ = std::fs::remove_dir_all(d);
 }
@@ -361,7 +324,7 @@ fn compare_never_overwrites_its_reference() {
     let reference = runs.join("pt_300ms_s0.exr");
     write_exr(&reference, &Image::new(16, 16)).unwrap();
     let out = s(&d.join("c"));
-    let args = ["compare", &scene(), "--methods", "pt", "--budgets", "300ms", "--seeds", "1", "--threads", "1"];
+    let args = ["compare", &cornell_box(), "--methods", "pt", "--budgets", "300ms", "--seeds", "1", "--threads", "1"];
     let mut args = args.to_vec();
     args.extend(["--quiet", "--out", &out, "--reference", reference.to_str().unwrap()]);
     refused(&args, &reference, &["--reference", "destroy"]);
@@ -383,74 +346,15 @@ fn pt_cf_forecast_photons_are_held_to_the_memory_estimate() {
     let d = tmp_dir("guards-ptcf-memory");
     for method in ["iws-cf", "pt-cf"] {
         let out = s(&d.join(method));
-        let args = ["render", &scene(), "--method", method, "--resolution", "16x16", "--time", "3s", "--threads", "1"];
+        let args =
+            ["render", &cornell_box(), "--method", method, "--resolution", "16x16", "--time", "3s", "--threads", "1"];
         let mut args = args.to_vec();
         args.extend(["--quiet", "--forecast-photons", "4000000000", "--out", &out]);
         let t = Instant::now();
-        let (code, err) = run(&args);
+        let (code, _, err) = run(&args);
         assert_eq!(code, 1, "{method}: {err}");
         assert!(err.contains("GiB") && err.contains("preprocess product"), "{method}: {err}");
         assert!(t.elapsed() < Duration::from_secs(10), "{method} took {:?}", t.elapsed());
     }
     let _ = std::fs::remove_dir_all(d);
-}
-
-/// A valid scene (a floor and a light at lines 17-22) for the scene-error cases below.
-const SCENE_BASE: &str = "[camera]\nposition = [0.0, 1.0, 3.0]\nlook_at = [0.0, 1.0, 0.0]\nfov = 40.0\nresolution = [8, 8]\n\n\
-[materials.white]\ntype = \"diffuse\"\nalbedo = [0.5, 0.5, 0.5]\n\n\
-[[shape]]\ntype = \"quad\"\ncorner = [-1.0, 0.0, -1.0]\nu = [2.0, 0.0, 0.0]\nv = [0.0, 0.0, 2.0]\nmaterial = \"white\"\n\
-[[shape]]\ntype = \"quad\"\ncorner = [-0.2, 1.9, -0.2]\nu = [0.4, 0.0, 0.0]\nv = [0.0, 0.0, 0.4]\nemission = [1.0, 1.0, 1.0]\n";
-
-/// `render` of `SCENE_BASE` + `extra` exits 1 with `FILE:line: key `key`:` and every one of `words`.
-fn scene_refused(name: &str, extra: &str, (line, key): (usize, &str), words: &[&str]) {
-    let d = tmp_dir(&format!("guards-scene-{name}"));
-    let (file, out) = (d.join(format!("{name}.toml")), s(&d.join("out")));
-    std::fs::write(&file, format!("{SCENE_BASE}{extra}")).unwrap();
-    let args = ["render", &s(&file), "--spp", "1", "--resolution", "8x8", "--threads", "2", "--quiet", "--out", &out];
-    let (code, err) = run(&args);
-    assert_eq!(code, 1, "{name}: {err}");
-    let at = format!("{}:{line}: key `{key}`: ", s(&file));
-    assert!(err.contains(&at), "{name}: `{at}` not in {err}");
-    for w in words {
-        assert!(err.contains(w), "{name}: `{w}` not in {err}");
-    }
-    let _ = std::fs::remove_dir_all(d);
-}
-
-/// An emitter's `material` must exist too (it was ignored when `emission` was given).
-#[test]
-fn an_emitters_unknown_material_is_refused() {
-    scene_refused("emitter-material", "material = \"x\"\n", (23, "shape[1].material"), &["unknown material `x`"]);
-}
-
-/// Two ROIs with one name, or a ROI named `full`, would write over each other's `compare` files.
-#[test]
-fn duplicate_and_reserved_roi_names_are_refused() {
-    let roi = |n: &str, r: &str| format!("\n[[roi]]\nname = \"{n}\"\nrect = {r}\n");
-    let two = roi("a", "[0, 0, 4, 4]") + &roi("a", "[0, 0, 2, 2]");
-    let words = ["duplicate roi name `a`", "`roi[0].name` (line 25)"];
-    scene_refused("roi-twice", &two, (29, "roi[1].name"), &words);
-    let alike = roi("a b", "[0, 0, 4, 4]") + &roi("a_b", "[0, 0, 2, 2]");
-    scene_refused("roi-alike", &alike, (29, "roi[1].name"), &["duplicate roi name `a_b`", "`a b`"]);
-    scene_refused("roi-full", &roi("full", "[0, 0, 4, 4]"), (25, "roi[0].name"), &["`full` is reserved"]);
-}
-
-/// toml's bare "duplicate key" names the table or key and its first definition.
-#[test]
-fn a_table_or_key_defined_twice_is_named() {
-    let camera = "[camera]\nposition = [0.0, 1.0, 3.0]\nlook_at = [0.0, 1.0, 0.0]\nfov = 40.0\nresolution = [8, 8]\n";
-    let words = ["the table `camera` is defined twice (first at line 1)"];
-    scene_refused("camera-twice", &format!("\n{camera}"), (24, "camera"), &words);
-    let white = "\n[materials.white]\ntype = \"diffuse\"\nalbedo = [0.5, 0.5, 0.5]\n";
-    let words = ["the table `materials.white` is defined twice (first at line 7)"];
-    scene_refused("material-twice", white, (24, "materials.white"), &words);
-    let words = ["`shape[1].emission` is given twice (first at line 22)"];
-    scene_refused("key-twice", "emission = [2.0, 2.0, 2.0]\n", (23, "shape[1].emission"), &words);
-}
-
-/// A tiny light quad is too small (area and limit given), not "zero-area".
-#[test]
-fn a_tiny_quad_is_too_small_not_zero_area() {
-    let tiny = "\n[[shape]]\ntype = \"quad\"\ncorner = [0.0, 1.0, 0.0]\nu = [1e-7, 0.0, 0.0]\nv = [0.0, 0.0, 1e-7]\nemission = [1.0, 1.0, 1.0]\n";
-    scene_refused("tiny-quad", tiny, (28, "shape[2].v"), &["quad too small: area |u × v| = 1e-14", "limit 1e-12"]);
 }

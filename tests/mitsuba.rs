@@ -2,11 +2,11 @@
 //! bit-identical image), the external SMS ring scene (loads with its ignored parameters listed,
 //! renders with every method, `pt` and `iws-cf` agree by a Šidák-corrected per-pixel Welch z-test
 //! at family-wise α = 1e-3), the cylinder tessellation against the analytic cylinder, `fov_axis`,
-//! transform order, `-D`, PLY meshes from XML and TOML, and malformed inputs (clear errors with
-//! file and line, no panic).
+//! transform order, `-D`, PLY meshes from XML and TOML, and inputs cut anywhere (no panic). The
+//! malformed inputs' errors (file and line, words) are tests/bad_scenes.rs's.
 
 mod common;
-use common::{assert_detects, global_z, max_z, render_passes, root, tmp_dir};
+use common::{assert_detects, global_z, max_z, ply_scene, render_passes, root, tmp_dir, xml, PLY_ASCII};
 use forecast::accel::World;
 use forecast::integrators::{Integrator, Method, MethodArgs};
 use forecast::math::Vec3;
@@ -33,10 +33,6 @@ fn integrator(m: Method, w: &World, o: &MethodArgs, seed: u64) -> Box<dyn Integr
     m.build(w, o, &bytes).unwrap()
 }
 // ----
-
-fn xml(src: &str, dir: &Path) -> Result<Scene, forecast::scene::SceneError> {
-    mitsuba::load_str(src, "t.xml", dir, &[])
-}
 
 /// The scene minus `path`, `hash` and `warnings`, as comparable text (f32 printed exactly).
 fn fingerprint(s: &Scene) -> String {
@@ -263,19 +259,6 @@ fn every_fov_axis_and_the_transform_order() {
     }
 }
 
-const PLY_ASCII: &str =
-    "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
-element face 2\nproperty list uchar int vertex_indices\nend_header\n-1 0 -1\n1 0 -1\n1 0 1\n-1 0 1\n3 0 2 1\n3 0 3 2\n";
-
-fn ply_scene(shape: &str) -> String {
-    format!(
-        r#"<scene version="2.0.0"><sensor type="perspective"><float name="fov" value="40"/>
-    <transform name="toWorld"><lookat origin="0, 3, 0.1" target="0, 0, 0"/></transform></sensor>
-    {shape}
-    <emitter type="point"><point name="position" value="0, 2, 0"/><rgb name="intensity" value="1"/></emitter></scene>"#
-    )
-}
-
 #[test]
 fn ply_meshes_load_from_xml_and_toml() {
     let dir = tmp_dir("mitsuba-ply");
@@ -320,57 +303,6 @@ intensity = [1.0, 1.0, 1.0]
     assert!(t.triangles.iter().all(|x| x.n == Some([Vec3::Y; 3])));
 }
 
-/// Each malformed input: (xml, files to write, expected line, words the message must contain).
-#[test]
-fn malformed_inputs_are_clear_errors_with_file_and_line() {
-    let dir = tmp_dir("mitsuba-bad");
-    std::fs::write(dir.join("quad.ply"), PLY_ASCII).unwrap();
-    std::fs::write(dir.join("bad_index.ply"), PLY_ASCII.replace("3 0 3 2", "3 0 3 9")).unwrap();
-    let mut bin = forecast::scene::ply::write_binary(&forecast::scene::ply::parse(PLY_ASCII.as_bytes()).unwrap());
-    bin.truncate(bin.len() - 5);
-    std::fs::write(dir.join("short.ply"), bin).unwrap();
-    let ply = |f: &str| {
-        format!(
-            r#"<shape type="ply">
-<string name="filename" value="{f}"/></shape>"#
-        )
-    };
-    let cases: Vec<(String, usize, Vec<&str>)> = vec![
-        (ply_scene("<shape type=\"ply\">\n<string name=\"filename\" value=\"quad.ply\"/>"), 5, vec!["malformed XML"]),
-        (ply_scene("<shape type=\"ply\">\n<string name=\"filename\" value=\"quad.ply\"/>\n<ref id=\"gold\"/></shape>"), 5, vec!["gold", "no BSDF"]),
-        (ply_scene(&ply("missing.ply")), 4, vec!["missing.ply", "filename"]),
-        (ply_scene(&ply("bad_index.ply")), 4, vec!["line 15", "index 9 out of range"]),
-        (ply_scene(&ply("short.ply")), 4, vec!["cut short at byte"]),
-        (
-            ply_scene("<shape type=\"ply\"><string name=\"filename\" value=\"quad.ply\"/>\n<transform name=\"to_world\">\n<matrix value=\"1 0 0 0 0 1 0 0 0 0 1 0 0 0 0\"/></transform></shape>"),
-            5,
-            vec!["matrix", "16", "got 15"],
-        ),
-        (ply_scene("<shape type=\"ply\"><string name=\"filename\" value=\"quad.ply\"/>\n<bsdf type=\"roughconductor\"/></shape>"), 4, vec!["roughconductor", "not supported"]),
-        (ply_scene("<shape type=\"ply\"><string name=\"filename\" value=\"quad.ply\"/>\n<bsdf type=\"diffuse\">\n<texture name=\"reflectance\" type=\"bitmap\"/></bsdf></shape>"), 5, vec!["diffuse.reflectance", "textures"]),
-        (ply_scene("\n<emitter type=\"envmap\"/>"), 4, vec!["envmap", "not supported"]),
-        (ply_scene("\n<medium type=\"homogeneous\"/>"), 4, vec!["medium"]),
-        (ply_scene("\n<shape type=\"ply\"><integer name=\"x\" value=\"$nope\"/></shape>"), 4, vec!["$nope", "not defined"]),
-        // 0 photons is an error, as `[forecast] photons = 0` (it used to fall back to the default)
-        (ply_scene("\n<default name=\"forecast_photons\" value=\"0\"/>"), 4, vec!["forecast_photons", "at least 1"]),
-        // the light limits of src/scene/limits.rs
-        (ply_scene("\n<emitter type=\"point\"><point name=\"position\" value=\"0, 2, 0\"/><rgb name=\"intensity\" value=\"2e9\"/></emitter>"), 4, vec!["intensity", "at most 1e9"]),
-        (ply_scene("<shape type=\"ply\"><string name=\"filename\" value=\"quad.ply\"/>\n<emitter type=\"area\"><rgb name=\"radiance\" value=\"1e16\"/></emitter></shape>"), 4, vec!["radiance", "at most 1e15"]),
-    ];
-    for (src, line, words) in cases {
-        let e = match std::panic::catch_unwind(|| xml(&src, &dir)) {
-            Ok(Err(e)) => e,
-            Ok(Ok(_)) => panic!("accepted:\n{src}"),
-            Err(_) => panic!("panicked on:\n{src}"),
-        };
-        let msg = e.to_string();
-        assert!(msg.starts_with(&format!("t.xml:{line}: ")), "wrong line in `{msg}` (want {line})");
-        for w in words {
-            assert!(msg.contains(w), "`{msg}` lacks `{w}`");
-        }
-    }
-}
-
 #[test]
 fn truncated_inputs_never_panic() {
     let src = ring_src();
@@ -391,184 +323,5 @@ fn truncated_inputs_never_panic() {
     for cut in 0..PLY_ASCII.len() - 1 {
         let r = std::panic::catch_unwind(|| forecast::scene::ply::parse(&PLY_ASCII.as_bytes()[..cut]));
         assert!(r.is_ok(), "ASCII PLY cut at byte {cut}: panic");
-    }
-}
-
-// ---- issue 31: parsers bounded by their input, one builder's checks in every format ----
-
-/// The reproducers of issue 31 (tests/scenes/robustness/).
-fn robust() -> std::path::PathBuf {
-    root().join("tests/scenes/robustness")
-}
-
-/// Loads `name` (TOML or XML) from the reproducers; panics on a panic.
-fn load_robust(name: &str) -> Result<Scene, forecast::scene::SceneError> {
-    let p = robust().join(name);
-    std::panic::catch_unwind(|| forecast::scene::load(&p)).unwrap_or_else(|_| panic!("{name}: panicked"))
-}
-
-/// `name` fails at `line` with `key`, and its message holds every word of `words`.
-fn refused(name: &str, line: usize, key: &str, words: &[&str]) {
-    let e = match load_robust(name) {
-        Ok(_) => panic!("{name}: accepted"),
-        Err(e) => e,
-    };
-    let msg = e.to_string();
-    assert_eq!((e.line, e.key.as_str()), (line, key), "{name}: {msg}");
-    for w in words {
-        assert!(msg.contains(w), "{name}: `{msg}` lacks `{w}`");
-    }
-}
-
-#[test]
-fn ply_second_vertex_element_is_refused_not_a_panic() {
-    // the normals of a second `element vertex` were shorter than the positions: index panics
-    // at scene/ply.rs (TOML, smooth normals) and mitsuba/shapes.rs (XML)
-    refused("ply_two_vertex_elements_panic.toml", 11, "shape[0].file", &["second `element vertex`", "line 7"]);
-    refused("ply_two_vertex_elements_panic.xml", 5, "ply.filename", &["second `element vertex`"]);
-}
-
-#[test]
-fn ply_element_counts_are_checked_against_the_bytes_left() {
-    // 0 properties × 1.8e19 rows: nothing to read, skipped at once (it was read row by row, forever)
-    let t = std::time::Instant::now();
-    let s = load_robust("ply_zero_prop_element_hang.toml").unwrap_or_else(|e| panic!("{e}"));
-    assert!(!s.triangles.is_empty());
-    load_robust("ply_zero_prop_element_hang.xml").unwrap_or_else(|e| panic!("{e}"));
-    assert!(t.elapsed().as_secs_f64() < 2.0, "{:?}", t.elapsed());
-    // a count the bytes cannot hold is refused before any row is read
-    let head = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
-property float z\nelement face 4000000000\nproperty list uchar int vertex_indices\nend_header\n";
-    let mut b = head.as_bytes().to_vec();
-    b.extend(std::iter::repeat_n(0u8, 36));
-    let e = forecast::scene::ply::parse(&b).err().unwrap();
-    assert!(e.contains("declares 4000000000 rows") && e.contains("at most"), "{e}");
-}
-
-#[test]
-fn ply_of_20mb_of_empty_faces_fails_at_the_first_face() {
-    // 20 M faces of 0 vertices: 1.6 GB before the error (an abort under a 1 GB limit); now the
-    // first face is the error and nothing is stored
-    let dir = tmp_dir("ply-zero-faces");
-    let n = 20_000_000;
-    let mut b = format!("ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face {n}\nproperty list uchar int vertex_indices\nend_header\n").into_bytes();
-    let head = b.len();
-    for v in [[-0.5f32, 0.5, 0.0], [0.5, 0.5, 0.0], [0.0, 1.2, 0.0]] {
-        v.iter().for_each(|x| b.extend_from_slice(&x.to_le_bytes()));
-    }
-    b.resize(b.len() + n, 0);
-    std::fs::write(dir.join("ply_zero_len_faces_20M.ply"), &b).unwrap();
-    for f in ["ply_zero_len_faces_20M.toml", "ply_zero_len_faces_20M.xml"] {
-        std::fs::copy(robust().join(f), dir.join(f)).unwrap();
-        let t = std::time::Instant::now();
-        let e = forecast::scene::load(&dir.join(f)).err().unwrap().to_string();
-        assert!(e.contains(&format!("byte {}: face with 0 vertices", head + 36)), "{f}: {e}");
-        assert!(t.elapsed().as_secs_f64() < 5.0, "{f}: {:?}", t.elapsed());
-    }
-}
-
-#[test]
-fn ply_list_length_must_be_a_whole_number() {
-    let b = std::fs::read(robust().join("ply_list_len_3.9_accepted.ply")).unwrap();
-    let e = forecast::scene::ply::parse(&b).err().unwrap();
-    assert!(e.contains("line 8") && e.contains("count type must be an integer"), "{e}");
-    let b = String::from_utf8(b).unwrap().replace("list float int", "list uchar int");
-    let e = forecast::scene::ply::parse(b.as_bytes()).err().unwrap();
-    assert!(e.contains("line 13") && e.contains("bad list length 3.9"), "{e}");
-}
-
-/// A minimal XML scene around `body` (a camera, a rectangle, a point light).
-fn xml_with(body: &str) -> String {
-    format!(
-        r#"<scene version="3.0.0"><sensor type="perspective"><float name="fov" value="40"/>
-<transform name="to_world"><lookat origin="0, 1, 3.88" target="0, 1, 0" up="0, 1, 0"/></transform>
-<film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
-<shape type="rectangle"/>
-<emitter type="point"><point name="position" x="0" y="1" z="2"/><rgb name="intensity" value="1"/></emitter>
-{body}</scene>"#
-    )
-}
-
-#[test]
-fn xml_nesting_is_limited_with_a_clear_error() {
-    // 10,000 nested elements overflowed the stack (SIGABRT)
-    let n = 10_000;
-    let deep =
-        format!("<bsdf type=\"twosided\">{}{}</bsdf>", "<bsdf type=\"twosided\">\n".repeat(n), "</bsdf>".repeat(n));
-    let e = xml(&xml_with(&deep), Path::new(".")).err().unwrap();
-    assert!(e.message.contains("nested more than 64 deep"), "{e}");
-    assert_eq!(e.line, 6 + 62, "{e}"); // the 65th element: scene, then 63 bsdfs from line 6
-                                       // real scenes nest a handful
-    let ok = "<bsdf type=\"twosided\"><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.5\"/></bsdf></bsdf>";
-    xml(&xml_with(ok), Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
-}
-
-#[test]
-fn xml_load_time_is_linear_in_the_elements() {
-    // 10k elements took 0.31 s, 40k 4.9 s, 100k over 20 s (a line lookup from the document start
-    // per node): quadratic. Linear: 100k costs about 5× 20k (quadratic: 25×); the best of two runs
-    // each, against the noise of a loaded machine.
-    let scene =
-        |n: usize| xml_with(&(0..n).map(|i| format!("<default name=\"v{i}\" value=\"1\"/>\n")).collect::<String>());
-    let best = |src: &str| {
-        (0..2)
-            .map(|_| {
-                let t = std::time::Instant::now();
-                xml(src, Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
-                t.elapsed().as_secs_f64()
-            })
-            .fold(f64::INFINITY, f64::min)
-    };
-    let (small, big) = (scene(20_000), scene(100_000));
-    let (t20, t100) = (best(&small), best(&big));
-    eprintln!("XML load: 20k elements {t20:.3} s, 100k {t100:.3} s");
-    assert!(t100 < 12.0 * t20.max(1e-3) && t100 < 3.0, "20k: {t20:.3} s, 100k: {t100:.3} s");
-    // and the line numbers are still right at the end
-    let e = xml(&(big.replace("</scene>", "<oops/></scene>")), Path::new(".")).err().unwrap();
-    assert_eq!(e.line, 6 + 100_000, "{e}");
-}
-
-#[test]
-fn xml_refuses_what_toml_refuses() {
-    // each rendered a black or wrong image without a word (TOML refused the same values)
-    refused("cam_origin_huge.xml", 3, "perspective.to_world", &["camera position", "extent"]);
-    refused("cam_translate_huge.xml", 3, "perspective.to_world", &["camera position", "extent"]);
-    refused("point_light_huge_pos.xml", 6, "point.position", &["point light position", "extent"]);
-    refused("cam_scale_zero_y.xml", 3, "perspective.to_world", &["finite and non-zero"]);
-    refused("cam_matrix_proj.xml", 3, "perspective.to_world", &["projective"]);
-    refused("ref_dup_id.xml", 5, "", &["id `a` is defined twice (first on line 5)"]);
-    refused("sphere_scale_zero.xml", 5, "sphere.to_world", &["radius must be positive"]);
-    // a 3e38 vertex is the extent error (it was dropped as "degenerate")
-    refused("far_vertex_dropped.xml", 5, "ply.filename", &["mesh vertex", "extent", "face 1 of"]);
-    refused("cyl_p1_huge.xml", 5, "cylinder.p1", &["mesh vertex", "extent"]);
-    refused("rect_scale_1e19.xml", 5, "rectangle.to_world", &["mesh vertex", "extent"]);
-}
-
-#[test]
-fn xml_messages_say_what_is_wrong() {
-    // the shape's own line, and the degenerate triangles named (the warning was lost)
-    refused("nan_vertex_empty_scene.xml", 5, "shape.ply", &["empty scene", "skipped 1 degenerate triangle(s)"]);
-    refused("width_huge_int.xml", 4, "hdrfilm.width", &["99999999999999999999999", "out of range"]);
-    // the light's power overflows: its own line and key, not "light 0" at line 0
-    refused("sphere_emit_r_1e12.xml", 5, "area.radiance", &["overflows"]);
-    // serde's Rust type names in words
-    let e = load_robust("materialraw_leak.toml").err().unwrap().to_string();
-    assert!(!e.contains("MaterialRaw") && e.contains("[materials.NAME]"), "{e}");
-}
-
-#[test]
-fn a_foreign_integrator_and_its_parameters_are_warnings() {
-    // a Mitsuba 0.5 sppm integrator: the method is --method, so its parameters are not errors
-    let s = xml(
-        &xml_with(
-            "<integrator type=\"sppm\"><integer name=\"photonCount\" value=\"250000\"/>\
-<integer name=\"maxPasses\" value=\"100\"/><float name=\"initialRadius\" value=\"0\"/></integrator>",
-        ),
-        Path::new("."),
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
-    let w = s.warnings.join("\n");
-    for p in ["integrator `sppm` ignored", "photon_count", "max_passes", "initial_radius"] {
-        assert!(w.contains(p), "no warning about {p}: {w}");
     }
 }

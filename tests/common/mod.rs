@@ -1,6 +1,9 @@
-//! Shared helpers for the integration tests: temporary directories, render jobs, and a
-//! brute-force ray caster that does not use the BVH (the reference for `tests/bvh.rs`).
+//! Shared helpers for the integration tests: temporary directories, render jobs, a brute-force
+//! ray caster that does not use the BVH (the reference for `tests/bvh.rs`), and the binary run as a
+//! user runs it ([`cli`]).
 #![allow(dead_code)]
+
+pub mod cli;
 
 use forecast::distributed::local::Local;
 use forecast::integrators::{Method, MethodArgs};
@@ -367,4 +370,26 @@ pub fn cornell_with_many_spheres() -> Scene {
         s.spheres.push(forecast::scene::Sphere { center: c, radius: 0.02 + 0.15 * rng.next_f32(), ..proto.clone() });
     }
     s
+}
+
+// ---- Mitsuba XML and PLY fixtures (tests/mitsuba.rs, tests/bad_scenes.rs) ----
+
+/// Loads Mitsuba XML text as the file `t.xml`, its files relative to `dir`, without `-D` values.
+pub fn xml(src: &str, dir: &Path) -> Result<Scene, forecast::scene::SceneError> {
+    forecast::scene::mitsuba::load_str(src, "t.xml", dir, &[])
+}
+
+/// A flat quad at y = 0 (4 vertices, 2 faces) as ASCII PLY.
+pub const PLY_ASCII: &str =
+    "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+element face 2\nproperty list uchar int vertex_indices\nend_header\n-1 0 -1\n1 0 -1\n1 0 1\n-1 0 1\n3 0 2 1\n3 0 3 2\n";
+
+/// A Mitsuba 2.0 scene around `shape`: a camera looking down at the origin, a point light above it.
+pub fn ply_scene(shape: &str) -> String {
+    format!(
+        r#"<scene version="2.0.0"><sensor type="perspective"><float name="fov" value="40"/>
+    <transform name="toWorld"><lookat origin="0, 3, 0.1" target="0, 0, 0"/></transform></sensor>
+    {shape}
+    <emitter type="point"><point name="position" value="0, 2, 0"/><rgb name="intensity" value="1"/></emitter></scene>"#
+    )
 }
