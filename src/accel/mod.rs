@@ -93,6 +93,22 @@ pub fn offset_origin(p: Vec3, ng: Vec3, dir: Vec3) -> Vec3 {
     }
 }
 
+/// The shadow segment between surface points `a` (normal `na`) and `b` (normal `nb`), both ends
+/// offset off their surfaces, and whether it exists (false when the points coincide). Without
+/// early returns, so that `pt`'s lanes run it sixteen wide ([`World::visibility_ray`] is its
+/// scalar form).
+#[inline(always)]
+pub fn shadow_segment(a: Vec3, na: Vec3, b: Vec3, nb: Vec3) -> (Ray, bool) {
+    let d = b - a;
+    let dist = d.length();
+    let dir = d / dist;
+    let o = offset_origin(a, na, dir);
+    let target = offset_origin(b, nb, -dir);
+    let seg = target - o;
+    let len = seg.length();
+    (Ray { o, d: seg / len.max(1e-30), tmax: len }, !(dist <= 0.0))
+}
+
 /// Why `World::build` refused a scene.
 #[derive(Clone, Debug, PartialEq)]
 pub enum BuildError {
@@ -132,10 +148,13 @@ impl std::error::Error for BuildError {}
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum AccelKind {
-    /// obvhs CWBVH (always built in).
+    /// A compressed wide BVH (the obvhs crate).
     #[default]
     Obvhs,
-    /// Intel Embree 3 (cargo feature `embree`).
+    /// Intel Embree 3 (builds with --features embree only).
+    // Hidden in a build without the feature, so that `--help` offers only what the build has;
+    // the value still parses there, and `check` refuses it with the rebuild hint.
+    #[cfg_attr(not(feature = "embree"), value(hide = true))]
     Embree,
 }
 
@@ -353,17 +372,8 @@ impl World {
     /// (normal `nb`), both ends offset off their surfaces; `None` when the points coincide
     /// (never visible).
     pub fn visibility_ray(&self, a: Vec3, na: Vec3, b: Vec3, nb: Vec3) -> Option<Ray> {
-        let d = b - a;
-        let dist = d.length();
-        if dist <= 0.0 {
-            return None;
-        }
-        let dir = d / dist;
-        let o = offset_origin(a, na, dir);
-        let target = offset_origin(b, nb, -dir);
-        let seg = target - o;
-        let len = seg.length();
-        Some(Ray { o, d: seg / len.max(1e-30), tmax: len })
+        let (ray, valid) = shadow_segment(a, na, b, nb);
+        valid.then_some(ray)
     }
 }
 

@@ -11,13 +11,13 @@
 
 mod conductor;
 mod dielectric;
+pub mod diffuse;
 mod phong;
 
 pub use conductor::fresnel_conductor;
 pub use dielectric::fresnel_dielectric;
 
-use crate::math::{Frame, Rgb, Vec3, INV_PI};
-use crate::sampling::warp::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
+use crate::math::{Rgb, Vec3};
 use crate::scene::Material;
 
 /// Which quantity a path carries (Veach ch. 5; pbrt's TransportMode).
@@ -61,12 +61,25 @@ impl ShadingPoint {
     /// Normals flipped to `wo`'s geometric side: (ng', ns').
     #[inline]
     fn oriented(&self, wo: Vec3) -> (Vec3, Vec3) {
-        if wo.dot(self.ng) >= 0.0 {
-            (self.ng, self.ns)
-        } else {
-            (-self.ng, -self.ns)
-        }
+        oriented(self.ng, self.ns, wo)
     }
+}
+
+/// The geometric and shading normals flipped to `wo`'s geometric side: (ng', ns').
+#[inline(always)]
+pub fn oriented(ng: Vec3, ns: Vec3, wo: Vec3) -> (Vec3, Vec3) {
+    if wo.dot(ng) >= 0.0 {
+        (ng, ns)
+    } else {
+        (-ng, -ns)
+    }
+}
+
+/// Whether a reflection lobe pairs `wo` and `wi` around the oriented normals `(ng, ns)`: `wi`
+/// above both, `wo` above `ns` (a NaN passes, as the lanes need).
+#[inline(always)]
+pub fn reflects(ng: Vec3, ns: Vec3, wo: Vec3, wi: Vec3) -> bool {
+    !(wi.dot(ng) <= 0.0 || wi.dot(ns) <= 0.0 || wo.dot(ns) <= 0.0)
 }
 
 /// Adjoint shading-normal correction for importance transport (Veach eq. 5.19).
@@ -85,13 +98,15 @@ fn shading_correction(mode: Mode, sp: &ShadingPoint, wo: Vec3, wi: Vec3) -> f32 
 /// BSDF value f(wo, wi) without the cosine; zero for Dirac and black materials.
 #[inline]
 pub fn eval(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3) -> Rgb {
-    let (ng, ns) = sp.oriented(wo);
-    if wi.dot(ng) <= 0.0 || wi.dot(ns) <= 0.0 || wo.dot(ns) <= 0.0 {
-        return Rgb::ZERO;
-    }
     match *m {
-        Material::Diffuse { albedo } => albedo * INV_PI,
-        Material::Glossy { albedo, specular, exponent } => phong::eval(albedo, specular, exponent, ns, wo, wi),
+        Material::Diffuse { albedo } => diffuse::eval(albedo, sp.ng, sp.ns, wo, wi),
+        Material::Glossy { albedo, specular, exponent } => {
+            let (ng, ns) = sp.oriented(wo);
+            if !reflects(ng, ns, wo, wi) {
+                return Rgb::ZERO;
+            }
+            phong::eval(albedo, specular, exponent, ns, wo, wi)
+        }
         _ => Rgb::ZERO,
     }
 }
@@ -99,13 +114,15 @@ pub fn eval(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3) -> Rgb {
 /// Solid-angle pdf of `sample` producing `wi` (0 for Dirac and black materials).
 #[inline]
 pub fn pdf_w(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3) -> f32 {
-    let (ng, ns) = sp.oriented(wo);
-    if wi.dot(ng) <= 0.0 {
-        return 0.0;
-    }
     match *m {
-        Material::Diffuse { .. } => cosine_hemisphere_pdf(wi.dot(ns)),
-        Material::Glossy { albedo, specular, exponent } => phong::pdf_w(albedo, specular, exponent, ns, wo, wi),
+        Material::Diffuse { .. } => diffuse::pdf_w(sp.ng, sp.ns, wo, wi),
+        Material::Glossy { albedo, specular, exponent } => {
+            let (ng, ns) = sp.oriented(wo);
+            if wi.dot(ng) <= 0.0 {
+                return 0.0;
+            }
+            phong::pdf_w(albedo, specular, exponent, ns, wo, wi)
+        }
         _ => 0.0,
     }
 }
@@ -116,18 +133,15 @@ pub fn sample(m: &Material, sp: &ShadingPoint, wo: Vec3, u: [f32; 3], mode: Mode
     let (ng, ns) = sp.oriented(wo);
     let s = match *m {
         Material::Diffuse { albedo } => {
-            let frame = Frame::from_normal(ns);
-            let wi = frame.to_world(sample_cosine_hemisphere([u[0], u[1]]));
-            let cos = wi.dot(ns);
-            if wi.dot(ng) <= 0.0 || cos <= 0.0 || wo.dot(ns) <= 0.0 {
+            let (wi, pdf_w, valid) = diffuse::sample(sp.ng, sp.ns, wo, [u[0], u[1]]);
+            if !valid {
                 return None;
             }
-            // f·cos/pdf = albedo for the cosine warp
-            BsdfSample { wi, weight: albedo, pdf_w: cos * INV_PI, is_delta: false, eta: 1.0 }
+            BsdfSample { wi, weight: albedo, pdf_w, is_delta: false, eta: 1.0 }
         }
         Material::Glossy { albedo, specular, exponent } => {
             let (wi, pdf) = phong::sample(albedo, specular, exponent, ns, wo, u)?;
-            if wi.dot(ng) <= 0.0 || wi.dot(ns) <= 0.0 || wo.dot(ns) <= 0.0 || pdf <= 0.0 {
+            if !reflects(ng, ns, wo, wi) || pdf <= 0.0 {
                 return None;
             }
             let f = phong::eval(albedo, specular, exponent, ns, wo, wi);

@@ -8,20 +8,21 @@ use crate::math::{Vec2, Vec3, INV_PI, PI};
 
 /// Shirley–Chiu concentric map of the square onto the unit disk. The angle is (π/4)·t in one
 /// octant pair and π/2 − (π/4)·t in the other, so its sine and cosine are those of (π/4)·t,
-/// from [`sin_cos_quarter_pi`], swapped in the second case.
-#[inline]
+/// from [`sin_cos_quarter_pi`], swapped in the second case. Written without early returns (both
+/// octant pairs select their operands, one sine and cosine is computed) so that `pt`'s lanes run
+/// it sixteen wide (`integrators::pt::lanes`).
+#[inline(always)]
 pub fn sample_concentric_disk(u: [f32; 2]) -> Vec2 {
     let ox = 2.0 * u[0] - 1.0;
     let oy = 2.0 * u[1] - 1.0;
+    let wide = ox.abs() > oy.abs();
+    let (r, t) = if wide { (ox, oy / ox) } else { (oy, ox / oy) };
+    let (s, c) = sin_cos_quarter_pi(t);
+    let disk = if wide { Vec2::new(r * c, r * s) } else { Vec2::new(r * s, r * c) };
     if ox == 0.0 && oy == 0.0 {
-        return Vec2::ZERO;
-    }
-    if ox.abs() > oy.abs() {
-        let (s, c) = sin_cos_quarter_pi(oy / ox);
-        Vec2::new(ox * c, ox * s)
+        Vec2::ZERO
     } else {
-        let (s, c) = sin_cos_quarter_pi(ox / oy);
-        Vec2::new(oy * s, oy * c)
+        disk
     }
 }
 
@@ -40,7 +41,7 @@ pub fn sin_cos_quarter_pi(t: f32) -> (f32, f32) {
 }
 
 /// Cosine-weighted hemisphere direction (Malley's method).
-#[inline]
+#[inline(always)]
 pub fn sample_cosine_hemisphere(u: [f32; 2]) -> Vec3 {
     let d = sample_concentric_disk(u);
     let z = (1.0 - d.length_squared()).max(0.0).sqrt();
@@ -48,7 +49,7 @@ pub fn sample_cosine_hemisphere(u: [f32; 2]) -> Vec3 {
 }
 
 /// Solid-angle pdf of `sample_cosine_hemisphere`.
-#[inline]
+#[inline(always)]
 pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
     cos_theta.max(0.0) * INV_PI
 }
@@ -87,8 +88,14 @@ pub fn phong_lobe_pdf(cos_alpha: f32, exponent: f32) -> f32 {
     }
 }
 
+/// The point of barycentrics (b0, b1, 1 − b0 − b1) in the triangle `p`.
+#[inline(always)]
+pub fn triangle_point(p: [Vec3; 3], (b0, b1): (f32, f32)) -> Vec3 {
+    b0 * p[0] + b1 * p[1] + (1.0 - b0 - b1) * p[2]
+}
+
 /// Uniform barycentrics (b0, b1) on a triangle; b2 = 1 − b0 − b1 (area pdf 1/area).
-#[inline]
+#[inline(always)]
 pub fn sample_triangle(u: [f32; 2]) -> (f32, f32) {
     // Heitz 2019 low-distortion map.
     let (b0, b1) = if u[0] < u[1] {

@@ -107,6 +107,7 @@ pub use material::Material;
 
 use crate::math::{luminance, Rgb, Vec3, PI};
 use crate::sampling::distribution::Distribution1D;
+use crate::sampling::warp;
 
 /// Sentinel for "no emitter".
 pub const NO_EMITTER: u32 = u32::MAX;
@@ -281,12 +282,11 @@ impl Scene {
         let e = &self.emitters[emitter as usize];
         if e.prim < self.ntri() {
             let t = &self.triangles[e.prim as usize];
-            let (b0, b1) = crate::sampling::warp::sample_triangle(u);
-            let p = b0 * t.p[0] + b1 * t.p[1] + (1.0 - b0 - b1) * t.p[2];
+            let p = warp::triangle_point(t.p, warp::sample_triangle(u));
             (p, t.ng, 1.0 / t.area)
         } else {
             let s = &self.spheres[(e.prim - self.ntri()) as usize];
-            let d = crate::sampling::warp::sample_uniform_sphere(u);
+            let d = warp::sample_uniform_sphere(u);
             let n = if s.inward { -d } else { d };
             (s.center + s.radius * d, n, 1.0 / e.area)
         }

@@ -23,6 +23,30 @@ pub fn emitter_pdf_w(world: &World, emitter: u32, dist2: f32, cos_l: f32) -> f32
     s.light_pick.pmf(li) / s.emitters[emitter as usize].area * dist2 / cos_l
 }
 
+/// The direction from `p` toward the light point `y` (normal `ny`): `(wi, distance², cos θ_l)`,
+/// the light-side cosine positive where `y` faces `p`.
+#[inline(always)]
+pub fn toward(p: Vec3, y: Vec3, ny: Vec3) -> (Vec3, f32, f32) {
+    let d = y - p;
+    let dist2 = d.length_squared();
+    let wi = d / dist2.sqrt();
+    (wi, dist2, ny.dot(-wi))
+}
+
+/// The solid-angle pdf of a light point picked with probability `pmf` and area density `pdf_a`,
+/// at distance² `dist2` and light-side cosine `cos_l`.
+#[inline(always)]
+pub fn light_pdf_w(pmf: f32, pdf_a: f32, dist2: f32, cos_l: f32) -> f32 {
+    pmf * pdf_a * dist2 / cos_l
+}
+
+/// An area light's NEE contribution `Le·f·|cos θ_s|/pdf_light`, MIS-weighted by the power
+/// heuristic against the caller's direction sampler (`pdf_other`).
+#[inline(always)]
+pub fn area_light_value(le: Rgb, f: Rgb, cos_s: f32, pdf_light: f32, pdf_other: f32) -> Rgb {
+    le * f * (cos_s.abs() / pdf_light) * power_heuristic(pdf_light, pdf_other)
+}
+
 /// One NEE sample at a non-Dirac point: Le·f·cos/pdf with MIS (area lights) or exact (point lights).
 #[inline]
 pub fn sample_light(world: &World, sp: &ShadingPoint, m: &Material, wo: Vec3, rng: &mut Rng) -> Rgb {
@@ -72,25 +96,19 @@ pub fn light_sample_mis(
     match s.lights[li] {
         LightRef::Area(e) => {
             let (y, ny, pdf_a) = s.sample_emitter_point(e, u);
-            let d = y - sp.p;
-            let dist2 = d.length_squared();
-            if dist2 <= 0.0 {
-                return None;
-            }
-            let wi = d / dist2.sqrt();
-            let cos_l = ny.dot(-wi);
-            if cos_l <= 0.0 {
+            let (wi, dist2, cos_l) = toward(sp.p, y, ny);
+            if dist2 <= 0.0 || cos_l <= 0.0 {
                 return None;
             }
             let f = bsdf::eval(m, sp, wo, wi);
             if f == Rgb::ZERO {
                 return None;
             }
-            let pdf_light = pmf * pdf_a * dist2 / cos_l;
+            let pdf_light = light_pdf_w(pmf, pdf_a, dist2, cos_l);
             let pdf_bsdf = pdf_other(wi);
             let shadow = world.visibility_ray(sp.p, sp.ng, y, ny)?;
             let le = s.emitters[e as usize].radiance;
-            let value = le * f * (wi.dot(sp.ns).abs() / pdf_light) * power_heuristic(pdf_light, pdf_bsdf);
+            let value = area_light_value(le, f, wi.dot(sp.ns), pdf_light, pdf_bsdf);
             Some(LightSample { value, shadow })
         }
         LightRef::Point(i) => {

@@ -1,26 +1,27 @@
-//! `pt`'s diffuse vertices sixteen at a time (issue #33): the wavefront (`path_batch`) queues each
-//! vertex on a `Material::Diffuse` surface, in a scene whose lights are all triangle emitters,
-//! into the lanes of `Lanes`, and computes their next-event estimate (`direct::light_sample_mis`
-//! with `bsdf::pdf_w` as the other pdf) and their cosine-weighted direction (`bsdf::sample`)
-//! as loops over the lanes of structure-of-arrays records, which LLVM runs as 16-wide vectors.
+//! `pt`'s diffuse vertices sixteen at a time: the wavefront (`pt::wavefront`) queues each vertex
+//! on a `Material::Diffuse` surface, in a scene whose lights are all triangle emitters, into the
+//! lanes of [`Lanes`], which compute their next-event estimate and their cosine-weighted direction
+//! as loops over structure-of-arrays records that LLVM runs as 16-wide vectors.
+//!
+//! The lanes own no formula: each lane calls the scalar code's own functions
+//! (`bsdf::diffuse`, `transport::direct::{toward, light_pdf_w, area_light_value}`,
+//! `accel::shadow_segment`, `sampling::warp`), written without early returns for this purpose. A
+//! new diffuse-like BSDF is written once, in its `bsdf/` file, and runs here by calling it.
 //!
 //! Invariants (why the image is the scalar loop's bit for bit, `tests/wavefront.rs`):
 //! - the random numbers are drawn by the caller in the scalar order (the light pick, the point on
 //!   the light, the BSDF's three), from the path's own stream;
-//! - each lane evaluates the scalar formulas with the same operations in the same order (glam's
-//!   `Vec3` methods, `offset_origin`, `power_heuristic`, `Frame`); a branch that returns `None`
-//!   there is a lane mask here, and a lane whose mask is off adds `β·0`, as the scalar code does;
-//! - the concentric map's sine and cosine are `warp::sin_cos_quarter_pi`, plain arithmetic in
-//!   both.
+//! - a branch that returns `None` in the scalar code is a lane mask here, and a lane whose mask
+//!   is off adds `β·0`, as the scalar code does.
 
-use crate::accel::{offset_origin, Ray, World};
-use crate::bsdf::ShadingPoint;
-use crate::math::{Frame, Rgb, Vec2, Vec3, INV_PI};
-use crate::sampling::power_heuristic;
+use crate::accel::{shadow_segment, Ray, World};
+use crate::bsdf::{diffuse, ShadingPoint};
+use crate::math::{Rgb, Vec3};
 use crate::sampling::rng::Rng;
-use crate::sampling::warp::sin_cos_quarter_pi;
+use crate::sampling::warp::{sample_triangle, triangle_point};
 use crate::scene::LightRef;
 use crate::scene::Triangle;
+use crate::transport::direct;
 
 /// Lanes per record.
 pub(crate) const W: usize = 16;
@@ -187,89 +188,35 @@ impl Lanes {
         }
     }
 
-    /// `light_sample_mis` for an area light on a triangle, at a diffuse vertex.
+    /// `direct::light_sample_mis` for an area light on a triangle, at a diffuse vertex: the
+    /// same formulas, called lane by lane, a rejection being a mask.
     #[inline(always)]
     fn nee_lane(&mut self, j: usize) {
         let (p, ng, ns, wo) = (self.p.get(j), self.ng.get(j), self.ns.get(j), self.wo.get(j));
-        let (u0, u1) = (self.u_light[0][j], self.u_light[1][j]);
-        // warp::sample_triangle and Scene::sample_emitter_point
-        let (b0, b1) = if u0 < u1 { (u0 / 2.0, u1 - u0 / 2.0) } else { (u0 - u1 / 2.0, u1 / 2.0) };
-        let y = b0 * self.y0.get(j) + b1 * self.y1.get(j) + (1.0 - b0 - b1) * self.y2.get(j);
-        let (ny, pdf_a) = (self.ny.get(j), 1.0 / self.area[j]);
-        let d = y - p;
-        let dist2 = d.length_squared();
-        let wi = d / dist2.sqrt();
-        let cos_l = ny.dot(-wi);
-        let f = diffuse_eval(self.albedo.get(j), ng, ns, wo, wi);
-        let pdf_light = self.pmf[j] * pdf_a * dist2 / cos_l;
-        let pdf_bsdf = diffuse_pdf_w(ng, ns, wo, wi);
-        // World::visibility_ray(p, ng, y, ny)
-        let dv = y - p;
-        let dist = dv.length();
-        let dir = dv / dist;
-        let o = offset_origin(p, ng, dir);
-        let seg = offset_origin(y, ny, -dir) - o;
-        let len = seg.length();
-        let value = self.le.get(j) * f * (wi.dot(ns).abs() / pdf_light) * power_heuristic(pdf_light, pdf_bsdf);
+        let (albedo, ny) = (self.albedo.get(j), self.ny.get(j));
+        let b = sample_triangle([self.u_light[0][j], self.u_light[1][j]]);
+        let y = triangle_point([self.y0.get(j), self.y1.get(j), self.y2.get(j)], b);
+        let (wi, dist2, cos_l) = direct::toward(p, y, ny);
+        let f = diffuse::eval(albedo, ng, ns, wo, wi);
+        let pdf_light = direct::light_pdf_w(self.pmf[j], 1.0 / self.area[j], dist2, cos_l);
+        let pdf_bsdf = diffuse::pdf_w(ng, ns, wo, wi);
+        let (shadow, segment) = shadow_segment(p, ng, y, ny);
+        let value = direct::area_light_value(self.le.get(j), f, wi.dot(ns), pdf_light, pdf_bsdf);
         // where the scalar code returns `None` (a NaN passes, as there)
-        let rejected = dist2 <= 0.0 || cos_l <= 0.0 || f == Rgb::ZERO || dist <= 0.0;
-        self.nee_ok[j] = !rejected;
+        self.nee_ok[j] = !(dist2 <= 0.0 || cos_l <= 0.0 || f == Rgb::ZERO) && segment;
         self.value.set(j, value);
-        self.shadow_o.set(j, o);
-        self.shadow_d.set(j, seg / len.max(1e-30));
-        self.shadow_t[j] = len;
+        self.shadow_o.set(j, shadow.o);
+        self.shadow_d.set(j, shadow.d);
+        self.shadow_t[j] = shadow.tmax;
     }
 
-    /// `bsdf::sample` for `Material::Diffuse` in radiance mode.
+    /// `bsdf::sample` for `Material::Diffuse` in radiance mode (`bsdf::diffuse::sample`).
     #[inline(always)]
     fn bsdf_lane(&mut self, j: usize) {
-        // warp::sample_concentric_disk, both octant pairs computed and one kept
-        let ox = 2.0 * self.u_bsdf[0][j] - 1.0;
-        let oy = 2.0 * self.u_bsdf[1][j] - 1.0;
-        let wide = ox.abs() > oy.abs();
-        let (r, t) = if wide { (ox, oy / ox) } else { (oy, ox / oy) };
-        let (s, c) = sin_cos_quarter_pi(t);
-        let disk = if wide { Vec2::new(r * c, r * s) } else { Vec2::new(r * s, r * c) };
-        let disk = if ox == 0.0 && oy == 0.0 { Vec2::ZERO } else { disk };
-        let local = Vec3::new(disk.x, disk.y, (1.0 - disk.length_squared()).max(0.0).sqrt());
-        let wo = self.wo.get(j);
-        let (ng, ns) = oriented(self.ng.get(j), self.ns.get(j), wo);
-        let wi = Frame::from_normal(ns).to_world(local);
-        let cos = wi.dot(ns);
-        self.bsdf_ok[j] = !(wi.dot(ng) <= 0.0 || cos <= 0.0 || wo.dot(ns) <= 0.0);
+        let u = [self.u_bsdf[0][j], self.u_bsdf[1][j]];
+        let (wi, pdf_w, valid) = diffuse::sample(self.ng.get(j), self.ns.get(j), self.wo.get(j), u);
+        self.bsdf_ok[j] = valid;
         self.wi.set(j, wi);
-        self.pdf_w[j] = cos * INV_PI;
-    }
-}
-
-/// `ShadingPoint::oriented`: the normals flipped to `wo`'s geometric side.
-#[inline(always)]
-fn oriented(ng: Vec3, ns: Vec3, wo: Vec3) -> (Vec3, Vec3) {
-    if wo.dot(ng) >= 0.0 {
-        (ng, ns)
-    } else {
-        (-ng, -ns)
-    }
-}
-
-/// `bsdf::eval` of `Material::Diffuse`.
-#[inline(always)]
-fn diffuse_eval(albedo: Rgb, ng: Vec3, ns: Vec3, wo: Vec3, wi: Vec3) -> Rgb {
-    let (ng, ns) = oriented(ng, ns, wo);
-    if wi.dot(ng) <= 0.0 || wi.dot(ns) <= 0.0 || wo.dot(ns) <= 0.0 {
-        Rgb::ZERO
-    } else {
-        albedo * INV_PI
-    }
-}
-
-/// `bsdf::pdf_w` of `Material::Diffuse`.
-#[inline(always)]
-fn diffuse_pdf_w(ng: Vec3, ns: Vec3, wo: Vec3, wi: Vec3) -> f32 {
-    let (ng, ns) = oriented(ng, ns, wo);
-    if wi.dot(ng) <= 0.0 {
-        0.0
-    } else {
-        wi.dot(ns).max(0.0) * INV_PI
+        self.pdf_w[j] = pdf_w;
     }
 }
