@@ -133,7 +133,7 @@ pub fn run(world: &World, resolution: (u32, u32), repeats: usize) -> Result<Benc
 
 /// The per-phase profile of `method` (default flags, the scene's caps) over `spp` passes at
 /// `resolution` on the current rayon pool, preprocess excluded (`forecast bench --method M`);
-/// `pt-cf` traces ½ light path per pixel here (`pt_cf_light::PATHS_PER_PIXEL`), not a pilot's count.
+/// `pt-cf` traces ½ light path per pixel here (`pt_cf::light::PATHS_PER_PIXEL`), not a pilot's count.
 pub fn profile_method(
     world: &World,
     method: Method,

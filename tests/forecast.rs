@@ -5,7 +5,7 @@
 //! objects, all photons missing, a single cluster, max-rank 0); the serialization round trip.
 //! Negative controls show that the same statistics reject a 3% error.
 //! The table samplers' χ² and the estimator-level unbiasedness tests live next to the tables
-//! (`src/forecast/direction_table.rs`).
+//! (`src/cf/direction_table.rs`).
 
 mod common;
 use common::{assert_agrees, assert_furnace_is_one, max_z, render_passes as render};

@@ -4,7 +4,7 @@
 //! glass furnace; the analytic point-light caustic of a planar mirror (which `pt` misses); `--light-paths 0` is the old
 //! `pt-cf` bit for bit (a stored render of the base commit); the image and the light-path pilot
 //! do not depend on the thread count, and a resumed render is the uninterrupted one. The MIS weights' sum is a unit
-//! test in `src/integrators/pt_cf_light.rs`.
+//! test in `src/integrators/pt_cf/light.rs`.
 
 mod common;
 use common::{

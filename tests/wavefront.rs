@@ -12,7 +12,7 @@
 //!   camera rays side by side, traced with the coherent hint): the wavefront changes when a ray
 //!   is traced, never what a path draws or adds. Scenes: `cornell-box` (glass and mirror spheres, Dirac chains),
 //!   `ring` (a conductor mesh), the glass furnace, `figurines` (smooth normals, a glossy lobe) and a
-//!   point light over a mirror (where the diffuse vertices' 16-wide lanes, `path_lanes`, do not
+//!   point light over a mirror (where the diffuse vertices' 16-wide lanes, `pt::lanes`, do not
 //!   apply); elsewhere every diffuse vertex goes through those lanes.
 //!
 //! Each test runs on every back end of the build: obvhs always, Embree with `--features embree`
@@ -163,7 +163,7 @@ fn pt_wavefront_is_bit_identical_to_the_scalar_loop() {
         wavefront_equals_scalar(&world("tests/scenes/furnace_glass.toml", kind), "glass furnace", 32, 0.25);
         // smooth shading normals and a glossy lobe beside the diffuse lanes
         wavefront_equals_scalar(&world("scenes/figurines.toml", kind), "figurines", 32, 0.25);
-        // a point light: the diffuse lanes do not apply (`path_lanes`), every vertex is scalar;
+        // a point light: the diffuse lanes do not apply (`pt::lanes`), every vertex is scalar;
         // the light reaches a fifth of this view (the floor it lights)
         wavefront_equals_scalar(&world("tests/scenes/point-mirror.toml", kind), "point mirror", 32, 0.1);
     }

@@ -1,4 +1,4 @@
-//! Tests of `forecast::direction_table`: bin geometry, the alias tables' exactness, χ² of every
+//! Tests of `cf::direction_table`: bin geometry, the alias tables' exactness, χ² of every
 //! table sampler, estimator-level unbiasedness of the dual, single, defensive and spread tables.
 
 use super::*;

@@ -39,7 +39,7 @@ pub struct AliasTable {
 /// `[0, one]`: column `c` returns `c` for `one·t_c` of its words and `alias_c` for the rest.
 /// A positive entry keeps a threshold ≥ 1 in its own column (reachable whatever its size); a
 /// zero entry has threshold 0 and aliases a positive entry (never returned). Shared by
-/// [`AliasTable`] (`one` = 2³²) and the 512-bin `forecast::direction_table` (2¹⁵).
+/// [`AliasTable`] (`one` = 2³²) and the 512-bin `cf::direction_table` (2¹⁵).
 pub fn quantised_columns(p: &[f64], one: u64) -> (Vec<u64>, Vec<u32>) {
     let n = p.len();
     let pos = |x: f64| if x.is_finite() && x > 0.0 { x } else { 0.0 };

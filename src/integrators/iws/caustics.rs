@@ -2,7 +2,7 @@
 //! shading-point query it receives, and the shared `L_c` integrand along one direction.
 //!
 //! Implementations: [`NoCaustics`] (`iws`: L_c omitted by design), the photon map (`iws-pm`,
-//! `photon_map`), Caustic Forecasting (`iws-cf`, `iws_forecast`) and [`BsdfCaustics`], the
+//! `iws_pm`), Caustic Forecasting (`iws-cf`, `iws_cf`) and [`BsdfCaustics`], the
 //! plain unbiased BSDF-sampled `L_c` (used by tests to check that the split is complete).
 
 use crate::accel::{offset_origin, Hit, World};

@@ -1,4 +1,4 @@
-//! The preprocess measurement of every kept cluster's [`CausticShare`] (`forecast/share.rs`):
+//! The preprocess measurement of every kept cluster's [`CausticShare`] (`cf/share.rs`):
 //! `E_c` from the cluster's forecast photons (flux over area), `E_d` by a cosine `pt` gather at a
 //! few of its caustic points. Run on rank 0 after the CF product is built; its result is part of
 //! the broadcast product.
