@@ -4,7 +4,7 @@
 //! shooting toward the bounding sphere of the Dirac objects (or the scene's
 //! `[forecast] target_box`), store a `CausticPoint` at every non-specular hit whose previous
 //! vertex was Dirac, cluster them and build the cluster map and forecast maps
-//! (`forecast::estimator::CausticForecast`). Render: at every non-specular vertex of the IWS
+//! (`cf::estimator::CausticForecast`). Render: at every non-specular vertex of the IWS
 //! recursion, `Ĺ_c` samples directions from the photon-driven tables (dual table by default),
 //! keeps a sample only if its first hit is Dirac, follows the chain and evaluates the full
 //! estimator `L̂` at its end (spec §1, §4).
@@ -199,7 +199,7 @@ pub fn trace_forecasters(
 /// per stored photon of a [`PILOT_PHOTONS`] pilot preprocess and `cap` the scene's (or default)
 /// count; else the scene's count. Any count leaves the image unbiased (the tables are a pdf).
 /// The rule and the pilot's cost go into `stats`. Phases: "pilot" (its own phases hidden), then
-/// those of [`build_forecast`], then "caustic shares" (`caustic_share::caustic_shares`).
+/// those of [`build_forecast`], then "caustic shares" (`share::caustic_shares`).
 pub fn preprocess_forecast(world: &World, args: &MethodArgs, seed: u64, phases: &dyn Phases) -> CausticForecast {
     let cap = args.cf.target_photons(world);
     let (n, rule, cost) = match (args.cf.forecast_photons, args.cf.time_budget_s) {
