@@ -8,7 +8,7 @@
 //! Invariants: `wo` and `wi` must lie on the same side of the **geometric** normal (no light
 //! through walls) and above the shading normal, both flipped to `wo`'s side (`super::oriented`).
 
-use super::{oriented, reflects};
+use super::{oriented, reflects, BsdfSample};
 use crate::math::{Frame, Rgb, Vec3, INV_PI};
 use crate::sampling::warp::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 
@@ -32,6 +32,12 @@ pub fn pdf_w(ng: Vec3, ns: Vec3, wo: Vec3, wi: Vec3) -> f32 {
     } else {
         cosine_hemisphere_pdf(wi.dot(ns))
     }
+}
+
+/// The sample of direction `wi` drawn by [`sample`] with pdf `pdf_w`: its weight f·cos/pdf is ρ.
+#[inline(always)]
+pub fn sampled(albedo: Rgb, wi: Vec3, pdf_w: f32) -> BsdfSample {
+    BsdfSample { wi, weight: albedo, pdf_w, is_delta: false, eta: 1.0 }
 }
 
 /// A cosine-weighted direction from `u`: `(wi, pdf_w, valid)`. Its weight f·cos/pdf is ρ.

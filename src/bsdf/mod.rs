@@ -137,7 +137,7 @@ pub fn sample(m: &Material, sp: &ShadingPoint, wo: Vec3, u: [f32; 3], mode: Mode
             if !valid {
                 return None;
             }
-            BsdfSample { wi, weight: albedo, pdf_w, is_delta: false, eta: 1.0 }
+            diffuse::sampled(albedo, wi, pdf_w)
         }
         Material::Glossy { albedo, specular, exponent } => {
             let (wi, pdf) = phong::sample(albedo, specular, exponent, ns, wo, u)?;

@@ -4,12 +4,12 @@
 //! `emitter_pdf_w` gives the light-sampling pdf of a BSDF-sampled hit on an emitter, so the
 //! path tracer can weight that hit with the same heuristic (Veach 1997 §9.2).
 
-use crate::accel::{offset_origin, Ray, World};
+use crate::accel::{offset_origin, Hit, Ray, World};
 use crate::bsdf::{self, ShadingPoint};
 use crate::math::{Rgb, Vec3};
 use crate::sampling::power_heuristic;
 use crate::sampling::rng::Rng;
-use crate::scene::{LightRef, Material};
+use crate::scene::{LightRef, Material, NO_EMITTER};
 
 /// Solid-angle pdf that `sample_light` picks the point `y` (normal `ny`) of emitter `e` from a
 /// point at distance² `dist2` with light-side cosine `cos_l`.
@@ -47,6 +47,24 @@ pub fn area_light_value(le: Rgb, f: Rgb, cos_s: f32, pdf_light: f32, pdf_other: 
     le * f * (cos_s.abs() / pdf_light) * power_heuristic(pdf_light, pdf_other)
 }
 
+/// A hit on an emitter's front reached along `d`: `(Le, MIS weight)`, the weight of the
+/// direction sampler (pdf `prev_pdf_w`, or a Dirac lobe when `prev_delta`) against NEE by the
+/// power heuristic. `None` when `hit` is not on an emitter or sees its back (no light).
+#[inline]
+pub fn emitter_hit(world: &World, hit: &Hit, d: Vec3, prev_delta: bool, prev_pdf_w: f32) -> Option<(Rgb, f32)> {
+    let em = world.scene.emitter_of(hit.prim);
+    let cos_l = hit.ng.dot(-d);
+    if em == NO_EMITTER {
+        return None;
+    }
+    (cos_l > 0.0).then(|| {
+        let le = world.scene.emitters[em as usize].radiance;
+        let w =
+            if prev_delta { 1.0 } else { power_heuristic(prev_pdf_w, emitter_pdf_w(world, em, hit.t * hit.t, cos_l)) };
+        (le, w)
+    })
+}
+
 /// One NEE sample at a non-Dirac point: Le·f·cos/pdf with MIS (area lights) or exact (point lights).
 #[inline]
 pub fn sample_light(world: &World, sp: &ShadingPoint, m: &Material, wo: Vec3, rng: &mut Rng) -> Rgb {
@@ -64,7 +82,14 @@ pub fn sample_light_mis(
     rng: &mut Rng,
     pdf_other: impl Fn(Vec3) -> f32,
 ) -> Rgb {
-    match light_sample_mis(world, sp, m, wo, rng, pdf_other) {
+    unoccluded(world, light_sample_mis(world, sp, m, wo, rng, pdf_other))
+}
+
+/// A NEE sample's contribution once its shadow ray is traced: its value, or 0 when blocked or
+/// when there is no sample.
+#[inline]
+pub fn unoccluded(world: &World, ls: Option<LightSample>) -> Rgb {
+    match ls {
         Some(ls) if !world.occluded(ls.shadow.o, ls.shadow.d, ls.shadow.tmax) => ls.value,
         _ => Rgb::ZERO,
     }

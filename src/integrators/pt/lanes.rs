@@ -15,13 +15,13 @@
 //!   is off adds `β·0`, as the scalar code does.
 
 use crate::accel::{shadow_segment, Ray, World};
-use crate::bsdf::{diffuse, ShadingPoint};
+use crate::bsdf::{diffuse, BsdfSample, ShadingPoint};
 use crate::math::{Rgb, Vec3};
 use crate::sampling::rng::Rng;
 use crate::sampling::warp::{sample_triangle, triangle_point};
 use crate::scene::LightRef;
 use crate::scene::Triangle;
-use crate::transport::direct;
+use crate::transport::direct::{self, LightSample};
 
 /// Lanes per record.
 pub(crate) const W: usize = 16;
@@ -128,9 +128,9 @@ pub(crate) struct Lanes {
 /// What `run` computed for one lane.
 pub(crate) struct LaneOut {
     /// The NEE contribution and its shadow segment (`None` where the scalar code returns `None`).
-    pub nee: Option<(Rgb, Ray)>,
-    /// The sampled direction and its pdf_w (`None` where `bsdf::sample` returns `None`).
-    pub bsdf: Option<(Vec3, f32)>,
+    pub nee: Option<LightSample>,
+    /// The sampled direction (`None` where `bsdf::sample` returns `None`).
+    pub bsdf: Option<BsdfSample>,
     /// The vertex's position, normals, direction toward the previous vertex and albedo.
     pub p: Vec3,
     pub ng: Vec3,
@@ -178,8 +178,8 @@ impl Lanes {
     pub fn out(&self, j: usize) -> LaneOut {
         let ray = Ray { o: self.shadow_o.get(j), d: self.shadow_d.get(j), tmax: self.shadow_t[j] };
         LaneOut {
-            nee: self.nee_ok[j].then(|| (self.value.get(j), ray)),
-            bsdf: self.bsdf_ok[j].then(|| (self.wi.get(j), self.pdf_w[j])),
+            nee: self.nee_ok[j].then(|| LightSample { value: self.value.get(j), shadow: ray }),
+            bsdf: self.bsdf_ok[j].then(|| diffuse::sampled(self.albedo.get(j), self.wi.get(j), self.pdf_w[j])),
             p: self.p.get(j),
             ng: self.ng.get(j),
             ns: self.ns.get(j),

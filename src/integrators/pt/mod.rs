@@ -12,30 +12,32 @@
 //!
 //! CLI: `forecast render scenes/cornell-box.toml --method pt --spp 64`.
 
+pub mod lanes;
+pub mod path_class;
+mod vertex;
+pub mod wavefront;
+
+pub use vertex::{vertex, Walk};
+
 use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
-use crate::accel::{offset_origin, Hit, Ray, World};
-use crate::bsdf::{self, Mode, ShadingPoint};
+use crate::accel::{Ray, World};
+use crate::bsdf::ShadingPoint;
+use crate::math::{Rgb, Vec3};
 use crate::profile::{Phase, Profile};
 use crate::progress::Phases;
 use crate::sampling::rng::Rng;
-pub mod lanes;
-pub mod path_class;
-pub mod wavefront;
-
-use crate::math::{Rgb, Vec3};
-use crate::sampling::power_heuristic;
 use crate::scene::NO_EMITTER;
 use crate::transport::direct;
-use crate::transport::roulette::Throughput;
 use path_class::{kept, PathClass, PathFilter};
 
 /// `pt`'s options (shared with `pt-cf`): `--path-filter`, the path tracers' diagnostic. The
 /// vertex cap and the emission split are render settings (`integrators::settings`).
 #[derive(clap::Args, Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PtArgs {
-    /// A biased diagnostic: keep only light paths of these classes, e.g. `DSL,DD*` (D a
-    /// non-Dirac vertex, S a Dirac chain, L the light, `*` a prefix; `integrators::pt::path_class`).
-    /// Turns emission splitting off (one camera ray per sample).
+    /// A biased diagnostic: render only the light paths of these classes, e.g. DSL,DD* (D a
+    /// diffuse or glossy vertex, S a chain of mirror or glass vertices, L the light, * anything
+    /// after); turns the emission split off.
+    // The classes are `path_class`'s; one camera ray per sample.
     #[arg(long, value_name = "CLASSES", value_parser = path_class::check_filter)]
     pub path_filter: Option<String>,
 }
@@ -70,27 +72,6 @@ pub struct PathTracer {
     pub filter: Option<PathFilter>,
 }
 
-/// A hit on an emitter's front reached along `d`: `(Le, MIS weight)`, the weight of the
-/// direction sampler (pdf `prev_pdf_w`, or a Dirac lobe when `prev_delta`) against NEE by the
-/// power heuristic. `None` when `hit` is not on an emitter or sees its back (no light).
-#[inline]
-pub fn emitter_hit(world: &World, hit: &Hit, d: Vec3, prev_delta: bool, prev_pdf_w: f32) -> Option<(Rgb, f32)> {
-    let em = world.scene.emitter_of(hit.prim);
-    let cos_l = hit.ng.dot(-d);
-    if em == NO_EMITTER {
-        return None;
-    }
-    (cos_l > 0.0).then(|| {
-        let le = world.scene.emitters[em as usize].radiance;
-        let w = if prev_delta {
-            1.0
-        } else {
-            power_heuristic(prev_pdf_w, direct::emitter_pdf_w(world, em, hit.t * hit.t, cos_l))
-        };
-        (le, w)
-    })
-}
-
 impl Integrator for PathTracer {
     /// Every pass is a pure function of (seed, pass, pixel) and the preprocess: no `begin_pass`.
     fn independent_passes(&self) -> bool {
@@ -118,7 +99,7 @@ impl Integrator for PathTracer {
         }
         let t0 = std::time::Instant::now();
         let mut wave = ctx.take_scratch::<wavefront::Wave>();
-        self.trace_batch(world, (rays, rngs), &mut wave, out);
+        wavefront::trace_batch(world, self.max_depth, (rays, rngs), &mut wave, out);
         ctx.put_scratch(wave);
         ctx.profile.samples += rays.len() as u64;
         ctx.profile.add_exact(Phase::Radiance, t0.elapsed().as_nanos() as u64);
@@ -151,39 +132,29 @@ impl PathTracer {
     pub fn trace(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
         let s = &world.scene;
         let rng = &mut ctx.rng;
-        let (mut o, mut d) = (origin, dir);
+        let mut w = Walk::camera(Ray { o: origin, d: dir, tmax: f32::INFINITY });
         let mut l = CameraEstimate::default();
         let mut prefix = true; // no non-Dirac vertex yet
-        let mut t = Throughput::new(Rgb::ONE);
-        let mut prev_delta = true;
-        let mut prev_pdf_w = 0.0f32;
         let mut class = PathClass::default();
         for depth in 0..self.max_depth {
-            let Some(hit) = world.intersect(o, d, f32::INFINITY) else { break };
+            let Some(hit) = world.intersect(w.o, w.d, f32::INFINITY) else { break };
             if s.emitter_of(hit.prim) != NO_EMITTER {
-                if let Some((le, w)) = emitter_hit(world, &hit, d, prev_delta, prev_pdf_w) {
-                    *if prefix { &mut l.prefix_le } else { &mut l.rest } += self.kept(class, t.beta * le * w);
+                if let Some((le, mis)) = w.emitted(world, &hit) {
+                    *if prefix { &mut l.prefix_le } else { &mut l.rest } += self.kept(class, w.t.beta * le * mis);
                 }
                 break; // emitters reflect nothing
             }
             let m = s.material_of(hit.prim);
             let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
-            let wo = -d;
             class.push(m.is_dirac());
-            if !m.is_dirac() {
-                prefix = false;
-                // a filtered-out sample still draws its random numbers (filters partition the image)
-                l.rest += self.kept(class, t.beta * direct::sample_light(world, &sp, m, wo, rng));
-            }
-            let u = rng.next_3d();
-            let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { break };
-            if !t.scatter(&bs, depth, rng) {
+            prefix &= m.is_dirac();
+            // a filtered-out sample still draws its random numbers (filters partition the image)
+            let beta = w.t.beta;
+            let nee = |ls| l.rest += self.kept(class, beta * direct::unoccluded(world, ls));
+            let Some(bs) = vertex(world, (m, &sp, -w.d), rng, nee) else { break };
+            if !w.scatter(&bs, (depth, hit.p, hit.ng), rng) {
                 break;
             }
-            prev_delta = bs.is_delta;
-            prev_pdf_w = bs.pdf_w;
-            o = offset_origin(hit.p, hit.ng, bs.wi);
-            d = bs.wi;
         }
         l
     }

@@ -12,30 +12,25 @@
 //! otherwise, as `sample_light` returns; paths never interact. `--path-filter` runs the scalar
 //! loop (`Integrator::estimate_batch`'s default).
 
-use crate::accel::{offset_origin, BatchScratch, Ray, World};
-use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
-use crate::integrators::pt::lanes::{Lanes, Vertex};
-use crate::integrators::pt::{emitter_hit, PathTracer};
+use super::lanes::{Lanes, Vertex};
+use super::vertex::{vertex, Walk};
+use crate::accel::{BatchScratch, Ray, World};
+use crate::bsdf::ShadingPoint;
 use crate::integrators::CameraEstimate;
 use crate::math::Rgb;
 use crate::sampling::rng::Rng;
 use crate::scene::{LightRef, Material, Scene, NO_EMITTER};
-use crate::transport::direct;
-use crate::transport::roulette::Throughput;
+use crate::transport::direct::LightSample;
 
 /// One live path of the wavefront.
 #[derive(Clone, Copy)]
 pub(crate) struct Live {
     /// Index of the camera ray (and of its stream and estimate).
     i: u32,
-    /// Its throughput (with roulette's η² scale).
-    t: Throughput,
+    /// The path's state.
+    w: Walk,
     /// No non-Dirac vertex yet.
     prefix: bool,
-    /// The last direction was sampled from a Dirac lobe.
-    prev_delta: bool,
-    /// The last direction's solid-angle pdf.
-    prev_pdf_w: f32,
 }
 
 /// Per-batch buffers, reused across bounces and, through `Context::take_scratch`, across the
@@ -118,9 +113,9 @@ impl<P> Wave<P> {
     /// Queues path `i`'s NEE sample: `β·value` if its segment is unoccluded, `β·0` for `None`
     /// (as `direct::sample_light` returns), added at the end of the bounce.
     #[inline]
-    pub(crate) fn queue_nee(&mut self, (i, beta): (u32, Rgb), ls: Option<(Rgb, Ray)>, out: &mut [CameraEstimate]) {
+    pub(crate) fn queue_nee(&mut self, (i, beta): (u32, Rgb), ls: Option<LightSample>, out: &mut [CameraEstimate]) {
         match ls {
-            Some((value, shadow)) => {
+            Some(LightSample { value, shadow }) => {
                 self.nee.push((i, beta, value));
                 self.shadow.push(shadow);
             }
@@ -144,104 +139,85 @@ impl<P> Wave<P> {
     }
 }
 
-impl PathTracer {
-    /// `trace` for every ray of `rays`, path `i` drawing from `rngs[i]`; `out[i]` is bit for bit
-    /// `trace(rays[i])` (the module's invariants). Requires no `--path-filter`.
-    pub(crate) fn trace_batch(
-        &self,
-        world: &World,
-        (rays, rngs): (&[Ray], &mut [Rng]),
-        w: &mut Wave,
-        out: &mut Vec<CameraEstimate>,
-    ) {
-        debug_assert!(self.filter.is_none() && rays.len() == rngs.len());
-        let start = Live { i: 0, t: Throughput::new(Rgb::ONE), prefix: true, prev_delta: true, prev_pdf_w: 0.0 };
-        w.start(world, rays, |i| Live { i, ..start }, out);
-        for depth in 0..self.max_depth {
-            if w.live.is_empty() {
-                break;
-            }
-            w.intersect(world, depth);
-            for k in 0..w.live.len() {
-                if self.shade(world, w, k, depth, rngs, out) {
-                    self.flush(w, depth, rngs, out);
-                }
-            }
-            if w.lanes.n > 0 {
-                self.flush(w, depth, rngs, out);
-            }
-            w.finish_bounce(world, out);
+/// `PathTracer::trace` (vertex cap `max_depth`, no `--path-filter`) for every ray of `rays`,
+/// path `i` drawing from `rngs[i]`; `out[i]` is bit for bit `trace(rays[i])` (the module's
+/// invariants).
+pub(crate) fn trace_batch(
+    world: &World,
+    max_depth: u32,
+    (rays, rngs): (&[Ray], &mut [Rng]),
+    w: &mut Wave,
+    out: &mut Vec<CameraEstimate>,
+) {
+    debug_assert!(rays.len() == rngs.len());
+    w.start(world, rays, |i| Live { i, w: Walk::camera(rays[i as usize]), prefix: true }, out);
+    for depth in 0..max_depth {
+        if w.live.is_empty() {
+            break;
         }
+        w.intersect(world, depth);
+        for k in 0..w.live.len() {
+            if shade(world, w, k, depth, rngs, out) {
+                flush(w, depth, rngs, out);
+            }
+        }
+        if w.lanes.n > 0 {
+            flush(w, depth, rngs, out);
+        }
+        w.finish_bounce(world, out);
     }
+}
 
-    /// One vertex of live path `k` (the body of `trace`'s loop): its emitter hit, its NEE
-    /// sample (queued with its shadow ray), its BSDF sample and roulette (queued as the next ray).
-    /// Where the lanes apply, a diffuse vertex draws its numbers and goes to `w.lanes` instead;
-    /// true when that record is full.
-    #[inline]
-    fn shade(
-        &self,
-        world: &World,
-        w: &mut Wave,
-        k: usize,
-        depth: u32,
-        rngs: &mut [Rng],
-        out: &mut [CameraEstimate],
-    ) -> bool {
-        let s = &world.scene;
-        let (mut p, d) = (w.live[k], w.rays[k].d);
-        let (i, rng) = (p.i as usize, &mut rngs[p.i as usize]);
-        let Some(found) = w.hits[k] else { return false };
-        let hit = world.hit_at(&w.rays[k], found);
-        if s.emitter_of(hit.prim) != NO_EMITTER {
-            if let Some((le, mis)) = emitter_hit(world, &hit, d, p.prev_delta, p.prev_pdf_w) {
-                let l = &mut out[i];
-                *if p.prefix { &mut l.prefix_le } else { &mut l.rest } += p.t.beta * le * mis;
-            }
-            return false; // emitters reflect nothing
+/// One vertex of live path `k` (the body of `trace`'s loop): its emitter hit, or `pt`'s vertex
+/// with its NEE sample queued with its shadow ray and its continuation queued as the next ray.
+/// Where the lanes apply, a diffuse vertex draws its numbers and goes to `w.lanes` instead; true
+/// when that record is full.
+#[inline]
+fn shade(world: &World, w: &mut Wave, k: usize, depth: u32, rngs: &mut [Rng], out: &mut [CameraEstimate]) -> bool {
+    let s = &world.scene;
+    let mut p = w.live[k];
+    let (i, rng) = (p.i as usize, &mut rngs[p.i as usize]);
+    let Some(found) = w.hits[k] else { return false };
+    let hit = world.hit_at(&w.rays[k], found);
+    if s.emitter_of(hit.prim) != NO_EMITTER {
+        if let Some((le, mis)) = p.w.emitted(world, &hit) {
+            let l = &mut out[i];
+            *if p.prefix { &mut l.prefix_le } else { &mut l.rest } += p.w.t.beta * le * mis;
         }
-        let m = s.material_of(hit.prim);
-        let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
-        let wo = -d;
-        if let (true, &Material::Diffuse { albedo }) = (w.lanes_on, m) {
-            w.live[k].prefix = false;
-            return w.lanes.push(Vertex::draw(world, k, (&sp, wo, albedo), rng));
-        }
-        if !m.is_dirac() {
-            p.prefix = false;
-            let ls = direct::light_sample_mis(world, &sp, m, wo, rng, |wi| bsdf::pdf_w(m, &sp, wo, wi));
-            w.queue_nee((p.i, p.t.beta), ls.map(|ls| (ls.value, ls.shadow)), out);
-        }
-        let u = rng.next_3d();
-        let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { return false };
-        if !p.t.scatter(&bs, depth, rng) {
-            return false;
-        }
-        p.prev_delta = bs.is_delta;
-        p.prev_pdf_w = bs.pdf_w;
+        return false; // emitters reflect nothing
+    }
+    let m = s.material_of(hit.prim);
+    let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
+    let wo = -p.w.d;
+    if let (true, &Material::Diffuse { albedo }) = (w.lanes_on, m) {
+        w.live[k].prefix = false;
+        return w.lanes.push(Vertex::draw(world, k, (&sp, wo, albedo), rng));
+    }
+    p.prefix &= m.is_dirac();
+    let beta = p.w.t.beta;
+    let nee = |ls| w.queue_nee((p.i, beta), ls, out);
+    let Some(bs) = vertex(world, (m, &sp, wo), rng, nee) else { return false };
+    if p.w.scatter(&bs, (depth, hit.p, hit.ng), rng) {
         w.next_live.push(p);
-        w.next_rays.push(Ray { o: offset_origin(hit.p, hit.ng, bs.wi), d: bs.wi, tmax: f32::INFINITY });
-        false
+        w.next_rays.push(p.w.ray());
     }
+    false
+}
 
-    /// Runs the queued diffuse vertices and finishes each as `shade` does: its NEE queued (or
-    /// `β·0` added), its scattering and roulette.
-    fn flush(&self, w: &mut Wave, depth: u32, rngs: &mut [Rng], out: &mut [CameraEstimate]) {
-        w.lanes.run();
-        for j in 0..w.lanes.n {
-            let (mut p, r) = (w.live[w.lanes.k[j] as usize], w.lanes.out(j));
-            w.queue_nee((p.i, p.t.beta), r.nee, out);
-            let Some((wi, pdf_w)) = r.bsdf else { continue };
-            let bs = BsdfSample { wi, weight: r.albedo, pdf_w, is_delta: false, eta: 1.0 };
-            if !p.t.scatter(&bs, depth, &mut rngs[p.i as usize]) {
-                continue;
-            }
-            (p.prev_delta, p.prev_pdf_w) = (false, pdf_w);
+/// Runs the queued diffuse vertices and finishes each as `shade` does: its NEE queued (or `β·0`
+/// added), its scattering and roulette.
+fn flush(w: &mut Wave, depth: u32, rngs: &mut [Rng], out: &mut [CameraEstimate]) {
+    w.lanes.run();
+    for j in 0..w.lanes.n {
+        let (mut p, r) = (w.live[w.lanes.k[j] as usize], w.lanes.out(j));
+        w.queue_nee((p.i, p.w.t.beta), r.nee, out);
+        let Some(bs) = r.bsdf else { continue };
+        if p.w.scatter(&bs, (depth, r.p, r.ng), &mut rngs[p.i as usize]) {
             w.next_live.push(p);
-            w.next_rays.push(Ray { o: offset_origin(r.p, r.ng, wi), d: wi, tmax: f32::INFINITY });
+            w.next_rays.push(p.w.ray());
         }
-        w.lanes.n = 0;
     }
+    w.lanes.n = 0;
 }
 
 /// Whether the lanes apply: every light is a triangle emitter (`path_lanes` samples those).

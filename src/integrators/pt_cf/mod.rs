@@ -41,11 +41,11 @@ pub mod light;
 mod wavefront;
 
 use super::iws_cf::{targeted_emission, IwsCf};
-use super::pt::emitter_hit;
 use super::pt::path_class::{kept, PathClass, PathFilter};
+use super::pt::{vertex, Walk};
 use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
-use crate::accel::{offset_origin, Hit, Ray, World};
-use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
+use crate::accel::{Hit, Ray, World};
+use crate::bsdf::{self, BsdfSample, ShadingPoint};
 use crate::cf::cluster::Cluster;
 use crate::cf::direction_table::ForecastTables;
 use crate::cf::estimator::{energy_split, CausticForecast, TableCache};
@@ -60,7 +60,6 @@ use crate::scene::{Camera, Material, NO_EMITTER};
 use crate::transport::context::ShadingQuery;
 use crate::transport::direct;
 use crate::transport::particle::MAX_VERTICES;
-use crate::transport::roulette::Throughput;
 use light::LightSide;
 use std::sync::Arc;
 
@@ -68,16 +67,17 @@ use std::sync::Arc;
 /// `iws-cf`: `--forecast-photons`, `--clusters`, `--split`, `--table-depth`, …).
 #[derive(clap::Args, Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PtCfArgs {
-    /// pt-cf: BSDF share c of q = c·p_BSDF + (1−c)·p_CF at guided vertices, 0 < c ≤ 1 (1 = pt);
-    /// per cluster c_k = max(c, 1 − s_k) from its caustic share s_k.
-    #[arg(long, default_value_t = 0.3, value_parser = parse_guide_fraction)]
+    /// The BSDF's share c of the guided vertices' directions, the tables' 1 − c; 0 < c ≤ 1
+    /// (1 = pt). A cluster's share is at least 1 − its caustic share.
+    // q = c·p_BSDF + (1−c)·p_CF; per cluster c_k = max(c, 1 − s_k) from its caustic share s_k.
+    #[arg(long, value_name = "C", default_value_t = 0.3, value_parser = parse_guide_fraction)]
     pub guide_fraction: f32,
-    /// pt-cf: clusters whose caustic share s_k of indirect irradiance is below this are not guided.
-    #[arg(long, default_value_t = 0.5, value_parser = parse_min_share)]
+    /// Clusters whose caustic share of the indirect light is below this are not guided.
+    #[arg(long, value_name = "S", default_value_t = 0.5, value_parser = parse_min_share)]
     pub guide_min_share: f32,
-    /// pt-cf: light paths per pass connected to the camera for the caustics L S+ (S|D)* D E, MIS-
-    /// weighted against the camera paths (0 = none: the camera side alone; default: a pilot
-    /// render picks 1/8 to 2 per pixel).
+    /// Light paths per pass connected to the camera for the caustics, weighted against the
+    /// camera paths (0 = none; default: a pilot render picks 1/8 to 2 per pixel).
+    // The caustics L S+ (S|D)* D E, MIS-weighted; 0 leaves the camera side alone.
     #[arg(long, value_name = "N")]
     pub light_paths: Option<u64>,
 }
@@ -194,18 +194,13 @@ pub struct GuidedPathTracer {
 /// One path (or branch) in flight: the ray, its throughput and how the last vertex sampled it.
 #[derive(Clone, Copy, Debug)]
 struct PathState {
-    o: Vec3,
-    d: Vec3,
-    /// β and etaScale, for the roulette (`transport::roulette::Throughput`).
-    t: Throughput,
+    /// The ray, β, the roulette's scales and the last direction's pdf (`prev_pdf_w` is the
+    /// effective `n·q` at a guided vertex, for MIS).
+    walk: Walk,
     /// Vertices traced so far.
     vertex: u32,
     /// Non-Dirac vertices traced so far (diffuse depth of the next one).
     diffuse: u32,
-    /// The last vertex was Dirac (or the camera).
-    prev_delta: bool,
-    /// Effective solid-angle pdf of the last direction for MIS (`n·q` at a guided vertex).
-    prev_pdf_w: f32,
     /// The path's class so far (`--path-filter`).
     class: PathClass,
     /// The running MIS ratio against the light paths (`light::first_ratio`, `next_ratio`)
@@ -216,17 +211,7 @@ struct PathState {
 impl PathState {
     /// A camera path starting along `ray`.
     fn camera(ray: Ray) -> Self {
-        PathState {
-            o: ray.o,
-            d: ray.d,
-            t: Throughput::new(Rgb::ONE),
-            vertex: 0,
-            diffuse: 0,
-            prev_delta: true,
-            prev_pdf_w: 0.0,
-            class: PathClass::default(),
-            mis: None,
-        }
+        PathState { walk: Walk::camera(ray), vertex: 0, diffuse: 0, class: PathClass::default(), mis: None }
     }
 }
 
@@ -299,9 +284,9 @@ impl GuidedPathTracer {
             return;
         }
         if index == 0 {
-            st.mis = Some(light::first_ratio(cam, -wo, t, sp.ng, (wo, st.d), st.prev_pdf_w));
+            st.mis = Some(light::first_ratio(cam, -wo, t, sp.ng, (wo, st.walk.d), st.walk.prev_pdf_w));
         } else if let Some(r) = st.mis {
-            st.mis = Some(r * light::next_ratio(m, sp, (wo, st.d), st.prev_pdf_w));
+            st.mis = Some(r * light::next_ratio(m, sp, (wo, st.walk.d), st.walk.prev_pdf_w));
         }
     }
 
@@ -310,8 +295,8 @@ impl GuidedPathTracer {
     #[inline]
     fn camera_weight(&self, world: &World, st: &PathState, hit: &Hit, ctx: &Context) -> f32 {
         match (&self.light, &ctx.camera, st.mis) {
-            (Some(light), Some(cam), Some(ratio)) if st.prev_delta && st.vertex < MAX_VERTICES => {
-                light::camera_weight(world, light, cam, hit, st.d, ratio)
+            (Some(light), Some(cam), Some(ratio)) if st.walk.prev_delta && st.vertex < MAX_VERTICES => {
+                light::camera_weight(world, light, cam, hit, st.walk.d, ratio)
             }
             _ => 1.0,
         }
@@ -327,9 +312,9 @@ impl GuidedPathTracer {
     /// and against the light paths (to `prefix_le` while no non-Dirac vertex came before).
     #[inline]
     fn add_emitted(&self, world: &World, st: &PathState, hit: &Hit, ctx: &Context, l: &mut CameraEstimate) {
-        if let Some((le, w)) = emitter_hit(world, hit, st.d, st.prev_delta, st.prev_pdf_w) {
+        if let Some((le, w)) = st.walk.emitted(world, hit) {
             let w = w * self.camera_weight(world, st, hit, ctx);
-            let v = self.kept(st.class, st.t.beta * le * w);
+            let v = self.kept(st.class, st.walk.t.beta * le * w);
             *if st.diffuse == 0 { &mut l.prefix_le } else { &mut l.rest } += v;
         }
     }
@@ -341,7 +326,7 @@ impl GuidedPathTracer {
         let depth = st.vertex;
         st.vertex += 1;
         st.class.push(m.is_dirac());
-        (ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns }, -st.d, depth)
+        (ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns }, -st.walk.d, depth)
     }
 
     /// The guide at the vertex `(m, sp, wo)` that `st` entered: `None` at a Dirac vertex and at
@@ -364,7 +349,7 @@ impl GuidedPathTracer {
         let s = &world.scene;
         let mut l = CameraEstimate::default();
         while st.vertex < self.max_depth {
-            let Some(hit) = world.intersect(st.o, st.d, f32::INFINITY) else { break };
+            let Some(hit) = world.intersect(st.walk.o, st.walk.d, f32::INFINITY) else { break };
             if s.emitter_of(hit.prim) != NO_EMITTER {
                 self.add_emitted(world, &st, &hit, ctx, &mut l);
                 break; // emitters reflect nothing
@@ -373,13 +358,11 @@ impl GuidedPathTracer {
             let (sp, wo, depth) = self.enter(&mut st, m, &hit);
             let Some(g) = self.guide_of(&st, (m, &sp, wo), ctx) else {
                 // a `pt` vertex, operation for operation
-                if !m.is_dirac() {
-                    l.rest += self.kept(st.class, st.t.beta * direct::sample_light(world, &sp, m, wo, &mut ctx.rng));
-                    st.diffuse += 1;
-                }
-                let u = ctx.rng.next_3d();
-                let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { break };
-                if !continue_path(&mut st, (depth, hit.p, hit.ng), &bs, &mut ctx.rng) {
+                let (beta, class) = (st.walk.t.beta, st.class);
+                let nee = |ls| l.rest += self.kept(class, beta * direct::unoccluded(world, ls));
+                let Some(bs) = vertex(world, (m, &sp, wo), &mut ctx.rng, nee) else { break };
+                st.diffuse += u32::from(!m.is_dirac());
+                if !st.walk.scatter(&bs, (depth, hit.p, hit.ng), &mut ctx.rng) {
                     break;
                 }
                 self.track_mis(&mut st, (m, &sp, wo, hit.t), depth, ctx);
@@ -388,12 +371,13 @@ impl GuidedPathTracer {
             st.diffuse += 1;
             let mix = DefensiveMixture::new(m, &sp, wo, &g.tables, g.frame, g.weights);
             let n = g.n as f32;
-            let nee = st.t.beta * direct::sample_light_mis(world, &sp, m, wo, &mut ctx.rng, |wi| n * mix.pdf_w(wi));
+            let nee =
+                st.walk.t.beta * direct::sample_light_mis(world, &sp, m, wo, &mut ctx.rng, |wi| n * mix.pdf_w(wi));
             l.rest += self.kept(st.class, nee);
             if g.n == 1 {
                 let Some(ms) = mix.sample(&mut ctx.rng) else { break };
-                st.t.guided(ms.pdf_w, ms.bsdf_pdf_w);
-                if !continue_path(&mut st, (depth, hit.p, hit.ng), &ms.as_bsdf_sample(), &mut ctx.rng) {
+                st.walk.t.guided(ms.pdf_w, ms.bsdf_pdf_w);
+                if !st.walk.scatter(&ms.as_bsdf_sample(), (depth, hit.p, hit.ng), &mut ctx.rng) {
                     break;
                 }
                 self.track_mis(&mut st, (m, &sp, wo, hit.t), depth, ctx);
@@ -422,27 +406,13 @@ impl GuidedPathTracer {
             let mut b = *st;
             let bs = BsdfSample { weight: ms.weight * (1.0 / nf), pdf_w: nf * ms.pdf_w, ..ms.as_bsdf_sample() };
             // roulette sees the branch as one BSDF-sampled path (`Throughput::guided`)
-            b.t.guided(bs.pdf_w, ms.bsdf_pdf_w);
-            if continue_path(&mut b, at, &bs, &mut ctx.rng) {
+            b.walk.t.guided(bs.pdf_w, ms.bsdf_pdf_w);
+            if b.walk.scatter(&bs, at, &mut ctx.rng) {
                 self.track_mis(&mut b, v, at.0, ctx);
                 *rest += self.trace(world, b, ctx).total();
             }
         }
     }
-}
-
-/// Applies a sampled continuation `bs` at vertex `(index, p, ng)`: throughput and `pt`'s
-/// roulette ([`Throughput::scatter`]), the next ray. False when the path ends.
-#[inline]
-fn continue_path(st: &mut PathState, (index, p, ng): (u32, Vec3, Vec3), bs: &BsdfSample, rng: &mut Rng) -> bool {
-    if !st.t.scatter(bs, index, rng) {
-        return false;
-    }
-    st.prev_delta = bs.is_delta;
-    st.prev_pdf_w = bs.pdf_w;
-    st.o = offset_origin(p, ng, bs.wi);
-    st.d = bs.wi;
-    true
 }
 
 impl Integrator for GuidedPathTracer {

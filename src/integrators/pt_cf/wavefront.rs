@@ -13,11 +13,12 @@
 //!   against the light paths (`track_mis`) is updated from the lane's result;
 //! - `--path-filter` runs `trace` ray by ray (`estimate_each`).
 
-use super::{continue_path, Guide, GuidedPathTracer, PathState};
+use super::{Guide, GuidedPathTracer, PathState};
 use crate::accel::{Ray, World};
-use crate::bsdf::{self, BsdfSample, Mode, ShadingPoint};
+use crate::bsdf::{BsdfSample, ShadingPoint};
 use crate::cf::mixture::DefensiveMixture;
 use crate::integrators::pt::lanes::{Vertex, W};
+use crate::integrators::pt::vertex;
 use crate::integrators::pt::wavefront::Wave;
 use crate::integrators::{CameraEstimate, Context};
 use crate::math::Vec3;
@@ -109,13 +110,9 @@ impl GuidedPathTracer {
             return w.lanes.push(Vertex::draw(world, k, (&sp, wo, albedo), rng));
         }
         let mut st = w.live[k].st;
-        if !m.is_dirac() {
-            let ls = direct::light_sample_mis(world, &sp, m, wo, rng, |wi| bsdf::pdf_w(m, &sp, wo, wi));
-            w.queue_nee((i, st.t.beta), ls.map(|ls| (ls.value, ls.shadow)), out);
-            st.diffuse += 1;
-        }
-        let u = rng.next_3d();
-        let Some(bs) = bsdf::sample(m, &sp, wo, u, Mode::Radiance) else { return false };
+        let beta = st.walk.t.beta;
+        let Some(bs) = vertex(world, (m, &sp, wo), rng, |ls| w.queue_nee((i, beta), ls, out)) else { return false };
+        st.diffuse += u32::from(!m.is_dirac());
         self.step(w, (i, st), (at, &bs), (m, &sp, wo, hit.t), (rng, ctx));
         false
     }
@@ -138,16 +135,16 @@ impl GuidedPathTracer {
         let n = g.n as f32;
         if g.n > 1 {
             let l = &mut out[i as usize];
-            l.rest += st.t.beta * direct::sample_light_mis(world, sp, m, wo, rng, |wi| n * mix.pdf_w(wi));
+            l.rest += st.walk.t.beta * direct::sample_light_mis(world, sp, m, wo, rng, |wi| n * mix.pdf_w(wi));
             std::mem::swap(&mut ctx.rng, rng);
             self.split(world, (&st, at), (&mix, g.n), v, &mut l.rest, ctx);
             std::mem::swap(&mut ctx.rng, rng);
             return;
         }
         let ls = direct::light_sample_mis(world, sp, m, wo, rng, |wi| n * mix.pdf_w(wi));
-        w.queue_nee((i, st.t.beta), ls.map(|ls| (ls.value, ls.shadow)), out);
+        w.queue_nee((i, st.walk.t.beta), ls, out);
         let Some(ms) = mix.sample(rng) else { return };
-        st.t.guided(ms.pdf_w, ms.bsdf_pdf_w);
+        st.walk.t.guided(ms.pdf_w, ms.bsdf_pdf_w);
         self.step(w, (i, st), (at, &ms.as_bsdf_sample()), v, (rng, ctx));
     }
 
@@ -163,9 +160,8 @@ impl GuidedPathTracer {
         w.lanes.run();
         for (j, &t) in lane_t.iter().enumerate().take(w.lanes.n) {
             let (Live { i, st }, r) = (w.live[w.lanes.k[j] as usize], w.lanes.out(j));
-            w.queue_nee((i, st.t.beta), r.nee, out);
-            let Some((wi, pdf_w)) = r.bsdf else { continue };
-            let bs = BsdfSample { wi, weight: r.albedo, pdf_w, is_delta: false, eta: 1.0 };
+            w.queue_nee((i, st.walk.t.beta), r.nee, out);
+            let Some(bs) = r.bsdf else { continue };
             let (m, sp) = (Material::Diffuse { albedo: r.albedo }, ShadingPoint { p: r.p, ng: r.ng, ns: r.ns });
             let at = (st.vertex - 1, r.p, r.ng);
             self.step(w, (i, st), (at, &bs), (&m, &sp, r.wo, t), (&mut rngs[i as usize], ctx));
@@ -184,11 +180,11 @@ impl GuidedPathTracer {
         v: At,
         (rng, ctx): (&mut Rng, &Context),
     ) {
-        if !continue_path(&mut st, at, bs, rng) {
+        if !st.walk.scatter(bs, at, rng) {
             return;
         }
         self.track_mis(&mut st, v, at.0, ctx);
-        w.next_rays.push(Ray { o: st.o, d: st.d, tmax: f32::INFINITY });
+        w.next_rays.push(st.walk.ray());
         w.next_live.push(Live { i, st });
     }
 }
