@@ -17,7 +17,7 @@
 
 use crate::compare::stability::StabilityConfig;
 use crate::compare::CompareConfig;
-use crate::integrators::{Method, MethodArgs, MethodChoice};
+use crate::integrators::{Method, MethodArgs, MethodChoice, RENDER_SETTINGS};
 use crate::pipeline::RenderJob;
 use clap::error::ErrorKind;
 use clap::parser::ValueSource;
@@ -32,7 +32,7 @@ pub struct Cli {
     /// What to do.
     #[command(subcommand)]
     pub command: Command,
-    /// Mitsuba XML scenes: set `<default>` parameter NAME (`$NAME`), as Mitsuba's `-D`.
+    /// Mitsuba XML scenes: set the <default> parameter NAME ($NAME), as Mitsuba's -D.
     #[arg(short = 'D', value_name = "NAME=VALUE", global = true, value_parser = crate::scene::parse_define)]
     pub define: Vec<(String, String)>,
 }
@@ -174,6 +174,86 @@ pub fn usage_error(subcommand: &str, message: String) -> clap::Error {
     }
 }
 
+/// The `--help` heading of the output options (`--out`, `--quiet`, `--snapshots`).
+const OUTPUT: &str = "Output";
+/// The `--help` heading of the checkpoint options.
+const CHECKPOINTS: &str = "Checkpoints";
+
+/// The generated part of docs/options.md: every `render` option under its `--help` heading, one
+/// Markdown table per heading (the flag and its value, the default, the help), the same in every
+/// build: a value that this build's `--help` hides (`--accel embree` without the `embree` feature)
+/// is listed too, with its own help, which says which builds have it. `tests/options_doc.rs` checks
+/// docs/options.md against it.
+pub fn options_markdown() -> String {
+    let mut cmd = Cli::command();
+    cmd.build();
+    let Some(render) = cmd.find_subcommand("render") else { return String::new() };
+    let mut groups: Vec<(&str, Vec<&clap::Arg>)> = Vec::new();
+    for arg in render.get_arguments() {
+        let help = matches!(arg.get_action(), clap::ArgAction::Help | clap::ArgAction::Version);
+        if arg.is_hide_set() || arg.is_positional() || help {
+            continue;
+        }
+        let heading = arg.get_help_heading().unwrap_or("Other options");
+        match groups.iter_mut().find(|(h, _)| *h == heading) {
+            Some((_, args)) => args.push(arg),
+            None => groups.push((heading, vec![arg])),
+        }
+    }
+    let mut out = String::new();
+    for (heading, args) in groups {
+        out += &format!("## {heading}\n\n| option | default | |\n|---|---|---|\n");
+        for arg in args {
+            out += &option_row(arg);
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// One option's row of [`options_markdown`]: `| `--flag VALUE` | default | help; its values |`.
+fn option_row(arg: &clap::Arg) -> String {
+    let id = arg.get_id().as_str();
+    let name = match (arg.get_long(), arg.get_short()) {
+        (Some(long), _) => format!("--{long}"),
+        (None, Some(short)) => format!("-{short}"),
+        (None, None) => id.to_string(),
+    };
+    let value = match arg.get_value_names() {
+        _ if !arg.get_action().takes_values() => String::new(),
+        Some(names) => format!(" {}", names.iter().map(|n| n.as_str()).collect::<Vec<_>>().join(" ")),
+        None => format!(" {}", id.to_uppercase()),
+    };
+    let defaults: Vec<String> = arg.get_default_values().iter().map(|d| format!("`{}`", d.to_string_lossy())).collect();
+    let default = match () {
+        _ if !arg.get_action().takes_values() => "off".to_string(), // a switch
+        _ if defaults.is_empty() => "—".to_string(),
+        _ => defaults.join(", "),
+    };
+    let mut help = arg.get_long_help().or(arg.get_help()).map_or(String::new(), |h| markdown_text(&h.to_string()));
+    if !help.is_empty() && !help.ends_with('.') {
+        help.push('.'); // clap drops a one-line help's final period
+    }
+    let values: Vec<String> = arg
+        .get_possible_values()
+        .iter()
+        .map(|v| match v.get_help() {
+            Some(h) => format!("`{}` ({})", v.get_name(), markdown_text(&h.to_string())),
+            None => format!("`{}`", v.get_name()),
+        })
+        .collect();
+    if !values.is_empty() {
+        help += &format!(" Values: {}.", values.join(", "));
+    }
+    format!("| `{name}{value}` | {default} | {help} |\n")
+}
+
+/// Help text as Markdown in a table cell: one line, with `|`, `<` and `*` escaped.
+fn markdown_text(text: &str) -> String {
+    let line = text.split_whitespace().collect::<Vec<_>>().join(" ");
+    line.replace('|', "\\|").replace('<', "\\<").replace('*', "\\*")
+}
+
 /// Subcommands.
 #[derive(Subcommand, Debug)]
 pub enum Command {
@@ -214,48 +294,49 @@ pub enum Command {
 /// `render` options.
 #[derive(Args, Debug, Clone)]
 pub struct RenderArgs {
-    /// Scene file (TOML, or Mitsuba XML by the `.xml` extension).
+    /// Scene file (TOML, or Mitsuba XML by the .xml extension).
     pub scene: PathBuf,
-    /// Rendering method; `auto` picks one from what the scene contains (default: the scene's
-    /// `render.method`, else `auto`).
-    #[arg(long, value_parser = crate::integrators::auto::value_parser())]
+    /// Rendering method; auto picks one from what the scene contains (default: the scene's
+    /// [render] method, else auto).
+    #[arg(long, value_parser = crate::integrators::auto::value_parser(), help_heading = RENDER_SETTINGS)]
     pub method: Option<MethodChoice>,
-    /// Samples per pixel (one per pass).
-    #[arg(long, conflicts_with = "time")]
+    /// Samples per pixel, one per pass; excludes --time (default: the scene's [render] spp or
+    /// time, else 16).
+    #[arg(long, value_name = "N", conflicts_with = "time", help_heading = RENDER_SETTINGS)]
     pub spp: Option<u64>,
     /// Time budget, preprocess included (e.g. 30s, 4m); whole passes only.
-    #[arg(long, value_parser = parse_secs)]
+    #[arg(long, value_name = "DURATION", value_parser = parse_secs, help_heading = RENDER_SETTINGS)]
     pub time: Option<f64>,
-    /// Resolution override, WxH.
-    #[arg(long, value_parser = parse_resolution)]
+    /// Image size (default: the scene camera's).
+    #[arg(long, value_name = "WxH", value_parser = parse_resolution, help_heading = RENDER_SETTINGS)]
     pub resolution: Option<(u32, u32)>,
-    /// Random seed (default: the scene's `render.seed`).
-    #[arg(long)]
+    /// Random seed; the image is a pure function of it (default: the scene's [render] seed, else 0).
+    #[arg(long, help_heading = RENDER_SETTINGS)]
     pub seed: Option<u64>,
-    /// Worker threads per process (default: all cores; with MPI, cores / local ranks).
-    #[arg(long)]
+    /// Worker threads per process (default: all cores; with MPI, the cores over the local ranks).
+    #[arg(long, value_name = "N", help_heading = RENDER_SETTINGS)]
     pub threads: Option<usize>,
-    /// Output prefix.
-    #[arg(long, default_value = "out/render")]
+    /// Output prefix: the image goes to PREFIX.exr and PREFIX.png, the report to PREFIX.json.
+    #[arg(long, value_name = "PREFIX", default_value = "out/render", help_heading = OUTPUT)]
     pub out: PathBuf,
     /// No progress bar.
-    #[arg(long)]
+    #[arg(long, help_heading = OUTPUT)]
     pub quiet: bool,
-    /// Write a checkpoint (PREFIX.ckpt) and the current image this often (e.g. 30s).
-    #[arg(long, value_parser = parse_secs)]
+    /// Write a checkpoint and the current image this often (e.g. 30s).
+    #[arg(long, value_name = "DURATION", value_parser = parse_secs, help_heading = CHECKPOINTS)]
     pub checkpoint_every: Option<f64>,
     /// Continue from a checkpoint, adding new passes.
-    #[arg(long)]
+    #[arg(long, value_name = "CHECKPOINT", help_heading = CHECKPOINTS)]
     pub resume: Option<PathBuf>,
-    /// Where checkpoints go (default PREFIX.ckpt).
-    #[arg(long, requires = "checkpoint_every")]
+    /// Where checkpoints go, with --checkpoint-every (default: PREFIX.ckpt).
+    #[arg(long, value_name = "PATH", requires = "checkpoint_every", help_heading = CHECKPOINTS)]
     pub checkpoint_path: Option<PathBuf>,
-    /// Stop after this many rounds of passes, one pass per rank each (testing kill/resume).
+    /// Stop after this many rounds of passes, one pass per rank each (testing kill/resume; hidden).
     #[arg(long, hide = true)]
     pub max_rounds: Option<u64>,
-    /// Also write the image as it stood at these times since the start (e.g. 15s,30s,1m), each
-    /// earlier than --time, to PREFIX.snap-LABEL.{exr,json} (`render` only).
-    #[arg(long, value_delimiter = ',', value_parser = parse_secs)]
+    /// Also write the image as it stood at these times since the start, each before --time
+    /// (e.g. 15s,30s,1m), to PREFIX.snap-LABEL.exr and .json (render only).
+    #[arg(long, value_name = "TIMES", value_delimiter = ',', value_parser = parse_secs, help_heading = OUTPUT)]
     pub snapshots: Vec<f64>,
     /// The render settings and every method's options (flags from each method's file; a flag
     /// of another method than the one rendering is refused).
@@ -341,7 +422,7 @@ pub struct BenchArgs {
     /// Passes for the `--method` profile.
     #[arg(long, default_value_t = 2)]
     pub spp: u64,
-    /// Ray-tracing back end (`embree` needs a build with `--features embree`).
+    /// Ray-tracing back end.
     #[arg(long, value_enum, default_value_t = crate::accel::AccelKind::Obvhs)]
     pub accel: crate::accel::AccelKind,
 }

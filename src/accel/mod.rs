@@ -148,10 +148,12 @@ impl std::error::Error for BuildError {}
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum AccelKind {
-    /// A compressed wide BVH (the obvhs crate).
+    // The obvhs crate's CWBVH (always built in); no doc comment, which would be a help text
+    // turning `render --help` into the long format.
+    #[allow(missing_docs)]
     #[default]
     Obvhs,
-    /// Intel Embree 3 (builds with --features embree only).
+    /// Intel Embree 3, in builds with --features embree only.
     // Hidden in a build without the feature, so that `--help` offers only what the build has;
     // the value still parses there, and `check` refuses it with the rebuild hint.
     #[cfg_attr(not(feature = "embree"), value(hide = true))]

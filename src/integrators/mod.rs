@@ -155,8 +155,9 @@ pub trait MethodSpec {
     fn build(world: &World, args: &MethodArgs, product: Self::Product) -> Result<Box<dyn Integrator>, String>;
 }
 
-/// The registry. `groups`: every option group, `field: Type` (a `#[derive(clap::Args,
-/// serde::Serialize)]` struct in its method's file); `methods`: `Variant = "name", [groups] =>
+/// The registry. `groups`: every option group, `field: Type = "Title"` (a `#[derive(clap::Args,
+/// serde::Serialize)]` struct in its method's file; the title heads its flags in `render --help`,
+/// with the methods that take it: [`group_heading`]); `methods`: `Variant = "name", [groups] =>
 /// module::SpecType;` per method, the groups whose options it takes. It declares the modules,
 /// the [`Method`] enum (the CLI/JSON name), the [`MethodArgs`] groups, which flags belong to
 /// which methods ([`MethodArgs::foreign_flag`]), the report's [`MethodOptions`] and the
@@ -164,7 +165,7 @@ pub trait MethodSpec {
 /// its line.
 macro_rules! methods {
     (
-        groups { $( $(#[$gdoc:meta])* $group:ident: $gty:ty, )* }
+        groups { $( $(#[$gdoc:meta])* $group:ident: $gty:ty = $title:literal, )* }
         methods { $( $(#[$doc:meta])* $variant:ident = $name:literal, [$($uses:ident),*] => $module:ident :: $spec:ident; )* }
     ) => {
         /// The rendering methods (`--method`).
@@ -178,11 +179,11 @@ macro_rules! methods {
         #[derive(clap::Args, Clone, Debug)]
         pub struct MethodArgs {
             /// Settings every method reads (`--max-depth`, `--emission-split`).
-            #[command(flatten)]
+            #[command(flatten, next_help_heading = RENDER_SETTINGS)]
             pub settings: RenderSettings,
             $(
                 $(#[$gdoc])*
-                #[command(flatten)]
+                #[command(flatten, next_help_heading = group_heading(stringify!($group)))]
                 pub $group: $gty,
             )*
             /// The ids of the method options given explicitly on the command line (set by
@@ -266,22 +267,28 @@ macro_rules! methods {
             }
         }
     };
+            /// Every option group's field name and title (`Caustic Forecasting`), in registry
+            /// order.
+            pub fn group_titles() -> &'static [(&'static str, &'static str)] {
+                &[$( (stringify!($group), $title), )*]
+            }
+
 }
 
 methods! {
     groups {
         /// `pt`'s `--path-filter` (shared with `pt-cf`).
-        pt: pt::PtArgs,
+        pt: pt::PtArgs = "Path tracing",
         /// The IWS options (`iws`, `iws-pm`, `iws-cf`).
-        iws: iws::IwsArgs,
+        iws: iws::IwsArgs = "Instant radiosity (IWS)",
         /// The photon map's (`iws-pm`).
-        pm: iws_pm::PmArgs,
+        pm: iws_pm::PmArgs = "Photon map",
         /// The Caustic Forecasting preprocess and tables (`iws-cf`, `pt-cf`).
-        cf: iws_cf::CfArgs,
+        cf: iws_cf::CfArgs = "Caustic Forecasting",
         /// `iws-cf`'s own (`--variant`).
-        iwscf: iws_cf::IwsCfArgs,
+        iwscf: iws_cf::IwsCfArgs = "Paper variant",
         /// `pt-cf`'s own (`--guide-*`).
-        ptcf: pt_cf::PtCfArgs,
+        ptcf: pt_cf::PtCfArgs = "Guided path tracing",
     }
     methods {
         /// Path tracing with NEE and MIS: the unbiased reference.
@@ -308,6 +315,24 @@ fn flags_of<T: clap::Args>() -> Vec<(String, String)> {
 impl Method {
     /// Parses a method name (scene files, `--methods`).
     pub fn from_name(s: &str) -> Option<Method> {
+/// The `--help` heading of the render settings (`settings`, and `cli`'s `--method`, `--spp`, ...).
+pub const RENDER_SETTINGS: &str = "Render settings";
+
+/// The `--help` heading of option group `group`: its title and the methods that take it, e.g.
+/// `Caustic Forecasting options (iws-cf, pt-cf)` (built once; clap takes `&'static str`).
+pub fn group_heading(group: &str) -> &'static str {
+    static HEADINGS: std::sync::OnceLock<Vec<(&'static str, &'static str)>> = std::sync::OnceLock::new();
+    let headings = HEADINGS.get_or_init(|| {
+        let heading = |(g, title): &(&'static str, &str)| {
+            let owners = Method::ALL.iter().filter(|m| m.groups().contains(g)).map(|m| m.name());
+            let text = format!("{title} options ({})", owners.collect::<Vec<_>>().join(", "));
+            (*g, &*Box::leak(text.into_boxed_str()))
+        };
+        MethodArgs::group_titles().iter().map(heading).collect()
+    });
+    headings.iter().find(|(g, _)| *g == group).map_or("Method options", |(_, h)| h)
+}
+
         <Method as clap::ValueEnum>::from_str(s, true).ok()
     }
 

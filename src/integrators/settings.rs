@@ -18,22 +18,23 @@ pub const MAX_EMISSION_SPLIT: u32 = 64;
 /// Settings shared by every method (not a method's options).
 #[derive(clap::Args, Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct RenderSettings {
-    /// Safety cap on path vertices (default: the scene's `render.max_depth`, 64).
-    #[arg(long)]
+    /// Safety cap on path vertices (default: the scene's [render] max_depth, else 64).
+    #[arg(long, value_name = "N")]
     pub max_depth: Option<u32>,
-    /// Camera rays per pixel sample in the pixels where a light source has an edge (found by a
-    /// probe): they average the emission seen directly or through mirrors and glass, one of them
-    /// carries the rest of the estimate (unbiased; 1 = off; default by measurement).
-    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=MAX_EMISSION_SPLIT as i64))]
+    /// Camera rays per pixel sample where a light's edge is in view: they average the light seen
+    /// directly or through mirrors and glass (unbiased; 1 = off, at most 64).
+    // The edge pixels are found by a probe before pass 0 (`render::pixel`); one of the rays
+    // carries the rest of the estimate. The default is by measurement.
+    #[arg(long, value_name = "K", default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=MAX_EMISSION_SPLIT as i64))]
     pub emission_split: u32,
-    /// Ray-tracing back end: `obvhs` (CWBVH, always built in) or `embree` (Intel Embree 3; needs a
-    /// build with `--features embree`).
-    #[arg(long, value_enum, default_value_t = AccelKind::Obvhs)]
+    /// Ray-tracing back end.
+    // `AccelKind::Embree` is a hidden value in a build without the `embree` feature: it parses
+    // there, and `validate` refuses it with the rebuild hint.
+    #[arg(long, value_name = "BACKEND", value_enum, default_value_t = AccelKind::Obvhs)]
     pub accel: AccelKind,
-    /// The camera paths' random numbers across passes: `independent` (every pass independent;
-    /// the EXR variance layer is exact) or `sobol` (a pixel's jitter and first light and BSDF
-    /// samples stratified over its passes by a scrambled Sobol sequence: lower error, a variance
-    /// layer that over-states it). Both unbiased; see docs/sampling.md.
+    /// The camera paths' random numbers across passes: independent (the variance layer is exact)
+    /// or sobol (each pixel's first samples stratified over its passes: lower error, a variance
+    /// layer that over-states it); both unbiased, see docs/sampling.md.
     #[arg(long, value_enum, default_value_t = SamplerKind::Independent)]
     pub sampler: SamplerKind,
 }

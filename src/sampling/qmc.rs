@@ -27,11 +27,14 @@
 /// The camera streams' sampler (`--sampler`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
+// The values are described in `--sampler`'s help: a value's doc comment would be its help text,
+// which turns `render --help` into its long format.
+#[allow(missing_docs)]
 pub enum SamplerKind {
-    /// PCG alone: every pass independent, so the film's variance layer is exact (the default).
+    // PCG alone: every pass independent, so the film's variance layer is exact (the default).
     #[default]
     Independent,
-    /// A scrambled Sobol prefix of [`SLOTS`] 2-D slots, then PCG (this module).
+    // A scrambled Sobol prefix of [`SLOTS`] 2-D slots, then PCG (this module).
     Sobol,
 }
 

@@ -49,20 +49,25 @@ use vpl::{generate_vpls, Vpl, VplKind};
 /// IWS parameters (shared by `iws`, `iws-pm` and `iws-cf`).
 #[derive(clap::Args, Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct IwsArgs {
-    /// IWS clamp bound b (default 0.25·π·N/A_D, spec §2; 0 = pure compensation, inf = no clamping).
-    #[arg(long, value_parser = parse_bound)]
+    /// Clamp bound b of the point lights (0 = pure bias compensation, inf = no clamping; any b
+    /// is unbiased; default: 0.25·π·N over the scene's diffuse and glossy area, N = --vpl-paths).
+    // The spec §2 default, `default_bound`.
+    #[arg(long, value_name = "B", value_parser = parse_bound)]
     pub bound: Option<f32>,
-    /// IWS light paths per pass N.
-    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Light paths per pass, whose vertices are the pass's point lights.
+    #[arg(long, value_name = "N", default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..))]
     pub vpl_paths: u32,
-    /// RIS candidates M per reservoir, drawn ∝ VPL power (0 = every VPL once).
-    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=(MAX_CANDIDATES as i64)))]
+    /// Point lights drawn per shading point as candidates, in proportion to their power
+    /// (0 = every point light once).
+    // RIS candidates M per reservoir.
+    #[arg(long, value_name = "M", default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=(MAX_CANDIDATES as i64)))]
     pub ris_candidates: u32,
-    /// RIS survivors K (shadow rays per vertex), from one shared candidate set.
-    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=(MAX_SURVIVORS as i64)))]
+    /// Candidates kept per shading point, one shadow ray each.
+    // RIS survivors K, from one shared candidate set.
+    #[arg(long, value_name = "K", default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=(MAX_SURVIVORS as i64)))]
     pub ris_survivors: u32,
-    /// IWS direct light from the emitters: `nee` (one light sample and shadow ray per vertex,
-    /// unclamped) or `vpl` (the paper: the light paths' first vertices as clamped point lights).
+    /// The light sources' direct light: nee (a light sample and a shadow ray per vertex, never
+    /// clamped) or vpl (as point lights clamped like the others, the papers' choice).
     #[arg(long, value_enum, default_value_t = DirectLight::Nee)]
     pub direct: DirectLight,
 }
@@ -70,13 +75,16 @@ pub struct IwsArgs {
 /// Where the IWS estimator gets the direct light of the scene's emitters (area and point lights).
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
+// The values are described in `--direct`'s help: a value's doc comment would be its help text,
+// which turns `render --help` into its long format.
+#[allow(missing_docs)]
 pub enum DirectLight {
-    /// Next-event estimation (`transport::direct`, light sampling only: an emitter ∝ power, a
-    /// point on it, one shadow ray), never clamped; the point lights are then only the light
-    /// paths' surface vertices, and the compensation ray adds nothing when it hits an emitter.
+    // Next-event estimation (`transport::direct`, light sampling only: an emitter ∝ power, a
+    // point on it, one shadow ray); the point lights are then only the light paths' surface
+    // vertices, and the compensation ray adds nothing when it hits an emitter.
     Nee,
-    /// [KK04, BAJ08]: the light paths' emitter vertices are point lights clamped by `b` like the
-    /// others, and the compensation ray recovers the clamped emission when it hits an emitter.
+    // [KK04, BAJ08]: the light paths' emitter vertices are point lights clamped by `b`, and the
+    // compensation ray recovers the clamped emission when it hits an emitter.
     Vpl,
 }
 

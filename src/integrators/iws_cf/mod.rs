@@ -41,29 +41,30 @@ pub const DEFAULT_FORECAST_PHOTONS: u64 = 200_000;
 /// `--variant`, onto the domain's [`ForecastOptions`]).
 #[derive(clap::Args, Clone, Debug, PartialEq, serde::Serialize)]
 pub struct CfArgs {
-    /// iws-cf, pt-cf: forecast photons to store (default: the scene's `[forecast] photons`, else
-    /// 200k; with `--time`, about 5% of the budget).
-    #[arg(long)]
+    /// Forecast photons to store (default: the scene's [forecast] photons, else 200000; with
+    /// --time, as many as about 5% of the budget allows).
+    #[arg(long, value_name = "N")]
     pub forecast_photons: Option<u64>,
-    /// iws-cf, pt-cf: codebook size k (clusters).
-    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Clusters the forecast photons are grouped into (the codebook size).
+    #[arg(long, value_name = "K", default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
     pub clusters: u32,
-    /// iws-cf, pt-cf: clusters with rank above this are culled (their points take BSDF samples).
-    #[arg(long, default_value_t = 6)]
+    /// Clusters ranked above this are culled (their points take BSDF samples).
+    #[arg(long, value_name = "R", default_value_t = 6)]
     pub max_rank: u32,
-    /// iws-cf, pt-cf: forecasters gathered per table (n).
-    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Forecasters gathered per table.
+    #[arg(long, value_name = "N", default_value_t = 128, value_parser = clap::value_parser!(u32).range(1..))]
     pub forecasters: u32,
-    /// iws-cf, pt-cf: the most samples S0 per table (iws-cf) or continuations (pt-cf) at diffuse
-    /// depth 0, by the energy rule S = clamp(ceil(S0·ρ_c/ρ_max), 1, S0); 1 deeper.
-    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
+    /// The most table samples (iws-cf) or continuations (pt-cf) at diffuse depth 0, fewer where
+    /// the cluster reflects less; 1 deeper.
+    // S0 of the energy rule S = clamp(ceil(S0·ρ_c/ρ_max), 1, S0).
+    #[arg(long, value_name = "S0", default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
     pub split: u32,
-    /// iws-cf, pt-cf: the tables are used at diffuse depths below this (deeper: BSDF sampling;
-    /// 0 = never, so pt-cf is pt).
-    #[arg(long, default_value_t = 1)]
+    /// The tables are used at diffuse depths below this (deeper: BSDF sampling; 0 = never, so
+    /// pt-cf renders as pt).
+    #[arg(long, value_name = "D", default_value_t = 1)]
     pub table_depth: u32,
-    /// iws-cf, pt-cf: table-cache cell edge as a fraction of the cluster's radius r_c (0 = build per point).
-    #[arg(long, default_value_t = 1.0, value_parser = parse_table_cache)]
+    /// Table-cache cell edge as a fraction of the cluster's radius (0 = a table per point).
+    #[arg(long, value_name = "F", default_value_t = 1.0, value_parser = parse_table_cache)]
     pub table_cache: f32,
     /// The run's time budget (set by the pipeline from `--time`, not a flag): without an explicit
     /// `--forecast-photons` the preprocess then costs about [`PREPROCESS_SHARE`] of it.
@@ -75,9 +76,9 @@ pub struct CfArgs {
 /// `iws-cf`'s own options.
 #[derive(clap::Args, Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct IwsCfArgs {
-    /// iws-cf: the paper's own choices together, for its ablations: `baj08` = the dual table
-    /// (no spread), the rank splitting rule S = max(1, S0 >> rank) and the emitters' light as
-    /// clamped point lights (`--direct vpl`).
+    /// The paper's own choices together, for its ablations: baj08 = the dual table without
+    /// spread, the rank splitting rule S = max(1, S0 >> rank) and the light sources as clamped
+    /// point lights (--direct vpl, so it excludes --direct).
     #[arg(long, value_enum, conflicts_with = "direct")]
     pub variant: Option<Variant>,
 }
@@ -85,8 +86,11 @@ pub struct IwsCfArgs {
 /// A named set of `iws-cf` choices (`--variant`).
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
+// The values are described in `--variant`'s help: a value's doc comment would be its help text,
+// which turns `render --help` into its long format.
+#[allow(missing_docs)]
 pub enum Variant {
-    /// [BAJ08] as published: `TableKind::Dual`, `SplitRule::Rank`, `DirectLight::Vpl`.
+    // [BAJ08] as published: `TableKind::Dual`, `SplitRule::Rank`, `DirectLight::Vpl`.
     Baj08,
 }
 

@@ -41,14 +41,14 @@ const NORMAL_COS: f32 = 0.9;
 /// `iws-pm` parameters.
 #[derive(clap::Args, Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct PmArgs {
-    /// iws-pm: caustic photons to store.
-    #[arg(long, default_value_t = 200_000)]
+    /// Caustic photons to store.
+    #[arg(long, value_name = "N", default_value_t = 200_000)]
     pub photons: u64,
-    /// iws-pm: photons per radiance estimate (k).
-    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Photons per radiance estimate.
+    #[arg(long, value_name = "K", default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
     pub gather: u32,
-    /// iws-pm: maximum gather radius in scene units (default 2% of the scene diagonal).
-    #[arg(long, value_parser = parse_positive)]
+    /// Largest gather radius in scene units (default: 2% of the scene's diagonal).
+    #[arg(long, value_name = "R", value_parser = parse_positive)]
     pub max_radius: Option<f32>,
 }
 
