@@ -7,7 +7,8 @@
 //! A flag of another method is a usage error (exit 2) naming the methods it belongs to
 //! ([`check_foreign_flags`], from clap's `ArgMatches::value_source`): at parse time when
 //! `--method` names the method, else once the pipeline knows it (the scene's `render.method`),
-//! from the explicit flags [`Cli::parse_checked`] records in `MethodArgs::explicit`.
+//! from the explicit flags [`Cli::parse_checked`] records in `MethodArgs::explicit`. The render
+//! settings and method options given (`MethodArgs::given`) win over the scene's `[render]` ones.
 //!
 //! The commands that reuse `render`'s options check them the same way, at parse time:
 //! `reference` renders `pt` only (a flag of another method, or `--method` other than `pt`, is
@@ -48,13 +49,23 @@ impl Cli {
         match (&mut cli.command, matches.subcommand()) {
             (Command::Render(a), Some(("render", sub))) => {
                 a.method_args.explicit = explicit_method_flags(sub);
+                a.method_args.given = given_flags(sub);
                 if let Some(MethodChoice::Named(m)) = a.method {
                     check_foreign_flags(m, sub)?;
                 }
             }
-            (Command::Reference(a), Some(("reference", sub))) => check_reference(a, sub)?,
-            (Command::Compare(a), Some(("compare", sub))) => check_compare(a, sub)?,
-            (Command::ForecastMap(_), Some(("forecast-map", sub))) => check_forecast_map(sub)?,
+            (Command::Reference(a), Some(("reference", sub))) => {
+                a.method_args.given = given_flags(sub);
+                check_reference(a, sub)?
+            }
+            (Command::Compare(a), Some(("compare", sub))) => {
+                a.render.method_args.given = given_flags(sub);
+                check_compare(a, sub)?
+            }
+            (Command::ForecastMap(a), Some(("forecast-map", sub))) => {
+                a.render.method_args.given = given_flags(sub);
+                check_forecast_map(sub)?
+            }
             _ => {}
         }
         Ok(cli)
@@ -66,6 +77,14 @@ impl Cli {
 pub fn explicit_method_flags(matches: &ArgMatches) -> Vec<String> {
     let ids = MethodArgs::group_flags().into_iter().flat_map(|(_, flags)| flags).map(|(id, _)| id);
     ids.filter(|id| matches.value_source(id) == Some(ValueSource::CommandLine)).collect()
+}
+
+/// The ids of the render settings and method options (`MethodArgs`'s) that `matches` got from the
+/// command line itself: they win over the scene's `[render]` options.
+fn given_flags(matches: &ArgMatches) -> Vec<String> {
+    let cmd = MethodArgs::augment_args(clap::Command::new("render"));
+    let ids = cmd.get_arguments().map(|a| a.get_id().to_string()).collect::<Vec<_>>();
+    ids.into_iter().filter(|id| matches.value_source(id) == Some(ValueSource::CommandLine)).collect()
 }
 
 /// Refuses, as a usage error (exit 2), a flag given in `matches` that the method `resolved`

@@ -138,6 +138,68 @@ fn base_scene_is_valid() {
     assert_eq!((s.triangles.len(), s.spheres.len(), s.emitters.len()), (4, 1, 2));
 }
 
+/// `[render]`'s keys besides its own are render settings and method options by their flag names
+/// (tests/scene_options.rs), which the render checks as it resolves the job (the pipeline knows
+/// the flags): an unknown key, another method's option, a value its flag refuses and two options
+/// that exclude each other are errors at the key's line, as the loader's are.
+#[test]
+fn render_options() {
+    let resolve = |src: &str| {
+        let scene = load_str(src, "bad.toml", Path::new(".")).unwrap_or_else(|e| panic!("loads: {e}"));
+        let job = forecast::pipeline::RenderJob {
+            method: None,
+            spp: None,
+            ..common::job(Path::new("bad.toml"), forecast::integrators::Method::Pt, 1, 0, (8, 8), 1, Path::new("out"))
+        };
+        job.resolve(&scene).err()
+    };
+    let mut fails = Vec::new();
+    let mut check = |name: &str, src: &str, key: &str, words: &str| {
+        let want = format!("bad.toml:{}: key `{key}`: ", marked_line(src));
+        match resolve(src) {
+            Some(e) if e.starts_with(&want) && e.contains(words) => {}
+            other => fails.push(format!("{name}: want `{want}...{words}...`, got {other:?}")),
+        }
+    };
+    check("unknown", &with("spp", "spp = 4\nsamples = 16 #<"), "render.samples", "unknown key `samples`");
+    check(
+        "the table's own key spelled as a flag",
+        &with("spp", "spp = 4\nmax-depth = 8 #<"),
+        "render.max-depth",
+        "unknown",
+    );
+    check(
+        "another method's",
+        &with("spp", "spp = 4\nclusters = 8 #<"),
+        "render.clusters",
+        "--clusters belongs to iws-cf/pt-cf, not pt",
+    );
+    check("out of range", &with("spp", "spp = 4\nemission_split = 0 #<"), "render.emission_split", "invalid value '0'");
+    check(
+        "not a number",
+        &with("spp", "spp = 4\nemission-split = \"many\" #<"),
+        "render.emission-split",
+        "invalid value 'many'",
+    );
+    check("bad path classes", &with("spp", "spp = 4\npath_filter = \"X\" #<"), "render.path_filter", "--path-filter");
+    let iws_cf = |extra: &str| with("method", &format!("method = \"iws-cf\"\n{extra}"));
+    check("over its limit", &iws_cf("split = 2000 #<"), "render.split", "--split");
+    check(
+        "excluded by another",
+        &iws_cf("variant = \"baj08\"\ndirect = \"vpl\" #<"),
+        "render.direct",
+        "cannot be used with",
+    );
+    // `auto` picks pt for this scene (no mirror or glass): its options are pt's
+    let auto = |extra: &str| with("method", &format!("method = \"auto\"\n{extra}"));
+    check("another method's than auto's", &auto("guide_fraction = 0.5 #<"), "render.guide_fraction", "not pt");
+    assert!(fails.is_empty(), "{} case(s) failed:\n{}", fails.len(), fails.join("\n"));
+    // a value that no flag takes is refused by the loader
+    let mut f = Vec::new();
+    case(&mut f, "array value", &with("spp", "spp = 4\nclusters = [8] #<"), "render.clusters");
+    finish(f);
+}
+
 #[test]
 fn unknown_keys() {
     let mut f = Vec::new();
@@ -148,7 +210,6 @@ fn unknown_keys() {
         "colour",
     );
     case(&mut f, "camera", &with("fov", "fov = 40.0\nfocus = 2.0 #<"), "camera.focus");
-    case(&mut f, "render", &with("spp", "spp = 4\nsamples = 16 #<"), "render.samples");
     case(
         &mut f,
         "material",

@@ -191,6 +191,12 @@ macro_rules! methods {
             /// `compare`, which hands one set of flags to several methods).
             #[arg(skip)]
             pub explicit: Vec<String>,
+            /// The ids of the render settings and method options the command line gave, for
+            /// every command that takes them (`render`, `reference`, `compare`, `forecast-map`):
+            /// they win over the scene's `[render]` options. Empty for API callers, whose values
+            /// give way to the scene's.
+            #[arg(skip)]
+            pub given: Vec<String>,
         }
 
         /// The options a report records: the render settings and the chosen method's groups.
@@ -256,6 +262,12 @@ macro_rules! methods {
                 vec![$( (stringify!($group), flags_of::<$gty>()), )*]
             }
 
+            /// Every option group's field name and title (`Caustic Forecasting`), in registry
+            /// order.
+            pub fn group_titles() -> &'static [(&'static str, &'static str)] {
+                &[$( (stringify!($group), $title), )*]
+            }
+
             /// The options a report records for `method`: the settings and its groups only, with
             /// `--variant`'s choices applied ([`MethodArgs::with_variant`]).
             pub fn options_for(&self, method: Method) -> MethodOptions {
@@ -267,12 +279,6 @@ macro_rules! methods {
             }
         }
     };
-            /// Every option group's field name and title (`Caustic Forecasting`), in registry
-            /// order.
-            pub fn group_titles() -> &'static [(&'static str, &'static str)] {
-                &[$( (stringify!($group), $title), )*]
-            }
-
 }
 
 methods! {
@@ -304,17 +310,6 @@ methods! {
     }
 }
 
-/// The flags of one option group, `(arg id, --long)`, from its clap definition.
-fn flags_of<T: clap::Args>() -> Vec<(String, String)> {
-    T::augment_args(clap::Command::new("group"))
-        .get_arguments()
-        .filter_map(|a| Some((a.get_id().to_string(), format!("--{}", a.get_long()?))))
-        .collect()
-}
-
-impl Method {
-    /// Parses a method name (scene files, `--methods`).
-    pub fn from_name(s: &str) -> Option<Method> {
 /// The `--help` heading of the render settings (`settings`, and `cli`'s `--method`, `--spp`, ...).
 pub const RENDER_SETTINGS: &str = "Render settings";
 
@@ -333,6 +328,17 @@ pub fn group_heading(group: &str) -> &'static str {
     headings.iter().find(|(g, _)| *g == group).map_or("Method options", |(_, h)| h)
 }
 
+/// The flags of one option group, `(arg id, --long)`, from its clap definition.
+fn flags_of<T: clap::Args>() -> Vec<(String, String)> {
+    T::augment_args(clap::Command::new("group"))
+        .get_arguments()
+        .filter_map(|a| Some((a.get_id().to_string(), format!("--{}", a.get_long()?))))
+        .collect()
+}
+
+impl Method {
+    /// Parses a method name (scene files, `--methods`).
+    pub fn from_name(s: &str) -> Option<Method> {
         <Method as clap::ValueEnum>::from_str(s, true).ok()
     }
 
@@ -342,7 +348,43 @@ pub fn group_heading(group: &str) -> &'static str {
     }
 }
 
+/// A render setting or method option by its long name ([`MethodArgs::option_named`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct OptionName {
+    /// The flag, `--clusters`.
+    pub long: String,
+    /// The clap id, `clusters`.
+    pub id: String,
+    /// Its option group (a field of [`MethodArgs`]); `None` for a render setting, which every
+    /// method takes.
+    pub group: Option<&'static str>,
+}
+
 impl MethodArgs {
+    /// The render setting or method option named `name`: its long flag name without the dashes,
+    /// with `-` or `_` between words (`guide-fraction`, `guide_fraction`), as a scene's `[render]`
+    /// table names it.
+    pub fn option_named(name: &str) -> Option<OptionName> {
+        let long = format!("--{}", name.replace('_', "-"));
+        let settings = flags_of::<RenderSettings>().into_iter().map(|f| (f, None));
+        let groups =
+            Self::group_flags().into_iter().flat_map(|(g, flags)| flags.into_iter().map(move |f| (f, Some(g))));
+        let ((id, long), group) = settings.chain(groups).find(|((_, l), _)| *l == long)?;
+        Some(OptionName { long, id, group })
+    }
+
+    /// These arguments with `flags` (`--long=value` each) parsed over them by clap, with each
+    /// flag's own parser, range and conflicts: a flag given replaces its value, the others keep
+    /// theirs (no defaults are applied).
+    pub fn with_flags(&self, flags: &[String]) -> Result<MethodArgs, clap::Error> {
+        use clap::{Args, FromArgMatches};
+        let cmd = Self::augment_args(clap::Command::new("render").no_binary_name(true));
+        let matches = cmd.mut_args(|a| a.default_value(None)).try_get_matches_from(flags)?;
+        let mut args = self.clone();
+        args.update_from_arg_matches(&matches)?;
+        Ok(args)
+    }
+
     /// The first flag in `explicit` that `method` does not take, as the error naming the methods
     /// it belongs to: `--clusters belongs to iws-cf/pt-cf, not pt`. `None` when every explicit
     /// flag is the method's (or a render setting).

@@ -40,6 +40,7 @@ mod memory;
 mod passes;
 mod preprocess;
 mod report;
+mod scene_options;
 mod snapshots;
 
 use passes::{run_passes, Passes};
@@ -154,7 +155,8 @@ impl RenderJob {
         crate::scene::LoadOptions { defines: self.defines.clone() }
     }
 
-    /// Fills the job's `None`s from the scene's `[render]` defaults.
+    /// Fills the job's `None`s from the scene's `[render]` defaults, and the method options the
+    /// command line did not give from the scene's `[render]` options (`scene_options`).
     pub fn resolve(&self, scene: &Scene) -> Result<Plan, String> {
         let r = &scene.render;
         let (method, method_reason) = crate::integrators::auto::resolve(self.method, scene)?;
@@ -163,7 +165,9 @@ impl RenderJob {
         if let Some(n) = self.threads {
             params::THREADS.check_flag("--threads", n as u64)?;
         }
-        let mut args = self.args.clone();
+        // the scene's [render] options, which the command line's override, must fit its own method
+        let own = if self.method.is_some() { crate::integrators::auto::resolve(None, scene)?.0 } else { method };
+        let mut args = scene_options::apply(&self.args, scene, method, own)?;
         args.settings.max_depth = args.settings.max_depth.or(Some(r.max_depth));
         let time = self.time.or(if self.spp.is_some() { None } else { r.time });
         args.cf.time_budget_s = time; // the CF preprocess scales its photon count to the budget

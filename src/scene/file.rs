@@ -205,6 +205,22 @@ fn render(cx: &Ctx, b: &mut SceneBuilder, doc: &Doc) -> Result<(), SceneError> {
     if let Some(d) = r.max_depth {
         b.max_depth(d.into(), &at("max_depth"))?;
     }
+    for (key, value) in &r.options {
+        let line = at(key).line;
+        let value = match value {
+            toml::Value::String(s) => s.clone(),
+            toml::Value::Integer(i) => i.to_string(),
+            toml::Value::Float(f) => f.to_string(),
+            toml::Value::Boolean(v) => v.to_string(),
+            other => {
+                let m =
+                    format!("a method option takes a number or a string, as its flag does; got a {}", other.type_str());
+                return Err(b.err(&at(key), m));
+            }
+        };
+        b.render.options.push(crate::scene::RenderOption { key: key.clone(), value, line });
+    }
+    b.render.options.sort_by_key(|o| o.line);
     Ok(())
 }
 

@@ -186,6 +186,22 @@ pub struct RenderDefaults {
     pub seed: u64,
     /// Safety cap on path vertices.
     pub max_depth: u32,
+    /// The table's other keys, in file order: render settings and method options by their long
+    /// flag names (`clusters = 32`), which the pipeline checks and applies (it knows the flags).
+    pub options: Vec<RenderOption>,
+}
+
+/// A `[render]` key that is not the table's own (`method`, `spp`, `time`, `seed`, `max_depth`):
+/// a render setting or a method's option by its long flag name, `-` or `_` (`guide_fraction =
+/// 0.5`). The scene reader keeps it as written; `pipeline` parses it as `--KEY=VALUE`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderOption {
+    /// The key as written (`guide_fraction`).
+    pub key: String,
+    /// The value as command-line text (`0.5`, `inf`, `DSL,DD*`).
+    pub value: String,
+    /// The key's line in the scene file.
+    pub line: usize,
 }
 
 /// Power (luminance, W) of a light, the weight of light selection.

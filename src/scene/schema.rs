@@ -63,14 +63,17 @@ fn exact_box<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[[f32; 3]; 2]>, D
     Ok(Some([sized(a)?, sized(b)?]))
 }
 
+/// `[render]`: its own keys, and the render settings and method options by their flag names in
+/// `options` (checked by the pipeline, which knows the flags: an unknown key is refused there).
 #[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
 pub(super) struct RenderDef {
     pub(super) method: Option<String>,
     pub(super) spp: Option<u64>,
     pub(super) time: Option<String>,
     pub(super) seed: Option<u64>,
     pub(super) max_depth: Option<u32>,
+    #[serde(flatten)]
+    pub(super) options: BTreeMap<String, toml::Value>,
 }
 
 /// A `[materials.NAME]` table as written: `type` plus the union of every type's keys. Kept flat
