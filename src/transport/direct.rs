@@ -12,7 +12,9 @@ use crate::sampling::rng::Rng;
 use crate::scene::{LightRef, Material, NO_EMITTER};
 
 /// Solid-angle pdf that `sample_light` picks the point `y` (normal `ny`) of emitter `e` from a
-/// point at distance² `dist2` with light-side cosine `cos_l`.
+/// point at distance² `dist2` with light-side cosine `cos_l`: [`light_pdf_w`] with the pick's
+/// pmf and `Scene::sample_emitter_point`'s area density, so that the two pdfs of an MIS pair are
+/// the same floating-point expression.
 #[inline]
 pub fn emitter_pdf_w(world: &World, emitter: u32, dist2: f32, cos_l: f32) -> f32 {
     let s = &world.scene;
@@ -20,7 +22,7 @@ pub fn emitter_pdf_w(world: &World, emitter: u32, dist2: f32, cos_l: f32) -> f32
         return 0.0;
     }
     let li = emitter as usize; // area emitters come first in `Scene::lights`
-    s.light_pick.pmf(li) / s.emitters[emitter as usize].area * dist2 / cos_l
+    light_pdf_w(s.light_pick.pmf(li), 1.0 / s.emitters[emitter as usize].area, dist2, cos_l)
 }
 
 /// The direction from `p` toward the light point `y` (normal `ny`): `(wi, distance², cos θ_l)`,
