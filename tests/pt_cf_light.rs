@@ -31,7 +31,7 @@ fn pt(world: &World, res: u32, spp: u64) -> Film {
 /// The summed light splats of pass 0 at `res`² (the light side is really on).
 fn splat_sum(w: &World, g: &dyn Integrator, res: u32) -> f64 {
     let cam = w.scene.camera.with_resolution(res, res);
-    let s = g.light_splats(w, &cam, 3, 0).expect("pt-cf traces light paths by default");
+    let s = g.light_tracer().expect("pt-cf traces light paths by default").light_splats(w, &cam, 3, 0);
     s.image.iter().map(|c| (c.x + c.y + c.z) as f64).sum()
 }
 

@@ -101,16 +101,27 @@ pub trait Integrator: Send + Sync {
     fn stats(&self, _profile: &Profile) -> serde_json::Value {
         serde_json::json!({})
     }
-    /// The pass's light-traced splats (`pt-cf`'s light paths, `integrators::pt_cf::light`): a dense
-    /// row-major image of `camera`'s size added to every pixel's camera sample of pass `pass`, a
-    /// pure function of (seed, pass) and the scene. `None`: the method traces no light paths.
-    fn light_splats(&self, _world: &World, _camera: &Camera, _seed: u64, _pass: u64) -> Option<LightSplats> {
+    /// The method's light tracer ([`LightTracer`]); `None` (the default): it traces no light paths.
+    fn light_tracer(&self) -> Option<&dyn LightTracer> {
         None
     }
-    /// Sets the light paths per pass of the next passes, both sides' weights included (`pt-cf`'s
-    /// light-path pilot, `pipeline::light_pilot`, which tries several counts on one integrator
-    /// and its warm table cache). A method without light paths ignores it.
-    fn set_light_paths(&mut self, _n: u64) {}
+    /// [`Integrator::light_tracer`], mutable (to set its path count).
+    fn light_tracer_mut(&mut self) -> Option<&mut dyn LightTracer> {
+        None
+    }
+}
+
+/// Light tracing, a capability a method may offer (as Mitsuba's `AdjointIntegrator`): paths from
+/// the lights splatted to the camera, added to the camera estimates of the same pass
+/// (`pt-cf`'s light side, `integrators::pt_cf::light`).
+pub trait LightTracer: Send + Sync {
+    /// The pass's light-traced splats: a dense row-major image of `camera`'s size added to every
+    /// pixel's camera sample of pass `pass`, a pure function of (seed, pass) and the scene.
+    fn light_splats(&self, world: &World, camera: &Camera, seed: u64, pass: u64) -> LightSplats;
+    /// Sets the light paths per pass of the next passes, both sides' MIS weights included (the
+    /// light-path pilot, `pipeline::light_pilot`, tries several counts on one integrator and its
+    /// warm table cache).
+    fn set_light_paths(&mut self, n: u64);
 }
 
 /// [`Integrator::estimate_batch`]'s default: `estimate` ray by ray, `ctx.rng` swapped with

@@ -205,7 +205,9 @@ pub fn choose(
     let measured: Option<Vec<Measured>> = CANDIDATES
         .iter()
         .map(|&nu| {
-            integrator.set_light_paths(paths(nu));
+            if let Some(light) = integrator.light_tracer_mut() {
+                light.set_light_paths(paths(nu));
+            }
             measure(world, integrator.as_mut(), &pixels, seed, nu)
         })
         .collect();
@@ -248,7 +250,7 @@ fn measure(
     for i in 0..PILOT_PASSES {
         let pass = PILOT_PASS_BASE + i;
         integrator.begin_pass(world, seed, pass);
-        let splats = integrator.light_splats(world, pixels.camera(), seed, pass)?;
+        let splats = integrator.light_tracer()?.light_splats(world, pixels.camera(), seed, pass);
         rays += splats.closest_rays + splats.shadow_rays;
         for (tile, out, c) in camera_tiles(world, &*integrator, pixels, seed, &[pass]) {
             rays += c.closest_rays + c.shadow_rays;

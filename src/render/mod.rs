@@ -166,7 +166,9 @@ pub fn render_passes(
     assert_eq!(pixels.resolution(), (w as u32, h as u32), "pixel sampler and film sizes differ");
     assert!(!passes.is_empty() && (passes.len() == 1 || integrator.independent_passes()));
     let results = camera_tiles(world, integrator, pixels, seed, passes);
-    let splats: Vec<_> = passes.iter().map(|&q| integrator.light_splats(world, pixels.camera(), seed, q)).collect();
+    let light = integrator.light_tracer();
+    let splats: Vec<_> =
+        passes.iter().map(|&q| light.map(|l| l.light_splats(world, pixels.camera(), seed, q))).collect();
     let g = passes.len();
     // The merge runs in parallel over rows of tiles (each a contiguous band of the film); every
     // pixel still gets its samples in pass order, so the film is the serial merge's.

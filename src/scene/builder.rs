@@ -18,7 +18,7 @@
 //! emitters in primitive order (emissive triangles, then emissive spheres); lights = the area
 //! emitters then the point lights, picked ∝ power (`light_power`).
 
-use super::limits::{extent_message, light_value_error, roi_name_error, within_extent, MAX_INTENSITY, MAX_RADIANCE};
+use super::limits::{extent_message, light_value_error, within_extent, MAX_INTENSITY, MAX_RADIANCE};
 use super::{
     light_power, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere, Triangle,
     NO_EMITTER,
@@ -585,4 +585,19 @@ pub fn parse_duration(s: &str) -> Result<f64, String> {
         return Err(format!("bad duration `{s}`: must be positive (e.g. 30s, 4m, 1h)"));
     }
     Ok(total)
+}
+
+/// `None` when ROI `name` gives `compare` files of its own (`crops/NAME-*.png`, `strip-NAME.png`,
+/// after `safe_name`; `full` is the whole image), else the message; `earlier`: the ROIs before.
+fn roi_name_error<'a>(name: &str, mut earlier: impl Iterator<Item = (&'a str, &'a Origin)>) -> Option<String> {
+    let file = super::safe_name;
+    if name == "full" {
+        return Some("roi name `full` is reserved: `compare` names the whole image `full`".into());
+    }
+    let (first, at) = earlier.find(|(n, _)| file(n) == file(name))?;
+    let alike = if first == name { String::new() } else { format!(" as `{first}` (both files `{}`)", file(name)) };
+    Some(format!(
+        "duplicate roi name `{name}`: `{}` (line {}) has it already{alike}; `compare` names each ROI's files after it",
+        at.key, at.line
+    ))
 }

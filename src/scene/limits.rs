@@ -1,5 +1,5 @@
 //! Scene limits: the extent every primitive, the camera and the lights must lie in, the largest
-//! light values, the ROI names `compare` can tell apart, and the non-regular-file refusal shared
+//! light values, and the non-regular-file refusal shared
 //! by the scene and mesh readers.
 //!
 //! `MAX_RADIANCE = 1e15` per channel for an emitter, `MAX_INTENSITY = 1e9` for a point light:
@@ -19,7 +19,6 @@
 //! Beyond it, surface areas or cost sums overflow to ∞ and obvhs panics. (f32 spacing at 1e12 is
 //! 2¹⁷ units, so such scenes are useless to render, but they fail cleanly or work.)
 
-use super::builder::Origin;
 use crate::math::Vec3;
 use std::path::Path;
 
@@ -36,24 +35,6 @@ pub const MAX_INTENSITY: f32 = 1e9;
 pub fn light_value_error(key: &str, v: Vec3, max: f32) -> Option<String> {
     let ok = v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= max;
     (!ok).then(|| format!("{key} must be finite, non-negative and at most {max:e} per channel (see scenes/README.md)"))
-}
-
-/// `None` when ROI `name` gives `compare` files of its own (`crops/NAME-*.png`, `strip-NAME.png`,
-/// after `safe_name`; `full` is the whole image), else the message; `earlier`: the ROIs before.
-pub(super) fn roi_name_error<'a>(
-    name: &str,
-    mut earlier: impl Iterator<Item = (&'a str, &'a Origin)>,
-) -> Option<String> {
-    let file = super::safe_name;
-    if name == "full" {
-        return Some("roi name `full` is reserved: `compare` names the whole image `full`".into());
-    }
-    let (first, at) = earlier.find(|(n, _)| file(n) == file(name))?;
-    let alike = if first == name { String::new() } else { format!(" as `{first}` (both files `{}`)", file(name)) };
-    Some(format!(
-        "duplicate roi name `{name}`: `{}` (line {}) has it already{alike}; `compare` names each ROI's files after it",
-        at.key, at.line
-    ))
 }
 
 /// True when `p` is finite and every |coordinate| ≤ `MAX_EXTENT`.

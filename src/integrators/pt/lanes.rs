@@ -69,7 +69,7 @@ pub(crate) struct Vertex<'a> {
 impl<'a> Vertex<'a> {
     /// The record of live path `k`'s vertex at `sp` (`wo`, `albedo`), its numbers drawn from
     /// `rng` in the scalar order: the light pick, the point on the light, then the BSDF's three
-    /// (`direct::light_sample_mis`, then `bsdf::sample`). Requires `path_batch::lanes_apply`.
+    /// (`direct::light_sample_mis`, then `bsdf::sample`). Requires `pt::wavefront::lanes_apply`.
     #[inline(always)]
     pub fn draw(world: &'a World, k: usize, (sp, wo, albedo): (&ShadingPoint, Vec3, Rgb), rng: &mut Rng) -> Self {
         let s = &world.scene;

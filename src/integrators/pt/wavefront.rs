@@ -1,16 +1,16 @@
-//! `pt` as a wavefront over a batch of camera rays (a tile): the same estimator as
+//! `pt` as a wavefront over a batch of camera rays (a tile): the estimator of
 //! `PathTracer::trace`, path by path and bit for bit, with the rays of each bounce traced in one
 //! batch (`World::intersect_batch`) and the shadow rays of each bounce in another
-//! (`World::occluded_batch`): Embree then pays its per-call cost once per 16-ray packet
-//! instead of once per ray (issue #33, `results/2026-12-04-core-wavefront.md`,
-//! `results/2026-12-05-embree-packets.md`).
+//! (`World::occluded_batch`), so that Embree pays its per-call cost once per 16-ray packet.
+//! Every vertex is `pt::vertex` (or, for a diffuse one, `pt::lanes`); measured in
+//! `results/2026-12-04-core-wavefront.md`.
 //!
-//! Invariants (why it is bit-identical to the scalar loop): each path draws from its own stream
-//! (`rngs[i]`) in the scalar order (NEE's numbers, then the BSDF's, then roulette's); a path's
-//! contributions are added in the scalar order (the emitter hit of bounce k, then NEE at k, then
-//! bounce k + 1); NEE's contribution is `β·value` when its segment is unoccluded and `β·0`
-//! otherwise, as `sample_light` returns; paths never interact. `--path-filter` runs the scalar
-//! loop (`Integrator::estimate_batch`'s default).
+//! Invariants (why it is bit-identical to the scalar loop, `tests/wavefront.rs`): each path draws
+//! from its own stream (`rngs[i]`) in the scalar order (NEE's numbers, then the BSDF's, then
+//! roulette's); a path's contributions are added in the scalar order (the emitter hit of bounce
+//! k, then NEE at k, then bounce k + 1); NEE's contribution is `β·value` when its segment is
+//! unoccluded and `β·0` otherwise, as `direct::unoccluded` returns; paths never interact.
+//! `--path-filter` runs the scalar loop (`Integrator::estimate_batch`'s default).
 
 use super::lanes::{Lanes, Vertex};
 use super::vertex::{vertex, Walk};
@@ -47,7 +47,7 @@ pub(crate) struct Wave<P = Live> {
     nee: Vec<(u32, Rgb, Rgb)>,
     shadow: Vec<Ray>,
     occluded: Vec<bool>,
-    /// The diffuse vertices of this bounce, sixteen at a time (`path_lanes`).
+    /// The diffuse vertices of this bounce, sixteen at a time (`pt::lanes`).
     pub(crate) lanes: Box<Lanes>,
     /// Whether the lanes apply to this batch's scene (`lanes_apply`).
     pub(crate) lanes_on: bool,
@@ -220,7 +220,7 @@ fn flush(w: &mut Wave, depth: u32, rngs: &mut [Rng], out: &mut [CameraEstimate])
     w.lanes.n = 0;
 }
 
-/// Whether the lanes apply: every light is a triangle emitter (`path_lanes` samples those).
+/// Whether the lanes apply: every light is a triangle emitter (`pt::lanes` samples those).
 pub(crate) fn lanes_apply(s: &Scene) -> bool {
     s.lights.iter().all(|l| matches!(*l, LightRef::Area(e) if s.emitters[e as usize].prim < s.ntri()))
 }

@@ -45,7 +45,6 @@
 
 use crate::accel::{offset_origin, take_ray_counts, Hit, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
-use crate::integrators::pt_cf::GuidedPathTracer;
 use crate::integrators::{Context, LightSplats};
 use crate::math::{Rgb, Vec3};
 use crate::sampling::rng::{stream, Rng};
@@ -207,6 +206,13 @@ fn launch(world: &World, emission: Emission, rng: &mut Rng) -> Option<Start> {
     }
 }
 
+/// The camera side's pdf of drawing `wi` at a non-Dirac vertex of diffuse depth `depth` seen
+/// from `wo` (the light paths' MIS weight needs it; `pt-cf`'s camera side implements it).
+pub trait CameraPdf: Sync {
+    /// That pdf, per unit solid angle.
+    fn camera_pdf_w(&self, sp: &ShadingPoint, m: &Material, wo_wi: (Vec3, Vec3), depth: u32, ctx: &mut Context) -> f32;
+}
+
 /// What one chunk of light paths produced.
 struct Chunk {
     splats: Vec<(u32, Rgb)>,
@@ -216,8 +222,8 @@ struct Chunk {
 }
 
 /// The pass's light splats for `camera` (see the module docs).
-pub fn light_splats(
-    pt: &GuidedPathTracer,
+pub fn light_splats<P: CameraPdf>(
+    pt: &P,
     light: &LightSide,
     world: &World,
     camera: &Camera,
@@ -257,8 +263,8 @@ pub fn light_splats(
 }
 
 /// One chunk's light tracer.
-struct Tracer<'a> {
-    pt: &'a GuidedPathTracer,
+struct Tracer<'a, P> {
+    pt: &'a P,
     light: &'a LightSide,
     world: &'a World,
     camera: &'a Camera,
@@ -271,7 +277,7 @@ struct Tracer<'a> {
     verts: Vec<Vertex<'a>>,
 }
 
-impl<'a> Tracer<'a> {
+impl<'a, P: CameraPdf> Tracer<'a, P> {
     /// Traces one light path, splatting at its vertices of C.
     fn path(&mut self, mut rng: Rng, ctx: &mut Context) {
         let s = &self.world.scene;
@@ -351,7 +357,7 @@ impl<'a> Tracer<'a> {
 }
 
 /// The camera side's pdf at a vertex: `(point, material, (wo, wi), diffuse depth) → pdf_w`.
-type CameraPdf<'q> = dyn FnMut(&ShadingPoint, &Material, (Vec3, Vec3), u32) -> f32 + 'q;
+type CameraPdfAt<'q> = dyn FnMut(&ShadingPoint, &Material, (Vec3, Vec3), u32) -> f32 + 'q;
 
 /// `w_L = 1/(1 + 1/r)` at the connected vertex `x1` (`(wc, w_in)`: toward the camera and the
 /// light) of a path with the earlier non-Dirac vertices `verts` (oldest first), `n` light paths,
@@ -362,7 +368,7 @@ fn light_weight(
     (sp, m): (&ShadingPoint, &Material),
     (wc, w_in): (Vec3, Vec3),
     p0: f32,
-    q: &mut CameraPdf,
+    q: &mut CameraPdfAt,
 ) -> f32 {
     let mut num = sp.ng.dot(wc).abs() * q(sp, m, (wc, w_in), 0);
     let mut den = n as f32 * p0 * sp.ng.dot(w_in).abs();

@@ -6,7 +6,7 @@
 //! vertices: non-Dirac hits at diffuse depth `d < --table-depth` that lie inside a *guided* kept
 //! cluster `k` (`CausticForecast::cluster_at`, then `tables_in`: forecast map → dual tables,
 //! through the shared `TableCache`). There the continuation direction is drawn from the defensive
-//! mixture `q(ω) = c_k·p_BSDF(ω) + (1−c_k)·p_CF(ω)` (`forecast::mixture`, `p_CF` = ½T1 + ½T2),
+//! mixture `q(ω) = c_k·p_BSDF(ω) + (1−c_k)·p_CF(ω)` (`cf::mixture`, `p_CF` = ½T1 + ½T2),
 //! weighted by `f·|cos|/q`, so no sample is worth more than `1/c_k` BSDF samples.
 //!
 //! Per-cluster guiding. With the caustic share `s = E_c/(E_c + E_d)` of a
@@ -24,7 +24,7 @@
 //! (`--guide-rule fixed` and `--guide-split-rule rank` measured no better and were retired:
 //! `results/rejected/`.)
 //!
-//! Options: the CF group (`iws_forecast::CfArgs`, shared with `iws-cf`: photons, clusters,
+//! Options: the CF group (`iws_cf::CfArgs`, shared with `iws-cf`: photons, clusters,
 //! `--split`, `--table-depth`, …), `--path-filter` (`pt`'s) and [`PtCfArgs`].
 //!
 //! Invariants: the tables are a pdf only (any photons give an unbiased image); `c = 1` never
@@ -43,7 +43,7 @@ mod wavefront;
 use super::iws_cf::{targeted_emission, IwsCf};
 use super::pt::path_class::{kept, PathClass, PathFilter};
 use super::pt::{vertex, Walk};
-use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
+use super::{CameraEstimate, Context, Integrator, LightSplats, LightTracer, MethodArgs, MethodSpec};
 use crate::accel::{Hit, Ray, World};
 use crate::bsdf::{self, BsdfSample, ShadingPoint};
 use crate::cf::cluster::Cluster;
@@ -60,7 +60,7 @@ use crate::scene::{Camera, Material, NO_EMITTER};
 use crate::transport::context::ShadingQuery;
 use crate::transport::direct;
 use crate::transport::particle::MAX_VERTICES;
-use light::LightSide;
+use light::{CameraPdf, LightSide};
 use std::sync::Arc;
 
 /// `pt-cf`'s own options (the CF preprocess and table options are the group shared with
@@ -252,23 +252,6 @@ impl GuidedPathTracer {
         Some(Guide { tables, frame, weights, n })
     }
 
-    /// The pdf `pt-cf` uses to draw `wi` at a non-Dirac vertex of diffuse depth `depth` seen from
-    /// `wo`: the BSDF's, or `n·q` of the guided mixture with its split count `n` (the light
-    /// side's MIS weight, `pt_cf_light`).
-    pub(super) fn camera_pdf_w(
-        &self,
-        sp: &ShadingPoint,
-        m: &Material,
-        (wo, wi): (Vec3, Vec3),
-        depth: u32,
-        ctx: &mut Context,
-    ) -> f32 {
-        match self.guide_at(&ShadingQuery { x: sp, m, wo, depth }, ctx) {
-            Some(g) => g.n as f32 * DefensiveMixture::new(m, sp, wo, &g.tables, g.frame, g.weights).pdf_w(wi),
-            None => bsdf::pdf_w(m, sp, wo, wi),
-        }
-    }
-
     /// Updates the path's MIS ratio after its vertex `index` (`(m, sp, wo, t)`: material, point,
     /// toward the previous vertex, distance from it) drew the continuation now in `st`.
     #[inline(always)]
@@ -415,6 +398,38 @@ impl GuidedPathTracer {
     }
 }
 
+impl CameraPdf for GuidedPathTracer {
+    /// The BSDF's pdf, or `n·q` of the guided mixture with its split count `n`.
+    fn camera_pdf_w(
+        &self,
+        sp: &ShadingPoint,
+        m: &Material,
+        (wo, wi): (Vec3, Vec3),
+        depth: u32,
+        ctx: &mut Context,
+    ) -> f32 {
+        match self.guide_at(&ShadingQuery { x: sp, m, wo, depth }, ctx) {
+            Some(g) => g.n as f32 * DefensiveMixture::new(m, sp, wo, &g.tables, g.frame, g.weights).pdf_w(wi),
+            None => bsdf::pdf_w(m, sp, wo, wi),
+        }
+    }
+}
+
+impl LightTracer for GuidedPathTracer {
+    fn light_splats(&self, world: &World, camera: &Camera, seed: u64, pass: u64) -> LightSplats {
+        match &self.light {
+            Some(light) => light::light_splats(self, light, world, camera, (seed, pass)),
+            None => LightSplats::default(),
+        }
+    }
+
+    fn set_light_paths(&mut self, n: u64) {
+        if let Some(l) = &mut self.light {
+            l.paths = Some(n);
+        }
+    }
+}
+
 impl Integrator for GuidedPathTracer {
     /// Every pass is a pure function of (seed, pass, pixel) and the preprocess: no `begin_pass`.
     fn independent_passes(&self) -> bool {
@@ -454,14 +469,15 @@ impl Integrator for GuidedPathTracer {
         self.max_depth
     }
 
-    fn light_splats(&self, world: &World, camera: &Camera, seed: u64, pass: u64) -> Option<super::LightSplats> {
-        let light = self.light.as_ref()?;
-        Some(light::light_splats(self, light, world, camera, (seed, pass)))
+    fn light_tracer(&self) -> Option<&dyn LightTracer> {
+        self.light.is_some().then_some(self as &dyn LightTracer)
     }
 
-    fn set_light_paths(&mut self, n: u64) {
-        if let Some(l) = &mut self.light {
-            l.paths = Some(n);
+    fn light_tracer_mut(&mut self) -> Option<&mut dyn LightTracer> {
+        if self.light.is_some() {
+            Some(self)
+        } else {
+            None
         }
     }
 

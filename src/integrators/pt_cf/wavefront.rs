@@ -1,7 +1,7 @@
-//! `pt-cf`'s camera side as a wavefront over a batch of camera rays (issue #34, after `pt`'s in
-//! `path_batch`): the estimator of `GuidedPathTracer::trace`, path by path and bit for bit, with
-//! each bounce's rays traced in one batch, its shadow rays in another, and its unguided diffuse
-//! vertices run sixteen at a time (`path_lanes`).
+//! `pt-cf`'s camera side as a wavefront over a batch of camera rays, on `pt::wavefront`'s
+//! buffers: the estimator of `GuidedPathTracer::trace`, path by path and bit for bit, with each
+//! bounce's rays traced in one batch, its shadow rays in another, its unguided vertices run by
+//! `pt::vertex` and the diffuse ones sixteen at a time (`pt::lanes`).
 //!
 //! Invariants (why it is bit-identical to `trace`, `tests/wavefront.rs`):
 //! - each path draws from its own stream in `trace`'s order; a path's contributions are added in
