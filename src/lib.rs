@@ -1,13 +1,12 @@
-//! `forecast`: unbiased global illumination with Caustic Forecasting
-//! (Budge, Anderson, Joy 2008, "[BAJ08]").
+//! `forecast`: unbiased global illumination with Caustic Forecasting (Budge, Anderson, Joy
+//! 2008, "[BAJ08]"). Methods (`--method`, one folder each under `integrators`): `pt` (path
+//! tracing, the reference), `iws` (Illumination by Weak Singularities, KK04), `iws-pm` (IWS + a
+//! caustic photon map, biased), `iws-cf` (IWS + Caustic Forecasting, the paper's, unbiased) and
+//! `pt-cf` (`pt` guided by the forecast tables, with light paths; unbiased), and `auto`, which
+//! picks one from the scene.
 //!
-//! Data flow (and module order):
-//! ```text
-//! scene (TOML, OBJ) → accel::World (CWBVH) → Method::preprocess (rank 0; caustic maps)
-//!   → distributed broadcast → per pass or pass group: Integrator::begin_pass (IWS point lights) → render::render_passes
-//!   → render::film::Film sums → distributed reduce → image_io (EXR, PNG) + JSON report
-//! ```
-//! Methods: `pt` (reference), `iws`, `iws-pm`, `iws-cf`; see `integrators` and ARCHITECTURE.md.
+//! The layout, data flow and layers: `ARCHITECTURE.md`; every file, one line each (the one module
+//! map): `docs/modules.md`; derivations: `docs/methods/`.
 #![warn(missing_docs)]
 
 pub mod accel;

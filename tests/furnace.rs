@@ -1,5 +1,5 @@
 //! Furnace tests (spec §8): closed scenes whose radiance is known analytically, rendered with
-//! every method (`Method::ALL`: `pt`, `iws`, `iws-pm`, `iws-cf`). Derivations are in the scene
+//! every method (`Method::ALL`: `pt`, `iws`, `iws-pm`, `iws-cf`, `pt-cf`). Derivations are in the scene
 //! files under `tests/scenes/`. None of the scenes has a diffuse surface reached through a
 //! Dirac vertex, so `L_c = 0` and even `iws` (which omits it) and `iws-pm` (biased only in `L_c`)
 //! must give the exact answer; the preprocesses store few photons (there are none to find).
