@@ -1,35 +1,25 @@
 //! How one pixel sample is drawn: one jittered camera ray, or emission splitting
-//! (`--emission-split K`) in the pixels where light sources have edges.
+//! (`--emission-split K`) in the pixels where light sources have edges (beyond the paper; the
+//! derivation and the tests: `docs/emission-split.md`).
 //!
 //! Estimator. In a split pixel a sample is `L̂ = (1/K)·Σ_k E(r_k) + (L − E)(r_J)`: `K` camera rays
 //! `r_k` at N-rooks positions in the pixel (ray `k` in column stratum `k` and row stratum
 //! `rows[k]`, a uniform random permutation), each contributing `E`, the emission seen along its
 //! Dirac prefix (`transport::dirac::prefix_emission`: the first hit, or a short mirror/glass
 //! chain), and one of them, `J` uniform, continued by the integrator for everything else
-//! (`Integrator::estimate` returns `E` and `L − E` apart). Ray `k` is uniform over its column
-//! stratum (its row stratum is uniform, the permutation being random), so the `K` rays together
-//! cover the pixel once, `E[(1/K)·Σ_k E(r_k)] = E[E(r)]`, and `r_J`, its column uniform, is
-//! uniform over the pixel: `E[L̂] = E[E(r)] + E[(L − E)(r)] = E[L(r)]`, unbiased for any `K`
-//! (the contract on `E` is `transport::dirac`'s). It divides the
-//! antialiasing variance of an emitter's edge by about `K` (more for edges along the rows or the
-//! columns, which are stratified) for `K − 1` cheap rays.
+//! (`Integrator::estimate` returns `E` and `L − E` apart).
 //!
-//! Which pixels. `K` rays everywhere would cost `K − 1` rays in every pixel for a gain in a few
-//! (on `cornell-box` at 60 s, the light's edges, direct and in the mirror ball, and the pixels
-//! next to them, 0.7% of the image, hold half of `pt`'s squared error and three quarters of
-//! `iws-cf`'s). So a probe traces the prefix emission on a lattice of `m` intervals per pixel side
-//! (`(mW+1)×(mH+1)` points, from a fixed stream, band by band; `m = 2` from 640 pixels across up,
-//! the corners, edge midpoints and centre, and up to 8 below, so that the lattice keeps its
-//! angular resolution: [`probe_subdivision`]) and splits exactly the pixels whose `(m+1)²` values
-//! are not all equal, or random at one point: a point whose prefix meets a mirror or glass is
-//! traced [`PROBE_CHAINS`] times, and chains that differ (the light seen through glass along some
-//! Fresnel choices only) mark it. On `figurines` those ~100 glints held nearly all of the camera
-//! side's `E S+ L` variance and a single chain per point found few of them (`results/2026-12-06-glass-probe.md`). The set is a pure function of
-//! the scene, the camera, the resolution and the cap, not of the samples, so the estimator stays
-//! unbiased whatever it marks; a pixel it misses (an edge thinner than `1/m` pixel) is merely
-//! not split. (With `m = 2` at every resolution the probe missed most of `figurines`' glints at
-//! 256×144: 28 pixels split against 163 at 640×360; `results/2026-12-06-probe-resolution.md`.)
-//! `K = 1` draws exactly the random numbers of the plain sampler and traces no probe.
+//! Which pixels. A probe traces the prefix emission on a lattice of `m` intervals per pixel side
+//! (`(mW+1)×(mH+1)` points, from a fixed stream, band by band; `m` from [`probe_subdivision`])
+//! and splits exactly the pixels whose `(m+1)²` values are not all equal, or random at one point:
+//! a point whose prefix meets a mirror or glass is traced [`PROBE_CHAINS`] times, and chains that
+//! differ (the light seen through glass along some Fresnel choices only) mark it.
+//!
+//! Invariants: `L̂` is unbiased for any `K` (the contract on `E` is `transport::dirac`'s); the
+//! split set is a pure function of the scene, the camera, the resolution and the cap, never of
+//! the samples, so it cannot bias (a pixel it misses, an edge thinner than `1/m` pixel, is merely
+//! not split); `K = 1` draws exactly the random numbers of the plain sampler and traces no probe.
+//! Measurements: `results/CONCLUSIONS.md`, "Emission splitting and its probe".
 
 use super::Context;
 use crate::accel::{Ray, World};
