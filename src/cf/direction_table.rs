@@ -18,8 +18,9 @@
 //! (The single defensive table and the defensive T1, `--table single|dual-defensive`, measured
 //! no better and were retired: `results/rejected/table.md`.)
 //!
-//! Invariants: every bin where the integrand may be non-zero has pdf > 0 in exactly one dual table; sampled directions have μ ∈ (0, 1] (never on the horizon) and a pdf
-//! equal to `pdf_w` of the same direction; the number of samples never depends on the samples.
+//! Invariants: every bin where the integrand may be non-zero has pdf > 0 in exactly one dual
+//! table; sampled directions have μ ∈ (0, 1] (never on the horizon) and a pdf equal to `pdf_w`
+//! of the same direction; the number of samples never depends on the samples.
 //! Construction never panics: NaN/negative weights count as 0, a table with no weight is `None`.
 
 // `!(x > 0.0)`-style tests are deliberate: they are true for NaN (degenerate input is rejected).

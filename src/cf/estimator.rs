@@ -2,12 +2,15 @@
 //! maps, search radius) and the CF estimator Ĺ_c at a non-specular point [BAJ08 §3.2; spec §4].
 //!
 //! At x: query the cluster map. Outside a kept cluster: S_cos = 1 BSDF sample. Inside: gather
-//! up to n forecasters within r, build the 32×16 table (weights lum(Φ)·f·μ, the paper's) and its
-//! dual on the empty bins, sample each S(rank, d) times and SUM
-//! the two estimates. The caller's `g(ωi)` returns the integrand f·cos·1[first hit Dirac]·L̂;
-//! any table is a valid pdf, so the estimate is unbiased whatever the photons are.
+//! up to n forecasters within r, build the 32×16 table T1 (weights lum(Φ)·f·μ, the paper's) and
+//! T2 on its empty bins ([`TableKind`]: `DualSpread`, or the paper's `Dual` with `--variant
+//! baj08`), sample each `S` times ([`CausticForecast::split_for`]: at d = 0 the energy rule, or the
+//! paper's rank rule with `--variant baj08`; 1 deeper) and SUM the two estimates. The caller's
+//! `g(ωi)` returns the integrand f·cos·1[first hit Dirac]·L̂; any table is a valid pdf, so the
+//! estimate is unbiased whatever the photons are. The derivation: `docs/methods/iws-cf.md`.
 //!
-//! Invariants: S depends only on the cluster rank and the diffuse depth, never on samples;
+//! Invariants: S depends only on the cluster (its density or rank) and the diffuse depth, never
+//! on samples;
 //! the product is identical after a bitcode round trip (it is what rank 0 broadcasts).
 //! The [`TableCache`] (`table_cache.rs`) is an explicit object owned by the estimator and shared
 //! by all worker threads: a cached entry is a pure function of its cell, so sharing it changes

@@ -1,6 +1,6 @@
 //! Defensive mixture of the BSDF sampler and the forecast tables, one-sample MIS with the mixture
 //! pdf (Veach 1997 §9.2.4 "one-sample model" with the balance heuristic; Hesterberg 1995 defensive
-//! importance sampling; issue #11 item 6 and `pt-cf`, issue #12):
+//! importance sampling), drawn at `pt-cf`'s guided vertices (`docs/methods/pt-cf.md`):
 //!
 //! `q(ω) = c_B·p_BSDF(ω) + c_1·p_T1(ω) + c_2·p_T2(ω)`: pick a component with probability `c_k`,
 //! sample it, and weight by `f·|cos|/q(ω)` with **all** component pdfs evaluated at `ω`. Hence

@@ -1,6 +1,9 @@
-//! Forecaster splatting (issue #11 item 6): how a forecaster's weight is spread over the
-//! 32×16 direction bins of [`super::bins`] when a table is built. Every spread adds
-//! exactly the forecaster's weight, so the tables stay valid pdfs and the estimator unbiased.
+//! Forecaster splatting, for the `dual-spread` tables (beyond BAJ08; `docs/methods/iws-cf.md`,
+//! "Sampling L_c"): how a forecaster's weight is spread over the 32×16 direction bins of
+//! [`super::bins`] when a table is built. Evidence: `results/rejected/table.md`.
+//!
+//! Invariant: every spread adds exactly the forecaster's weight, so the tables stay valid pdfs
+//! and the estimator unbiased.
 
 use super::bins::{bin_of, N_BINS, N_MU, N_PHI};
 use crate::math::{Vec3, PI};

@@ -1,33 +1,28 @@
-//! Where the cluster map cannot return one of a few clusters, and what it returns elsewhere: a
-//! voxel grid that answers `pt-cf`'s cluster-map queries for its guided clusters (issue #12;
-//! issue #33 for the answers; an acceleration only, the image is the same bit for bit).
+//! A voxel grid that answers the cluster map's query for a subset of its clusters (`pt-cf`'s
+//! guided clusters; `iws-cf`'s kept ones) without the map's kd-tree wherever it can: an
+//! acceleration only, the image is the same bit for bit. The bounds and why they are exact:
+//! `docs/methods/pt-cf.md`, "Estimator" (the voxel grid).
 //!
 //! [`ClusterMap::query`] takes the representative `q` nearest to `x` and accepts its cluster `c`
-//! iff `|x − q| ≤ reach_c` (and a normal test). For a cell `V` of the grid with centre `o` and
-//! half-diagonal `h`, let `d_n` be the distance from `o` to the nearest representative of any
-//! cluster and `d_g` the distance from `o` to the nearest representative of a subset cluster.
-//! For every `x ∈ V` the nearest representative is at most `d_n + h` away, and every subset
-//! representative at least `d_g − h`; so if `d_g − h > min(d_n + h, R)`, `R` the largest reach of
-//! the subset, no `x ∈ V` can be accepted for a subset cluster, and the cell is marked empty.
-//! The map's normal test gives a second exact rejection: a point whose normal `n_x` has
-//! `n_x·n̄_c < 0.5` for every subset cluster `c` (a wall, when the guided caustics lie on a floor).
+//! iff `|x − q| ≤ reach_c` (and a normal test). A cell `V` (centre `o`, half-diagonal `h`; `d_n`,
+//! `d_g` the distances from `o` to the nearest representative of any cluster and of a subset
+//! cluster; `R` the subset's largest reach) is one of:
+//! - **empty**: `d_g − h > min(d_n + h, R)` (no `x ∈ V` can be accepted for a subset cluster);
+//! - **one cluster** `c`: its candidates, the representatives within `min(d_n + h, R) + h` of `o`,
+//!   all belong to `c` and `d_n + h ≤ reach_c` (only the normal test is left);
+//! - **a scan** of its candidates, smallest `(dist², cluster)` first with the map's own squared
+//!   distance (`spatial::dist2`): that is the map's nearest whenever the map could accept it;
+//! - **ask the map**, with more than [`MAX_CANDIDATES`] candidates.
 //!
-//! The other cells store the answer itself. The representative `q*` nearest to `x ∈ V` matters
-//! only when `|x − q*| ≤ R` (beyond it no subset cluster accepts, whichever `q*` is), and then
-//! `|o − q*| ≤ min(d_n + h, R) + h`: the cell's **candidates** are the representatives within
-//! that distance of `o`. The smallest `(dist², cluster)` over them, with the map's own squared
-//! distance (`spatial::dist2`), is the map's nearest whenever that one can be accepted, and a
-//! rejected one otherwise, so [`SubsetGrid::cluster_at`] equals `query` restricted to the
-//! subset. A cell whose candidates include no subset cluster is empty; one whose candidates all
-//! belong to one cluster `c` with `d_n + h ≤ reach_c` answers `c` (only the normal test is left);
-//! one with more than [`MAX_CANDIDATES`] asks the map.
+//! A point whose normal fails the map's normal test for every subset cluster (a wall, when the
+//! guided caustics lie on a floor) is rejected before its cell is looked at.
 //!
-//! Invariants: exact (`cluster_at(x, n_x)` = `query(x, n_x)` when that is a subset cluster, else
-//! `None`; distance bounds carry a relative slack for f32 rounding, and a point in the slack band
-//! around the grid asks the map; `tests` compare with the map on random points and near every
-//! representative), a pure function of the map and the subset, outside the grid's box always
-//! `None` (the box is the union of the subset clusters' boxes, which already bound where the map
-//! can accept them).
+//! Invariants: exact ([`SubsetGrid::cluster_at`]`(x, n_x)` = `query(x, n_x)` when that is a
+//! subset cluster, else `None`; distance bounds carry a relative slack for f32 rounding, and a
+//! point in the slack band around the grid asks the map; `tests` compare with the map on random
+//! points and near every representative), a pure function of the map and the subset, outside
+//! the grid's box always `None` (the box is the union of the subset clusters' boxes, which
+//! already bound where the map can accept them).
 
 use super::cluster_map::{ClusterMap, MIN_NORMAL_COS};
 use crate::math::Vec3;

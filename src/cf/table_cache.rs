@@ -1,4 +1,4 @@
-//! The CF table cache [spec §9 "caching tables per cluster cell"; issue #11 item 4]: the
+//! The CF table cache [spec §9 "caching tables per cluster cell"]: the
 //! direction tables of a flat-shaded, non-Dirac point are those of its cache cell, built once
 //! and shared by every worker thread.
 //!
@@ -7,8 +7,8 @@
 //! `r_c = min(r, sqrt(n/(π ρ_c)))` is the radius that holds n forecasters at the cluster's own
 //! photon density `ρ_c = N_c/A_c`. The tables of a cell are built once, at its centre, from `c`'s
 //! forecast map. So a small, dense caustic gets small cells and a wide, faint cluster large ones,
-//! instead of one cell size from the global radius r, which the faint clusters dominate (1.34 m
-//! on `figurines`, whose brightest caustic clusters hold 128 forecasters within 4 mm).
+//! instead of one cell size from the global radius r, which the faint clusters dominate
+//! (measured: `results/2026-12-01-option-tables.md`, `--table-cache`).
 //!
 //! Invariants: every entry is a pure function of its key, never of random numbers or of the
 //! thread that built it (two threads may race to build the same entry; both results are equal),
