@@ -7,8 +7,9 @@
 //! for the extra rays of emission splitting (`render::pixel`). Invariant the splitting's
 //! unbiasedness rests on: every integrator's `CameraEstimate::prefix_le` is an estimate of the
 //! same `E` with the same truncation: weight 1 (no MIS on a Dirac prefix), the BSDF's own
-//! sampling, roulette from vertex [`RR_FROM_VERTEX`](super::roulette::RR_FROM_VERTEX) on β·etaScale ([`Throughput`], as `pt`'s),
-//! one-sided emitters, and the integrator's own vertex cap (`Integrator::prefix_cap`).
+//! sampling, roulette from vertex [`RR_FROM_VERTEX`](super::roulette::RR_FROM_VERTEX) on
+//! β·etaScale ([`Throughput`], as `pt`'s), one-sided emitters, and the integrator's own vertex cap
+//! (`Integrator::prefix_cap`).
 
 use super::particle::MAX_VERTICES;
 use super::roulette::Throughput;

@@ -1,7 +1,7 @@
 //! Point-light (VPL) selection by resampled importance sampling (RIS; Talbot, Cline, Egbert 2005,
 //! "Importance Resampling for Global Illumination"; the core of ReSTIR DI, Bitterli et al. 2020).
 //!
-//! Replaces the full gather `Σ_i F_i·V_i` (issue #11 item 2): draw `M` candidates `i_1..i_M` from a
+//! Replaces the full gather `Σ_i F_i·V_i` (evidence: `results/rejected/vpl-select.md`): draw `M` candidates `i_1..i_M` from a
 //! cheap source `q` (an alias table, e.g. ∝ lum(Φ_i), built once per pass), weight each by
 //! `w_j = p̂(i_j)/q(i_j)` with the caller's target `p̂(i) = lum(|f|·min(G,b)·Φ_i)` (no visibility),
 //! keep `y = i_j` with probability `w_j/Σw` (prefix sums for M ≤ 32, else streaming weighted

@@ -1,5 +1,6 @@
-//! The one particle (light-path) tracer behind every light-path consumer: IWS point lights
-//! (VPLs), the caustic photon map, and (later) caustic forecasters.
+//! The one particle (light-path) tracer behind the preprocesses' and passes' light paths: IWS
+//! point lights (VPLs), the caustic photon map and the caustic forecasters; `pt-cf`'s light
+//! paths launch with its [`Emission`] samplers and bounce with the same roulette.
 //!
 //! A path is launched from a light picked with probability `P_ℓ ∝ power`, at a point `y0` with
 //! area pdf `p_A` (`Scene::sample_emitter_point`), in a direction drawn by an [`Emission`]

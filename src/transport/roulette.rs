@@ -5,7 +5,7 @@
 //! The survival probabilities: [`q_max`] for `pt` and Dirac chains (Mitsuba's and pbrt-v4's
 //! `min(max β·etaScale, 0.95)`, applied by [`Throughput::scatter`]), [`q_recursion`] for the
 //! IWS recursion (spec §4 "Termination", on the largest channel rather than the luminance, see
-//! there) and [`q_particle`] for light paths (spec §2).
+//! there) and [`q_particle`] for light paths (spec §2). Why each: `results/2026-11-30-roulette.md`.
 
 use crate::bsdf::BsdfSample;
 use crate::math::{luminance, Rgb};
