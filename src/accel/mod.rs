@@ -106,7 +106,7 @@ pub fn shadow_segment(a: Vec3, na: Vec3, b: Vec3, nb: Vec3) -> (Ray, bool) {
     let target = offset_origin(b, nb, -dir);
     let seg = target - o;
     let len = seg.length();
-    (Ray { o, d: seg / len.max(1e-30), tmax: len }, !(dist <= 0.0))
+    (Ray { o, d: seg / len.max(1e-30), tmax: len }, dist > 0.0 || dist.is_nan())
 }
 
 /// Why `World::build` refused a scene.

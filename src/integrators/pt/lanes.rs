@@ -14,6 +14,7 @@
 //! - a branch that returns `None` in the scalar code is a lane mask here, and a lane whose mask
 //!   is off adds `β·0`, as the scalar code does.
 
+use super::vertex::SurfaceVertex;
 use crate::accel::{shadow_segment, Ray, World};
 use crate::bsdf::{diffuse, BsdfSample, ShadingPoint};
 use crate::math::{Rgb, Vec3};
@@ -50,12 +51,11 @@ impl V3 {
 pub(crate) struct Vertex<'a> {
     /// The wavefront's live index of the path.
     pub k: u32,
-    /// Position, geometric and shading normal (`ShadingPoint`).
-    pub p: Vec3,
-    pub ng: Vec3,
-    pub ns: Vec3,
+    /// Position, geometric and shading normal.
+    pub sp: ShadingPoint,
     /// Toward the previous vertex.
     pub wo: Vec3,
+    /// The diffuse reflectance.
     pub albedo: Rgb,
     /// The picked emitter's triangle, its light-pick pmf and radiance.
     pub light: &'a Triangle,
@@ -67,11 +67,11 @@ pub(crate) struct Vertex<'a> {
 }
 
 impl<'a> Vertex<'a> {
-    /// The record of live path `k`'s vertex at `sp` (`wo`, `albedo`), its numbers drawn from
+    /// The record of live path `k`'s vertex `v` (of reflectance `albedo`), its numbers drawn from
     /// `rng` in the scalar order: the light pick, the point on the light, then the BSDF's three
     /// (`direct::light_sample_mis`, then `bsdf::sample`). Requires `pt::wavefront::lanes_apply`.
     #[inline(always)]
-    pub fn draw(world: &'a World, k: usize, (sp, wo, albedo): (&ShadingPoint, Vec3, Rgb), rng: &mut Rng) -> Self {
+    pub fn draw(world: &'a World, k: usize, v: &SurfaceVertex, albedo: Rgb, rng: &mut Rng) -> Self {
         let s = &world.scene;
         let (li, pmf, _) = s.light_pick.sample(rng.next_f32());
         let u_light = rng.next_2d();
@@ -80,10 +80,8 @@ impl<'a> Vertex<'a> {
         let em = &s.emitters[e as usize];
         Vertex {
             k: k as u32,
-            p: sp.p,
-            ng: sp.ng,
-            ns: sp.ns,
-            wo,
+            sp: v.sp,
+            wo: v.wo,
             albedo,
             light: &s.triangles[em.prim as usize],
             pmf,
@@ -131,11 +129,11 @@ pub(crate) struct LaneOut {
     pub nee: Option<LightSample>,
     /// The sampled direction (`None` where `bsdf::sample` returns `None`).
     pub bsdf: Option<BsdfSample>,
-    /// The vertex's position, normals, direction toward the previous vertex and albedo.
-    pub p: Vec3,
-    pub ng: Vec3,
-    pub ns: Vec3,
+    /// The vertex's position and normals.
+    pub sp: ShadingPoint,
+    /// Toward the previous vertex.
     pub wo: Vec3,
+    /// The diffuse reflectance.
     pub albedo: Rgb,
 }
 
@@ -145,7 +143,7 @@ impl Lanes {
     pub fn push(&mut self, v: Vertex) -> bool {
         let j = self.n;
         self.k[j] = v.k;
-        for (f, x) in [(&mut self.p, v.p), (&mut self.ng, v.ng), (&mut self.ns, v.ns), (&mut self.wo, v.wo)] {
+        for (f, x) in [(&mut self.p, v.sp.p), (&mut self.ng, v.sp.ng), (&mut self.ns, v.sp.ns), (&mut self.wo, v.wo)] {
             f.set(j, x);
         }
         self.albedo.set(j, v.albedo);
@@ -180,9 +178,7 @@ impl Lanes {
         LaneOut {
             nee: self.nee_ok[j].then(|| LightSample { value: self.value.get(j), shadow: ray }),
             bsdf: self.bsdf_ok[j].then(|| diffuse::sampled(self.albedo.get(j), self.wi.get(j), self.pdf_w[j])),
-            p: self.p.get(j),
-            ng: self.ng.get(j),
-            ns: self.ns.get(j),
+            sp: ShadingPoint { p: self.p.get(j), ng: self.ng.get(j), ns: self.ns.get(j) },
             wo: self.wo.get(j),
             albedo: self.albedo.get(j),
         }

@@ -17,11 +17,10 @@ pub mod path_class;
 mod vertex;
 pub mod wavefront;
 
-pub use vertex::{vertex, Walk};
+pub use vertex::{vertex, SurfaceVertex, Walk};
 
 use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
 use crate::accel::{Ray, World};
-use crate::bsdf::ShadingPoint;
 use crate::math::{Rgb, Vec3};
 use crate::profile::{Phase, Profile};
 use crate::progress::Phases;
@@ -99,7 +98,7 @@ impl Integrator for PathTracer {
         }
         let t0 = std::time::Instant::now();
         let mut wave = ctx.take_scratch::<wavefront::Wave>();
-        wavefront::trace_batch(world, self.max_depth, (rays, rngs), &mut wave, out);
+        wavefront::trace_batch(world, self.max_depth, rays, rngs, &mut wave, out);
         ctx.put_scratch(wave);
         ctx.profile.samples += rays.len() as u64;
         ctx.profile.add_exact(Phase::Radiance, t0.elapsed().as_nanos() as u64);
@@ -145,14 +144,14 @@ impl PathTracer {
                 break; // emitters reflect nothing
             }
             let m = s.material_of(hit.prim);
-            let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
+            let v = SurfaceVertex::at(m, &hit, w.d, depth);
             class.push(m.is_dirac());
             prefix &= m.is_dirac();
             // a filtered-out sample still draws its random numbers (filters partition the image)
             let beta = w.t.beta;
             let nee = |ls| l.rest += self.kept(class, beta * direct::unoccluded(world, ls));
-            let Some(bs) = vertex(world, (m, &sp, -w.d), rng, nee) else { break };
-            if !w.scatter(&bs, (depth, hit.p, hit.ng), rng) {
+            let Some(bs) = vertex(world, &v, rng, nee) else { break };
+            if !w.scatter(&bs, depth, &v.sp, rng) {
                 break;
             }
         }

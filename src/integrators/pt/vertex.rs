@@ -17,6 +17,29 @@ use crate::scene::Material;
 use crate::transport::direct::{self, LightSample};
 use crate::transport::roulette::Throughput;
 
+/// A path's vertex on a surface that is not an emitter: what its BSDF, NEE and a guide see.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceVertex<'a> {
+    /// Its material.
+    pub m: &'a Material,
+    /// Its position and normals.
+    pub sp: ShadingPoint,
+    /// The direction toward the previous vertex (unit).
+    pub wo: Vec3,
+    /// Its distance from the previous vertex.
+    pub t: f32,
+    /// Its index along the path (0: the camera ray's first hit).
+    pub index: u32,
+}
+
+impl<'a> SurfaceVertex<'a> {
+    /// The vertex `index` of a path at `hit`, reached along `d`, of material `m`.
+    #[inline(always)]
+    pub fn at(m: &'a Material, hit: &Hit, d: Vec3, index: u32) -> Self {
+        SurfaceVertex { m, sp: ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns }, wo: -d, t: hit.t, index }
+    }
+}
+
 /// A path in flight: its next ray, its throughput and how its last vertex drew that ray.
 #[derive(Clone, Copy, Debug)]
 pub struct Walk {
@@ -51,31 +74,32 @@ impl Walk {
         direct::emitter_hit(world, hit, self.d, self.prev_delta, self.prev_pdf_w)
     }
 
-    /// Vertex `index` at `(p, ng)` scatters into `bs`: β·weight and roulette
+    /// Vertex `index` at `sp` scatters into `bs`: β·weight and roulette
     /// ([`Throughput::scatter`]), then the next ray. False when the path ends.
     #[inline]
-    pub fn scatter(&mut self, bs: &BsdfSample, (index, p, ng): (u32, Vec3, Vec3), rng: &mut Rng) -> bool {
+    pub fn scatter(&mut self, bs: &BsdfSample, index: u32, sp: &ShadingPoint, rng: &mut Rng) -> bool {
         if !self.t.scatter(bs, index, rng) {
             return false;
         }
         self.prev_delta = bs.is_delta;
         self.prev_pdf_w = bs.pdf_w;
-        self.o = offset_origin(p, ng, bs.wi);
+        self.o = offset_origin(sp.p, sp.ng, bs.wi);
         self.d = bs.wi;
         true
     }
 }
 
-/// A surface vertex `(m, sp, wo)` of `pt` (not an emitter): at a non-Dirac material, one NEE
-/// sample MIS-weighted against the BSDF, before its shadow ray, handed to `nee`; then the BSDF's
-/// direction (`None`: the path ends).
+/// `pt` at the surface vertex `v`: at a non-Dirac material, one NEE sample MIS-weighted against
+/// the BSDF, before its shadow ray, handed to `nee`; then the BSDF's direction (`None`: the path
+/// ends).
 #[inline(always)]
 pub fn vertex(
     world: &World,
-    (m, sp, wo): (&Material, &ShadingPoint, Vec3),
+    v: &SurfaceVertex,
     rng: &mut Rng,
     nee: impl FnOnce(Option<LightSample>),
 ) -> Option<BsdfSample> {
+    let (m, sp, wo) = (v.m, &v.sp, v.wo);
     if !m.is_dirac() {
         nee(direct::light_sample_mis(world, sp, m, wo, rng, |wi| bsdf::pdf_w(m, sp, wo, wi)));
     }

@@ -13,9 +13,8 @@
 //! `--path-filter` runs the scalar loop (`Integrator::estimate_batch`'s default).
 
 use super::lanes::{Lanes, Vertex};
-use super::vertex::{vertex, Walk};
+use super::vertex::{vertex, SurfaceVertex, Walk};
 use crate::accel::{BatchScratch, Ray, World};
-use crate::bsdf::ShadingPoint;
 use crate::integrators::CameraEstimate;
 use crate::math::Rgb;
 use crate::sampling::rng::Rng;
@@ -113,7 +112,7 @@ impl<P> Wave<P> {
     /// Queues path `i`'s NEE sample: `β·value` if its segment is unoccluded, `β·0` for `None`
     /// (as `direct::sample_light` returns), added at the end of the bounce.
     #[inline]
-    pub(crate) fn queue_nee(&mut self, (i, beta): (u32, Rgb), ls: Option<LightSample>, out: &mut [CameraEstimate]) {
+    pub(crate) fn queue_nee(&mut self, i: u32, beta: Rgb, ls: Option<LightSample>, out: &mut [CameraEstimate]) {
         match ls {
             Some(LightSample { value, shadow }) => {
                 self.nee.push((i, beta, value));
@@ -145,7 +144,8 @@ impl<P> Wave<P> {
 pub(crate) fn trace_batch(
     world: &World,
     max_depth: u32,
-    (rays, rngs): (&[Ray], &mut [Rng]),
+    rays: &[Ray],
+    rngs: &mut [Rng],
     w: &mut Wave,
     out: &mut Vec<CameraEstimate>,
 ) {
@@ -187,17 +187,16 @@ fn shade(world: &World, w: &mut Wave, k: usize, depth: u32, rngs: &mut [Rng], ou
         return false; // emitters reflect nothing
     }
     let m = s.material_of(hit.prim);
-    let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
-    let wo = -p.w.d;
+    let v = SurfaceVertex::at(m, &hit, p.w.d, depth);
     if let (true, &Material::Diffuse { albedo }) = (w.lanes_on, m) {
         w.live[k].prefix = false;
-        return w.lanes.push(Vertex::draw(world, k, (&sp, wo, albedo), rng));
+        return w.lanes.push(Vertex::draw(world, k, &v, albedo, rng));
     }
     p.prefix &= m.is_dirac();
     let beta = p.w.t.beta;
-    let nee = |ls| w.queue_nee((p.i, beta), ls, out);
-    let Some(bs) = vertex(world, (m, &sp, wo), rng, nee) else { return false };
-    if p.w.scatter(&bs, (depth, hit.p, hit.ng), rng) {
+    let nee = |ls| w.queue_nee(p.i, beta, ls, out);
+    let Some(bs) = vertex(world, &v, rng, nee) else { return false };
+    if p.w.scatter(&bs, depth, &v.sp, rng) {
         w.next_live.push(p);
         w.next_rays.push(p.w.ray());
     }
@@ -210,9 +209,9 @@ fn flush(w: &mut Wave, depth: u32, rngs: &mut [Rng], out: &mut [CameraEstimate])
     w.lanes.run();
     for j in 0..w.lanes.n {
         let (mut p, r) = (w.live[w.lanes.k[j] as usize], w.lanes.out(j));
-        w.queue_nee((p.i, p.w.t.beta), r.nee, out);
+        w.queue_nee(p.i, p.w.t.beta, r.nee, out);
         let Some(bs) = r.bsdf else { continue };
-        if p.w.scatter(&bs, (depth, r.p, r.ng), &mut rngs[p.i as usize]) {
+        if p.w.scatter(&bs, depth, &r.sp, &mut rngs[p.i as usize]) {
             w.next_live.push(p);
             w.next_rays.push(p.w.ray());
         }

@@ -42,7 +42,7 @@ mod wavefront;
 
 use super::iws_cf::{targeted_emission, IwsCf};
 use super::pt::path_class::{kept, PathClass, PathFilter};
-use super::pt::{vertex, Walk};
+use super::pt::{vertex, SurfaceVertex, Walk};
 use super::{CameraEstimate, Context, Integrator, LightSplats, LightTracer, MethodArgs, MethodSpec};
 use crate::accel::{Hit, Ray, World};
 use crate::bsdf::{self, BsdfSample, ShadingPoint};
@@ -215,6 +215,12 @@ impl PathState {
     }
 }
 
+/// The continuations of a guided vertex: the mixture they are drawn from and how many.
+struct Branches<'a> {
+    mix: &'a DefensiveMixture<'a>,
+    n: usize,
+}
+
 /// The guide at one vertex: tables, their frame, the mixture weights and the split count.
 struct Guide {
     tables: Arc<ForecastTables>,
@@ -252,21 +258,15 @@ impl GuidedPathTracer {
         Some(Guide { tables, frame, weights, n })
     }
 
-    /// Updates the path's MIS ratio after its vertex `index` (`(m, sp, wo, t)`: material, point,
-    /// toward the previous vertex, distance from it) drew the continuation now in `st`.
+    /// Updates the path's MIS ratio after its vertex `v` drew the continuation now in `st`.
     #[inline(always)]
-    fn track_mis(
-        &self,
-        st: &mut PathState,
-        (m, sp, wo, t): (&Material, &ShadingPoint, Vec3, f32),
-        index: u32,
-        ctx: &Context,
-    ) {
+    fn track_mis(&self, st: &mut PathState, v: &SurfaceVertex, ctx: &Context) {
         let (Some(_), Some(cam)) = (&self.light, &ctx.camera) else { return };
+        let (m, sp, wo, t) = (v.m, &v.sp, v.wo, v.t);
         if m.is_dirac() {
             return;
         }
-        if index == 0 {
+        if v.index == 0 {
             st.mis = Some(light::first_ratio(cam, -wo, t, sp.ng, (wo, st.walk.d), st.walk.prev_pdf_w));
         } else if let Some(r) = st.mis {
             st.mis = Some(r * light::next_ratio(m, sp, (wo, st.walk.d), st.walk.prev_pdf_w));
@@ -302,29 +302,23 @@ impl GuidedPathTracer {
         }
     }
 
-    /// Enters the non-emitter vertex `hit` (material `m`) of `st`, counting it: its shading
-    /// point, the direction toward the previous vertex and its index.
+    /// Enters the non-emitter vertex `hit` (material `m`) of `st`, counting it.
     #[inline(always)]
-    fn enter(&self, st: &mut PathState, m: &Material, hit: &Hit) -> (ShadingPoint, Vec3, u32) {
-        let depth = st.vertex;
+    fn enter<'m>(&self, st: &mut PathState, m: &'m Material, hit: &Hit) -> SurfaceVertex<'m> {
+        let v = SurfaceVertex::at(m, hit, st.walk.d, st.vertex);
         st.vertex += 1;
         st.class.push(m.is_dirac());
-        (ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns }, -st.walk.d, depth)
+        v
     }
 
-    /// The guide at the vertex `(m, sp, wo)` that `st` entered: `None` at a Dirac vertex and at
-    /// a `pt` vertex. (Not a field of `enter`'s result: a `None` then stays out of memory.)
+    /// The guide at the vertex `v` that `st` entered: `None` at a Dirac vertex and at a `pt`
+    /// vertex. (Not a field of `enter`'s result: a `None` then stays out of memory.)
     #[inline(always)]
-    fn guide_of(
-        &self,
-        st: &PathState,
-        (m, sp, wo): (&Material, &ShadingPoint, Vec3),
-        ctx: &mut Context,
-    ) -> Option<Guide> {
-        if m.is_dirac() {
+    fn guide_of(&self, st: &PathState, v: &SurfaceVertex, ctx: &mut Context) -> Option<Guide> {
+        if v.m.is_dirac() {
             return None;
         }
-        self.guide_at(&ShadingQuery { x: sp, m, wo, depth: st.diffuse }, ctx)
+        self.guide_at(&ShadingQuery { x: &v.sp, m: v.m, wo: v.wo, depth: st.diffuse }, ctx)
     }
 
     /// Radiance along `st` (a whole path, or one branch of a split).
@@ -338,51 +332,44 @@ impl GuidedPathTracer {
                 break; // emitters reflect nothing
             }
             let m = s.material_of(hit.prim);
-            let (sp, wo, depth) = self.enter(&mut st, m, &hit);
-            let Some(g) = self.guide_of(&st, (m, &sp, wo), ctx) else {
-                // a `pt` vertex, operation for operation
+            let v = self.enter(&mut st, m, &hit);
+            let Some(g) = self.guide_of(&st, &v, ctx) else {
+                // a `pt` vertex
                 let (beta, class) = (st.walk.t.beta, st.class);
                 let nee = |ls| l.rest += self.kept(class, beta * direct::unoccluded(world, ls));
-                let Some(bs) = vertex(world, (m, &sp, wo), &mut ctx.rng, nee) else { break };
+                let Some(bs) = vertex(world, &v, &mut ctx.rng, nee) else { break };
                 st.diffuse += u32::from(!m.is_dirac());
-                if !st.walk.scatter(&bs, (depth, hit.p, hit.ng), &mut ctx.rng) {
+                if !st.walk.scatter(&bs, v.index, &v.sp, &mut ctx.rng) {
                     break;
                 }
-                self.track_mis(&mut st, (m, &sp, wo, hit.t), depth, ctx);
+                self.track_mis(&mut st, &v, ctx);
                 continue;
             };
             st.diffuse += 1;
-            let mix = DefensiveMixture::new(m, &sp, wo, &g.tables, g.frame, g.weights);
+            let (sp, wo) = (&v.sp, v.wo);
+            let mix = DefensiveMixture::new(m, sp, wo, &g.tables, g.frame, g.weights);
             let n = g.n as f32;
-            let nee =
-                st.walk.t.beta * direct::sample_light_mis(world, &sp, m, wo, &mut ctx.rng, |wi| n * mix.pdf_w(wi));
+            let nee = st.walk.t.beta * direct::sample_light_mis(world, sp, m, wo, &mut ctx.rng, |wi| n * mix.pdf_w(wi));
             l.rest += self.kept(st.class, nee);
             if g.n == 1 {
                 let Some(ms) = mix.sample(&mut ctx.rng) else { break };
                 st.walk.t.guided(ms.pdf_w, ms.bsdf_pdf_w);
-                if !st.walk.scatter(&ms.as_bsdf_sample(), (depth, hit.p, hit.ng), &mut ctx.rng) {
+                if !st.walk.scatter(&ms.as_bsdf_sample(), v.index, sp, &mut ctx.rng) {
                     break;
                 }
-                self.track_mis(&mut st, (m, &sp, wo, hit.t), depth, ctx);
+                self.track_mis(&mut st, &v, ctx);
                 continue;
             }
-            self.split(world, (&st, (depth, hit.p, hit.ng)), (&mix, g.n), (m, &sp, wo, hit.t), &mut l.rest, ctx);
+            self.split(world, &st, &v, Branches { mix: &mix, n: g.n }, &mut l.rest, ctx);
             break;
         }
         l
     }
 
-    /// Splitting: `n` independent continuations of `st` at vertex `at` drawn from `mix`, each
+    /// Splitting: `b.n` independent continuations of `st` at vertex `v` drawn from `b.mix`, each
     /// with weight 1/n, their radiance added to `rest` one by one.
-    fn split(
-        &self,
-        world: &World,
-        (st, at): (&PathState, (u32, Vec3, Vec3)),
-        (mix, n): (&DefensiveMixture, usize),
-        v: (&Material, &ShadingPoint, Vec3, f32),
-        rest: &mut Rgb,
-        ctx: &mut Context,
-    ) {
+    fn split(&self, world: &World, st: &PathState, v: &SurfaceVertex, b: Branches, rest: &mut Rgb, ctx: &mut Context) {
+        let (mix, n) = (b.mix, b.n);
         let nf = n as f32;
         for _ in 0..n {
             let Some(ms) = mix.sample(&mut ctx.rng) else { continue };
@@ -390,8 +377,8 @@ impl GuidedPathTracer {
             let bs = BsdfSample { weight: ms.weight * (1.0 / nf), pdf_w: nf * ms.pdf_w, ..ms.as_bsdf_sample() };
             // roulette sees the branch as one BSDF-sampled path (`Throughput::guided`)
             b.walk.t.guided(bs.pdf_w, ms.bsdf_pdf_w);
-            if b.walk.scatter(&bs, at, &mut ctx.rng) {
-                self.track_mis(&mut b, v, at.0, ctx);
+            if b.walk.scatter(&bs, v.index, &v.sp, &mut ctx.rng) {
+                self.track_mis(&mut b, v, ctx);
                 *rest += self.trace(world, b, ctx).total();
             }
         }
@@ -459,7 +446,7 @@ impl Integrator for GuidedPathTracer {
         }
         let t0 = std::time::Instant::now();
         let mut wave = ctx.take_scratch::<wavefront::CfWave>();
-        self.trace_batch(world, (rays, rngs), &mut wave, ctx, out);
+        self.trace_batch(world, rays, rngs, &mut wave, ctx, out);
         ctx.put_scratch(wave);
         ctx.profile.samples += rays.len() as u64;
         ctx.profile.add_exact(Phase::Radiance, t0.elapsed().as_nanos() as u64);

@@ -13,15 +13,14 @@
 //!   against the light paths (`track_mis`) is updated from the lane's result;
 //! - `--path-filter` runs `trace` ray by ray (`estimate_each`).
 
-use super::{Guide, GuidedPathTracer, PathState};
+use super::{Branches, Guide, GuidedPathTracer, PathState};
 use crate::accel::{Ray, World};
-use crate::bsdf::{BsdfSample, ShadingPoint};
+use crate::bsdf::BsdfSample;
 use crate::cf::mixture::DefensiveMixture;
 use crate::integrators::pt::lanes::{Vertex, W};
-use crate::integrators::pt::vertex;
 use crate::integrators::pt::wavefront::Wave;
+use crate::integrators::pt::{vertex, SurfaceVertex};
 use crate::integrators::{CameraEstimate, Context};
-use crate::math::Vec3;
 use crate::sampling::rng::Rng;
 use crate::scene::{Material, NO_EMITTER};
 use crate::transport::direct;
@@ -41,55 +40,56 @@ pub(super) struct CfWave {
     t: [f32; W],
 }
 
-/// A vertex's material, point, direction toward the previous vertex and distance from it.
-type At<'a> = (&'a Material, &'a ShadingPoint, Vec3, f32);
+/// A guided vertex of path `live`: the vertex `v` and its guide `g`.
+struct GuidedVertex<'a> {
+    live: Live,
+    v: SurfaceVertex<'a>,
+    g: Guide,
+}
 
 impl GuidedPathTracer {
     /// `trace` for every ray of `rays`, path `i` drawing from `rngs[i]`; `out[i]` is bit for bit
-    /// `trace(rays[i])` with `ctx.rng = rngs[i]`. Requires no `--path-filter`.
+    /// `trace(rays[i])` with `ctx.rng = rngs[i]`. Requires no `--path-filter`. While one of its
+    /// vertices is shaded, a path's stream is `ctx.rng` (swapped in and out), as in `trace`.
     pub(super) fn trace_batch(
         &self,
         world: &World,
-        (rays, rngs): (&[Ray], &mut [Rng]),
+        rays: &[Ray],
+        rngs: &mut [Rng],
         cw: &mut CfWave,
         ctx: &mut Context,
         out: &mut Vec<CameraEstimate>,
     ) {
         debug_assert!(self.filter.is_none() && rays.len() == rngs.len());
-        let w = &mut cw.wave;
-        w.start(world, rays, |i| Live { i, st: PathState::camera(rays[i as usize]) }, out);
+        cw.wave.start(world, rays, |i| Live { i, st: PathState::camera(rays[i as usize]) }, out);
         for depth in 0..self.max_depth {
-            if w.live.is_empty() {
+            if cw.wave.live.is_empty() {
                 break;
             }
-            w.intersect(world, depth);
-            for k in 0..w.live.len() {
-                if self.shade(world, (w, &mut cw.t), k, (rngs, ctx), out) {
-                    self.flush(w, &cw.t, (rngs, ctx), out);
+            cw.wave.intersect(world, depth);
+            for k in 0..cw.wave.live.len() {
+                let i = cw.wave.live[k].i as usize;
+                std::mem::swap(&mut ctx.rng, &mut rngs[i]);
+                let full = self.shade(world, cw, k, ctx, out);
+                std::mem::swap(&mut ctx.rng, &mut rngs[i]);
+                if full {
+                    self.flush(cw, rngs, ctx, out);
                 }
             }
-            if w.lanes.n > 0 {
-                self.flush(w, &cw.t, (rngs, ctx), out);
+            if cw.wave.lanes.n > 0 {
+                self.flush(cw, rngs, ctx, out);
             }
-            w.finish_bounce(world, out);
+            cw.wave.finish_bounce(world, out);
         }
     }
 
-    /// One vertex of live path `k` (the body of `trace`'s loop). An unguided diffuse vertex
-    /// draws its numbers and goes to the lanes; true when they are full.
-    fn shade(
-        &self,
-        world: &World,
-        (w, lane_t): (&mut Wave<Live>, &mut [f32; W]),
-        k: usize,
-        (rngs, ctx): (&mut [Rng], &mut Context),
-        out: &mut [CameraEstimate],
-    ) -> bool {
-        let s = &world.scene;
+    /// One vertex of live path `k` (the body of `trace`'s loop), drawing from `ctx.rng`. An
+    /// unguided diffuse vertex draws its numbers and goes to the lanes; true when they are full.
+    fn shade(&self, world: &World, cw: &mut CfWave, k: usize, ctx: &mut Context, out: &mut [CameraEstimate]) -> bool {
+        let (s, w) = (&world.scene, &mut cw.wave);
         let Some(found) = w.hits[k] else { return false };
         let hit = world.hit_at(&w.rays[k], found);
         let i = w.live[k].i;
-        let rng = &mut rngs[i as usize];
         if s.emitter_of(hit.prim) != NO_EMITTER {
             self.add_emitted(world, &w.live[k].st, &hit, ctx, &mut out[i as usize]);
             return false; // emitters reflect nothing
@@ -97,93 +97,88 @@ impl GuidedPathTracer {
         let m = s.material_of(hit.prim);
         // the state is updated in place, not copied out and back (a copy right after a field's
         // store stalls on store forwarding)
-        let (sp, wo, depth) = self.enter(&mut w.live[k].st, m, &hit);
-        let at = (depth, hit.p, hit.ng);
-        if let Some(g) = self.guide_of(&w.live[k].st, (m, &sp, wo), ctx) {
-            let st = w.live[k].st;
-            self.guided(world, w, (i, st, g), (m, &sp, wo, hit.t), (rng, ctx), out);
+        let v = self.enter(&mut w.live[k].st, m, &hit);
+        if let Some(g) = self.guide_of(&w.live[k].st, &v, ctx) {
+            let live = w.live[k];
+            self.guided(world, w, GuidedVertex { live, v, g }, ctx, out);
             return false;
         }
         if let (true, &Material::Diffuse { albedo }) = (w.lanes_on, m) {
             w.live[k].st.diffuse += 1;
-            lane_t[w.lanes.n] = hit.t;
-            return w.lanes.push(Vertex::draw(world, k, (&sp, wo, albedo), rng));
+            cw.t[w.lanes.n] = hit.t;
+            return w.lanes.push(Vertex::draw(world, k, &v, albedo, &mut ctx.rng));
         }
         let mut st = w.live[k].st;
         let beta = st.walk.t.beta;
-        let Some(bs) = vertex(world, (m, &sp, wo), rng, |ls| w.queue_nee((i, beta), ls, out)) else { return false };
+        let nee = |ls| w.queue_nee(i, beta, ls, out);
+        let Some(bs) = vertex(world, &v, &mut ctx.rng, nee) else { return false };
         st.diffuse += u32::from(!m.is_dirac());
-        self.step(w, (i, st), (at, &bs), (m, &sp, wo, hit.t), (rng, ctx));
+        self.step(w, Live { i, st }, &bs, &v, ctx);
         false
     }
 
-    /// A guided vertex `v` of path `i` (its guide `g`): `trace`'s, with its NEE shadow ray
-    /// queued; a split vertex runs its NEE and its branches on the spot, on the path's stream.
+    /// A guided vertex: `trace`'s, with its NEE shadow ray queued; a split vertex runs its NEE
+    /// and its branches on the spot, on the path's stream.
     fn guided(
         &self,
         world: &World,
         w: &mut Wave<Live>,
-        (i, mut st, g): (u32, PathState, Guide),
-        v: At,
-        (rng, ctx): (&mut Rng, &mut Context),
+        gv: GuidedVertex,
+        ctx: &mut Context,
         out: &mut [CameraEstimate],
     ) {
-        let (m, sp, wo, _) = v;
-        let at = (st.vertex - 1, sp.p, sp.ng);
+        let GuidedVertex { live: Live { i, mut st }, v, g } = gv;
+        let (m, sp, wo) = (v.m, &v.sp, v.wo);
         st.diffuse += 1;
         let mix = DefensiveMixture::new(m, sp, wo, &g.tables, g.frame, g.weights);
         let n = g.n as f32;
         if g.n > 1 {
             let l = &mut out[i as usize];
-            l.rest += st.walk.t.beta * direct::sample_light_mis(world, sp, m, wo, rng, |wi| n * mix.pdf_w(wi));
-            std::mem::swap(&mut ctx.rng, rng);
-            self.split(world, (&st, at), (&mix, g.n), v, &mut l.rest, ctx);
-            std::mem::swap(&mut ctx.rng, rng);
+            l.rest += st.walk.t.beta * direct::sample_light_mis(world, sp, m, wo, &mut ctx.rng, |wi| n * mix.pdf_w(wi));
+            self.split(world, &st, &v, Branches { mix: &mix, n: g.n }, &mut l.rest, ctx);
             return;
         }
-        let ls = direct::light_sample_mis(world, sp, m, wo, rng, |wi| n * mix.pdf_w(wi));
-        w.queue_nee((i, st.walk.t.beta), ls, out);
-        let Some(ms) = mix.sample(rng) else { return };
+        let ls = direct::light_sample_mis(world, sp, m, wo, &mut ctx.rng, |wi| n * mix.pdf_w(wi));
+        w.queue_nee(i, st.walk.t.beta, ls, out);
+        let Some(ms) = mix.sample(&mut ctx.rng) else { return };
         st.walk.t.guided(ms.pdf_w, ms.bsdf_pdf_w);
-        self.step(w, (i, st), (at, &ms.as_bsdf_sample()), v, (rng, ctx));
+        self.step(w, Live { i, st }, &ms.as_bsdf_sample(), &v, ctx);
     }
 
     /// Runs the queued diffuse vertices and finishes each as `trace` does: its NEE queued, its
-    /// scattering, roulette and MIS ratio.
-    fn flush(
-        &self,
-        w: &mut Wave<Live>,
-        lane_t: &[f32; W],
-        (rngs, ctx): (&mut [Rng], &mut Context),
-        out: &mut [CameraEstimate],
-    ) {
+    /// scattering, roulette and MIS ratio (each on its path's stream).
+    fn flush(&self, cw: &mut CfWave, rngs: &mut [Rng], ctx: &mut Context, out: &mut [CameraEstimate]) {
+        let w = &mut cw.wave;
         w.lanes.run();
-        for (j, &t) in lane_t.iter().enumerate().take(w.lanes.n) {
-            let (Live { i, st }, r) = (w.live[w.lanes.k[j] as usize], w.lanes.out(j));
-            w.queue_nee((i, st.walk.t.beta), r.nee, out);
+        for (j, &t) in cw.t.iter().enumerate().take(w.lanes.n) {
+            let (live, r) = (w.live[w.lanes.k[j] as usize], w.lanes.out(j));
+            w.queue_nee(live.i, live.st.walk.t.beta, r.nee, out);
             let Some(bs) = r.bsdf else { continue };
-            let (m, sp) = (Material::Diffuse { albedo: r.albedo }, ShadingPoint { p: r.p, ng: r.ng, ns: r.ns });
-            let at = (st.vertex - 1, r.p, r.ng);
-            self.step(w, (i, st), (at, &bs), (&m, &sp, r.wo, t), (&mut rngs[i as usize], ctx));
+            let m = Material::Diffuse { albedo: r.albedo };
+            let v = SurfaceVertex { m: &m, sp: r.sp, wo: r.wo, t, index: live.st.vertex - 1 };
+            let rng = &mut rngs[live.i as usize];
+            std::mem::swap(&mut ctx.rng, rng);
+            self.step(w, live, &bs, &v, ctx);
+            std::mem::swap(&mut ctx.rng, rng);
         }
         w.lanes.n = 0;
     }
 
-    /// Applies the continuation `bs` drawn at vertex `at` (`continue_path`, then `track_mis`)
-    /// and queues the path for the next bounce if it goes on.
+    /// Applies the continuation `bs` drawn at vertex `v` (`Walk::scatter`, then `track_mis`) and
+    /// queues the path for the next bounce if it goes on.
     #[inline(always)]
     fn step(
         &self,
         w: &mut Wave<Live>,
-        (i, mut st): (u32, PathState),
-        (at, bs): ((u32, Vec3, Vec3), &BsdfSample),
-        v: At,
-        (rng, ctx): (&mut Rng, &Context),
+        Live { i, mut st }: Live,
+        bs: &BsdfSample,
+        v: &SurfaceVertex,
+        ctx: &mut Context,
     ) {
-        if !st.walk.scatter(bs, at, rng) {
+        if !st.walk.scatter(bs, v.index, &v.sp, &mut ctx.rng) {
             return;
         }
-        self.track_mis(&mut st, v, at.0, ctx);
+        self.track_mis(&mut st, v, ctx);
         w.next_rays.push(st.walk.ray());
         w.next_live.push(Live { i, st });
     }
