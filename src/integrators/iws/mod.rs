@@ -7,15 +7,14 @@
 //!   shadow ray, never clamped; `transport::direct`). The point lights are then only the light
 //!   paths' surface vertices, and `C` drops emitter hits. With `--direct vpl` (the paper) `D = 0`
 //!   and the emitter vertices are point lights clamped like the rest, `C` recovering their
-//!   clamped part. Measured (docs/methods/iws.md, `--direct`): the glossy highlights of `figurines`, which 32
-//!   clamped light points per pass render as sparkles, are 4.6× less noisy per sample.
+//!   clamped part (why NEE: `docs/methods/iws.md`, "Departures from the spec").
 //! - `VPL_b = Σ_v W_v·e_v·min(G,b)·V·f` over the pass's point lights (spec §2), with
 //!   `G = |n_x·ŵ||n_y·ŵ|/r²` on **geometric** normals; Dirac surfaces block VPL shadow rays;
 //!   scene point lights are never clamped (their `G = |n_x·ŵ|/r²`).
 //! - `C`: one BSDF-sampled ray with weight `(G−b)/G` when `G > b`, limited to
 //!   `t_max = sqrt(cosθ_x/b)`; 0 on a miss or a Dirac hit; at a non-specular hit (or, with
-//!   `--direct vpl`, an emitter: `Le` is recovered here because emitter VPLs are clamped) it recurses into `L̂` with
-//!   `d+1`, with Russian roulette at `d+1 ≥ 2` (spec §4 "Termination").
+//!   `--direct vpl`, an emitter: `Le` is recovered here because emitter VPLs are clamped) it
+//!   recurses into `L̂` with `d+1`, with Russian roulette at `d+1 ≥ 2` (spec §4 "Termination").
 //! - `Ĺ_c`: a [`CausticEstimator`] (`integrators::iws::caustics`); `iws` uses [`NoCaustics`] (L_c
 //!   omitted by design), `iws-pm` a photon map, `iws-cf` Caustic Forecasting.
 //!

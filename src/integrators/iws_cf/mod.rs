@@ -1,13 +1,14 @@
 //! `iws-cf`: IWS for L_d plus Caustic Forecasting for L_c [BAJ08 §3.2] — unbiased.
 //!
-//! Preprocess (rank 0, once per run, never refreshed): trace forecast light paths with targeted
-//! shooting toward the bounding sphere of the Dirac objects (or the scene's
-//! `[forecast] target_box`), store a `CausticPoint` at every non-specular hit whose previous
-//! vertex was Dirac, cluster them and build the cluster map and forecast maps
+//! Preprocess (rank 0, once per run, never refreshed; [`build_forecast`], which `pt-cf` reuses):
+//! trace forecast light paths with targeted shooting toward the spheres around the Dirac objects
+//! (one cone each, `transport::target`; or the circumsphere of the scene's `[forecast]
+//! target_box`), store a `CausticPoint` at every non-specular hit whose previous vertex was
+//! Dirac, cluster them and build the cluster map and forecast maps
 //! (`cf::estimator::CausticForecast`). Render: at every non-specular vertex of the IWS
-//! recursion, `Ĺ_c` samples directions from the photon-driven tables (dual table by default),
-//! keeps a sample only if its first hit is Dirac, follows the chain and evaluates the full
-//! estimator `L̂` at its end (spec §1, §4).
+//! recursion, `Ĺ_c` samples directions from the photon-driven dual tables (`dual-spread` by
+//! default), keeps a sample only if its first hit is Dirac, follows the chain and evaluates the
+//! full estimator `L̂` at its end (spec §1, §4; the derivation: `docs/methods/iws-cf.md`).
 //!
 //! Options: the CF group [`CfArgs`] (shared with `pt-cf`) and `--variant baj08` ([`IwsCfArgs`]:
 //! the paper's dual table, rank rule and emitter VPLs together, for its ablations).

@@ -3,11 +3,12 @@
 //! Build (once, rank 0, in `preprocess`): light paths from the shared particle tracer
 //! (`transport::particle`, stream `PHOTON`, pass 0); every non-specular hit whose previous vertex
 //! was Dirac is stored with flux `Φ = β / paths launched` (spec §6 ⚠: never divided by the
-//! number stored; `particle::collect_caustic_points`, shared with the forecasters). `--photons N` is the number of **stored** photons targeted (the paper's
-//! "200K" counts stored photons): paths are traced in fixed-size index blocks and the map keeps
-//! exactly the paths `0..P`, where `P` is the first path count with `≥ N` photons stored, so
-//! the normaliser `P` is exact and the map is a pure function of the seed. Tracing stops at
-//! `PATH_FACTOR·N` paths in scenes where caustics are rare (or absent).
+//! number stored; `particle::collect_caustic_points`, shared with the forecasters). `--photons N`
+//! is the number of **stored** photons targeted (the paper's "200K" counts stored photons):
+//! paths are traced in fixed-size index blocks and the map keeps exactly the paths `0..P`, where
+//! `P` is the first path count with `≥ N` photons stored, so the normaliser `P` is exact and the
+//! map is a pure function of the seed. Tracing stops at `PATH_FACTOR·N` paths in scenes where
+//! caustics are rare (or absent).
 //!
 //! Estimate at `x`: `L_c ≈ Σ_{p≤k} f(x,ω_p,ω_o)·Φ_p·w_p / (C·π·r²)` with Jensen's cone filter
 //! `w_p = 1 − d_p/(k_c·r)`, `C = 1 − 2/(3k_c)`, `k_c = 1.1` (integrates to 1 over the disc),
