@@ -2,8 +2,8 @@
 //! sums and writes the checkpoint and the current `PREFIX.{exr,png,json}` as one
 //! `atomic_io::FileSet`; `image_files` adds `PREFIX.{exr,png}` to such a set.
 //!
-//! A checkpoint records `identity::job_keys` (the `-D` values and the method's options) beside the scene
-//! hash, seed, method and resolution; `--resume` refuses a render whose keys differ.
+//! A checkpoint records `identity::job_keys` (the `-D` values and the method's options) beside the
+//! scene hash, seed, method and resolution; `--resume` refuses a render whose keys differ.
 //!
 //! Invariants: the checkpoint is added to the set last, so once it is visible its images and
 //! JSON are too; a failed write is a warning (the previous set stays, the next interval retries).

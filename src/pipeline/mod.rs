@@ -1,7 +1,8 @@
 //! The render pipeline, top to bottom, and the only place the stages meet:
 //! scene → [`RenderJob::resolve`] (and the output guard, `RenderJob::output_set`) → BVH →
-//! the ranks' job check (`distributed::job::agree_job`) → [`preprocess`] (rank 0, broadcast) → [`agree_resume`]
-//! → [`run_passes`] (interleaved passes, checkpoints) → [`reduce`] → images + [`RenderReport`].
+//! the ranks' job check (`distributed::job::agree_job`) → [`preprocess`] (rank 0, broadcast) →
+//! [`agree_resume`] → [`run_passes`] (interleaved passes, checkpoints) → [`reduce`] → images +
+//! [`RenderReport`].
 //!
 //! Ranks: rank r renders passes r, r+N, … in rounds of N passes; all ranks agree once per round
 //! whether to start another (time boxes), so finished passes are always a contiguous range
@@ -11,9 +12,11 @@
 //! is a warning (the previous set stays, the next interval retries). `--resume` continues with the
 //! next pass and repeats none.
 //! Snapshots (`--snapshots`) are taken at round boundaries the same way: `PREFIX.snap-LABEL.*`.
-//! Submodules: `memory` (the up-front estimate), `preprocess` (stage 2, with `light_pilot`,
-//! `pt-cf`'s light-path pilot), `checkpoints` (checkpoint and output sets),
-//! `snapshots` (the image at intermediate wall-clock times), `report` (the typed `RenderReport`).
+//! Submodules: `scene_options` (a scene's `[render]` options under the command line's), `memory`
+//! (the up-front estimate), `identity` (what `--resume` and the ranks compare), `preprocess`
+//! (stage 2, with `light_pilot`, `pt-cf`'s light-path pilot), `passes` (stage 4), `checkpoints`
+//! (checkpoint and output sets), `snapshots` (the image at intermediate wall-clock times),
+//! `report` (the typed `RenderReport`).
 //!
 //! Failure: every parameter is validated and the memory estimated in [`RenderJob::resolve`],
 //! before any work. An error on any rank — during setup, the preprocess, resuming, inside the
