@@ -1,12 +1,12 @@
 //! Point-light (VPL) selection by resampled importance sampling (RIS; Talbot, Cline, Egbert 2005,
 //! "Importance Resampling for Global Illumination"; the core of ReSTIR DI, Bitterli et al. 2020).
 //!
-//! Replaces the full gather `Σ_i F_i·V_i` (evidence: `results/rejected/vpl-select.md`): draw `M` candidates `i_1..i_M` from a
-//! cheap source `q` (an alias table, e.g. ∝ lum(Φ_i), built once per pass), weight each by
-//! `w_j = p̂(i_j)/q(i_j)` with the caller's target `p̂(i) = lum(|f|·min(G,b)·Φ_i)` (no visibility),
-//! keep `y = i_j` with probability `w_j/Σw` (prefix sums for M ≤ 32, else streaming weighted
-//! reservoirs), and estimate
-//! `F(y)·V(y)·W` with the unbiased contribution weight `W = Σ_j w_j / (M·p̂(y))`.
+//! Replaces the full gather `Σ_i F_i·V_i` (evidence: `results/rejected/vpl-select.md`): draw `M`
+//! candidates `i_1..i_M` from a cheap source `q` (an alias table, e.g. ∝ lum(Φ_i), built once per
+//! pass), weight each by `w_j = p̂(i_j)/q(i_j)` with the caller's target
+//! `p̂(i) = lum(|f|·min(G,b)·Φ_i)` (no visibility), keep `y = i_j` with probability `w_j/Σw`
+//! (prefix sums for M ≤ 32, else streaming weighted reservoirs), and estimate `F(y)·V(y)·W` with
+//! the unbiased contribution weight `W = Σ_j w_j / (M·p̂(y))`.
 //! `K` survivors (K shadow rays) are averaged, so each returned weight is `W/K` and the caller's
 //! estimate is simply `Σ_k weight_k·F(y_k)·V(y_k)`.
 //!
