@@ -1,5 +1,5 @@
 //! `forecast`: unbiased global illumination with Caustic Forecasting (Budge, Anderson, Joy
-//! 2008, "[BAJ08]"). Methods (`--method`, one folder each under `integrators`): `pt` (path
+//! 2008, "BAJ08"). Methods (`--method`, one folder each under `integrators`): `pt` (path
 //! tracing, the reference), `iws` (Illumination by Weak Singularities, KK04), `iws-pm` (IWS + a
 //! caustic photon map, biased), `iws-cf` (IWS + Caustic Forecasting, the paper's, unbiased) and
 //! `pt-cf` (`pt` guided by the forecast tables, with light paths; unbiased), and `auto`, which
