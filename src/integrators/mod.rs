@@ -34,7 +34,7 @@ pub use iws::caustics::{BsdfCaustics, CausticEstimator, NoCaustics, Recurse, Sha
 
 use crate::accel::World;
 use crate::math::{Rgb, Vec3};
-use crate::profile::Profile;
+use crate::profile::{Phase, Profile};
 use crate::progress::{Hidden, Phases};
 use crate::scene::Camera;
 pub use crate::transport::context::Context;
@@ -122,6 +122,29 @@ pub trait LightTracer: Send + Sync {
     /// light-path pilot, `pipeline::light_pilot`, tries several counts on one integrator and its
     /// warm table cache).
     fn set_light_paths(&mut self, n: u64);
+}
+
+/// One camera estimate `f` under the profile's radiance timer, counted as one sample (the path
+/// tracers' [`Integrator::estimate`]).
+#[inline]
+pub fn profiled_estimate(ctx: &mut Context, f: impl FnOnce(&mut Context) -> CameraEstimate) -> CameraEstimate {
+    let t0 = ctx.profile.start(Phase::Radiance);
+    let l = f(ctx);
+    ctx.profile.samples += 1;
+    ctx.profile.record(Phase::Radiance, t0);
+    l
+}
+
+/// A batch of `n` camera estimates `f` (a wavefront, its scratch `S` taken from and put back
+/// into `ctx`), timed exactly and counted as `n` samples (the path tracers'
+/// [`Integrator::estimate_batch`]).
+pub fn profiled_batch<S: Default + Send + 'static>(ctx: &mut Context, n: usize, f: impl FnOnce(&mut S, &mut Context)) {
+    let t0 = std::time::Instant::now();
+    let mut scratch = ctx.take_scratch::<S>();
+    f(&mut scratch, ctx);
+    ctx.put_scratch(scratch);
+    ctx.profile.samples += n as u64;
+    ctx.profile.add_exact(Phase::Radiance, t0.elapsed().as_nanos() as u64);
 }
 
 /// [`Integrator::estimate_batch`]'s default: `estimate` ray by ray, `ctx.rng` swapped with

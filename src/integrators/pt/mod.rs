@@ -22,7 +22,7 @@ pub use vertex::{vertex, SurfaceVertex, Walk};
 use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
 use crate::accel::{Ray, World};
 use crate::math::{Rgb, Vec3};
-use crate::profile::{Phase, Profile};
+use crate::profile::Profile;
 use crate::progress::Phases;
 use crate::sampling::rng::Rng;
 use crate::scene::NO_EMITTER;
@@ -78,11 +78,7 @@ impl Integrator for PathTracer {
     }
 
     fn estimate(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
-        let t0 = ctx.profile.start(Phase::Radiance);
-        let l = self.trace(world, origin, dir, ctx);
-        ctx.profile.samples += 1;
-        ctx.profile.record(Phase::Radiance, t0);
-        l
+        super::profiled_estimate(ctx, |ctx| self.trace(world, origin, dir, ctx))
     }
 
     fn estimate_batch(
@@ -96,12 +92,9 @@ impl Integrator for PathTracer {
         if self.filter.is_some() {
             return super::estimate_each(self, world, rays, rngs, ctx, out);
         }
-        let t0 = std::time::Instant::now();
-        let mut wave = ctx.take_scratch::<wavefront::Wave>();
-        wavefront::trace_batch(world, self.max_depth, rays, rngs, &mut wave, out);
-        ctx.put_scratch(wave);
-        ctx.profile.samples += rays.len() as u64;
-        ctx.profile.add_exact(Phase::Radiance, t0.elapsed().as_nanos() as u64);
+        super::profiled_batch(ctx, rays.len(), |wave, _| {
+            wavefront::trace_batch(world, self.max_depth, rays, rngs, wave, out)
+        });
     }
 
     fn prefix_cap(&self) -> u32 {

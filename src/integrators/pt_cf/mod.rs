@@ -53,7 +53,7 @@ use crate::cf::mixture::{DefensiveMixture, MixtureWeights};
 use crate::cf::share::{min_share, parse_min_share};
 use crate::cf::subset_grid::SubsetGrid;
 use crate::math::{Frame, Rgb, Vec3};
-use crate::profile::{Phase, Profile};
+use crate::profile::Profile;
 use crate::progress::Phases;
 use crate::sampling::rng::Rng;
 use crate::scene::{Camera, Material, NO_EMITTER};
@@ -424,11 +424,8 @@ impl Integrator for GuidedPathTracer {
     }
 
     fn estimate(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
-        let t0 = ctx.profile.start(Phase::Radiance);
-        let l = self.trace(world, PathState::camera(Ray { o: origin, d: dir, tmax: f32::INFINITY }), ctx);
-        ctx.profile.samples += 1;
-        ctx.profile.record(Phase::Radiance, t0);
-        l
+        let camera = PathState::camera(Ray { o: origin, d: dir, tmax: f32::INFINITY });
+        super::profiled_estimate(ctx, |ctx| self.trace(world, camera, ctx))
     }
 
     /// The wavefront (`pt_cf::wavefront`), bit for bit `estimate` ray by ray; `--path-filter` runs
@@ -444,12 +441,9 @@ impl Integrator for GuidedPathTracer {
         if self.filter.is_some() {
             return super::estimate_each(self, world, rays, rngs, ctx, out);
         }
-        let t0 = std::time::Instant::now();
-        let mut wave = ctx.take_scratch::<wavefront::CfWave>();
-        self.trace_batch(world, rays, rngs, &mut wave, ctx, out);
-        ctx.put_scratch(wave);
-        ctx.profile.samples += rays.len() as u64;
-        ctx.profile.add_exact(Phase::Radiance, t0.elapsed().as_nanos() as u64);
+        super::profiled_batch(ctx, rays.len(), |wave: &mut wavefront::CfWave, ctx| {
+            self.trace_batch(world, rays, rngs, wave, ctx, out)
+        });
     }
 
     fn prefix_cap(&self) -> u32 {
