@@ -11,7 +11,8 @@
 //!   and are then renamed over `path`, so a reader never sees a half-written file
 //!   ([`crate::atomic_io`]). The `encode_*` functions return the file's bytes instead, for a
 //!   set of files written as a whole ([`crate::atomic_io::FileSet`]).
-//! * Nothing here panics on bad input; errors are `String`s that name the file.
+//! * Nothing here panics on bad input; errors are [`ImageError`]s that name the file (where
+//!   there is one).
 //!
 //! This is the only module that uses the `exr` and `png` crates.
 
@@ -21,6 +22,187 @@ use std::path::{Path, PathBuf};
 
 /// Names of the per-pixel variance-of-the-mean channels written by [`write_exr_layers`].
 pub const VARIANCE_CHANNELS: [&str; 3] = ["var.R", "var.G", "var.B"];
+
+/// What went wrong reading, writing or shaping an image; each variant keeps the file (where
+/// there is one) and the figures its message names. `Display` is the message.
+#[derive(Debug)]
+pub enum ImageError {
+    /// A pixel vector whose length is not `width * height` ([`Image::from_pixels`]).
+    PixelCount {
+        /// Width asked for.
+        width: usize,
+        /// Height asked for.
+        height: usize,
+        /// Pixels given.
+        pixels: usize,
+    },
+    /// A crop rectangle `(x, y, w, h)` that is empty or leaves the `width`×`height` image.
+    Crop {
+        /// The rectangle asked for: left, top, width, height.
+        rect: (usize, usize, usize, usize),
+        /// The image's width.
+        width: usize,
+        /// The image's height.
+        height: usize,
+    },
+    /// Two images that must have the same size do not ([`check_same_size`]).
+    SizeMismatch {
+        /// The first image's file and `(width, height)`.
+        first: (PathBuf, (usize, usize)),
+        /// The first image of another size: its file and `(width, height)`.
+        other: (PathBuf, (usize, usize)),
+    },
+    /// An image to write that is empty or whose pixel count does not match its size.
+    Malformed {
+        /// File it was to be written to.
+        path: PathBuf,
+        /// Width.
+        width: usize,
+        /// Height.
+        height: usize,
+        /// Pixels it holds.
+        pixels: usize,
+    },
+    /// A variance image whose size is not the colour image's.
+    VarianceSize {
+        /// File they were to be written to.
+        path: PathBuf,
+        /// The variance image's `(width, height)`.
+        variance: (usize, usize),
+        /// The colour image's `(width, height)`.
+        colour: (usize, usize),
+    },
+    /// The file cannot be opened (`cannot open`) or read (`cannot read`).
+    Open {
+        /// File concerned.
+        path: PathBuf,
+        /// `"open"` or `"read"`, as the message words it.
+        action: &'static str,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The bytes are not a valid file of `format` (`"EXR"`, `"PNG"`).
+    Decode {
+        /// File concerned.
+        path: PathBuf,
+        /// `"EXR"` or `"PNG"`.
+        format: &'static str,
+        /// The decoder's message.
+        reason: String,
+    },
+    /// The file decodes but holds no image this reader takes (no colour channels, subsampled
+    /// channels, not 8-bit, ...).
+    Unsupported {
+        /// File concerned.
+        path: PathBuf,
+        /// What it holds instead.
+        reason: String,
+    },
+    /// Pixels with a value that is refused (not finite; a negative variance).
+    BadPixels {
+        /// File concerned.
+        path: PathBuf,
+        /// How many pixels.
+        count: usize,
+        /// What is wrong with them, in words (`not finite`).
+        what: &'static str,
+        /// The first one, `(x, y)`.
+        first: (usize, usize),
+        /// Its value.
+        value: [f32; 3],
+    },
+    /// Encoding failed: the EXR encoder's message (`path` always given), or a PNG's (raw RGB
+    /// bytes that do not fit the size, a size PNG cannot hold, the encoder's message), with the
+    /// file when the caller named one ([`ImageError::in_file`]).
+    Encode {
+        /// File the bytes were for, if named.
+        path: Option<PathBuf>,
+        /// `"EXR"` or `"PNG"`.
+        format: &'static str,
+        /// What went wrong.
+        reason: String,
+    },
+    /// The file could not be written (`atomic_io`'s message, which names the file).
+    Write {
+        /// File concerned.
+        path: PathBuf,
+        /// The message.
+        message: String,
+    },
+}
+
+impl ImageError {
+    /// This error, for bytes meant for `path` (a PNG's encoding error gains the file name).
+    pub fn in_file(self, path: &Path) -> ImageError {
+        match self {
+            ImageError::Encode { path: None, format, reason } => {
+                ImageError::Encode { path: Some(path.to_path_buf()), format, reason }
+            }
+            e => e,
+        }
+    }
+}
+
+impl std::fmt::Display for ImageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        use ImageError::*;
+        match self {
+            PixelCount { width, height, pixels } => {
+                write!(f, "image of {width}x{height} needs {} pixels, got {pixels}", width.saturating_mul(*height))
+            }
+            Crop { rect: (x, y, w, h), width, height } => {
+                write!(f, "crop {x},{y},{w},{h} is empty or outside the {width}x{height} image")
+            }
+            SizeMismatch { first: (p0, (w0, h0)), other: (p, (w, h)) } => write!(
+                f,
+                "{} is {w0}x{h0} but {} is {w}x{h}: the images must have the same size",
+                p0.display(),
+                p.display()
+            ),
+            Malformed { path, width, height, pixels } => write!(
+                f,
+                "{}: image {width}x{height} has {pixels} pixels (must be non-empty and match)",
+                path.display()
+            ),
+            VarianceSize { path, variance: (vw, vh), colour: (w, h) } => {
+                write!(f, "{}: variance image is {vw}x{vh}, colour image is {w}x{h}", path.display())
+            }
+            Open { path, action, source } => write!(f, "cannot {action} {}: {source}", path.display()),
+            Decode { path, format, reason } => write!(f, "cannot decode {format} {}: {reason}", path.display()),
+            Unsupported { path, reason } => write!(f, "{}: {reason}", path.display()),
+            BadPixels { path, count, what, first: (x, y), value } => {
+                write!(f, "{}: {count} pixel(s) {what}, the first at ({x}, {y}): {value:?}", path.display())
+            }
+            Encode { path: Some(path), format: "EXR", reason } => {
+                write!(f, "cannot encode EXR {}: {reason}", path.display())
+            }
+            Encode { path: Some(path), reason, .. } => write!(f, "{}: {reason}", path.display()),
+            Encode { path: None, reason, .. } => write!(f, "{reason}"),
+            Write { message, .. } => write!(f, "{message}"),
+        }
+    }
+}
+
+impl std::error::Error for ImageError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            ImageError::Open { source, .. } => Some(source),
+            _ => None,
+        }
+    }
+}
+
+/// For the callers whose own errors are still messages.
+impl From<ImageError> for String {
+    fn from(e: ImageError) -> String {
+        e.to_string()
+    }
+}
+
+/// [`atomic_write`] with its failure as an [`ImageError::Write`].
+fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ImageError> {
+    atomic_write(path, bytes).map_err(|message| ImageError::Write { path: path.to_path_buf(), message })
+}
 
 /// A linear-RGB float image, row-major, `(0, 0)` at the top-left.
 #[derive(Clone, Debug, PartialEq)]
@@ -40,13 +222,9 @@ impl Image {
     }
 
     /// Wraps a pixel vector, checking that its length is `width * height`.
-    pub fn from_pixels(width: usize, height: usize, pixels: Vec<[f32; 3]>) -> Result<Image, String> {
+    pub fn from_pixels(width: usize, height: usize, pixels: Vec<[f32; 3]>) -> Result<Image, ImageError> {
         if width.checked_mul(height) != Some(pixels.len()) {
-            return Err(format!(
-                "image of {width}x{height} needs {} pixels, got {}",
-                width.saturating_mul(height),
-                pixels.len()
-            ));
+            return Err(ImageError::PixelCount { width, height, pixels: pixels.len() });
         }
         Ok(Image { width, height, pixels })
     }
@@ -89,13 +267,13 @@ impl Image {
 
     /// The `w`×`h` sub-image whose top-left corner is `(x, y)`; errors if it leaves the image
     /// or is empty.
-    pub fn crop(&self, x: usize, y: usize, w: usize, h: usize) -> Result<Image, String> {
+    pub fn crop(&self, x: usize, y: usize, w: usize, h: usize) -> Result<Image, ImageError> {
         let fits = w > 0
             && h > 0
             && x.checked_add(w).is_some_and(|r| r <= self.width)
             && y.checked_add(h).is_some_and(|b| b <= self.height);
         if !fits {
-            return Err(format!("crop {x},{y},{w},{h} is empty or outside the {}x{} image", self.width, self.height));
+            return Err(ImageError::Crop { rect: (x, y, w, h), width: self.width, height: self.height });
         }
         let mut pixels = Vec::with_capacity(w * h);
         for row in y..y + h {
@@ -132,48 +310,38 @@ pub fn with_ext(prefix: &Path, ext: &str) -> PathBuf {
 }
 
 /// Checks that every image has the size of the first; the error names both files and sizes.
-pub fn check_same_size(named: &[(&Path, &Image)]) -> Result<(), String> {
+pub fn check_same_size(named: &[(&Path, &Image)]) -> Result<(), ImageError> {
     let Some(&(p0, i0)) = named.first() else { return Ok(()) };
     match named.iter().find(|(_, i)| !i.same_size(i0)) {
         None => Ok(()),
-        Some((p, i)) => Err(format!(
-            "{} is {}x{} but {} is {}x{}: the images must have the same size",
-            p0.display(),
-            i0.width,
-            i0.height,
-            p.display(),
-            i.width,
-            i.height
-        )),
+        Some((p, i)) => Err(ImageError::SizeMismatch {
+            first: (p0.to_path_buf(), (i0.width, i0.height)),
+            other: (p.to_path_buf(), (i.width, i.height)),
+        }),
     }
 }
 
-fn check_len(path: &Path, img: &Image) -> Result<(), String> {
+fn check_len(path: &Path, img: &Image) -> Result<(), ImageError> {
     if img.pixels.len() != img.width * img.height || img.width == 0 || img.height == 0 {
-        return Err(format!(
-            "{}: image {}x{} has {} pixels (must be non-empty and match)",
-            path.display(),
-            img.width,
-            img.height,
-            img.pixels.len()
-        ));
+        let (width, height, pixels) = (img.width, img.height, img.pixels.len());
+        return Err(ImageError::Malformed { path: path.to_path_buf(), width, height, pixels });
     }
     Ok(())
 }
 
 /// Writes an RGB float32 EXR (channels `R`, `G`, `B`).
-pub fn write_exr(path: &Path, img: &Image) -> Result<(), String> {
+pub fn write_exr(path: &Path, img: &Image) -> Result<(), ImageError> {
     write_exr_layers(path, img, None)
 }
 
 /// Writes an RGB float32 EXR; with `variance` also the channels [`VARIANCE_CHANNELS`]
 /// (`var.R`, `var.G`, `var.B`, the per-pixel variance of the mean) in the same layer.
-pub fn write_exr_layers(path: &Path, img: &Image, variance: Option<&Image>) -> Result<(), String> {
-    atomic_write(path, &encode_exr_layers(path, img, variance)?)
+pub fn write_exr_layers(path: &Path, img: &Image, variance: Option<&Image>) -> Result<(), ImageError> {
+    write_file(path, &encode_exr_layers(path, img, variance)?)
 }
 
 /// The bytes [`write_exr_layers`] would write to `path` (named in errors only).
-pub fn encode_exr_layers(path: &Path, img: &Image, variance: Option<&Image>) -> Result<Vec<u8>, String> {
+pub fn encode_exr_layers(path: &Path, img: &Image, variance: Option<&Image>) -> Result<Vec<u8>, ImageError> {
     use exr::image::write::WritableImage;
     use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Layer};
     use exr::meta::header::LayerAttributes;
@@ -183,14 +351,8 @@ pub fn encode_exr_layers(path: &Path, img: &Image, variance: Option<&Image>) -> 
         ["R", "G", "B"].iter().enumerate().map(|(c, n)| AnyChannel::new(*n, plane(img, c))).collect();
     if let Some(v) = variance {
         if !v.same_size(img) {
-            return Err(format!(
-                "{}: variance image is {}x{}, colour image is {}x{}",
-                path.display(),
-                v.width,
-                v.height,
-                img.width,
-                img.height
-            ));
+            let (variance, colour) = ((v.width, v.height), (img.width, img.height));
+            return Err(ImageError::VarianceSize { path: path.to_path_buf(), variance, colour });
         }
         check_len(path, v)?;
         for (c, n) in VARIANCE_CHANNELS.iter().enumerate() {
@@ -201,15 +363,19 @@ pub fn encode_exr_layers(path: &Path, img: &Image, variance: Option<&Image>) -> 
     let layer = Layer::new((img.width, img.height), LayerAttributes::default(), Encoding::SMALL_LOSSLESS, channels);
     let image = exr::image::Image::from_layer(layer);
     let mut buf = Cursor::new(Vec::new());
-    image.write().to_buffered(&mut buf).map_err(|e| format!("cannot encode EXR {}: {e}", path.display()))?;
+    image.write().to_buffered(&mut buf).map_err(|e| ImageError::Encode {
+        path: Some(path.to_path_buf()),
+        format: "EXR",
+        reason: e.to_string(),
+    })?;
     Ok(buf.into_inner())
 }
 
 type FlatLayer = exr::image::Layer<exr::image::AnyChannels<exr::image::FlatSamples>>;
 
-fn read_first_layer(path: &Path) -> Result<FlatLayer, String> {
+fn read_first_layer(path: &Path) -> Result<FlatLayer, ImageError> {
     use exr::image::read::{image::ReadLayers, layers::ReadChannels, read};
-    let bytes = crate::atomic_io::read_regular(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let bytes = crate::atomic_io::read_regular(path).map_err(|e| open_error(path, "read", e))?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -217,14 +383,14 @@ fn read_first_layer(path: &Path) -> Result<FlatLayer, String> {
         .all_layers()
         .all_attributes()
         .from_buffered(Cursor::new(bytes))
-        .map_err(|e| format!("cannot decode EXR {}: {e}", path.display()))?;
+        .map_err(|e| decode_error(path, "EXR", e))?;
     let mut layers = image.layer_data.into_iter();
-    let first = layers.next().ok_or_else(|| format!("{}: EXR has no layers", path.display()))?;
+    let first = layers.next().ok_or_else(|| unsupported(path, "EXR has no layers".into()))?;
     if find_channels(&first, &["R", "G", "B"]).is_some() || find_channels(&first, &["Y"]).is_some() {
         return Ok(first);
     }
     layers.find(|l| find_channels(l, &["R", "G", "B"]).is_some()).ok_or_else(|| {
-        format!("{}: no layer with R, G, B channels (first layer has {:?})", path.display(), channel_names(&first))
+        unsupported(path, format!("no layer with R, G, B channels (first layer has {:?})", channel_names(&first)))
     })
 }
 
@@ -236,12 +402,12 @@ fn find_channels(layer: &FlatLayer, names: &[&str]) -> Option<Vec<usize>> {
     names.iter().map(|n| layer.channel_data.list.iter().position(|c| c.name.eq(n))).collect()
 }
 
-fn layer_to_image(path: &Path, layer: &FlatLayer, idx: &[usize]) -> Result<Image, String> {
+fn layer_to_image(path: &Path, layer: &FlatLayer, idx: &[usize]) -> Result<Image, ImageError> {
     let (w, h) = (layer.size.width(), layer.size.height());
     let planes: Vec<Vec<f32>> =
         idx.iter().map(|&i| layer.channel_data.list[i].sample_data.values_as_f32().collect()).collect();
     if planes.iter().any(|p| p.len() != w * h) {
-        return Err(format!("{}: channel sample count does not match {w}x{h} (subsampled channels?)", path.display()));
+        return Err(unsupported(path, format!("channel sample count does not match {w}x{h} (subsampled channels?)")));
     }
     let pixels = (0..w * h)
         .map(|i| {
@@ -254,26 +420,38 @@ fn layer_to_image(path: &Path, layer: &FlatLayer, idx: &[usize]) -> Result<Image
 
 /// Reads the colour of an EXR: channels `R`, `G`, `B` of the first layer that has them (or a
 /// lone `Y` channel of the first layer, replicated to grey). Other channels are ignored.
-pub fn read_exr(path: &Path) -> Result<Image, String> {
+pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
     let layer = read_first_layer(path)?;
     let idx = find_channels(&layer, &["R", "G", "B"])
         .or_else(|| find_channels(&layer, &["Y"]))
-        .ok_or_else(|| format!("{}: no R, G, B or Y channels", path.display()))?;
+        .ok_or_else(|| unsupported(path, "no R, G, B or Y channels".into()))?;
     layer_to_image(path, &layer, &idx).and_then(|img| checked(path, img, "not finite", |v| v.is_finite()))
 }
 
 /// `img` if every channel of every pixel passes `ok`; else an error naming the first pixel that
 /// does not (a NaN would make every metric NaN, and a check that compares with NaN pass).
-fn checked(path: &Path, img: Image, what: &str, ok: impl Fn(f32) -> bool) -> Result<Image, String> {
+fn checked(path: &Path, img: Image, what: &'static str, ok: impl Fn(f32) -> bool) -> Result<Image, ImageError> {
     let bad = |p: &[f32; 3]| !p.iter().all(|&v| ok(v));
     let Some(first) = img.pixels.iter().position(bad) else { return Ok(img) };
-    let n = img.pixels.iter().filter(|p| bad(p)).count();
-    let (x, y) = (first % img.width, first / img.width);
-    Err(format!("{}: {n} pixel(s) {what}, the first at ({x}, {y}): {:?}", path.display(), img.pixels[first]))
+    let count = img.pixels.iter().filter(|p| bad(p)).count();
+    let (path, value) = (path.to_path_buf(), img.pixels[first]);
+    Err(ImageError::BadPixels { path, count, what, first: (first % img.width, first / img.width), value })
+}
+
+fn open_error(path: &Path, action: &'static str, source: std::io::Error) -> ImageError {
+    ImageError::Open { path: path.to_path_buf(), action, source }
+}
+
+fn decode_error(path: &Path, format: &'static str, e: impl std::fmt::Display) -> ImageError {
+    ImageError::Decode { path: path.to_path_buf(), format, reason: e.to_string() }
+}
+
+fn unsupported(path: &Path, reason: String) -> ImageError {
+    ImageError::Unsupported { path: path.to_path_buf(), reason }
 }
 
 /// Reads the [`VARIANCE_CHANNELS`] of the colour layer of an EXR, or `Ok(None)` if it has none.
-pub fn read_exr_variance(path: &Path) -> Result<Option<Image>, String> {
+pub fn read_exr_variance(path: &Path) -> Result<Option<Image>, ImageError> {
     let layer = read_first_layer(path)?;
     match find_channels(&layer, &VARIANCE_CHANNELS) {
         Some(idx) => layer_to_image(path, &layer, &idx)
@@ -304,64 +482,64 @@ pub fn to_srgb8(v: f32, scale: f32) -> u8 {
 
 /// Writes an 8-bit sRGB PNG of a linear image. `exposure` is in stops: values are multiplied
 /// by `2^exposure` (0 = unchanged), clamped to `[0, 1]`, then encoded with the sRGB OETF.
-pub fn write_png_srgb(path: &Path, img: &Image, exposure: f32) -> Result<(), String> {
-    atomic_write(path, &encode_png_srgb(path, img, exposure)?)
+pub fn write_png_srgb(path: &Path, img: &Image, exposure: f32) -> Result<(), ImageError> {
+    write_file(path, &encode_png_srgb(path, img, exposure)?)
 }
 
 /// The bytes [`write_png_srgb`] would write to `path` (named in errors only).
-pub fn encode_png_srgb(path: &Path, img: &Image, exposure: f32) -> Result<Vec<u8>, String> {
+pub fn encode_png_srgb(path: &Path, img: &Image, exposure: f32) -> Result<Vec<u8>, ImageError> {
     check_len(path, img)?;
     let scale = exposure.exp2();
     let bytes: Vec<u8> = img.pixels.iter().flat_map(|p| p.map(|v| to_srgb8(v, scale))).collect();
-    encode_png_rgb8(img.width, img.height, &bytes).map_err(|e| format!("{}: {e}", path.display()))
+    encode_png_rgb8(img.width, img.height, &bytes).map_err(|e| e.in_file(path))
 }
 
 /// Writes raw 8-bit RGB bytes (`3 * w * h`, row-major, top row first) as a PNG.
-pub fn write_png_rgb8(path: &Path, w: usize, h: usize, rgb: &[u8]) -> Result<(), String> {
-    let bytes = encode_png_rgb8(w, h, rgb).map_err(|e| format!("{}: {e}", path.display()))?;
-    atomic_write(path, &bytes)
+pub fn write_png_rgb8(path: &Path, w: usize, h: usize, rgb: &[u8]) -> Result<(), ImageError> {
+    let bytes = encode_png_rgb8(w, h, rgb).map_err(|e| e.in_file(path))?;
+    write_file(path, &bytes)
 }
 
 /// Encodes raw 8-bit RGB bytes (`3 * w * h`) as PNG file bytes in memory.
-pub fn encode_png_rgb8(w: usize, h: usize, rgb: &[u8]) -> Result<Vec<u8>, String> {
+/// The file is named by the caller ([`ImageError::in_file`]).
+pub fn encode_png_rgb8(w: usize, h: usize, rgb: &[u8]) -> Result<Vec<u8>, ImageError> {
+    let fail = |reason: String| ImageError::Encode { path: None, format: "PNG", reason };
     if w == 0 || h == 0 || w.checked_mul(h).and_then(|n| n.checked_mul(3)) != Some(rgb.len()) {
-        return Err(format!(
-            "PNG of {w}x{h} needs {} RGB bytes, got {}",
-            w.saturating_mul(h).saturating_mul(3),
-            rgb.len()
-        ));
+        let needs = w.saturating_mul(h).saturating_mul(3);
+        return Err(fail(format!("PNG of {w}x{h} needs {needs} RGB bytes, got {}", rgb.len())));
     }
-    let (w32, h32) = (u32::try_from(w).map_err(|_| "PNG too wide")?, u32::try_from(h).map_err(|_| "PNG too tall")?);
+    let w32 = u32::try_from(w).map_err(|_| fail("PNG too wide".into()))?;
+    let h32 = u32::try_from(h).map_err(|_| fail("PNG too tall".into()))?;
     let mut out = Vec::new();
     {
         let mut enc = png::Encoder::new(&mut out, w32, h32);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
-        let mut writer = enc.write_header().map_err(|e| format!("PNG header: {e}"))?;
-        writer.write_image_data(rgb).map_err(|e| format!("PNG data: {e}"))?;
-        writer.finish().map_err(|e| format!("PNG finish: {e}"))?;
+        let mut writer = enc.write_header().map_err(|e| fail(format!("PNG header: {e}")))?;
+        writer.write_image_data(rgb).map_err(|e| fail(format!("PNG data: {e}")))?;
+        writer.finish().map_err(|e| fail(format!("PNG finish: {e}")))?;
     }
     Ok(out)
 }
 
 /// Reads an 8-bit RGB or RGBA PNG into `(width, height, RGB bytes)` (alpha dropped). Used by
 /// tests and tools that inspect written PNGs.
-pub fn read_png_rgb8(path: &Path) -> Result<(usize, usize, Vec<u8>), String> {
-    crate::atomic_io::require_regular(path).map_err(|e| format!("cannot open {}: {e}", path.display()))?;
-    let file = std::fs::File::open(path).map_err(|e| format!("cannot open {}: {e}", path.display()))?;
+pub fn read_png_rgb8(path: &Path) -> Result<(usize, usize, Vec<u8>), ImageError> {
+    crate::atomic_io::require_regular(path).map_err(|e| open_error(path, "open", e))?;
+    let file = std::fs::File::open(path).map_err(|e| open_error(path, "open", e))?;
     let decoder = png::Decoder::new(std::io::BufReader::new(file));
-    let mut reader = decoder.read_info().map_err(|e| format!("cannot decode PNG {}: {e}", path.display()))?;
-    let size = reader.output_buffer_size().ok_or_else(|| format!("{}: PNG too large", path.display()))?;
+    let mut reader = decoder.read_info().map_err(|e| decode_error(path, "PNG", e))?;
+    let size = reader.output_buffer_size().ok_or_else(|| unsupported(path, "PNG too large".into()))?;
     let mut buf = vec![0; size];
-    let info = reader.next_frame(&mut buf).map_err(|e| format!("cannot decode PNG {}: {e}", path.display()))?;
+    let info = reader.next_frame(&mut buf).map_err(|e| decode_error(path, "PNG", e))?;
     if info.bit_depth != png::BitDepth::Eight {
-        return Err(format!("{}: only 8-bit PNGs are supported", path.display()));
+        return Err(unsupported(path, "only 8-bit PNGs are supported".into()));
     }
     let (w, h) = (info.width as usize, info.height as usize);
     let rgb = match info.color_type {
         png::ColorType::Rgb => buf[..w * h * 3].to_vec(),
         png::ColorType::Rgba => buf[..w * h * 4].chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect(),
-        other => return Err(format!("{}: unsupported PNG colour type {other:?}", path.display())),
+        other => return Err(unsupported(path, format!("unsupported PNG colour type {other:?}"))),
     };
     Ok((w, h, rgb))
 }
@@ -422,10 +600,55 @@ mod tests {
         let bad = Image::new(2, 2);
         assert!(write_exr_layers(&q, &img, Some(&bad)).is_err());
         let err = read_exr(&d.join("missing.exr")).unwrap_err();
-        assert!(err.contains("missing.exr"), "{err}");
+        assert!(matches!(err, ImageError::Open { action: "read", .. }), "{err:?}");
+        assert!(err.to_string().starts_with("cannot read ") && err.to_string().contains("missing.exr"), "{err}");
         std::fs::write(d.join("junk.exr"), b"not an exr").unwrap();
-        assert!(read_exr(&d.join("junk.exr")).unwrap_err().contains("junk.exr"));
+        let err = read_exr(&d.join("junk.exr")).unwrap_err();
+        assert!(matches!(err, ImageError::Decode { format: "EXR", .. }), "{err:?}");
+        assert!(err.to_string().starts_with("cannot decode EXR ") && err.to_string().contains("junk.exr"), "{err}");
         let _ = std::fs::remove_dir_all(d);
+    }
+
+    /// Each error's message, word for word as the callers and the tests read it.
+    #[test]
+    fn error_messages() {
+        let p = Path::new("d/a.exr");
+        let msg = |e: ImageError| e.to_string();
+        assert_eq!(msg(Image::from_pixels(2, 2, vec![[0.0; 3]; 3]).unwrap_err()), "image of 2x2 needs 4 pixels, got 3");
+        assert_eq!(
+            msg(Image::new(4, 3).crop(3, 0, 2, 1).unwrap_err()),
+            "crop 3,0,2,1 is empty or outside the 4x3 image"
+        );
+        let (a, b) = (Image::new(4, 3), Image::new(8, 6));
+        assert_eq!(
+            msg(check_same_size(&[(p, &a), (Path::new("b.exr"), &b)]).unwrap_err()),
+            "d/a.exr is 4x3 but b.exr is 8x6: the images must have the same size"
+        );
+        let empty = Image { width: 2, height: 2, pixels: vec![] };
+        assert_eq!(
+            msg(encode_exr_layers(p, &empty, None).unwrap_err()),
+            "d/a.exr: image 2x2 has 0 pixels (must be non-empty and match)"
+        );
+        assert_eq!(
+            msg(encode_exr_layers(p, &a, Some(&b)).unwrap_err()),
+            "d/a.exr: variance image is 8x6, colour image is 4x3"
+        );
+        assert_eq!(msg(encode_png_rgb8(2, 2, &[0; 5]).unwrap_err()), "PNG of 2x2 needs 12 RGB bytes, got 5");
+        assert_eq!(
+            msg(write_png_rgb8(Path::new("d/x.png"), 2, 2, &[0; 5]).unwrap_err()),
+            "d/x.png: PNG of 2x2 needs 12 RGB bytes, got 5"
+        );
+        let nan = Image::from_fn(3, 2, |x, y| if (x, y) == (1, 1) { [f32::NAN, 0.0, 0.0] } else { [0.0; 3] });
+        assert_eq!(
+            msg(checked(p, nan, "not finite", |v| v.is_finite()).unwrap_err()),
+            "d/a.exr: 1 pixel(s) not finite, the first at (1, 1): [NaN, 0.0, 0.0]"
+        );
+        assert_eq!(msg(unsupported(p, "no R, G, B or Y channels".into())), "d/a.exr: no R, G, B or Y channels");
+        assert_eq!(msg(decode_error(p, "PNG", "bad")), "cannot decode PNG d/a.exr: bad");
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "gone");
+        assert_eq!(msg(open_error(p, "open", io)), "cannot open d/a.exr: gone");
+        let enc = ImageError::Encode { path: Some(p.to_path_buf()), format: "EXR", reason: "full".into() };
+        assert_eq!(msg(enc), "cannot encode EXR d/a.exr: full");
     }
 
     #[test]

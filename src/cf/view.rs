@@ -74,5 +74,5 @@ pub fn render_view(world: &World, camera: &Camera, cf: &CausticForecast) -> Imag
 pub fn write_view(prefix: &std::path::Path, img: &Image) -> Result<(), String> {
     let mut s = prefix.as_os_str().to_owned();
     s.push(".png");
-    image_io::write_png_srgb(std::path::Path::new(&s), img, 0.0)
+    Ok(image_io::write_png_srgb(std::path::Path::new(&s), img, 0.0)?)
 }

@@ -277,7 +277,7 @@ fn write_crops(
     notes: &mut Vec<String>,
 ) -> Result<CropRow, String> {
     let rn = safe_name(&reg.name);
-    let cut = |img: &Image| -> Result<Image, String> {
+    let cut = |img: &Image| -> Result<Image, image_io::ImageError> {
         let c = match reg.rect {
             Some((x, y, w, h)) => img.crop(x, y, w, h)?,
             None => img.clone(),

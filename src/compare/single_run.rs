@@ -80,7 +80,7 @@ impl Ctx<'_> {
         rec.nonfinite_samples = snap.nonfinite_samples;
         match image_io::read_exr(&with_ext(&rec.prefix, "exr")) {
             Ok(img) => self.measure_into(rec, &img),
-            Err(e) => rec.error = Some(e),
+            Err(e) => rec.error = Some(e.to_string()),
         }
     }
 }

@@ -6,7 +6,7 @@
 //! differ only by noise, within a tolerance derived from its own standard error
 //! ([`NoiseReport::ratio_tolerance`]). [`mitsuba_agreement`] also bounds the per-channel means.
 
-use super::{box_filter, check_same, half_variance, rel_diff, z_scores};
+use super::{box_filter, check_same, half_variance, rel_diff, z_scores, MetricsError};
 use crate::image_io::Image;
 use std::fmt;
 
@@ -72,7 +72,7 @@ pub fn noise_consistency(
     ref_half0: &Image,
     ref_half1: &Image,
     test_var_of_mean: Option<&Image>,
-) -> Result<NoiseReport, String> {
+) -> Result<NoiseReport, MetricsError> {
     check_same(test, reference, "noise_consistency (test vs reference)")?;
     let var_ref = half_variance(ref_half0, ref_half1)?;
     check_same(test, &var_ref, "noise_consistency (test vs reference halves)")?;
@@ -196,7 +196,7 @@ pub fn mitsuba_agreement(
     reference: &Image,
     half0: &Image,
     half1: &Image,
-) -> Result<AgreementReport, String> {
+) -> Result<AgreementReport, MetricsError> {
     let noise = noise_consistency(test, reference, half0, half1, test_var)?;
     let (mean_test, mean_ref) = (test.mean(), reference.mean());
     let mean_rel_diff: [f64; 3] = std::array::from_fn(|c| rel_diff(mean_test[c], mean_ref[c]));

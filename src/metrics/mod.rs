@@ -22,9 +22,9 @@ pub use agreement::{
     Z_SMOOTH_RADIUS,
 };
 
-use crate::image_io::{write_png_rgb8, Image};
+use crate::image_io::{write_png_rgb8, Image, ImageError};
 use std::fmt;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A crop rectangle `(x, y, width, height)` in pixels, `(0, 0)` at the top-left.
 pub type Rect = (usize, usize, usize, usize);
@@ -32,26 +32,96 @@ pub type Rect = (usize, usize, usize, usize);
 /// The default `ε` of [`rel_mse`].
 pub const REL_MSE_EPS: f64 = 0.01;
 
-fn check_same(a: &Image, b: &Image, what: &str) -> Result<(), String> {
+/// Why a metric could not be computed; `Display` is the message.
+#[derive(Debug)]
+pub enum MetricsError {
+    /// The two images of metric `what` (`mse`, `z_scores (mean_a vs var_a)`) differ in size.
+    SizeMismatch {
+        /// The metric, and which images where it takes more than two.
+        what: &'static str,
+        /// The first image's `(width, height)`.
+        a: (usize, usize),
+        /// The second image's `(width, height)`.
+        b: (usize, usize),
+    },
+    /// An image of metric `what` is empty or its pixel count does not match its size.
+    Malformed {
+        /// The metric.
+        what: &'static str,
+    },
+    /// A crop outside the image, or the image file that could not be written.
+    Image(ImageError),
+    /// The difference map to be written to `path` could not be computed.
+    InFile {
+        /// The PNG.
+        path: PathBuf,
+        /// Why.
+        source: Box<MetricsError>,
+    },
+}
+
+impl fmt::Display for MetricsError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            MetricsError::SizeMismatch { what, a: (aw, ah), b: (bw, bh) } => {
+                write!(f, "{what}: size mismatch {aw}x{ah} vs {bw}x{bh}")
+            }
+            MetricsError::Malformed { what } => write!(f, "{what}: empty image or pixel count does not match its size"),
+            MetricsError::Image(e) => write!(f, "{e}"),
+            MetricsError::InFile { path, source } => write!(f, "{}: {source}", path.display()),
+        }
+    }
+}
+
+impl std::error::Error for MetricsError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            MetricsError::Image(e) => Some(e),
+            MetricsError::InFile { source, .. } => Some(source.as_ref()),
+            _ => None,
+        }
+    }
+}
+
+impl From<ImageError> for MetricsError {
+    fn from(e: ImageError) -> MetricsError {
+        MetricsError::Image(e)
+    }
+}
+
+/// For the callers whose own errors are still messages.
+impl From<MetricsError> for String {
+    fn from(e: MetricsError) -> String {
+        e.to_string()
+    }
+}
+
+fn check_same(a: &Image, b: &Image, what: &'static str) -> Result<(), MetricsError> {
     if !a.same_size(b) {
-        return Err(format!("{what}: size mismatch {}x{} vs {}x{}", a.width, a.height, b.width, b.height));
+        return Err(MetricsError::SizeMismatch { what, a: (a.width, a.height), b: (b.width, b.height) });
     }
     if a.pixels.len() != a.width * a.height || b.pixels.len() != b.width * b.height || a.pixels.is_empty() {
-        return Err(format!("{what}: empty image or pixel count does not match its size"));
+        return Err(MetricsError::Malformed { what });
     }
     Ok(())
 }
 
 /// Applies an optional crop to an image (borrowing it unchanged when `crop` is `None`).
-pub fn apply_crop(img: &Image, crop: Option<Rect>) -> Result<std::borrow::Cow<'_, Image>, String> {
+pub fn apply_crop(img: &Image, crop: Option<Rect>) -> Result<std::borrow::Cow<'_, Image>, MetricsError> {
     match crop {
         None => Ok(std::borrow::Cow::Borrowed(img)),
-        Some((x, y, w, h)) => img.crop(x, y, w, h).map(std::borrow::Cow::Owned),
+        Some((x, y, w, h)) => Ok(std::borrow::Cow::Owned(img.crop(x, y, w, h)?)),
     }
 }
 
 /// Mean over pixels and channels of `f(a, b)`, after checking sizes and cropping.
-fn mean_over(a: &Image, b: &Image, crop: Option<Rect>, what: &str, f: impl Fn(f64, f64) -> f64) -> Result<f64, String> {
+fn mean_over(
+    a: &Image,
+    b: &Image,
+    crop: Option<Rect>,
+    what: &'static str,
+    f: impl Fn(f64, f64) -> f64,
+) -> Result<f64, MetricsError> {
     check_same(a, b, what)?;
     let (a, b) = (apply_crop(a, crop)?, apply_crop(b, crop)?);
     let mut s = 0.0;
@@ -64,27 +134,27 @@ fn mean_over(a: &Image, b: &Image, crop: Option<Rect>, what: &str, f: impl Fn(f6
 }
 
 /// Mean squared error over pixels and channels.
-pub fn mse(a: &Image, b: &Image, crop: Option<Rect>) -> Result<f64, String> {
+pub fn mse(a: &Image, b: &Image, crop: Option<Rect>) -> Result<f64, MetricsError> {
     mean_over(a, b, crop, "mse", |x, y| (x - y) * (x - y))
 }
 
 /// Root mean squared error, `sqrt(mse)`.
-pub fn rmse(a: &Image, b: &Image, crop: Option<Rect>) -> Result<f64, String> {
+pub fn rmse(a: &Image, b: &Image, crop: Option<Rect>) -> Result<f64, MetricsError> {
     mse(a, b, crop).map(f64::sqrt)
 }
 
 /// Relative MSE: mean over pixels and channels of `(I − R)² / (R² + eps)`; use [`REL_MSE_EPS`].
-pub fn rel_mse(img: &Image, reference: &Image, eps: f64, crop: Option<Rect>) -> Result<f64, String> {
+pub fn rel_mse(img: &Image, reference: &Image, eps: f64, crop: Option<Rect>) -> Result<f64, MetricsError> {
     mean_over(img, reference, crop, "rel_mse", |x, r| (x - r) * (x - r) / (r * r + eps))
 }
 
 /// Mean absolute difference over pixels and channels.
-pub fn mean_abs(a: &Image, b: &Image, crop: Option<Rect>) -> Result<f64, String> {
+pub fn mean_abs(a: &Image, b: &Image, crop: Option<Rect>) -> Result<f64, MetricsError> {
     mean_over(a, b, crop, "mean_abs", |x, y| (x - y).abs())
 }
 
 /// Per-channel mean of an image (or of a crop of it).
-pub fn channel_means(img: &Image, crop: Option<Rect>) -> Result<[f64; 3], String> {
+pub fn channel_means(img: &Image, crop: Option<Rect>) -> Result<[f64; 3], MetricsError> {
     Ok(apply_crop(img, crop)?.mean())
 }
 
@@ -108,7 +178,7 @@ pub struct DiffMetrics {
 }
 
 /// Computes [`DiffMetrics`] of `a` against the reference `b`, optionally on a crop.
-pub fn compare(a: &Image, b: &Image, crop: Option<Rect>) -> Result<DiffMetrics, String> {
+pub fn compare(a: &Image, b: &Image, crop: Option<Rect>) -> Result<DiffMetrics, MetricsError> {
     let m = mse(a, b, crop)?;
     let (mean_a, mean_b) = (channel_means(a, crop)?, channel_means(b, crop)?);
     Ok(DiffMetrics {
@@ -174,7 +244,7 @@ fn quantile(mut v: Vec<f64>, q: f64) -> Option<f64> {
 
 /// Signed difference map of `a − b` (per pixel, mean over channels): white at 0, red where
 /// `a > b`, blue where `a < b`, fully saturated at the 99th percentile of `|a − b|`.
-pub fn false_colour_diff(a: &Image, b: &Image) -> Result<DiffMap, String> {
+pub fn false_colour_diff(a: &Image, b: &Image) -> Result<DiffMap, MetricsError> {
     check_same(a, b, "false_colour_diff")?;
     let d: Vec<f64> = a
         .pixels
@@ -209,8 +279,9 @@ pub fn false_colour_diff(a: &Image, b: &Image) -> Result<DiffMap, String> {
 }
 
 /// Writes [`false_colour_diff`]`(a, b)` as a PNG; returns the saturation scale.
-pub fn write_diff_png(path: &Path, a: &Image, b: &Image) -> Result<f64, String> {
-    let m = false_colour_diff(a, b).map_err(|e| format!("{}: {e}", path.display()))?;
+pub fn write_diff_png(path: &Path, a: &Image, b: &Image) -> Result<f64, MetricsError> {
+    let m =
+        false_colour_diff(a, b).map_err(|e| MetricsError::InFile { path: path.to_path_buf(), source: Box::new(e) })?;
     write_png_rgb8(path, m.width, m.height, &m.rgb)?;
     Ok(m.scale)
 }
@@ -218,7 +289,7 @@ pub fn write_diff_png(path: &Path, a: &Image, b: &Image) -> Result<f64, String> 
 /// Per-pixel, per-channel Welch z-scores `(μa − μb) / sqrt(σa² + σb²)`, where the `var_*`
 /// images hold variances of the means. Where the denominator is 0 the score is 0 if the means
 /// are equal, else ±∞.
-pub fn z_scores(mean_a: &Image, var_a: &Image, mean_b: &Image, var_b: &Image) -> Result<Image, String> {
+pub fn z_scores(mean_a: &Image, var_a: &Image, mean_b: &Image, var_b: &Image) -> Result<Image, MetricsError> {
     check_same(mean_a, var_a, "z_scores (mean_a vs var_a)")?;
     check_same(mean_a, mean_b, "z_scores (mean_a vs mean_b)")?;
     check_same(mean_a, var_b, "z_scores (mean_a vs var_b)")?;
@@ -237,12 +308,12 @@ pub fn z_scores(mean_a: &Image, var_a: &Image, mean_b: &Image, var_b: &Image) ->
             })
         })
         .collect();
-    Image::from_pixels(mean_a.width, mean_a.height, pixels)
+    Ok(Image::from_pixels(mean_a.width, mean_a.height, pixels)?)
 }
 
 /// Variance of the mean of the full render estimated from two independent halves:
 /// `(h0 − h1)² / 4` per pixel and channel.
-pub fn half_variance(half0: &Image, half1: &Image) -> Result<Image, String> {
+pub fn half_variance(half0: &Image, half1: &Image) -> Result<Image, MetricsError> {
     check_same(half0, half1, "half_variance")?;
     let pixels = half0
         .pixels
@@ -250,7 +321,7 @@ pub fn half_variance(half0: &Image, half1: &Image) -> Result<Image, String> {
         .zip(&half1.pixels)
         .map(|(p, q)| std::array::from_fn(|c| ((p[c] as f64 - q[c] as f64).powi(2) / 4.0) as f32))
         .collect();
-    Image::from_pixels(half0.width, half0.height, pixels)
+    Ok(Image::from_pixels(half0.width, half0.height, pixels)?)
 }
 
 /// Box filter of radius `r` ((2r+1)² window), averaging only the in-bounds pixels (so borders
@@ -306,7 +377,7 @@ mod tests {
         assert!((mse(&a, &b, Some((0, 0, 1, 1))).unwrap() - 4.0 / 3.0).abs() < 1e-12);
         assert_eq!(mse(&a, &b, Some((1, 0, 1, 1))).unwrap(), 1.0 / 3.0);
         assert!(mse(&a, &b, Some((1, 0, 2, 1))).is_err());
-        assert!(mse(&a, &Image::new(1, 2), None).unwrap_err().contains("size mismatch"));
+        assert_eq!(mse(&a, &Image::new(1, 2), None).unwrap_err().to_string(), "mse: size mismatch 2x1 vs 1x2");
         assert_eq!(channel_means(&a, None).unwrap(), [0.5, 1.0, 1.5]);
         let m = compare(&a, &b, None).unwrap();
         assert_eq!(m.mean_b, [0.5, 0.0, 2.0]);
