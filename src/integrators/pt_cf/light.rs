@@ -1,47 +1,24 @@
-//! `pt-cf`'s light-traced caustics (issue #34): light paths connected to the pinhole camera,
-//! MIS-combined with `pt-cf`'s camera paths (design: `docs/methods/pt-cf.md` §"Light paths").
+//! `pt-cf`'s light side: light paths connected to the pinhole camera, MIS-combined with the
+//! camera paths by the balance heuristic with counts (Veach ch. 10; the weights, the splat's
+//! importance `W = 1/(A_pix cos³θ_c)` and their derivation: `docs/methods/pt-cf.md`, "Light
+//! paths").
 //!
-//! Path class. **C** = light paths whose first vertex after the emitter is Dirac, ending at a
-//! non-Dirac vertex `x1` that the camera sees directly: `L S+ (S|D)* D E`. Next-event estimation
-//! never samples C (its light segment ends at a Dirac vertex), so exactly two techniques do: the
-//! camera side (E: `pt-cf`'s path through `x1` that hits the emitter through a Dirac chain) and
-//! the light side (L: the light subpath `y0 … x1` connected to the camera). Every other class
-//! keeps `pt-cf`'s weights exactly.
+//! Path class C = `L S+ (S|D)* D E`: light paths whose first vertex after the emitter is Dirac,
+//! ending at a non-Dirac vertex `x1` the camera sees. NEE never samples C, so exactly two
+//! techniques do: the camera side (a `pt-cf` path through `x1` that reaches the emitter through a
+//! Dirac chain, weight `w_E`) and this one (the light subpath connected to the camera, `w_L`),
+//! with `w_L + w_E = 1`; every other class keeps `pt-cf`'s weights. A point light has `p_E = 0`:
+//! `w_L = 1`, and the light side alone renders its caustics.
 //!
-//! Light side. Each pass traces `N_L` light paths (`--light-paths`; path `i` draws from
-//! `Rng::keyed(seed, stream::LIGHT_PATHS, pass, i)`), launched as the particle tracer's with the
-//! CF preprocess's targeted emission (`Emission::Targeted`) and bounced by BSDF sampling in
-//! importance mode with the particle tracer's roulette. At each non-Dirac vertex `x` after a
-//! Dirac first vertex (and at most `--max-depth − 1` vertices from the light, the camera side's
-//! cap on C) it splats into the pixel that sees `x`
+//! Each pass traces `N_L` light paths (`--light-paths`, or the pipeline's pilot), path `i` from
+//! `Rng::keyed(seed, stream::LIGHT_PATHS, pass, i)`, launched with the CF preprocess's targeted
+//! emission and bounced in importance mode with the particle tracer's roulette.
 //!
-//!   `w_L · β · f(ω_c, ω_in) · (|n_s·ω_in|/|n_g·ω_in|) · V(x, x0) · |n_g·ω_c| / |x − x0|² · W / N_L`,
-//!
-//! `W = 1/(A_pix cos³θ_c)` (a pixel's value is the mean radiance over its footprint on the image
-//! plane at distance 1, area `A_pix`; pbrt-v4's `We = 1/(A cos⁴θ)` times the camera-side cosine
-//! of its `G`), the shading-normal factor of importance transport as `transport::particle`.
-//!
-//! Weights (balance heuristic with counts, Veach ch. 10; SmallVCM `vertexcm` without merging).
-//! With `r = N_L p_L / (n_E p_E)`, `w_L = r/(1 + r)` and `w_E = 1/(1 + r)`, which sum to 1. Along
-//! the camera path `x0, x1, …, x_m` (non-Dirac vertices `v_1 = x1 … v_m`, Dirac chains between),
-//! then the chain to the emitter point `y0`:
-//!
-//!   `r = N_L · P_ℓ p_A(y0) p_e(ω0)/|cos θ_y0| · |x1 − x0|²·A_pix cos³θ_c
-//!        · Π_{j=1..m} c⁺_j / (c⁻_j q_j) · Π_{j=2..m} p^L_j`
-//!
-//! `c⁺_j`/`c⁻_j` the geometric cosines at `v_j` toward the light/camera side, `q_j` the pdf
-//! `pt-cf` used at `v_j` (BSDF, or `n·q` of the defensive mixture with its split count `n`, so
-//! `n_E` is inside `q_1`), `p^L_j` the light side's BSDF pdf at `v_j`. The chains' generalized
-//! distances cancel pairwise, so do their Fresnel choice probabilities; roulette is neither pdf.
-//! Assumed: `x1` and the light lie in the same medium (the `(η_x1/η_y0)²` factor is 1; no scene
-//! has a diffuse surface inside glass). A point light has `p_E = 0`: `w_L = 1`, the light side
-//! alone renders its caustics.
-//!
-//! Splat film. Light paths run in chunks of [`CHUNK`] (in parallel); each chunk returns its
-//! (pixel, value) list and the lists are added in chunk order into a dense per-pass image, which
-//! `render::render_passes` adds to each pixel's camera sample: the pass's value of a pixel is still
-//! one i.i.d. sample, so the film's variance layer and checkpoints stay valid, and the image does
-//! not depend on threads or ranks (a pass, light paths included, is rendered by one rank).
+//! Invariants: light paths run in chunks of [`CHUNK`] in parallel and their splats are added in
+//! chunk order into a dense per-pass image that `render::render_passes` adds to each pixel's
+//! camera sample, so a pass's pixel value is still one i.i.d. sample (the variance layer and the
+//! checkpoints stay valid) and the image does not depend on threads or ranks. Assumed: `x1` and
+//! the light lie in the same medium.
 
 use crate::accel::{offset_origin, take_ray_counts, Hit, World};
 use crate::bsdf::{self, Mode, ShadingPoint};

@@ -1,41 +1,20 @@
-//! `pt-cf`: the `pt` path tracer guided by the Caustic Forecasting tables (issue #12; beyond
-//! BAJ08, which combines CF with IWS only).
+//! `pt-cf`: `pt` guided by the Caustic Forecasting tables and MIS-combined with light paths
+//! (beyond BAJ08, which combines CF with IWS only). Derivations: `docs/methods/pt-cf.md`.
 //!
-//! Estimator. Exactly `pt` (NEE + power-heuristic MIS for area lights, Dirac chains followed by
-//! BSDF sampling, Russian roulette from the 5th vertex, `transport::roulette::Throughput`) except at the guided
-//! vertices: non-Dirac hits at diffuse depth `d < --table-depth` that lie inside a *guided* kept
-//! cluster `k` (`CausticForecast::cluster_at`, then `tables_in`: forecast map → dual tables,
-//! through the shared `TableCache`). There the continuation direction is drawn from the defensive
-//! mixture `q(ω) = c_k·p_BSDF(ω) + (1−c_k)·p_CF(ω)` (`cf::mixture`, `p_CF` = ½T1 + ½T2),
-//! weighted by `f·|cos|/q`, so no sample is worth more than `1/c_k` BSDF samples.
+//! Estimator. Exactly `pt` (`pt::vertex`) except at the guided vertices: non-Dirac hits at
+//! diffuse depth `d < --table-depth` inside a guided kept cluster `k` (`CausticForecast::
+//! cluster_at`, then `tables_in` through the shared `TableCache`). There the continuation is
+//! drawn from the defensive mixture `q(ω) = c_k·p_BSDF(ω) + (1−c_k)·p_CF(ω)` (`cf::mixture`),
+//! `c_k = max(c, 1 − s_k)` from the cluster's caustic share `s_k` (`cf::share`), and at `d = 0`
+//! split into `n` continuations (`--split`, `n` a function of the cluster only). NEE is
+//! MIS-weighted against `n·q`, the pdf really used. The light side (`light`) adds the paths
+//! `L S+ (S|D)* D E` from the lights, each weighted against the camera side's technique.
 //!
-//! Per-cluster guiding. With the caustic share `s = E_c/(E_c + E_d)` of a
-//! cluster's indirect irradiance ([`CausticShare`](crate::cf::share::CausticShare): `E_c` from its forecast photons, `E_d` from a
-//! cosine `pt` gather in the preprocess), the mixture's second moment `E_d²/c + E_c²/(1−c)` (tables
-//! matching the caustic, the BSDF the rest) is smallest at `c = 1 − s`; so `c_k = max(c, 1 − s)`
-//! where `s ≥ --guide-min-share` and no guiding elsewhere. A `SubsetGrid` of the guided clusters
-//! answers the cluster map's query for them, mostly without its tree (same image, exactly).
-//!
-//! MIS against NEE uses the pdf really used: NEE's weight is `h(p_light, n·q(ω_l))` and a mixture-sampled emitter hit's is
-//! `h(n·q, p_light)` (power heuristic `h`, `n` the split count), which sum to 1 per direction.
-//! Splitting: at `d = 0` inside a guided cluster `k`, `n = clamp(⌈S0·ρ_k/ρ_max⌉, 1, S0)`
-//! continuations are drawn and averaged (`--split S0`; `ρ_k` the cluster's energy density, `ρ_max`
-//! the densest guided cluster's); `n` depends only on the vertex's cluster, so it stays unbiased.
-//! (`--guide-rule fixed` and `--guide-split-rule rank` measured no better and were retired:
-//! `results/rejected/`.)
-//!
-//! Options: the CF group (`iws_cf::CfArgs`, shared with `iws-cf`: photons, clusters,
-//! `--split`, `--table-depth`, …), `--path-filter` (`pt`'s) and [`PtCfArgs`].
-//!
-//! Invariants: the tables are a pdf only (any photons give an unbiased image); `c = 1` never
-//! looks a table up and draws exactly `pt`'s random numbers, so it is `pt` bit for bit; outside
-//! guided clusters every vertex is a `pt` vertex. The preprocess product is `iws-cf`'s
-//! (`IwsCf::preprocess`: same photons, clusters, maps) plus the shares, broadcast together.
-//!
-//! `--path-filter` (a biased diagnostic, as `pt`'s) keeps only some path classes; every branch
-//! of a split carries its path's class.
-//!
-//! CLI: `forecast render scenes/cornell-box.toml --method pt-cf --time 1m`.
+//! Invariants: the tables are a pdf only (any photons give an unbiased image); `c = 1` draws
+//! exactly `pt`'s random numbers and is `pt` bit for bit; outside guided clusters every vertex is
+//! a `pt` vertex; the MIS weights of every technique pair sum to 1; the image does not depend on
+//! threads or ranks. The preprocess product is `iws-cf`'s plus the caustic shares. Options: the
+//! CF group (`iws_cf::CfArgs`, shared with `iws-cf`), `--path-filter` (`pt`'s) and [`PtCfArgs`].
 
 pub mod light;
 mod wavefront;
@@ -43,7 +22,7 @@ mod wavefront;
 use super::iws_cf::{targeted_emission, IwsCf};
 use super::pt::path_class::{kept, PathClass, PathFilter};
 use super::pt::{vertex, SurfaceVertex, Walk};
-use super::{CameraEstimate, Context, Integrator, LightSplats, LightTracer, MethodArgs, MethodSpec};
+use super::{CameraEstimate, Context, Integrator, LightSplats, LightTracer, MethodArgs, MethodError, MethodSpec};
 use crate::accel::{Hit, Ray, World};
 use crate::bsdf::{self, BsdfSample, ShadingPoint};
 use crate::cf::cluster::Cluster;
@@ -84,8 +63,9 @@ pub struct PtCfArgs {
 
 impl PtCfArgs {
     /// The limits of `crate::param_limits`.
-    pub fn validate(&self) -> Result<(), String> {
-        self.light_paths.map_or(Ok(()), |n| crate::param_limits::LIGHT_PATHS.check_flag("--light-paths", n))
+    pub fn validate(&self) -> Result<(), MethodError> {
+        self.light_paths
+            .map_or(Ok(()), |n| MethodError::check_limit(&crate::param_limits::LIGHT_PATHS, "--light-paths", n))
     }
 }
 
@@ -99,17 +79,23 @@ pub struct PtCf;
 
 impl MethodSpec for PtCf {
     type Product = CausticForecast;
-    fn preprocess(world: &World, args: &MethodArgs, seed: u64, phases: &dyn Phases) -> Result<CausticForecast, String> {
+    fn preprocess(
+        world: &World,
+        args: &MethodArgs,
+        seed: u64,
+        phases: &dyn Phases,
+    ) -> Result<CausticForecast, MethodError> {
         <IwsCf as MethodSpec>::preprocess(world, args, seed, phases)
     }
-    fn build(world: &World, args: &MethodArgs, g: CausticForecast) -> Result<Box<dyn Integrator>, String> {
+    fn build(world: &World, args: &MethodArgs, g: CausticForecast) -> Result<Box<dyn Integrator>, MethodError> {
         let p = &args.ptcf;
         let c = p.guide_fraction;
-        let weights = MixtureWeights::guide_fraction(c).map_err(|e| format!("--guide-fraction: {e}"))?;
-        min_share(p.guide_min_share).map_err(|e| format!("--guide-min-share: {e}"))?;
+        let weights = MixtureWeights::guide_fraction(c).map_err(|e| MethodError::option("--guide-fraction", e))?;
+        min_share(p.guide_min_share).map_err(|e| MethodError::option("--guide-min-share", e))?;
         let n_kept = g.clustering.n_kept(g.opts.max_rank);
         if g.shares.len() != n_kept {
-            return Err(format!("pt-cf: {} caustic shares for {n_kept} kept clusters", g.shares.len()));
+            let m = format!("pt-cf: {} caustic shares for {n_kept} kept clusters", g.shares.len());
+            return Err(MethodError::BadProduct(m));
         }
         // the BSDF share of each kept cluster (None: a `pt` vertex there)
         let per_cluster: Vec<Option<MixtureWeights>> = g
