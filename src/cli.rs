@@ -92,7 +92,7 @@ fn given_flags(matches: &ArgMatches) -> Vec<String> {
 /// known: at parse time for `--method M`, after the scene (or `auto`) resolves it otherwise.
 pub fn check_foreign_flags(resolved: Method, matches: &ArgMatches) -> Result<(), clap::Error> {
     match MethodArgs::foreign_flag(resolved, &explicit_method_flags(matches)) {
-        Some(msg) => Err(render_usage_error(msg)),
+        Some(e) => Err(render_usage_error(e.to_string())),
         None => Ok(()),
     }
 }
@@ -110,7 +110,7 @@ fn check_reference(a: &RenderArgs, matches: &ArgMatches) -> Result<(), clap::Err
         return Err(usage_error("reference", msg));
     }
     match MethodArgs::foreign_flag(Method::Pt, &explicit_method_flags(matches)) {
-        Some(msg) => Err(usage_error("reference", msg)),
+        Some(e) => Err(usage_error("reference", e.to_string())),
         None => Ok(()),
     }
 }

@@ -117,7 +117,7 @@ fn foreign_flag_usage(a: &forecast::cli::RenderArgs, f: Failure) -> Failure {
     let foreign = forecast::integrators::Method::ALL
         .iter()
         .filter_map(|&m| forecast::integrators::MethodArgs::foreign_flag(m, explicit))
-        .any(|e| f.message.ends_with(&e));
+        .any(|e| f.message.ends_with(&e.to_string()));
     Failure { usage: foreign, ..f }
 }
 

@@ -178,15 +178,95 @@ pub struct LightSplats {
     pub shadow_rays: u64,
 }
 
+/// Why a method refused its options or its preprocess product (the errors of [`MethodArgs`]'s
+/// checks, [`Method::preprocess`] and [`Method::build`]); `Display` is the message.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MethodError {
+    /// An option's value refused: `--photons 0: photons must be at least 1 (got 0)`, or without
+    /// the value, `--path-filter: ...`.
+    Option {
+        /// The flag (`--photons`; `--ris-candidates/--ris-survivors` for a pair).
+        flag: &'static str,
+        /// The value refused, where the message names it.
+        value: Option<String>,
+        /// Why.
+        reason: String,
+    },
+    /// A flag of another method: `--clusters belongs to iws-cf/pt-cf, not pt`.
+    ForeignFlag {
+        /// The flag, `--clusters`.
+        flag: String,
+        /// The methods that take it, `iws-cf/pt-cf`.
+        owners: String,
+        /// The method that does not.
+        method: Method,
+    },
+    /// A back end this build lacks (`--accel embree` without Embree): `accel`'s message.
+    Backend(String),
+    /// The broadcast preprocess product does not decode.
+    Product {
+        /// The method whose product it is.
+        method: Method,
+        /// Its length in bytes.
+        bytes: usize,
+        /// The decoder's message.
+        reason: String,
+    },
+    /// A decoded product that is inconsistent (the message names the product).
+    BadProduct(String),
+}
+
+impl MethodError {
+    /// Option `flag` refused for `reason` (the message does not repeat the value).
+    pub fn option(flag: &'static str, reason: impl std::fmt::Display) -> MethodError {
+        MethodError::Option { flag, value: None, reason: reason.to_string() }
+    }
+
+    /// `value` of option `flag` against `limit` (`crate::param_limits`).
+    pub fn check_limit(limit: &crate::param_limits::Limit, flag: &'static str, value: u64) -> Result<(), MethodError> {
+        limit.check(value).map_err(|reason| MethodError::Option { flag, value: Some(value.to_string()), reason })
+    }
+}
+
+impl std::fmt::Display for MethodError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            MethodError::Option { flag, value: Some(v), reason } => write!(f, "{flag} {v}: {reason}"),
+            MethodError::Option { flag, value: None, reason } => write!(f, "{flag}: {reason}"),
+            MethodError::ForeignFlag { flag, owners, method } => {
+                write!(f, "{flag} belongs to {owners}, not {}", method.name())
+            }
+            MethodError::Backend(m) | MethodError::BadProduct(m) => write!(f, "{m}"),
+            MethodError::Product { method, bytes, reason } => {
+                write!(f, "{}: cannot decode the broadcast preprocess product ({bytes} bytes): {reason}", method.name())
+            }
+        }
+    }
+}
+
+impl std::error::Error for MethodError {}
+
+/// For the callers whose own errors are still messages.
+impl From<MethodError> for String {
+    fn from(e: MethodError) -> String {
+        e.to_string()
+    }
+}
+
 /// One method: its preprocess and its construction (its parameters are its field of
 /// [`MethodArgs`]; a method reads the groups it shares, e.g. the IWS ones).
 pub trait MethodSpec {
     /// The one-off preprocess product, broadcast from rank 0 (`()` when there is none).
     type Product: bitcode::Encode + bitcode::DecodeOwned;
     /// Runs the preprocess (rank 0 only), reporting its phases to `phases` (display only).
-    fn preprocess(world: &World, args: &MethodArgs, seed: u64, phases: &dyn Phases) -> Result<Self::Product, String>;
+    fn preprocess(
+        world: &World,
+        args: &MethodArgs,
+        seed: u64,
+        phases: &dyn Phases,
+    ) -> Result<Self::Product, MethodError>;
     /// Builds the integrator from the (broadcast) product.
-    fn build(world: &World, args: &MethodArgs, product: Self::Product) -> Result<Box<dyn Integrator>, String>;
+    fn build(world: &World, args: &MethodArgs, product: Self::Product) -> Result<Box<dyn Integrator>, MethodError>;
 }
 
 /// The registry. `groups`: every option group, `field: Type = "Title"` (a `#[derive(clap::Args,
@@ -263,7 +343,7 @@ macro_rules! methods {
             }
 
             /// The one-off preprocess (rank 0), encoded for the broadcast, reporting nothing.
-            pub fn preprocess(self, world: &World, args: &MethodArgs, seed: u64) -> Result<Vec<u8>, String> {
+            pub fn preprocess(self, world: &World, args: &MethodArgs, seed: u64) -> Result<Vec<u8>, MethodError> {
                 self.preprocess_reporting(world, args, seed, &Hidden)
             }
 
@@ -275,14 +355,19 @@ macro_rules! methods {
                 args: &MethodArgs,
                 seed: u64,
                 phases: &dyn Phases,
-            ) -> Result<Vec<u8>, String> {
+            ) -> Result<Vec<u8>, MethodError> {
                 match self {
                     $( Method::$variant => encode_product::<$module::$spec>(world, args, seed, phases), )*
                 }
             }
 
             /// Builds the integrator from the broadcast product.
-            pub fn build(self, world: &World, args: &MethodArgs, product: &[u8]) -> Result<Box<dyn Integrator>, String> {
+            pub fn build(
+                self,
+                world: &World,
+                args: &MethodArgs,
+                product: &[u8],
+            ) -> Result<Box<dyn Integrator>, MethodError> {
                 args.check_for(self)?;
                 match self {
                     $( Method::$variant => build_from::<$module::$spec>(self, world, args, product), )*
@@ -422,7 +507,7 @@ impl MethodArgs {
     /// The first flag in `explicit` that `method` does not take, as the error naming the methods
     /// it belongs to: `--clusters belongs to iws-cf/pt-cf, not pt`. `None` when every explicit
     /// flag is the method's (or a render setting).
-    pub fn foreign_flag(method: Method, explicit: &[String]) -> Option<String> {
+    pub fn foreign_flag(method: Method, explicit: &[String]) -> Option<MethodError> {
         let uses = method.groups();
         for (group, flags) in Self::group_flags() {
             if uses.contains(&group) {
@@ -430,7 +515,7 @@ impl MethodArgs {
             }
             for (id, long) in flags {
                 if explicit.contains(&id) {
-                    return Some(format!("{long} belongs to {}, not {}", Method::owners(group), method.name()));
+                    return Some(MethodError::ForeignFlag { flag: long, owners: Method::owners(group), method });
                 }
             }
         }
@@ -440,12 +525,16 @@ impl MethodArgs {
     /// Refuses what `method` does not take: a flag of another method given on the command line
     /// ([`MethodArgs::foreign_flag`]), and (API callers too) a `--path-filter`, which only the
     /// methods of `pt`'s group implement.
-    pub fn check_for(&self, method: Method) -> Result<(), String> {
+    pub fn check_for(&self, method: Method) -> Result<(), MethodError> {
         if let Some(e) = Self::foreign_flag(method, &self.explicit) {
             return Err(e);
         }
         if self.pt.path_filter.is_some() && !method.groups().contains(&"pt") {
-            return Err(format!("--path-filter belongs to {}, not {}", Method::owners("pt"), method.name()));
+            return Err(MethodError::ForeignFlag {
+                flag: "--path-filter".into(),
+                owners: Method::owners("pt"),
+                method,
+            });
         }
         Ok(())
     }
@@ -461,7 +550,7 @@ impl MethodArgs {
     }
 
     /// Every group's own `validate` (each method file owns its limits), before any work.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), MethodError> {
         self.settings.validate()?;
         self.pt.validate()?;
         self.iws.validate()?;
@@ -488,7 +577,7 @@ fn encode_product<S: MethodSpec>(
     args: &MethodArgs,
     seed: u64,
     phases: &dyn Phases,
-) -> Result<Vec<u8>, String> {
+) -> Result<Vec<u8>, MethodError> {
     Ok(bitcode::encode(&S::preprocess(world, args, seed, phases)?))
 }
 
@@ -497,9 +586,11 @@ fn build_from<S: MethodSpec>(
     world: &World,
     args: &MethodArgs,
     product: &[u8],
-) -> Result<Box<dyn Integrator>, String> {
-    let p: S::Product = bitcode::decode(product).map_err(|e| {
-        format!("{}: cannot decode the broadcast preprocess product ({} bytes): {e}", method.name(), product.len())
+) -> Result<Box<dyn Integrator>, MethodError> {
+    let p: S::Product = bitcode::decode(product).map_err(|e| MethodError::Product {
+        method,
+        bytes: product.len(),
+        reason: e.to_string(),
     })?;
     S::build(world, args, p)
 }

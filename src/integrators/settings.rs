@@ -8,6 +8,7 @@
 //! `render.max_depth` (direct callers get [`MAX_VERTICES`]); `1 <= emission_split <=
 //! MAX_EMISSION_SPLIT` (clap checks the flag; the pixel sampler clamps API values).
 
+use super::MethodError;
 use crate::accel::AccelKind;
 use crate::sampling::qmc::SamplerKind;
 use crate::transport::particle::MAX_VERTICES;
@@ -46,8 +47,9 @@ impl RenderSettings {
     }
 
     /// The limits of `crate::param_limits` (the scene's `render.max_depth` has the same).
-    pub fn validate(&self) -> Result<(), String> {
-        self.accel.check()?;
-        self.max_depth.map_or(Ok(()), |d| crate::param_limits::MAX_DEPTH.check_flag("--max-depth", d.into()))
+    pub fn validate(&self) -> Result<(), MethodError> {
+        self.accel.check().map_err(MethodError::Backend)?;
+        self.max_depth
+            .map_or(Ok(()), |d| MethodError::check_limit(&crate::param_limits::MAX_DEPTH, "--max-depth", d.into()))
     }
 }

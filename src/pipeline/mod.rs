@@ -206,7 +206,7 @@ impl Plan {
             params::check_time(t).map_err(|m| format!("--time: {m}"))?;
         }
         self.args.check_for(self.method)?;
-        self.args.validate()
+        Ok(self.args.validate()?)
     }
 }
 

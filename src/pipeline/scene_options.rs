@@ -29,7 +29,7 @@ pub(super) fn apply(args: &MethodArgs, scene: &Scene, method: Method, own: Metho
         out = args
             .with_flags(&flags)
             .map_err(|e| clap_message(&e))
-            .and_then(|a| a.validate().map(|()| a))
+            .and_then(|a| a.validate().map(|()| a).map_err(String::from))
             .map_err(|m| error_at(scene, o, m))?;
     }
     Ok(out)
@@ -47,7 +47,7 @@ fn option_name(scene: &Scene, o: &RenderOption, own: Method) -> Result<OptionNam
         return Err(error_at(scene, o, m));
     };
     match MethodArgs::foreign_flag(own, std::slice::from_ref(&name.id)) {
-        Some(m) => Err(error_at(scene, o, m)),
+        Some(e) => Err(error_at(scene, o, e.to_string())),
         None => Ok(name),
     }
 }

@@ -29,7 +29,7 @@
 pub mod caustics;
 pub mod vpl;
 
-use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
+use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodError, MethodSpec};
 use crate::accel::{offset_origin, ray_epsilon, Hit, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::math::{Rgb, Vec3, PI};
@@ -89,16 +89,16 @@ pub enum DirectLight {
 
 impl IwsArgs {
     /// The RIS parameters (ranges checked; the error names the option).
-    pub fn ris(&self) -> Result<RisParams, String> {
+    pub fn ris(&self) -> Result<RisParams, MethodError> {
         RisParams::new(self.ris_candidates, self.ris_survivors, true)
-            .map_err(|e| format!("--ris-candidates/--ris-survivors: {e}"))
+            .map_err(|e| MethodError::option("--ris-candidates/--ris-survivors", e))
     }
 }
 
 impl IwsArgs {
     /// The limits of `crate::param_limits`.
-    pub fn validate(&self) -> Result<(), String> {
-        crate::param_limits::VPL_PATHS.check_flag("--vpl-paths", self.vpl_paths.into())
+    pub fn validate(&self) -> Result<(), MethodError> {
+        MethodError::check_limit(&crate::param_limits::VPL_PATHS, "--vpl-paths", self.vpl_paths.into())
     }
 }
 
@@ -117,10 +117,10 @@ fn parse_bound(s: &str) -> Result<f32, String> {
 
 impl MethodSpec for Iws {
     type Product = ();
-    fn preprocess(_: &World, _: &MethodArgs, _: u64, _: &dyn Phases) -> Result<(), String> {
+    fn preprocess(_: &World, _: &MethodArgs, _: u64, _: &dyn Phases) -> Result<(), MethodError> {
         Ok(())
     }
-    fn build(world: &World, args: &MethodArgs, _: ()) -> Result<Box<dyn Integrator>, String> {
+    fn build(world: &World, args: &MethodArgs, _: ()) -> Result<Box<dyn Integrator>, MethodError> {
         args.iws.ris()?;
         Ok(Box::new(Iws::new(world, args, Box::new(NoCaustics))))
     }

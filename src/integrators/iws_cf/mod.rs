@@ -18,7 +18,7 @@
 pub mod share;
 use super::iws::caustics::{caustic_chain, CausticEstimator, Recurse, ShadingQuery};
 use super::iws::{DirectLight, Iws};
-use super::{Context, Integrator, MethodArgs, MethodSpec};
+use super::{Context, Integrator, MethodArgs, MethodError, MethodSpec};
 use crate::accel::World;
 use crate::bsdf;
 use crate::cf::caustic_point::CausticPoint;
@@ -146,11 +146,12 @@ impl MethodArgs {
 
 impl CfArgs {
     /// The limits of `crate::param_limits` (the scene's `forecast.photons` has the same).
-    pub fn validate(&self) -> Result<(), String> {
-        let photons = self
-            .forecast_photons
-            .map_or(Ok(()), |n| crate::param_limits::FORECAST_PHOTONS.check_flag("--forecast-photons", n));
-        photons.and_then(|()| crate::param_limits::SPLIT.check_flag("--split", self.split.into()))
+    pub fn validate(&self) -> Result<(), MethodError> {
+        use crate::param_limits::{FORECAST_PHOTONS, SPLIT};
+        if let Some(n) = self.forecast_photons {
+            MethodError::check_limit(&FORECAST_PHOTONS, "--forecast-photons", n)?;
+        }
+        MethodError::check_limit(&SPLIT, "--split", self.split.into())
     }
 
     /// Forecast photons to store: the CLI's, else the scene's, else [`DEFAULT_FORECAST_PHOTONS`].
@@ -164,10 +165,15 @@ pub struct IwsCf;
 
 impl MethodSpec for IwsCf {
     type Product = CausticForecast;
-    fn preprocess(world: &World, args: &MethodArgs, seed: u64, phases: &dyn Phases) -> Result<CausticForecast, String> {
+    fn preprocess(
+        world: &World,
+        args: &MethodArgs,
+        seed: u64,
+        phases: &dyn Phases,
+    ) -> Result<CausticForecast, MethodError> {
         Ok(preprocess_forecast(world, args, seed, phases))
     }
-    fn build(world: &World, args: &MethodArgs, cf: CausticForecast) -> Result<Box<dyn Integrator>, String> {
+    fn build(world: &World, args: &MethodArgs, cf: CausticForecast) -> Result<Box<dyn Integrator>, MethodError> {
         Ok(Box::new(Iws::new(world, &args.with_variant(), Box::new(ForecastCaustics::new(cf)))))
     }
 }

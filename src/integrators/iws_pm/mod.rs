@@ -22,7 +22,7 @@
 
 use super::iws::caustics::{CausticEstimator, Recurse, ShadingQuery};
 use super::iws::Iws;
-use super::{Context, Integrator, MethodArgs, MethodSpec};
+use super::{Context, Integrator, MethodArgs, MethodError, MethodSpec};
 use crate::accel::World;
 use crate::bsdf::{self, ShadingPoint};
 use crate::math::{Rgb, Vec3, PI};
@@ -55,8 +55,8 @@ pub struct PmArgs {
 
 impl PmArgs {
     /// The limits of `crate::param_limits`.
-    pub fn validate(&self) -> Result<(), String> {
-        crate::param_limits::PHOTONS.check_flag("--photons", self.photons)
+    pub fn validate(&self) -> Result<(), MethodError> {
+        MethodError::check_limit(&crate::param_limits::PHOTONS, "--photons", self.photons)
     }
 }
 
@@ -72,14 +72,14 @@ pub struct IwsPm;
 
 impl MethodSpec for IwsPm {
     type Product = PhotonMap;
-    fn preprocess(world: &World, args: &MethodArgs, seed: u64, phases: &dyn Phases) -> Result<PhotonMap, String> {
+    fn preprocess(world: &World, args: &MethodArgs, seed: u64, phases: &dyn Phases) -> Result<PhotonMap, MethodError> {
         let pm = &args.pm;
         let phase = phases.phase("photon map", Some(pm.photons));
         let map = PhotonMap::build(world, pm.photons, pm.gather, pm.max_radius, seed, &|n| phase.set(n));
         Ok(map)
     }
-    fn build(world: &World, args: &MethodArgs, pm: PhotonMap) -> Result<Box<dyn Integrator>, String> {
-        pm.validate()?;
+    fn build(world: &World, args: &MethodArgs, pm: PhotonMap) -> Result<Box<dyn Integrator>, MethodError> {
+        pm.validate().map_err(MethodError::BadProduct)?;
         Ok(Box::new(Iws::new(world, args, Box::new(pm))))
     }
 }

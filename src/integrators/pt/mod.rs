@@ -19,7 +19,7 @@ pub mod wavefront;
 
 pub use vertex::{vertex, SurfaceVertex, Walk};
 
-use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodSpec};
+use super::{CameraEstimate, Context, Integrator, MethodArgs, MethodError, MethodSpec};
 use crate::accel::{Ray, World};
 use crate::math::{Rgb, Vec3};
 use crate::profile::Profile;
@@ -43,22 +43,26 @@ pub struct PtArgs {
 
 impl PtArgs {
     /// `--path-filter`, parsed (`None` when not given).
-    pub fn filter(&self) -> Result<Option<PathFilter>, String> {
-        self.path_filter.as_deref().map(PathFilter::parse).transpose().map_err(|e| format!("--path-filter: {e}"))
+    pub fn filter(&self) -> Result<Option<PathFilter>, MethodError> {
+        self.path_filter
+            .as_deref()
+            .map(PathFilter::parse)
+            .transpose()
+            .map_err(|e| MethodError::option("--path-filter", e))
     }
 
     /// A `--path-filter` that parses.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), MethodError> {
         self.filter().map(|_| ())
     }
 }
 
 impl MethodSpec for PathTracer {
     type Product = ();
-    fn preprocess(_: &World, _: &MethodArgs, _: u64, _: &dyn Phases) -> Result<(), String> {
+    fn preprocess(_: &World, _: &MethodArgs, _: u64, _: &dyn Phases) -> Result<(), MethodError> {
         Ok(())
     }
-    fn build(_: &World, args: &MethodArgs, _: ()) -> Result<Box<dyn Integrator>, String> {
+    fn build(_: &World, args: &MethodArgs, _: ()) -> Result<Box<dyn Integrator>, MethodError> {
         Ok(Box::new(PathTracer { max_depth: args.settings.cap(), filter: args.pt.filter()? }))
     }
 }
