@@ -72,11 +72,12 @@ pub enum ImageError {
         /// The colour image's `(width, height)`.
         colour: (usize, usize),
     },
-    /// The file cannot be opened (`cannot open`) or read (`cannot read`).
-    Open {
-        /// File concerned.
+    /// The file cannot be opened or read, or its directory created (`cannot open`, `cannot
+    /// read`, `cannot create`).
+    Io {
+        /// File (or directory) concerned.
         path: PathBuf,
-        /// `"open"` or `"read"`, as the message words it.
+        /// `"open"`, `"read"` or `"create"`, as the message words it.
         action: &'static str,
         /// The I/O error.
         source: std::io::Error,
@@ -167,7 +168,7 @@ impl std::fmt::Display for ImageError {
             VarianceSize { path, variance: (vw, vh), colour: (w, h) } => {
                 write!(f, "{}: variance image is {vw}x{vh}, colour image is {w}x{h}", path.display())
             }
-            Open { path, action, source } => write!(f, "cannot {action} {}: {source}", path.display()),
+            Io { path, action, source } => write!(f, "cannot {action} {}: {source}", path.display()),
             Decode { path, format, reason } => write!(f, "cannot decode {format} {}: {reason}", path.display()),
             Unsupported { path, reason } => write!(f, "{}: {reason}", path.display()),
             BadPixels { path, count, what, first: (x, y), value } => {
@@ -186,7 +187,7 @@ impl std::fmt::Display for ImageError {
 impl std::error::Error for ImageError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
-            ImageError::Open { source, .. } => Some(source),
+            ImageError::Io { source, .. } => Some(source),
             _ => None,
         }
     }
@@ -375,7 +376,7 @@ type FlatLayer = exr::image::Layer<exr::image::AnyChannels<exr::image::FlatSampl
 
 fn read_first_layer(path: &Path) -> Result<FlatLayer, ImageError> {
     use exr::image::read::{image::ReadLayers, layers::ReadChannels, read};
-    let bytes = crate::atomic_io::read_regular(path).map_err(|e| open_error(path, "read", e))?;
+    let bytes = crate::atomic_io::read_regular(path).map_err(|e| io_error(path, "read", e))?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -438,8 +439,8 @@ fn checked(path: &Path, img: Image, what: &'static str, ok: impl Fn(f32) -> bool
     Err(ImageError::BadPixels { path, count, what, first: (first % img.width, first / img.width), value })
 }
 
-fn open_error(path: &Path, action: &'static str, source: std::io::Error) -> ImageError {
-    ImageError::Open { path: path.to_path_buf(), action, source }
+fn io_error(path: &Path, action: &'static str, source: std::io::Error) -> ImageError {
+    ImageError::Io { path: path.to_path_buf(), action, source }
 }
 
 fn decode_error(path: &Path, format: &'static str, e: impl std::fmt::Display) -> ImageError {
@@ -525,8 +526,8 @@ pub fn encode_png_rgb8(w: usize, h: usize, rgb: &[u8]) -> Result<Vec<u8>, ImageE
 /// Reads an 8-bit RGB or RGBA PNG into `(width, height, RGB bytes)` (alpha dropped). Used by
 /// tests and tools that inspect written PNGs.
 pub fn read_png_rgb8(path: &Path) -> Result<(usize, usize, Vec<u8>), ImageError> {
-    crate::atomic_io::require_regular(path).map_err(|e| open_error(path, "open", e))?;
-    let file = std::fs::File::open(path).map_err(|e| open_error(path, "open", e))?;
+    crate::atomic_io::require_regular(path).map_err(|e| io_error(path, "open", e))?;
+    let file = std::fs::File::open(path).map_err(|e| io_error(path, "open", e))?;
     let decoder = png::Decoder::new(std::io::BufReader::new(file));
     let mut reader = decoder.read_info().map_err(|e| decode_error(path, "PNG", e))?;
     let size = reader.output_buffer_size().ok_or_else(|| unsupported(path, "PNG too large".into()))?;
@@ -600,7 +601,7 @@ mod tests {
         let bad = Image::new(2, 2);
         assert!(write_exr_layers(&q, &img, Some(&bad)).is_err());
         let err = read_exr(&d.join("missing.exr")).unwrap_err();
-        assert!(matches!(err, ImageError::Open { action: "read", .. }), "{err:?}");
+        assert!(matches!(err, ImageError::Io { action: "read", .. }), "{err:?}");
         assert!(err.to_string().starts_with("cannot read ") && err.to_string().contains("missing.exr"), "{err}");
         std::fs::write(d.join("junk.exr"), b"not an exr").unwrap();
         let err = read_exr(&d.join("junk.exr")).unwrap_err();
@@ -646,7 +647,7 @@ mod tests {
         assert_eq!(msg(unsupported(p, "no R, G, B or Y channels".into())), "d/a.exr: no R, G, B or Y channels");
         assert_eq!(msg(decode_error(p, "PNG", "bad")), "cannot decode PNG d/a.exr: bad");
         let io = std::io::Error::new(std::io::ErrorKind::NotFound, "gone");
-        assert_eq!(msg(open_error(p, "open", io)), "cannot open d/a.exr: gone");
+        assert_eq!(msg(io_error(p, "open", io)), "cannot open d/a.exr: gone");
         let enc = ImageError::Encode { path: Some(p.to_path_buf()), format: "EXR", reason: "full".into() };
         assert_eq!(msg(enc), "cannot encode EXR d/a.exr: full");
     }

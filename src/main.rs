@@ -25,9 +25,17 @@ impl From<String> for Failure {
 /// Runs `f` on the cluster; an error is printed by rank 0 only (the pipeline agrees errors
 /// across ranks, so rank 0's message names every failing rank).
 fn on_cluster<T>(f: impl FnOnce(&dyn distributed::Cluster) -> Result<T, String>) -> Result<T, Failure> {
+    on_cluster_usage(f, |_| false)
+}
+
+/// [`on_cluster`], with `usage` telling which errors are usage errors (exit 2).
+fn on_cluster_usage<T, E: std::fmt::Display>(
+    f: impl FnOnce(&dyn distributed::Cluster) -> Result<T, E>,
+    usage: impl FnOnce(&E) -> bool,
+) -> Result<T, Failure> {
     let cluster = distributed::try_init()?;
     let print = cluster.rank() == 0;
-    f(cluster.as_ref()).map_err(|message| Failure { message, print, usage: false, interrupted: false })
+    f(cluster.as_ref()).map_err(|e| Failure { usage: usage(&e), message: e.to_string(), print, interrupted: false })
 }
 
 /// Parses the command line with `try_parse`, so that `--help`/`--version` text that cannot be
@@ -57,11 +65,13 @@ fn run(cli: Cli) -> Result<(), Failure> {
     let started = Instant::now();
     let opts = forecast::scene::LoadOptions { defines: cli.define };
     match cli.command {
-        Command::Render(a) => match on_cluster(|c| render(&a, &opts, c, started)) {
-            Ok(false) => Ok(()),
-            Ok(true) => Err(Failure { message: String::new(), print: false, usage: false, interrupted: true }),
-            Err(f) => Err(foreign_flag_usage(&a, f)),
-        },
+        Command::Render(a) => {
+            let interrupted = on_cluster_usage(|c| render(&a, &opts, c, started), |e| foreign_flag_usage(&a, e))?;
+            match interrupted {
+                false => Ok(()),
+                true => Err(Failure { message: String::new(), print: false, usage: false, interrupted: true }),
+            }
+        }
         Command::Diff(a) => Ok(diff(&a)?),
         Command::Bench(a) => Ok(bench_cmd(&a, &opts)?),
         Command::ExportMitsuba { scene, out } => {
@@ -110,15 +120,18 @@ fn run(cli: Cli) -> Result<(), Failure> {
     }
 }
 
-/// A render's failure because a flag belongs to another method than the one the scene (or
-/// `auto`) chose is a usage error (exit 2), as it is at parse time for `--method M`.
-fn foreign_flag_usage(a: &forecast::cli::RenderArgs, f: Failure) -> Failure {
-    let explicit = &a.method_args.explicit;
-    let foreign = forecast::integrators::Method::ALL
-        .iter()
-        .filter_map(|&m| forecast::integrators::MethodArgs::foreign_flag(m, explicit))
-        .any(|e| f.message.ends_with(&e.to_string()));
-    Failure { usage: foreign, ..f }
+/// A render's failure because a flag of the command line belongs to another method than the
+/// one the scene (or `auto`) chose is a usage error (exit 2), as it is at parse time for
+/// `--method M`: the error refuses the flag that `MethodArgs::foreign_flag` finds first among
+/// the command line's for that method (the scene's `[render]` table may name it too).
+fn foreign_flag_usage(a: &forecast::cli::RenderArgs, e: &pipeline::RenderError) -> bool {
+    use forecast::integrators::{MethodArgs, MethodError};
+    match e.foreign_flag() {
+        Some(f @ MethodError::ForeignFlag { method, .. }) => {
+            MethodArgs::foreign_flag(*method, &a.method_args.explicit).as_ref() == Some(f)
+        }
+        _ => false,
+    }
 }
 
 /// `forecast render`; `Ok(true)` when a signal ended it early (its outputs are written).
@@ -127,7 +140,7 @@ fn render(
     opts: &forecast::scene::LoadOptions,
     cluster: &dyn distributed::Cluster,
     started: Instant,
-) -> Result<bool, String> {
+) -> Result<bool, pipeline::RenderError> {
     let interrupt = forecast::interrupt::Interrupt::install()?;
     let job = pipeline::RenderJob { defines: opts.defines.clone(), interrupt, ..a.job() };
     let res = pipeline::render(&job, cluster, started)?;

@@ -151,7 +151,7 @@ fn render_options() {
             spp: None,
             ..common::job(Path::new("bad.toml"), forecast::integrators::Method::Pt, 1, 0, (8, 8), 1, Path::new("out"))
         };
-        job.resolve(&scene).err()
+        job.resolve(&scene).err().map(|e| e.to_string())
     };
     let mut fails = Vec::new();
     let mut check = |name: &str, src: &str, key: &str, words: &str| {

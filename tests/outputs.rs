@@ -162,7 +162,7 @@ fn a_render_that_cannot_write_its_json_keeps_the_old_images() {
         std::time::Instant::now(),
     ) {
         Ok(_) => panic!("the render replaced its outputs although r.json is a directory"),
-        Err(e) => e,
+        Err(e) => e.to_string(),
     };
     assert!(err.contains("r.json"), "{err}");
     let after = snapshot(&dir);

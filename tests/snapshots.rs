@@ -115,7 +115,7 @@ fn snapshot_times_are_checked_against_the_budget() {
     let d = tmp_dir("snapshots-bad");
     let err = |time: Option<f64>, snapshots: Vec<f64>| {
         let j = RenderJob { spp: None, time, snapshots, ..job(&cornell(), Method::Pt, 1, 0, RES, 1, &d.join("r")) };
-        render(&j, &Local::new(), Instant::now()).err().expect("refused")
+        render(&j, &Local::new(), Instant::now()).err().expect("refused").to_string()
     };
     let e = err(Some(1.0), vec![0.5, 1.0]);
     assert!(e.contains("--snapshots") && e.contains("1s") && e.contains("budget"), "{e}");

@@ -309,7 +309,11 @@ impl Ctx<'_> {
     }
 
     /// Fills `rec` from a finished render (rank 0) and measures its film.
-    fn fill_from_render(&self, rec: &mut RunRecord, result: &Result<Option<pipeline::RenderResult>, String>) {
+    fn fill_from_render(
+        &self,
+        rec: &mut RunRecord,
+        result: &Result<Option<pipeline::RenderResult>, pipeline::RenderError>,
+    ) {
         match result {
             Ok(Some(r)) => {
                 let rep = &r.report;
@@ -321,7 +325,7 @@ impl Ctx<'_> {
                 self.measure_into(rec, &pipeline::image_from_film(&r.film));
             }
             Ok(None) => rec.error = Some("no result on rank 0".into()),
-            Err(e) => rec.error = Some(e.clone()),
+            Err(e) => rec.error = Some(e.to_string()),
         }
     }
 

@@ -13,7 +13,7 @@
 use super::{budget_label, log_record, Ctx, RunRecord};
 use crate::image_io::{self, with_ext};
 use crate::integrators::Method;
-use crate::pipeline::{self, snapshot_prefix, RenderResult};
+use crate::pipeline::{self, snapshot_prefix, RenderError, RenderResult};
 use std::time::Instant;
 
 impl Ctx<'_> {
@@ -48,7 +48,7 @@ impl Ctx<'_> {
     }
 
     /// Fills `rec` from the snapshot at `rec.budget_s` of the render `result` (rank 0).
-    fn fill_from_snapshot(&self, rec: &mut RunRecord, result: &Result<Option<RenderResult>, String>) {
+    fn fill_from_snapshot(&self, rec: &mut RunRecord, result: &Result<Option<RenderResult>, RenderError>) {
         let label = budget_label(rec.budget_s);
         let run_prefix = rec.prefix.clone();
         rec.from_snapshot = true;
@@ -60,7 +60,7 @@ impl Ctx<'_> {
                 return;
             }
             Err(e) => {
-                rec.error = Some(e.clone());
+                rec.error = Some(e.to_string());
                 return;
             }
         };

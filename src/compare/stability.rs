@@ -180,7 +180,7 @@ pub fn guarded_render(job: &RenderJob) -> Result<RenderResult, (String, bool)> {
     match catch_unwind(AssertUnwindSafe(|| pipeline::render(job, &Local::new(), Instant::now()))) {
         Ok(Ok(Some(r))) => Ok(r),
         Ok(Ok(None)) => Err(("no result".into(), false)),
-        Ok(Err(e)) => Err((e, false)),
+        Ok(Err(e)) => Err((e.to_string(), false)),
         Err(p) => Err((format!("panic: {}", panic_text(p.as_ref())), true)),
     }
 }

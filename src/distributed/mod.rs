@@ -134,16 +134,24 @@ pub fn all_agree(c: &dyn Cluster, local_ok: bool) -> bool {
 /// binary does not print (rank 0 prints the job's error once). Costs one 8-byte all-reduce when
 /// every rank succeeded. Any error that could end one rank early goes through here, so no rank
 /// is left waiting in a collective for a rank that has left.
-pub fn agree<T>(c: &dyn Cluster, result: Result<T, String>) -> Result<T, String> {
+///
+/// A typed error (`E`, sent as its message) comes back as itself where the agreed message is
+/// its own (rank 0's error, alone or the same on every failing rank), else as the agreed
+/// message (`E::from`).
+pub fn agree<T, E: std::fmt::Display + From<String>>(c: &dyn Cluster, result: Result<T, E>) -> Result<T, E> {
     let failed = c.all_reduce_max(if result.is_err() { 1.0 } else { 0.0 }) > 0.0;
     if !failed {
         return result;
     }
-    let mine = result.as_ref().err().map_or(Vec::new(), |e| e.as_bytes().to_vec());
-    Err(match c.gather_bytes(&mine) {
+    let mine = result.as_ref().err().map(|e| e.to_string()).unwrap_or_default();
+    let agreed = match c.gather_bytes(mine.as_bytes()) {
         Some(blobs) => combine_errors(&blobs),
         None => "the job failed on another rank (rank 0 reports it)".to_string(),
-    })
+    };
+    match result {
+        Err(e) if agreed == mine => Err(e),
+        _ => Err(E::from(agreed)),
+    }
 }
 
 /// One message per distinct error, naming the ranks when there is more than one rank.

@@ -12,7 +12,7 @@ use super::identity::job_keys;
 use super::{counter_sums, secs, Passes, Run, Timings, Totals};
 use crate::atomic_io::FileSet;
 use crate::checkpoint::Checkpoint;
-use crate::image_io::{self, with_ext, Image};
+use crate::image_io::{self, with_ext, Image, ImageError};
 use crate::integrators::Integrator;
 use crate::render::film::Film;
 use std::path::{Path, PathBuf};
@@ -43,7 +43,7 @@ impl Run<'_> {
         let Some(sums) = self.cluster.reduce_sum(&p.film.data) else { return Ok(()) };
         let total = self.total_film(sums)?;
         let mut set = FileSet::new();
-        let written = image_files(&self.job.out, &total, &mut set).and_then(|image| {
+        let written = image_files(&self.job.out, &total, &mut set).map_err(String::from).and_then(|image| {
             let timings = Timings { render_s: p.render_s, total_s: secs(self.started), ..Timings::default() };
             let parts = Totals::new(&t, &total, 0, Vec::new());
             let report = self.report(p, parts, timings, integrator.stats(&p.counters.profile), &image, false);
@@ -96,18 +96,19 @@ pub fn image_from_film(f: &Film) -> Image {
 }
 
 /// Writes PREFIX.exr (mean + variance-of-mean layer) and PREFIX.png as one set; returns the mean.
-pub fn write_images(prefix: &Path, film: &Film) -> Result<Image, String> {
+pub fn write_images(prefix: &Path, film: &Film) -> Result<Image, ImageError> {
     let mut set = FileSet::new();
     let img = image_files(prefix, film, &mut set)?;
-    set.commit()?;
+    set.commit().map_err(|message| ImageError::Write { path: prefix.to_path_buf(), message })?;
     Ok(img)
 }
 
 /// Adds PREFIX.exr (mean + variance-of-mean layer) and PREFIX.png to `set` (creating PREFIX's
 /// directory); returns the mean.
-pub fn image_files(prefix: &Path, film: &Film, set: &mut FileSet) -> Result<Image, String> {
+pub fn image_files(prefix: &Path, film: &Film, set: &mut FileSet) -> Result<Image, ImageError> {
     if let Some(dir) = prefix.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        let dir_error = |source| ImageError::Io { path: dir.to_path_buf(), action: "create", source };
+        std::fs::create_dir_all(dir).map_err(dir_error)?;
     }
     let img = image_from_film(film);
     let var = Image { width: film.width, height: film.height, pixels: film.variance_of_mean() };

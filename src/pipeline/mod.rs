@@ -28,13 +28,13 @@ use crate::accel::World;
 use crate::atomic_io::{FileSet, OutputSet};
 use crate::checkpoint::Checkpoint;
 use crate::distributed::{self, Cluster};
-use crate::image_io::{with_ext, Image};
-use crate::integrators::{Integrator, Method, MethodArgs, MethodChoice};
+use crate::image_io::{with_ext, Image, ImageError};
+use crate::integrators::{Integrator, Method, MethodArgs, MethodChoice, MethodError};
 use crate::param_limits as params;
 use crate::progress::PhaseBar;
 use crate::render::film::Film;
 use crate::render::PassCounters;
-use crate::scene::Scene;
+use crate::scene::{Scene, SceneError};
 
 mod checkpoints;
 mod identity;
@@ -58,6 +58,105 @@ use memory::local_ranks;
 use preprocess::preprocess;
 use std::path::PathBuf;
 use std::time::Instant;
+
+/// Why a render failed; `Display` is the message (the one rank 0 prints).
+#[derive(Debug)]
+pub enum RenderError {
+    /// The scene file: its file, line and key.
+    Scene(SceneError),
+    /// An option of the scene's `[render]` table refused: where (`at`), and the method's
+    /// refusal when it is one (`None`: the value does not parse).
+    SceneOption {
+        /// The option's file, line and key; its message is the whole refusal.
+        at: SceneError,
+        /// The method's refusal of it (a flag of another method, a value out of range).
+        cause: Option<Box<MethodError>>,
+    },
+    /// The method refused its options, or its preprocess product.
+    Method(MethodError),
+    /// The checkpoint to resume cannot be read.
+    Checkpoint(crate::checkpoint::CheckpointError),
+    /// The images cannot be encoded or written.
+    Image(ImageError),
+    /// Anything else, as its message; also an error agreed across ranks that is not this rank's
+    /// own (`distributed::agree`: it names the failing ranks).
+    Other(String),
+}
+
+impl RenderError {
+    /// The flag of another method this error refuses, if it is one (from the command line or
+    /// the scene's `[render]` table): a [`MethodError::ForeignFlag`].
+    pub fn foreign_flag(&self) -> Option<&MethodError> {
+        let e = match self {
+            RenderError::Method(e) => e,
+            RenderError::SceneOption { cause: Some(e), .. } => e.as_ref(),
+            _ => return None,
+        };
+        matches!(e, MethodError::ForeignFlag { .. }).then_some(e)
+    }
+}
+
+impl std::fmt::Display for RenderError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RenderError::Scene(e) | RenderError::SceneOption { at: e, .. } => write!(f, "{e}"),
+            RenderError::Method(e) => write!(f, "{e}"),
+            RenderError::Checkpoint(e) => write!(f, "{e}"),
+            RenderError::Image(e) => write!(f, "{e}"),
+            RenderError::Other(m) => write!(f, "{m}"),
+        }
+    }
+}
+
+impl std::error::Error for RenderError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            RenderError::Scene(e) => Some(e),
+            RenderError::SceneOption { cause, .. } => cause.as_deref().map(|e| e as _),
+            RenderError::Method(e) => Some(e),
+            RenderError::Checkpoint(e) => Some(e),
+            RenderError::Image(e) => Some(e),
+            RenderError::Other(_) => None,
+        }
+    }
+}
+
+impl From<String> for RenderError {
+    fn from(m: String) -> RenderError {
+        RenderError::Other(m)
+    }
+}
+
+impl From<SceneError> for RenderError {
+    fn from(e: SceneError) -> RenderError {
+        RenderError::Scene(e)
+    }
+}
+
+impl From<MethodError> for RenderError {
+    fn from(e: MethodError) -> RenderError {
+        RenderError::Method(e)
+    }
+}
+
+impl From<crate::checkpoint::CheckpointError> for RenderError {
+    fn from(e: crate::checkpoint::CheckpointError) -> RenderError {
+        RenderError::Checkpoint(e)
+    }
+}
+
+impl From<ImageError> for RenderError {
+    fn from(e: ImageError) -> RenderError {
+        RenderError::Image(e)
+    }
+}
+
+/// For the callers whose own errors are still messages (`compare`, `reference`).
+impl From<RenderError> for String {
+    fn from(e: RenderError) -> String {
+        e.to_string()
+    }
+}
 
 /// Everything a render needs, as requested (the scene's defaults fill the `None`s, see
 /// [`RenderJob::resolve`]).
@@ -160,7 +259,7 @@ impl RenderJob {
 
     /// Fills the job's `None`s from the scene's `[render]` defaults, and the method options the
     /// command line did not give from the scene's `[render]` options (`scene_options`).
-    pub fn resolve(&self, scene: &Scene) -> Result<Plan, String> {
+    pub fn resolve(&self, scene: &Scene) -> Result<Plan, RenderError> {
         let r = &scene.render;
         let (method, method_reason) = crate::integrators::auto::resolve(self.method, scene)?;
         // the command line's own values first, with the limits the scene format applies too
@@ -198,7 +297,7 @@ impl Plan {
     }
 
     /// The plan's values against `crate::param_limits` (the same limits as the scene format's).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), RenderError> {
         if let Some(s) = self.spp {
             params::SPP.check_flag("--spp", s)?;
         }
@@ -225,7 +324,7 @@ impl Drop for Disarm<'_> {
 
 /// Runs a render on every rank of `cluster`; returns `Some` on rank 0. Every error is agreed
 /// across ranks (see the module docs): all ranks return it, rank 0's names the failing ranks.
-pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Result<Option<RenderResult>, String> {
+pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Result<Option<RenderResult>, RenderError> {
     // the watchdog holds the setup to `--time` (the shared deadline re-arms it with the plan's)
     let _disarm = Disarm(cluster);
     if let Some(at) =
@@ -234,6 +333,7 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
         cluster.watch(distributed::job::watchdog_limit(at, job.time));
     }
     let setup = crate::atomic_io::check_output_prefix(&job.out)
+        .map_err(RenderError::from)
         .and_then(|()| Ok((thread_pool(job.threads)?, load(job, cluster.rank())?)));
     let (pool, (world, mut plan, mut timings)) = distributed::agree(cluster, setup)?;
     distributed::job::agree_job(cluster, &job_fields(job, &world.scene, &plan))?;
@@ -260,10 +360,11 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
     passes.preprocess_over_budget = over_budget.is_some();
     passes.warnings.splice(0..0, over_budget);
     timings.render_s = passes.render_s;
-    let outcome = reduce(&run, &passes, &pre.stats, &mut timings).and_then(|reduced| match reduced {
-        Some(r) => finish(&run, &mut passes, r, timings, pre.integrator.as_ref()).map(Some),
-        None => Ok(None),
-    });
+    let outcome =
+        reduce(&run, &passes, &pre.stats, &mut timings).map_err(RenderError::from).and_then(|reduced| match reduced {
+            Some(r) => finish(&run, &mut passes, r, timings, pre.integrator.as_ref()).map(Some),
+            None => Ok(None),
+        });
     // rank 0's write failing must end every rank with the error too
     distributed::agree(cluster, outcome)
 }
@@ -277,7 +378,7 @@ fn finish(
     reduced: Reduced,
     mut timings: Timings,
     integrator: &dyn Integrator,
-) -> Result<RenderResult, String> {
+) -> Result<RenderResult, RenderError> {
     let t_write = Instant::now();
     if run.job.checkpoint_every.is_some() {
         let saved = run.checkpoint(passes.passes_done, &reduced.film).save(&run.ckpt_path());
@@ -318,9 +419,9 @@ fn preprocess_over_budget(plan: &Plan, timings: &Timings, started: Instant, rank
 
 /// Stage 1: load the scene (warnings printed on rank 0), resolve the job (validation and the
 /// memory estimate), build the BVH.
-fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), String> {
+fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), RenderError> {
     let t_load = Instant::now();
-    let mut scene = crate::scene::load_with(&job.scene, &job.load_options()).map_err(|e| e.to_string())?;
+    let mut scene = crate::scene::load_with(&job.scene, &job.load_options())?;
     job.output_set(&scene).check()?; // before anything is written
     let load_s = secs(t_load);
     if rank == 0 {
@@ -364,12 +465,12 @@ struct Resume {
 }
 
 /// Stage 3: rank 0 validates the checkpoint; every rank learns the first pass.
-fn agree_resume(job: &RenderJob, world: &World, plan: &Plan, cluster: &dyn Cluster) -> Result<Resume, String> {
+fn agree_resume(job: &RenderJob, world: &World, plan: &Plan, cluster: &dyn Cluster) -> Result<Resume, RenderError> {
     let (w, h) = plan.resolution;
     let loaded = match (&job.resume, cluster.rank()) {
-        (Some(p), 0) => Checkpoint::load(p).map_err(|e| e.to_string()).and_then(|c| {
+        (Some(p), 0) => Checkpoint::load(p).map_err(RenderError::from).and_then(|c| {
             c.validate(world.scene.hash, plan.seed, &plan.checkpoint_label(), (w, h), &job_keys(job, plan))
-                .map_err(|e| format!("{}: cannot resume: {e}", p.display()))
+                .map_err(|e| RenderError::Other(format!("{}: cannot resume: {e}", p.display())))
                 .map(|()| Some(c))
         }),
         _ => Ok(None),

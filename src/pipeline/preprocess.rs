@@ -6,7 +6,7 @@
 //! collective), so none waits in a broadcast.
 
 use super::light_pilot::{self, LightPathRule};
-use super::{secs, Plan, RankStats};
+use super::{secs, Plan, RankStats, RenderError};
 use crate::accel::World;
 use crate::distributed::{self, Cluster};
 use crate::integrators::Integrator;
@@ -30,10 +30,10 @@ pub(super) fn preprocess(
     plan: &mut Plan,
     cluster: &dyn Cluster,
     phases: &PhaseBar,
-) -> Result<Prepared, String> {
+) -> Result<Prepared, RenderError> {
     let t_pre = Instant::now();
     let pilot = light_pilot::wanted(plan);
-    let run = || -> Result<(Vec<u8>, Option<LightPathRule>), String> {
+    let run = || -> Result<(Vec<u8>, Option<LightPathRule>), RenderError> {
         let product = plan.method.preprocess_reporting(world, &plan.args, plan.seed, phases)?;
         let rule =
             if pilot { light_pilot::choose(world, &plan.args, (plan.seed, plan.resolution), &product)? } else { None };

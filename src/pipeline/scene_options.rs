@@ -11,12 +11,13 @@
 //! renders `pt` from a scene that records its `pt-cf` options). Every error names the file, the
 //! line and the key, as the scene reader's do.
 
-use crate::integrators::{Method, MethodArgs, OptionName};
+use super::RenderError;
+use crate::integrators::{Method, MethodArgs, MethodError, OptionName};
 use crate::scene::{RenderOption, Scene, SceneError};
 
 /// `args` (the command line's) with `scene`'s `[render]` options for `method`, the method that
 /// renders; `own` is the scene's own method, which every option must fit.
-pub(super) fn apply(args: &MethodArgs, scene: &Scene, method: Method, own: Method) -> Result<MethodArgs, String> {
+pub(super) fn apply(args: &MethodArgs, scene: &Scene, method: Method, own: Method) -> Result<MethodArgs, RenderError> {
     let mut flags = Vec::new();
     let mut out = args.clone();
     for o in &scene.render.options {
@@ -26,17 +27,15 @@ pub(super) fn apply(args: &MethodArgs, scene: &Scene, method: Method, own: Metho
         }
         flags.push(format!("{}={}", name.long, o.value));
         // all the flags so far, so that a conflict is reported at the later key
-        out = args
-            .with_flags(&flags)
-            .map_err(|e| clap_message(&e))
-            .and_then(|a| a.validate().map(|()| a).map_err(String::from))
-            .map_err(|m| error_at(scene, o, m))?;
+        let parsed = args.with_flags(&flags).map_err(|e| error_at(scene, o, clap_message(&e), None))?;
+        parsed.validate().map_err(|e| error_at(scene, o, e.to_string(), Some(e)))?;
+        out = parsed;
     }
     Ok(out)
 }
 
 /// The option `o` names, if it is a render setting or an option of `own`.
-fn option_name(scene: &Scene, o: &RenderOption, own: Method) -> Result<OptionName, String> {
+fn option_name(scene: &Scene, o: &RenderOption, own: Method) -> Result<OptionName, RenderError> {
     // `max_depth` is the table's own key (the spelling `max-depth` would set it twice)
     let Some(name) = MethodArgs::option_named(&o.key).filter(|n| n.id != "max_depth") else {
         let m = format!(
@@ -44,17 +43,19 @@ fn option_name(scene: &Scene, o: &RenderOption, own: Method) -> Result<OptionNam
              method options of `forecast render --help` by their long names (e.g. `clusters = 32`)",
             o.key
         );
-        return Err(error_at(scene, o, m));
+        return Err(error_at(scene, o, m, None));
     };
     match MethodArgs::foreign_flag(own, std::slice::from_ref(&name.id)) {
-        Some(e) => Err(error_at(scene, o, e.to_string())),
+        Some(e) => Err(error_at(scene, o, e.to_string(), Some(e))),
         None => Ok(name),
     }
 }
 
-/// `message` at `o`'s line and key, as the scene reader words its errors.
-fn error_at(scene: &Scene, o: &RenderOption, message: String) -> String {
-    SceneError { file: scene.path.clone(), line: o.line, key: format!("render.{}", o.key), message }.to_string()
+/// `message` at `o`'s line and key, as the scene reader words its errors; `cause`: the method's
+/// refusal that `message` words.
+fn error_at(scene: &Scene, o: &RenderOption, message: String, cause: Option<MethodError>) -> RenderError {
+    let at = SceneError { file: scene.path.clone(), line: o.line, key: format!("render.{}", o.key), message };
+    RenderError::SceneOption { at, cause: cause.map(Box::new) }
 }
 
 /// clap's message without its `error: ` and its hints (`For more information, try '--help'`).
