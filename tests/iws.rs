@@ -13,7 +13,7 @@ use forecast::bsdf::ShadingPoint;
 use forecast::integrators::iws::DirectLight;
 use forecast::integrators::iws::Iws;
 use forecast::integrators::ShadingQuery;
-use forecast::integrators::{BsdfCaustics, Context, Integrator, Method, MethodArgs, NoCaustics};
+use forecast::integrators::{BsdfCaustics, Context, Integrator, Method, MethodArgs, MethodError, NoCaustics};
 use forecast::math::{Rgb, Vec3};
 use forecast::profile::Profile;
 use forecast::render::film::Film;
@@ -189,8 +189,12 @@ fn photon_map_roundtrips_through_bitcode() {
     let integ = Method::IwsPm.build(&w, &opts, &bytes).unwrap();
     let s = integ.stats(&Profile::default());
     assert!(s["caustics"]["photons_stored"].as_u64().unwrap() >= 2000);
-    assert!(Method::IwsPm.build(&w, &opts, &bytes[..bytes.len() / 2]).is_err());
-    assert!(Method::IwsPm.build(&w, &opts, &[]).is_err());
+    for cut in [&bytes[..bytes.len() / 2], &[]] {
+        let e = Method::IwsPm.build(&w, &opts, cut).err().expect("a cut product is refused");
+        let want = format!("iws-pm: cannot decode the broadcast preprocess product ({} bytes): ", cut.len());
+        assert!(matches!(e, MethodError::Product { method: Method::IwsPm, .. }), "{e:?}");
+        assert!(e.to_string().starts_with(&want), "{e}");
+    }
 }
 
 /// Photon-map consistency (spec §6/§8) on the Cornell box's glass caustic, seen by its crop

@@ -386,6 +386,32 @@ mod tests {
         assert_eq!(combine_errors(&blobs(&["a", "b", "a"])), "rank 0,2: a; rank 1: b");
     }
 
+    /// A rank's own typed error comes back as itself (one rank: the agreed message is its own).
+    #[test]
+    fn agree_keeps_a_typed_error() {
+        #[derive(Debug, PartialEq)]
+        enum Typed {
+            Mine(u8),
+            Agreed(String),
+        }
+        impl std::fmt::Display for Typed {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                match self {
+                    Typed::Mine(n) => write!(f, "error {n}"),
+                    Typed::Agreed(m) => write!(f, "{m}"),
+                }
+            }
+        }
+        impl From<String> for Typed {
+            fn from(m: String) -> Typed {
+                Typed::Agreed(m)
+            }
+        }
+        let c = local::Local::new();
+        assert_eq!(agree(&c, Err::<(), _>(Typed::Mine(7))), Err(Typed::Mine(7)));
+        assert_eq!(agree(&c, Ok::<u8, Typed>(1)), Ok(1));
+    }
+
     #[test]
     fn shared_deadline_local() {
         let c = local::Local::new();

@@ -594,3 +594,26 @@ fn build_from<S: MethodSpec>(
     })?;
     S::build(world, args, p)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each refusal's message, word for word as the command line and the scene reader print it.
+    #[test]
+    fn method_errors_keep_their_messages() {
+        let e = MethodError::check_limit(&crate::param_limits::PHOTONS, "--photons", 0).unwrap_err();
+        assert_eq!(e.to_string(), "--photons 0: photons must be at least 1 (got 0)");
+        assert_eq!(MethodError::option("--path-filter", "bad classes").to_string(), "--path-filter: bad classes");
+        let f = MethodArgs::foreign_flag(Method::Pt, &["clusters".to_string()]).expect("a flag of iws-cf/pt-cf");
+        let want =
+            MethodError::ForeignFlag { flag: "--clusters".into(), owners: "iws-cf/pt-cf".into(), method: Method::Pt };
+        assert_eq!(f, want);
+        assert_eq!(f.to_string(), "--clusters belongs to iws-cf/pt-cf, not pt");
+        let mut a = MethodArgs::default();
+        a.pt.path_filter = Some("DSL".into());
+        assert_eq!(a.check_for(Method::Iws).unwrap_err().to_string(), "--path-filter belongs to pt/pt-cf, not iws");
+        let p = MethodError::Product { method: Method::IwsPm, bytes: 3, reason: "eof".into() };
+        assert_eq!(p.to_string(), "iws-pm: cannot decode the broadcast preprocess product (3 bytes): eof");
+    }
+}
