@@ -157,6 +157,23 @@ impl std::error::Error for CheckpointError {
     }
 }
 
+/// Why a checkpoint does not belong to the requested render ([`Checkpoint::validate`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResumeMismatch {
+    /// Every difference in words, in the order checked: the job keys, then the scene hash, the
+    /// seed, the method, the resolution and the checkpoint's own consistency (`seed differs
+    /// (checkpoint 42, requested 43)`).
+    pub reasons: Vec<String>,
+}
+
+impl fmt::Display for ResumeMismatch {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "cannot resume from this checkpoint: {}", self.reasons.join("; "))
+    }
+}
+
+impl std::error::Error for ResumeMismatch {}
+
 /// Every key whose value differs between the checkpoint's `old` pairs and the requested `new`
 /// ones (a key on one side only counts, shown as `unset`), in key order.
 fn job_mismatches(old: &[(String, String)], new: &[(String, String)]) -> Vec<String> {
@@ -328,7 +345,7 @@ impl Checkpoint {
         method: &str,
         (width, height): (u32, u32),
         job: &[(String, String)],
-    ) -> Result<(), String> {
+    ) -> Result<(), ResumeMismatch> {
         let mut why = job_mismatches(&self.job, job);
         if self.scene_hash != scene_hash {
             why.push(format!(
@@ -354,7 +371,7 @@ impl Checkpoint {
         if why.is_empty() {
             Ok(())
         } else {
-            Err(format!("cannot resume from this checkpoint: {}", why.join("; ")))
+            Err(ResumeMismatch { reasons: why })
         }
     }
 }
@@ -509,12 +526,15 @@ mod tests {
         let c = sample();
         assert_eq!(c.validate(c.scene_hash, 42, "iws+cf", (4, 3), &c.job), Ok(()));
         let e = c.validate(1, 43, "pt", (8, 3), &c.job).expect_err("must fail");
+        assert_eq!(e.reasons.len(), 4, "{e}");
+        let e = e.to_string();
+        assert!(e.starts_with("cannot resume from this checkpoint: scene changed (checkpoint scene hash "), "{e}");
         for part in ["scene changed", "seed differs", "method differs", "resolution differs", "4x3", "8x3"] {
             assert!(e.contains(part), "{e}");
         }
         let mut bad = c.clone();
         bad.next_pass = 3;
-        let e = bad.validate(c.scene_hash, 42, "iws+cf", (4, 3), &c.job).expect_err("must fail");
+        let e = bad.validate(c.scene_hash, 42, "iws+cf", (4, 3), &c.job).expect_err("must fail").to_string();
         assert!(e.contains("next_pass"), "{e}");
         let mut bad = c.clone();
         bad.film.pop();
@@ -522,10 +542,10 @@ mod tests {
         assert!(Checkpoint::from_bytes(&bad.to_bytes(), Path::new("x")).is_err());
         // another -D value, another max_depth, a -D given on one side only: each key named
         let other = vec![("-D spp".to_string(), "8".to_string()), ("option max_depth".into(), "3".into())];
-        let e = c.validate(c.scene_hash, 42, "iws+cf", (4, 3), &other).expect_err("must fail");
+        let e = c.validate(c.scene_hash, 42, "iws+cf", (4, 3), &other).expect_err("must fail").to_string();
         assert!(e.contains("-D spp differs (checkpoint 4, requested 8)"), "{e}");
         assert!(e.contains("option max_depth differs (checkpoint 8, requested 3)"), "{e}");
-        let e = c.validate(c.scene_hash, 42, "iws+cf", (4, 3), &other[1..]).expect_err("must fail");
+        let e = c.validate(c.scene_hash, 42, "iws+cf", (4, 3), &other[1..]).expect_err("must fail").to_string();
         assert!(e.contains("-D spp differs (checkpoint 4, requested unset)"), "{e}");
     }
 

@@ -76,6 +76,13 @@ pub enum RenderError {
     Method(MethodError),
     /// The checkpoint to resume cannot be read.
     Checkpoint(crate::checkpoint::CheckpointError),
+    /// The checkpoint to resume belongs to another render.
+    Resume {
+        /// The checkpoint (`--resume`).
+        path: PathBuf,
+        /// Every difference.
+        mismatch: crate::checkpoint::ResumeMismatch,
+    },
     /// The images cannot be encoded or written.
     Image(ImageError),
     /// Anything else, as its message; also an error agreed across ranks that is not this rank's
@@ -102,6 +109,7 @@ impl std::fmt::Display for RenderError {
             RenderError::Scene(e) | RenderError::SceneOption { at: e, .. } => write!(f, "{e}"),
             RenderError::Method(e) => write!(f, "{e}"),
             RenderError::Checkpoint(e) => write!(f, "{e}"),
+            RenderError::Resume { path, mismatch } => write!(f, "{}: cannot resume: {mismatch}", path.display()),
             RenderError::Image(e) => write!(f, "{e}"),
             RenderError::Other(m) => write!(f, "{m}"),
         }
@@ -115,6 +123,7 @@ impl std::error::Error for RenderError {
             RenderError::SceneOption { cause, .. } => cause.as_deref().map(|e| e as _),
             RenderError::Method(e) => Some(e),
             RenderError::Checkpoint(e) => Some(e),
+            RenderError::Resume { mismatch, .. } => Some(mismatch),
             RenderError::Image(e) => Some(e),
             RenderError::Other(_) => None,
         }
@@ -470,7 +479,7 @@ fn agree_resume(job: &RenderJob, world: &World, plan: &Plan, cluster: &dyn Clust
     let loaded = match (&job.resume, cluster.rank()) {
         (Some(p), 0) => Checkpoint::load(p).map_err(RenderError::from).and_then(|c| {
             c.validate(world.scene.hash, plan.seed, &plan.checkpoint_label(), (w, h), &job_keys(job, plan))
-                .map_err(|e| RenderError::Other(format!("{}: cannot resume: {e}", p.display())))
+                .map_err(|mismatch| RenderError::Resume { path: p.clone(), mismatch })
                 .map(|()| Some(c))
         }),
         _ => Ok(None),
