@@ -42,7 +42,7 @@
 use super::Plan;
 use crate::accel::World;
 use crate::distributed::Cluster;
-use crate::integrators::{Integrator, Method, MethodArgs};
+use crate::integrators::{Integrator, Method, MethodArgs, MethodError};
 use crate::math::luminance;
 use crate::render::{camera_tiles, tile_pixels, with_splat, PassCounters, PixelSampler};
 
@@ -192,7 +192,7 @@ pub fn choose(
     args: &MethodArgs,
     (seed, resolution): (u64, (u32, u32)),
     product: &[u8],
-) -> Result<Option<LightPathRule>, String> {
+) -> Result<Option<LightPathRule>, MethodError> {
     let (pw, ph) = pilot_resolution(resolution.0, resolution.1);
     let px = pw as f64 * ph as f64;
     let paths = |nu: f64| (nu * px).ceil() as u64;
