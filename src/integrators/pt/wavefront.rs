@@ -16,20 +16,44 @@ use super::lanes::{Lanes, Vertex};
 use super::vertex::{vertex, SurfaceVertex, Walk};
 use crate::accel::{BatchScratch, Ray, World};
 use crate::integrators::CameraEstimate;
-use crate::math::Rgb;
+use crate::math::{Rgb, Vec3};
 use crate::sampling::rng::Rng;
 use crate::scene::{LightRef, Material, Scene, NO_EMITTER};
 use crate::transport::direct::LightSample;
+use crate::transport::roulette::Throughput;
 
 /// One live path of the wavefront.
 #[derive(Clone, Copy)]
 pub(crate) struct Live {
     /// Index of the camera ray (and of its stream and estimate).
     i: u32,
-    /// The path's state.
-    w: Walk,
+    /// The path's `Walk` without its ray, which is the bounce's `Wave::rays[k]` (a live path is
+    /// copied in and out at every vertex: 32 bytes, not 56).
+    t: Throughput,
+    prev_delta: bool,
+    prev_pdf_w: f32,
     /// No non-Dirac vertex yet.
     prefix: bool,
+}
+
+impl Live {
+    /// A camera path's state.
+    fn camera(i: u32) -> Live {
+        let w = Walk::camera(Ray { o: Vec3::ZERO, d: Vec3::ZERO, tmax: f32::INFINITY });
+        Live { i, t: w.t, prev_delta: w.prev_delta, prev_pdf_w: w.prev_pdf_w, prefix: true }
+    }
+
+    /// The path's `Walk` along its bounce's `ray`.
+    #[inline(always)]
+    fn walk(&self, ray: &Ray) -> Walk {
+        Walk { o: ray.o, d: ray.d, t: self.t, prev_delta: self.prev_delta, prev_pdf_w: self.prev_pdf_w }
+    }
+
+    /// The path after its `Walk` moved on to `w`.
+    #[inline(always)]
+    fn moved(self, w: &Walk) -> Live {
+        Live { t: w.t, prev_delta: w.prev_delta, prev_pdf_w: w.prev_pdf_w, ..self }
+    }
 }
 
 /// Per-batch buffers, reused across bounces and, through `Context::take_scratch`, across the
@@ -150,7 +174,7 @@ pub(crate) fn trace_batch(
     out: &mut Vec<CameraEstimate>,
 ) {
     debug_assert!(rays.len() == rngs.len());
-    w.start(world, rays, |i| Live { i, w: Walk::camera(rays[i as usize]), prefix: true }, out);
+    w.start(world, rays, Live::camera, out);
     for depth in 0..max_depth {
         if w.live.is_empty() {
             break;
@@ -176,29 +200,30 @@ pub(crate) fn trace_batch(
 fn shade(world: &World, w: &mut Wave, k: usize, depth: u32, rngs: &mut [Rng], out: &mut [CameraEstimate]) -> bool {
     let s = &world.scene;
     let mut p = w.live[k];
+    let mut walk = p.walk(&w.rays[k]);
     let (i, rng) = (p.i as usize, &mut rngs[p.i as usize]);
     let Some(found) = w.hits[k] else { return false };
     let hit = world.hit_at(&w.rays[k], found);
     if s.emitter_of(hit.prim) != NO_EMITTER {
-        if let Some((le, mis)) = p.w.emitted(world, &hit) {
+        if let Some((le, mis)) = walk.emitted(world, &hit) {
             let l = &mut out[i];
-            *if p.prefix { &mut l.prefix_le } else { &mut l.rest } += p.w.t.beta * le * mis;
+            *if p.prefix { &mut l.prefix_le } else { &mut l.rest } += walk.t.beta * le * mis;
         }
         return false; // emitters reflect nothing
     }
     let m = s.material_of(hit.prim);
-    let v = SurfaceVertex::at(m, &hit, p.w.d, depth);
+    let v = SurfaceVertex::at(m, &hit, walk.d, depth);
     if let (true, &Material::Diffuse { albedo }) = (w.lanes_on, m) {
         w.live[k].prefix = false;
         return w.lanes.push(Vertex::draw(world, k, &v, albedo, rng));
     }
     p.prefix &= m.is_dirac();
-    let beta = p.w.t.beta;
+    let beta = walk.t.beta;
     let nee = |ls| w.queue_nee(p.i, beta, ls, out);
     let Some(bs) = vertex(world, &v, rng, nee) else { return false };
-    if p.w.scatter(&bs, depth, &v.sp, rng) {
-        w.next_live.push(p);
-        w.next_rays.push(p.w.ray());
+    if walk.scatter(&bs, depth, &v.sp, rng) {
+        w.next_live.push(p.moved(&walk));
+        w.next_rays.push(walk.ray());
     }
     false
 }
@@ -208,12 +233,14 @@ fn shade(world: &World, w: &mut Wave, k: usize, depth: u32, rngs: &mut [Rng], ou
 fn flush(w: &mut Wave, depth: u32, rngs: &mut [Rng], out: &mut [CameraEstimate]) {
     w.lanes.run();
     for j in 0..w.lanes.n {
-        let (mut p, r) = (w.live[w.lanes.k[j] as usize], w.lanes.out(j));
-        w.queue_nee(p.i, p.w.t.beta, r.nee, out);
+        let k = w.lanes.k[j] as usize;
+        let (p, r) = (w.live[k], w.lanes.out(j));
+        w.queue_nee(p.i, p.t.beta, r.nee, out);
         let Some(bs) = r.bsdf else { continue };
-        if p.w.scatter(&bs, depth, &r.sp, &mut rngs[p.i as usize]) {
-            w.next_live.push(p);
-            w.next_rays.push(p.w.ray());
+        let mut walk = p.walk(&w.rays[k]);
+        if walk.scatter(&bs, depth, &r.sp, &mut rngs[p.i as usize]) {
+            w.next_live.push(p.moved(&walk));
+            w.next_rays.push(walk.ray());
         }
     }
     w.lanes.n = 0;
