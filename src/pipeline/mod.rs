@@ -28,13 +28,13 @@ use crate::accel::World;
 use crate::atomic_io::{FileSet, OutputSet};
 use crate::checkpoint::Checkpoint;
 use crate::distributed::{self, Cluster};
-use crate::image_io::{with_ext, Image, ImageError};
-use crate::integrators::{Integrator, Method, MethodArgs, MethodChoice, MethodError};
+use crate::image_io::{with_ext, Image};
+use crate::integrators::{Integrator, Method, MethodArgs, MethodChoice};
 use crate::param_limits as params;
 use crate::progress::PhaseBar;
 use crate::render::film::Film;
 use crate::render::PassCounters;
-use crate::scene::{Scene, SceneError};
+use crate::scene::Scene;
 
 mod checkpoints;
 mod identity;
@@ -52,120 +52,14 @@ pub use checkpoints::{image_files, image_from_film, write_images};
 pub use identity::{job_fields, job_keys};
 pub use light_pilot::LightPathRule;
 pub use report::{RankStats, Rays, RenderReport, RenderResult, Timings};
+mod error;
+pub use error::RenderError;
 pub use snapshots::{check_snapshots, snapshot_label, snapshot_prefix, SnapshotReport};
 
 use memory::local_ranks;
 use preprocess::preprocess;
 use std::path::PathBuf;
 use std::time::Instant;
-
-/// Why a render failed; `Display` is the message (the one rank 0 prints).
-#[derive(Debug)]
-pub enum RenderError {
-    /// The scene file: its file, line and key.
-    Scene(SceneError),
-    /// An option of the scene's `[render]` table refused: where (`at`), and the method's
-    /// refusal when it is one (`None`: the value does not parse).
-    SceneOption {
-        /// The option's file, line and key; its message is the whole refusal.
-        at: SceneError,
-        /// The method's refusal of it (a flag of another method, a value out of range).
-        cause: Option<Box<MethodError>>,
-    },
-    /// The method refused its options, or its preprocess product.
-    Method(MethodError),
-    /// The checkpoint to resume cannot be read.
-    Checkpoint(crate::checkpoint::CheckpointError),
-    /// The checkpoint to resume belongs to another render.
-    Resume {
-        /// The checkpoint (`--resume`).
-        path: PathBuf,
-        /// Every difference.
-        mismatch: crate::checkpoint::ResumeMismatch,
-    },
-    /// The images cannot be encoded or written.
-    Image(ImageError),
-    /// Anything else, as its message; also an error agreed across ranks that is not this rank's
-    /// own (`distributed::agree`: it names the failing ranks).
-    Other(String),
-}
-
-impl RenderError {
-    /// The flag of another method this error refuses, if it is one (from the command line or
-    /// the scene's `[render]` table): a [`MethodError::ForeignFlag`].
-    pub fn foreign_flag(&self) -> Option<&MethodError> {
-        let e = match self {
-            RenderError::Method(e) => e,
-            RenderError::SceneOption { cause: Some(e), .. } => e.as_ref(),
-            _ => return None,
-        };
-        matches!(e, MethodError::ForeignFlag { .. }).then_some(e)
-    }
-}
-
-impl std::fmt::Display for RenderError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            RenderError::Scene(e) | RenderError::SceneOption { at: e, .. } => write!(f, "{e}"),
-            RenderError::Method(e) => write!(f, "{e}"),
-            RenderError::Checkpoint(e) => write!(f, "{e}"),
-            RenderError::Resume { path, mismatch } => write!(f, "{}: cannot resume: {mismatch}", path.display()),
-            RenderError::Image(e) => write!(f, "{e}"),
-            RenderError::Other(m) => write!(f, "{m}"),
-        }
-    }
-}
-
-impl std::error::Error for RenderError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            RenderError::Scene(e) => Some(e),
-            RenderError::SceneOption { cause, .. } => cause.as_deref().map(|e| e as _),
-            RenderError::Method(e) => Some(e),
-            RenderError::Checkpoint(e) => Some(e),
-            RenderError::Resume { mismatch, .. } => Some(mismatch),
-            RenderError::Image(e) => Some(e),
-            RenderError::Other(_) => None,
-        }
-    }
-}
-
-impl From<String> for RenderError {
-    fn from(m: String) -> RenderError {
-        RenderError::Other(m)
-    }
-}
-
-impl From<SceneError> for RenderError {
-    fn from(e: SceneError) -> RenderError {
-        RenderError::Scene(e)
-    }
-}
-
-impl From<MethodError> for RenderError {
-    fn from(e: MethodError) -> RenderError {
-        RenderError::Method(e)
-    }
-}
-
-impl From<crate::checkpoint::CheckpointError> for RenderError {
-    fn from(e: crate::checkpoint::CheckpointError) -> RenderError {
-        RenderError::Checkpoint(e)
-    }
-}
-
-impl From<ImageError> for RenderError {
-    fn from(e: ImageError) -> RenderError {
-        RenderError::Image(e)
-    }
-}
-
-/// For the callers whose own errors are still messages (`compare`, `reference`).
-impl From<RenderError> for String {
-    fn from(e: RenderError) -> String {
-        e.to_string()
-    }
-}
 
 /// Everything a render needs, as requested (the scene's defaults fill the `None`s, see
 /// [`RenderJob::resolve`]).
