@@ -13,6 +13,8 @@ mod conductor;
 mod dielectric;
 pub mod diffuse;
 mod phong;
+#[cfg(test)]
+pub(crate) mod testing;
 
 pub use conductor::fresnel_conductor;
 pub use dielectric::fresnel_dielectric;
@@ -55,6 +57,32 @@ pub struct BsdfSample {
     /// path's roulette divides out the radiance-mode 1/η² it put into `weight`
     /// (`transport::roulette::Throughput`).
     pub eta: f32,
+}
+
+/// A BSDF in its local shading frame: the contract every BSDF file implements (Mitsuba 3's
+/// `BSDF::eval`, `pdf` and `sample`, with forecast's names).
+///
+/// - The frame: `z` is the shading normal as the shape orients it (never flipped toward `wo`), `x`
+///   the tangent ∂p/∂u where the surface has UVs (anisotropic roughness is measured along it).
+/// - `wo` is the given direction (toward the viewer on eye paths, the light on particle paths;
+///   Mitsuba's `si.wi`), `wi` the sampled or evaluated one (Mitsuba's `wo`); both unit, pointing
+///   away from the surface.
+/// - `eval` is f(wo, wi) **without** the cosine (Mitsuba's `eval` / |cos θ_i|); Dirac lobes
+///   contribute nothing to `eval` and `pdf_w`.
+/// - One-sided, as Mitsuba's: a reflecting BSDF is black unless `wo.z > 0` and `wi.z > 0`
+///   (`twosided` flips both to the front before calling it); dielectrics take either side.
+/// - `sample`'s `weight` is f·|cos θ_i|/pdf_w, with the radiance-mode factor 1/η² of a
+///   refraction (η = η_t/η_i; none in importance mode). Its `pdf_w` is the solid-angle pdf of the
+///   non-Dirac lobes times their selection probability, or for a Dirac lobe that lobe's discrete
+///   probability, with `is_delta` set.
+/// - `pdf_w(wo, wi)` equals the pdf of `sample` drawing `wi` by its non-Dirac lobes.
+pub trait LocalBsdf {
+    /// f(wo, wi) without the cosine.
+    fn eval(&self, wo: Vec3, wi: Vec3, mode: Mode) -> Rgb;
+    /// Solid-angle pdf of `sample` drawing `wi` by a non-Dirac lobe.
+    fn pdf_w(&self, wo: Vec3, wi: Vec3, mode: Mode) -> f32;
+    /// Draws `wi` with three uniforms (`u[0]` picks a lobe, `u[1..]` the direction).
+    fn sample(&self, wo: Vec3, u: [f32; 3], mode: Mode) -> Option<BsdfSample>;
 }
 
 impl ShadingPoint {

@@ -1,0 +1,146 @@
+//! The checks every BSDF file's tests run on a [`LocalBsdf`] (spec §8; Mitsuba 3's `chi2.py`):
+//! a χ² test of `sample` against `pdf_w`, `sample`'s weight against `eval·|cos|/pdf`, a white
+//! furnace (the mean weight, the directional albedo, is at most 1) and agreement with Mitsuba 3's
+//! own `eval` and `pdf` on the committed tables of `tests/data/bsdf/<plugin>.csv`
+//! (`scripts/mitsuba-bsdf-tables.py` writes them).
+//!
+//! Significance: each BSDF file runs its χ² tests at `sidak_alpha(0.01, n)` for its own `n`
+//! tests, so a correct sampler fails with probability below 1% per file.
+
+use super::{LocalBsdf, Mode};
+use crate::math::{Rgb, Vec3};
+use crate::sampling::rng::{stream, Rng};
+use crate::stats::{sidak_alpha, sphere_chi2, Chi2Result};
+
+/// Samples per χ² test.
+pub const CHI2_SAMPLES: usize = 1_000_000;
+
+/// The unit direction at polar angle `theta` and azimuth `phi` (degrees) in the local frame.
+pub fn dir(theta: f32, phi: f32) -> Vec3 {
+    let (t, p) = (theta.to_radians(), phi.to_radians());
+    Vec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos())
+}
+
+/// Three uniforms.
+pub fn u3(rng: &mut Rng) -> [f32; 3] {
+    [rng.next_f32(), rng.next_f32(), rng.next_f32()]
+}
+
+/// A deterministic generator for test `seed`.
+pub fn rng(seed: u64) -> Rng {
+    Rng::keyed(seed, stream::MISC, 0x0b5d_f7e5, 0)
+}
+
+/// χ² of `b`'s non-Dirac samples against its `pdf_w` over the sphere (Dirac samples are left
+/// out: their share is `1 − ∫pdf_w`, which the test's total checks). Asserts a pass at the
+/// Šidák level of `n_tests` tests and that the observed total matches `∫pdf_w` within 1%.
+pub fn assert_chi2(name: &str, b: &impl LocalBsdf, wo: Vec3, mode: Mode, n_tests: usize, seed: u64) -> Chi2Result {
+    let r = sphere_chi2(
+        |rng| b.sample(wo, u3(rng), mode).filter(|s| !s.is_delta).map(|s| s.wi),
+        |wi| b.pdf_w(wo, wi, mode) as f64,
+        40,
+        40,
+        CHI2_SAMPLES,
+        seed,
+    );
+    let alpha = sidak_alpha(0.01, n_tests);
+    assert!(r.impossible_samples == 0.0, "{name}: samples where pdf_w = 0: {r:?}");
+    assert!(r.passes(alpha), "{name}: χ² rejected at {alpha:.2e}: {r:?}");
+    let rel = (r.n_expected - r.n_observed).abs() / r.n_observed.max(1.0);
+    assert!(rel < 0.01, "{name}: ∫pdf_w = {} samples, drew {}", r.n_expected, r.n_observed);
+    r
+}
+
+/// `sample`'s weight equals `eval·|cos θ_i|/pdf_w` and its pdf equals `pdf_w` (relative `tol`)
+/// for every non-Dirac sample of `n`.
+pub fn assert_weights(name: &str, b: &impl LocalBsdf, wo: Vec3, mode: Mode, n: usize, tol: f32) {
+    let mut rng = rng(7);
+    for _ in 0..n {
+        let Some(s) = b.sample(wo, u3(&mut rng), mode) else { continue };
+        assert!(s.weight.is_finite() && s.weight.min_element() >= 0.0, "{name}: weight {} at {:?}", s.weight, s.wi);
+        if s.is_delta {
+            continue;
+        }
+        let pdf = b.pdf_w(wo, s.wi, mode);
+        assert!((pdf - s.pdf_w).abs() <= tol * pdf.max(1e-3), "{name}: sample pdf {} vs pdf_w {pdf}", s.pdf_w);
+        let want = b.eval(wo, s.wi, mode) * s.wi.z.abs() / s.pdf_w;
+        let err = (s.weight - want).abs().max_element();
+        assert!(
+            err <= tol * want.max_element().max(1e-3),
+            "{name}: weight {} vs f·cos/pdf {want} at {:?}",
+            s.weight,
+            s.wi
+        );
+    }
+}
+
+/// The directional albedo ∫f·|cos| dω_i from `wo`: the mean importance-mode weight of `n`
+/// samples, Dirac lobes included (the white furnace: at most 1 for a passive BSDF).
+pub fn albedo(b: &impl LocalBsdf, wo: Vec3, n: usize) -> Rgb {
+    let mut rng = rng(11);
+    let mut sum = Rgb::ZERO;
+    for _ in 0..n {
+        if let Some(s) = b.sample(wo, u3(&mut rng), Mode::Importance) {
+            sum += s.weight;
+        }
+    }
+    sum / n as f32
+}
+
+/// One row of a Mitsuba table: a case name, `wo`, `wi`, Mitsuba's f (its eval / |cos θ_i|) and
+/// pdf.
+#[derive(Clone, Debug)]
+pub struct MitsubaRow {
+    /// The case's `name` in `<plugin>.json`.
+    pub case: String,
+    /// Given direction.
+    pub wo: Vec3,
+    /// Evaluated direction.
+    pub wi: Vec3,
+    /// Mitsuba's f without the cosine.
+    pub f: Rgb,
+    /// Mitsuba's pdf.
+    pub pdf: f32,
+}
+
+/// The rows of `tests/data/bsdf/<plugin>.csv`.
+pub fn mitsuba_table(plugin: &str) -> Vec<MitsubaRow> {
+    let path = format!("{}/tests/data/bsdf/{plugin}.csv", env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    text.lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            let x: Vec<f32> = c[1..].iter().map(|v| v.parse().unwrap()).collect();
+            MitsubaRow {
+                case: c[0].to_string(),
+                wo: Vec3::new(x[0], x[1], x[2]),
+                wi: Vec3::new(x[3], x[4], x[5]),
+                f: Rgb::new(x[6], x[7], x[8]),
+                pdf: x[9],
+            }
+        })
+        .collect()
+}
+
+/// Asserts that `b` (the case `case` of `plugin`'s table) agrees with Mitsuba's f and pdf at
+/// every row: |ours − Mitsuba's| ≤ `rel`·|Mitsuba's| + `abs`. Returns the rows checked.
+pub fn assert_mitsuba(plugin: &str, case: &str, b: &impl LocalBsdf, mode: Mode, rel: f32, abs: f32) -> usize {
+    let rows: Vec<MitsubaRow> = mitsuba_table(plugin).into_iter().filter(|r| r.case == case).collect();
+    assert!(!rows.is_empty(), "{plugin}.csv has no case {case}");
+    for r in &rows {
+        let f = b.eval(r.wo, r.wi, mode);
+        let pdf = b.pdf_w(r.wo, r.wi, mode);
+        let ok_f = (f - r.f).abs().cmple(r.f.abs() * rel + Vec3::splat(abs)).all();
+        let ok_pdf = (pdf - r.pdf).abs() <= r.pdf.abs() * rel + abs;
+        assert!(
+            ok_f && ok_pdf,
+            "{plugin}/{case} wo {:?} wi {:?}: f {f} pdf {pdf}, Mitsuba f {} pdf {}",
+            r.wo,
+            r.wi,
+            r.f,
+            r.pdf
+        );
+    }
+    rows.len()
+}
