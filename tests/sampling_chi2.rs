@@ -216,7 +216,7 @@ fn weight_check(sps: &[ShadingPoint], seed: u64) {
                         assert!(s.wi.dot(sp.ng) * wo.dot(sp.ng) > 0.0, "reflection must stay on wo's side of ng");
                         let pdf = bsdf::pdf_w(m, sp, wo, s.wi);
                         assert!((pdf - s.pdf_w).abs() <= 1e-4 * pdf.max(1.0), "{m:?}: pdf {pdf} vs sample {}", s.pdf_w);
-                        let f = bsdf::eval(m, sp, wo, s.wi);
+                        let f = bsdf::eval(m, sp, wo, s.wi, Mode::Radiance);
                         let expect = f * s.wi.dot(sp.ns).abs() / s.pdf_w;
                         let tol = 1e-4 * expect.max_element().max(1e-3);
                         assert!(
@@ -270,7 +270,7 @@ fn mirror_reflects_exactly() {
         assert!(s.is_delta && s.pdf_w == 1.0);
         assert!((s.wi - Vec3::new(-wo.x, -wo.y, wo.z)).length() < 1e-6);
         assert_eq!(s.weight, Rgb::new(0.9, 0.5, 0.1));
-        assert_eq!(bsdf::eval(&m, &sp_z(), wo, s.wi), Rgb::ZERO);
+        assert_eq!(bsdf::eval(&m, &sp_z(), wo, s.wi, Mode::Radiance), Rgb::ZERO);
         assert_eq!(bsdf::pdf_w(&m, &sp_z(), wo, s.wi), 0.0);
     }
 }

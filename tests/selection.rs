@@ -326,7 +326,7 @@ fn tables(
     s: Splat,
 ) -> (ForecastTables, Frame) {
     let frame = Frame::from_normal(sp.ns);
-    let fc = |l: Vec3| luminance(bsdf::eval(m, sp, wo, frame.to_world(l))) * l.z;
+    let fc = |l: Vec3| luminance(bsdf::eval(m, sp, wo, frame.to_world(l), Mode::Radiance)) * l.z;
     (ForecastTables::build_with(photons.iter().copied(), fc, mode, s), frame)
 }
 
@@ -403,7 +403,7 @@ fn mixture_weights_are_bounded_by_the_bsdf_weight_over_c_b() {
             assert!((s.pdf_w - q).abs() <= 1e-4 * q, "{}: sample pdf {} vs pdf_w {q}", c.name, s.pdf_w);
             // the BSDF's own pdf, which the roulette after a guided vertex divides by
             assert!((s.bsdf_pdf_w - p_b).abs() <= 1e-4 * p_b, "{}: bsdf_pdf_w {} vs {p_b}", c.name, s.bsdf_pdf_w);
-            let f_cos = bsdf::eval(&c.m, &c.sp, c.wo, s.wi) * s.wi.dot(c.sp.ns).abs();
+            let f_cos = bsdf::eval(&c.m, &c.sp, c.wo, s.wi, Mode::Radiance) * s.wi.dot(c.sp.ns).abs();
             let bound = f_cos / (cb * p_b);
             assert!(s.weight.cmple(bound * (1.0 + 1e-4) + 1e-7).all(), "{}: weight {} > {bound}", c.name, s.weight);
             if let Material::Diffuse { albedo } = c.m {

@@ -16,6 +16,7 @@
 //! are unit; `Hit::ns` lies on the side of `Hit::ng`; primitive ids follow `Scene` (triangles, then
 //! spheres); a back end reports t ∈ [0, tmax] (triangles) or (0, tmax) (spheres).
 
+use crate::bsdf::{Material, ShadingPoint};
 use crate::math::Vec3;
 use crate::scene::Scene;
 #[cfg(feature = "embree")]
@@ -210,7 +211,21 @@ fn bounds(scene: &Scene) -> Vec<(Vec3, Vec3)> {
     tris.chain(scene.spheres.iter().map(|s| (s.center - r(s), s.center + r(s)))).collect()
 }
 
+impl Hit {
+    /// Its position and normals as a BSDF sees them.
+    #[inline(always)]
+    pub fn shading_point(&self) -> ShadingPoint {
+        ShadingPoint { p: self.p, ng: self.ng, ns: self.ns }
+    }
+}
+
 impl World {
+    /// The BSDF and shading point at `hit` seen from `wo` (`Scene::shade`).
+    #[inline(always)]
+    pub fn shade(&self, hit: &Hit, wo: Vec3) -> (Material, ShadingPoint) {
+        self.scene.shade(hit.prim, hit.shading_point(), wo)
+    }
+
     /// Builds the default (obvhs) BVH over the scene's primitives; refuses boxes that are not
     /// finite or exceed `scene::MAX_EXTENT` (obvhs would panic on them).
     pub fn build(scene: Scene) -> Result<World, BuildError> {

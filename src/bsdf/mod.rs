@@ -12,15 +12,16 @@
 mod conductor;
 mod dielectric;
 pub mod diffuse;
+mod material;
 mod phong;
 #[cfg(test)]
 pub(crate) mod testing;
 
 pub use conductor::fresnel_conductor;
 pub use dielectric::fresnel_dielectric;
+pub use material::Material;
 
-use crate::math::{Rgb, Vec3};
-use crate::scene::Material;
+use crate::math::{Frame, Rgb, Vec3};
 
 /// Which quantity a path carries (Veach ch. 5; pbrt's TransportMode).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -123,9 +124,10 @@ fn shading_correction(mode: Mode, sp: &ShadingPoint, wo: Vec3, wi: Vec3) -> f32 
     (wo.dot(sp.ns).abs() * wi.dot(sp.ng).abs()) / den
 }
 
-/// BSDF value f(wo, wi) without the cosine; zero for Dirac and black materials.
+/// BSDF value f(wo, wi) without the cosine, as `mode` transports it (they differ only across a
+/// refraction); zero for Dirac and black materials.
 #[inline]
-pub fn eval(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3) -> Rgb {
+pub fn eval(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3, mode: Mode) -> Rgb {
     match *m {
         Material::Diffuse { albedo } => diffuse::eval(albedo, sp.ng, sp.ns, wo, wi),
         Material::Glossy { albedo, specular, exponent } => {
@@ -135,8 +137,69 @@ pub fn eval(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3) -> Rgb {
             }
             phong::eval(albedo, specular, exponent, ns, wo, wi)
         }
-        _ => Rgb::ZERO,
+        _ => {
+            let _ = mode;
+            Rgb::ZERO
+        }
     }
+}
+
+/// The local frame of a BSDF at `sp` seen from `wo`: around the shading normal, flipped to
+/// `wo`'s side for a two-sided reflecting BSDF (Mitsuba's `twosided`), as the shape orients it
+/// for one that scatters from both sides by nature (a dielectric).
+#[inline]
+fn frame(m: &Material, sp: &ShadingPoint, wo: Vec3) -> Frame {
+    let ns = if m.is_two_sided_by_nature() { sp.ns } else { sp.oriented(wo).1 };
+    Frame::from_normal(ns)
+}
+
+/// True when the geometric normal agrees with the local directions `(lo, li)` about whether
+/// `wo` → `wi` is a reflection or a transmission (no light through walls).
+#[inline]
+fn sides_agree(sp: &ShadingPoint, wo: Vec3, wi: Vec3, lo: Vec3, li: Vec3) -> bool {
+    ((wo.dot(sp.ng) > 0.0) == (wi.dot(sp.ng) > 0.0)) == ((lo.z > 0.0) == (li.z > 0.0))
+}
+
+/// `b`'s f(wo, wi) at `sp` (world directions).
+#[inline]
+fn eval_local(b: &impl LocalBsdf, m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3, mode: Mode) -> Rgb {
+    let f = frame(m, sp, wo);
+    let (lo, li) = (f.to_local(wo), f.to_local(wi));
+    if !sides_agree(sp, wo, wi, lo, li) {
+        return Rgb::ZERO;
+    }
+    b.eval(lo, li, mode)
+}
+
+/// `b`'s pdf_w(wo, wi) at `sp` (world directions).
+#[inline]
+fn pdf_local(b: &impl LocalBsdf, m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3) -> f32 {
+    let f = frame(m, sp, wo);
+    let (lo, li) = (f.to_local(wo), f.to_local(wi));
+    if !sides_agree(sp, wo, wi, lo, li) {
+        return 0.0;
+    }
+    b.pdf_w(lo, li, Mode::Radiance)
+}
+
+/// `b`'s sample at `sp` (world directions), before the adjoint shading-normal factor.
+#[inline]
+fn sample_local(
+    b: &impl LocalBsdf,
+    m: &Material,
+    sp: &ShadingPoint,
+    wo: Vec3,
+    u: [f32; 3],
+    mode: Mode,
+) -> Option<BsdfSample> {
+    let f = frame(m, sp, wo);
+    let lo = f.to_local(wo);
+    let s = b.sample(lo, u, mode)?;
+    let wi = f.to_world(s.wi);
+    if !sides_agree(sp, wo, wi, lo, s.wi) || !(s.pdf_w > 0.0) {
+        return None;
+    }
+    Some(BsdfSample { wi, ..s })
 }
 
 /// Solid-angle pdf of `sample` producing `wi` (0 for Dirac and black materials).

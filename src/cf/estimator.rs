@@ -286,10 +286,10 @@ impl CausticForecast {
         let (sp, m, wo) = (q.x, q.m, q.wo);
         let t0 = Instant::now();
         let w = |cp: &CausticPoint, l: Vec3| {
-            let f = luminance(bsdf::eval(m, sp, wo, cp.wi()));
+            let f = luminance(bsdf::eval(m, sp, wo, cp.wi(), Mode::Radiance));
             cp.energy() * f * l.z
         };
-        let brdf_cos = |l: Vec3| luminance(bsdf::eval(m, sp, wo, frame.to_world(l))) * l.z;
+        let brdf_cos = |l: Vec3| luminance(bsdf::eval(m, sp, wo, frame.to_world(l), Mode::Radiance)) * l.z;
         let t = self.build_tables((c, sp.p, frame), &mut ctx.knn, w, brdf_cos);
         ctx.profile.cf.tables_built += 1;
         ctx.profile.cf.cdf_ns += t0.elapsed().as_nanos() as u64;

@@ -220,7 +220,7 @@ impl<'a> DefensiveMixture<'a> {
         if !(q > 0.0) {
             return None; // outside the domain (f = 0 there)
         }
-        let f = bsdf::eval(self.m, self.sp, self.wo, wi);
+        let f = bsdf::eval(self.m, self.sp, self.wo, wi, Mode::Radiance);
         let weight = f * (wi.dot(self.sp.ns).abs() / q);
         let component = component as u8;
         Some(MixtureSample { wi, weight, pdf_w: q, component, is_delta: false, eta: 1.0, bsdf_pdf_w })

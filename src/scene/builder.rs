@@ -20,8 +20,8 @@
 
 use super::limits::{extent_message, light_value_error, within_extent, MAX_INTENSITY, MAX_RADIANCE};
 use super::{
-    light_power, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere, Triangle,
-    NO_EMITTER,
+    light_power, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere, Surface,
+    Triangle, NO_EMITTER,
 };
 use crate::math::{Rgb, Vec3, PI};
 use crate::param_limits as params;
@@ -122,6 +122,7 @@ pub(super) struct SceneBuilder {
     /// Render defaults (set through the checked setters).
     pub render: RenderDefaults,
     materials: Vec<Material>,
+    surfaces: Vec<Surface>,
     triangles: Vec<Triangle>,
     tri_shape: Vec<u32>,
     spheres: Vec<Sphere>,
@@ -152,6 +153,7 @@ impl SceneBuilder {
                 options: Vec::new(),
             },
             materials: vec![Material::Black],
+            surfaces: vec![Surface::TWO_SIDED],
             triangles: Vec::new(),
             tri_shape: Vec::new(),
             spheres: Vec::new(),
@@ -182,10 +184,21 @@ impl SceneBuilder {
         self.hash = crate::math::fnv1a(self.hash, &bytes_hash.to_le_bytes());
     }
 
-    /// Adds a material; returns its index.
+    /// Adds a two-sided material; returns its index.
     pub fn material(&mut self, m: Material) -> u32 {
+        self.material_with(m, Surface::TWO_SIDED)
+    }
+
+    /// Adds a material with its surface properties; returns its index.
+    pub fn material_with(&mut self, m: Material, s: Surface) -> u32 {
         self.materials.push(m);
+        self.surfaces.push(s);
         self.materials.len() as u32 - 1
+    }
+
+    /// The surface properties of material `i`.
+    pub fn surface_at(&self, i: u32) -> Surface {
+        self.surfaces[i as usize]
     }
 
     /// The material at `i`.
@@ -479,6 +492,7 @@ impl SceneBuilder {
             camera,
             render: self.render,
             materials: self.materials,
+            surfaces: self.surfaces,
             triangles: self.triangles,
             spheres: self.spheres,
             emitters,

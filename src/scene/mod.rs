@@ -16,12 +16,12 @@ pub mod export;
 mod file;
 mod limits;
 mod locate;
-mod material;
 mod mesh;
 pub mod mitsuba;
 mod obj;
 pub mod ply;
 mod schema;
+mod surface;
 
 pub use builder::{parse_duration, SceneError};
 pub use camera::Camera;
@@ -103,8 +103,10 @@ fn load_mesh_file(path: &std::path::Path, smooth: bool) -> Result<mesh::Mesh, St
     }
     obj::load_mesh(path, smooth)
 }
-pub use material::Material;
+pub use crate::bsdf::Material;
+pub use surface::Surface;
 
+use crate::bsdf::ShadingPoint;
 use crate::math::{luminance, Rgb, Vec3, PI};
 use crate::sampling::distribution::Distribution1D;
 use crate::sampling::warp;
@@ -240,6 +242,8 @@ pub struct Scene {
     pub render: RenderDefaults,
     /// Materials (index = material id).
     pub materials: Vec<Material>,
+    /// Each material's sides (index = material id).
+    pub surfaces: Vec<Surface>,
     /// Triangles.
     pub triangles: Vec<Triangle>,
     /// Spheres.
@@ -272,15 +276,34 @@ impl Scene {
         self.triangles.len() as u32
     }
 
-    /// Material of a primitive.
+    /// The material id of a primitive.
     #[inline]
-    pub fn material_of(&self, prim: u32) -> &Material {
+    fn material_id(&self, prim: u32) -> usize {
         let m = if prim < self.ntri() {
             self.triangles[prim as usize].material
         } else {
             self.spheres[(prim - self.ntri()) as usize].material
         };
-        &self.materials[m as usize]
+        m as usize
+    }
+
+    /// The material of a primitive as the scene gives it, whichever side it is seen from (for
+    /// what does not depend on a direction: is it Dirac, is it black). A path's vertex takes
+    /// [`Scene::shade`]'s.
+    #[inline]
+    pub fn material_of(&self, prim: u32) -> &Material {
+        &self.materials[self.material_id(prim)]
+    }
+
+    /// The BSDF and shading point at `sp` on `prim`, seen from `wo` (toward the previous vertex):
+    /// black behind a one-sided material (`Surface`).
+    #[inline]
+    pub fn shade(&self, prim: u32, sp: ShadingPoint, wo: Vec3) -> (Material, ShadingPoint) {
+        let id = self.material_id(prim);
+        if !self.surfaces[id].two_sided && wo.dot(sp.ng) <= 0.0 {
+            return (Material::Black, sp);
+        }
+        (self.materials[id], sp)
     }
 
     /// Emitter of a primitive, or `NO_EMITTER`.

@@ -14,7 +14,7 @@
 use super::particle::MAX_VERTICES;
 use super::roulette::Throughput;
 use crate::accel::{offset_origin, Hit, World};
-use crate::bsdf::{self, Mode, ShadingPoint};
+use crate::bsdf::{self, Mode};
 use crate::math::{Rgb, Vec3};
 use crate::sampling::rng::Rng;
 use crate::scene::NO_EMITTER;
@@ -46,13 +46,12 @@ fn follow_chain(
     let s = &world.scene;
     let mut t = Throughput::new(beta);
     for v in 0..cap {
-        let m = s.material_of(hit.prim);
+        let (m, sp) = world.shade(&hit, -d);
         if s.emitter_of(hit.prim) != NO_EMITTER || !m.is_dirac() {
             return Some((hit, d, t.beta));
         }
-        let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
         let u = rng.next_3d();
-        let bs = bsdf::sample(m, &sp, -d, u, Mode::Radiance)?;
+        let bs = bsdf::sample(&m, &sp, -d, u, Mode::Radiance)?;
         if !t.scatter(&bs, v, rng) {
             return None;
         }

@@ -5,7 +5,7 @@
 //! path tracer can weight that hit with the same heuristic (Veach 1997 §9.2).
 
 use crate::accel::{offset_origin, Hit, Ray, World};
-use crate::bsdf::{self, ShadingPoint};
+use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::math::{Rgb, Vec3};
 use crate::sampling::power_heuristic;
 use crate::sampling::rng::Rng;
@@ -127,7 +127,7 @@ pub fn light_sample_mis(
             if dist2 <= 0.0 || cos_l <= 0.0 {
                 return None;
             }
-            let f = bsdf::eval(m, sp, wo, wi);
+            let f = bsdf::eval(m, sp, wo, wi, Mode::Radiance);
             if f == Rgb::ZERO {
                 return None;
             }
@@ -147,7 +147,7 @@ pub fn light_sample_mis(
             }
             let dist = dist2.sqrt();
             let wi = d / dist;
-            let f = bsdf::eval(m, sp, wo, wi);
+            let f = bsdf::eval(m, sp, wo, wi, Mode::Radiance);
             if f == Rgb::ZERO {
                 return None;
             }

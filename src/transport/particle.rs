@@ -258,8 +258,9 @@ fn follow(
         if s.emitter_of(hit.prim) != NO_EMITTER {
             return; // emitters absorb (black material)
         }
-        let m = s.material_of(hit.prim);
         let w_in = -d;
+        let (m, sp) = world.shade(&hit, w_in);
+        let m = &m;
         if !m.is_dirac() {
             let (p, ng, ns) = (hit.p, hit.ng, hit.ns);
             let v = SurfaceVertex { p, ng, ns, material: m, w_in, beta: beta * inv_n, prev_dirac, depth };
@@ -270,7 +271,6 @@ fn follow(
                 return;
             }
         }
-        let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
         let Some((wi, weight, is_delta)) = scatter(m, &sp, w_in, rng) else {
             return;
         };

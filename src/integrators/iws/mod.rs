@@ -197,7 +197,7 @@ impl Iws {
             return Rgb::ZERO;
         }
         let w = d / r2.sqrt();
-        let f = bsdf::eval(m, x, wo, w);
+        let f = bsdf::eval(m, x, wo, w, Mode::Radiance);
         if f == Rgb::ZERO {
             return Rgb::ZERO;
         }
@@ -219,7 +219,7 @@ impl Iws {
             }
             VplKind::Surface(my) => {
                 let sy = ShadingPoint { p: v.p, ng: v.ng, ns: v.ns };
-                let fy = bsdf::eval(&my, &sy, v.w_in, -w); // real BSDF, one-sided checks
+                let fy = bsdf::eval(&my, &sy, v.w_in, -w, Mode::Importance); // real BSDF, one-sided checks
                 let cin_g = v.w_in.dot(v.ng).abs();
                 if fy == Rgb::ZERO || cin_g <= 0.0 {
                     return Rgb::ZERO;
@@ -369,12 +369,11 @@ impl Recurse for Iws {
             // emitters reflect nothing; one-sided emission
             return if hit.ng.dot(wo) > 0.0 { s.emitters[e as usize].radiance } else { Rgb::ZERO };
         }
-        let m = s.material_of(hit.prim);
+        let (m, sp) = world.shade(hit, wo);
         if m.is_dirac() {
             return Rgb::ZERO;
         }
-        let sp = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
-        self.at_surface(world, &ShadingQuery { x: &sp, m, wo, depth }, ctx)
+        self.at_surface(world, &ShadingQuery { x: &sp, m: &m, wo, depth }, ctx)
     }
 }
 

@@ -20,7 +20,7 @@ use super::iws::caustics::{caustic_chain, CausticEstimator, Recurse, ShadingQuer
 use super::iws::{DirectLight, Iws};
 use super::{Context, Integrator, MethodArgs, MethodError, MethodSpec};
 use crate::accel::World;
-use crate::bsdf;
+use crate::bsdf::{self, Mode};
 use crate::cf::caustic_point::CausticPoint;
 use crate::cf::estimator::{CausticForecast, ForecastOptions, PreprocessStats, SplitRule, TableCache, TableKind};
 use crate::cf::subset_grid::SubsetGrid;
@@ -291,7 +291,7 @@ impl CausticEstimator for ForecastCaustics {
         // roulette sees the whole sample weight f·|cos|·w (on f·|cos| alone, q ≤ albedo/π would
         // kill ~85% of the chains at depth ≥ 1 and give the survivors ×7: fireflies)
         let g = |wi: Vec3, w: f32, ctx: &mut Context| -> Rgb {
-            let f = bsdf::eval(q.m, q.x, q.wo, wi);
+            let f = bsdf::eval(q.m, q.x, q.wo, wi, Mode::Radiance);
             if f == Rgb::ZERO {
                 return Rgb::ZERO;
             }

@@ -24,7 +24,7 @@ use super::iws::caustics::{CausticEstimator, Recurse, ShadingQuery};
 use super::iws::Iws;
 use super::{Context, Integrator, MethodArgs, MethodError, MethodSpec};
 use crate::accel::World;
-use crate::bsdf::{self, ShadingPoint};
+use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::math::{Rgb, Vec3, PI};
 use crate::profile::{Phase, Profile};
 use crate::progress::Phases;
@@ -201,7 +201,7 @@ impl PhotonMap {
                 if Vec3::from(ph.n).dot(nx) < NORMAL_COS || w_in.dot(nx) <= 0.0 {
                     continue;
                 }
-                let f = bsdf::eval(m, x, wo, w_in);
+                let f = bsdf::eval(m, x, wo, w_in, Mode::Radiance);
                 // [Jen01] cone filter w_p = 1 − d_p/(k_c·r)
                 let w = 1.0 - d2.sqrt() / (CONE_K * r);
                 sum += f * Vec3::from(ph.flux) * w.max(0.0);

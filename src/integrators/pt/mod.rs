@@ -140,8 +140,8 @@ impl PathTracer {
                 }
                 break; // emitters reflect nothing
             }
-            let m = s.material_of(hit.prim);
-            let v = SurfaceVertex::at(m, &hit, w.d, depth);
+            let (m, sp) = world.shade(&hit, -w.d);
+            let v = SurfaceVertex::at(&m, sp, &hit, w.d, depth);
             class.push(m.is_dirac());
             prefix &= m.is_dirac();
             // a filtered-out sample still draws its random numbers (filters partition the image)

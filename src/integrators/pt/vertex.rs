@@ -33,10 +33,11 @@ pub struct SurfaceVertex<'a> {
 }
 
 impl<'a> SurfaceVertex<'a> {
-    /// The vertex `index` of a path at `hit`, reached along `d`, of material `m`.
+    /// The vertex `index` of a path at `hit`, reached along `d`, where the BSDF is `m` at `sp`
+    /// (`World::shade`).
     #[inline(always)]
-    pub fn at(m: &'a Material, hit: &Hit, d: Vec3, index: u32) -> Self {
-        SurfaceVertex { m, sp: ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns }, wo: -d, t: hit.t, index }
+    pub fn at(m: &'a Material, sp: ShadingPoint, hit: &Hit, d: Vec3, index: u32) -> Self {
+        SurfaceVertex { m, sp, wo: -d, t: hit.t, index }
     }
 }
 

@@ -211,9 +211,9 @@ fn shade(world: &World, w: &mut Wave, k: usize, depth: u32, rngs: &mut [Rng], ou
         }
         return false; // emitters reflect nothing
     }
-    let m = s.material_of(hit.prim);
-    let v = SurfaceVertex::at(m, &hit, walk.d, depth);
-    if let (true, &Material::Diffuse { albedo }) = (w.lanes_on, m) {
+    let (m, sp) = world.shade(&hit, -walk.d);
+    let v = SurfaceVertex::at(&m, sp, &hit, walk.d, depth);
+    if let (true, Material::Diffuse { albedo }) = (w.lanes_on, m) {
         w.live[k].prefix = false;
         return w.lanes.push(Vertex::draw(world, k, &v, albedo, rng));
     }

@@ -135,9 +135,9 @@ pub fn next_ratio(m: &Material, sp: &ShadingPoint, (wo, wi): (Vec3, Vec3), q: f3
 
 /// A non-Dirac vertex of a light path before the connected one.
 #[derive(Clone, Copy)]
-struct Vertex<'a> {
+struct Vertex {
     sp: ShadingPoint,
-    m: &'a Material,
+    m: Material,
     /// Toward the light side.
     w_in: Vec3,
     /// The sampled direction (toward the camera side).
@@ -251,7 +251,7 @@ struct Tracer<'a, P> {
     /// Splats dropped as non-finite (counted in the pass's `nonfinite`, as camera estimates are).
     nonfinite: u64,
     /// The current path's non-Dirac vertices so far (scratch).
-    verts: Vec<Vertex<'a>>,
+    verts: Vec<Vertex>,
 }
 
 impl<'a, P: CameraPdf> Tracer<'a, P> {
@@ -267,8 +267,9 @@ impl<'a, P: CameraPdf> Tracer<'a, P> {
             if s.emitter_of(hit.prim) != NO_EMITTER {
                 return; // emitters absorb
             }
-            let m: &'a Material = s.material_of(hit.prim);
-            let (w_in, sp) = (-d, ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns });
+            let w_in = -d;
+            let (m, sp) = self.world.shade(&hit, w_in);
+            let m = &m;
             if !m.is_dirac() {
                 if depth == 1 {
                     return; // not a path of C
@@ -281,7 +282,7 @@ impl<'a, P: CameraPdf> Tracer<'a, P> {
             let Some(bs) = bsdf::sample(m, &sp, w_in, u, Mode::Importance) else { return };
             let Some(w) = roulette(bs.weight, q_particle(bs.weight), &mut rng) else { return };
             if !m.is_dirac() {
-                self.verts.push(Vertex { sp, m, w_in, w_out: bs.wi, pdf_l: bs.pdf_w });
+                self.verts.push(Vertex { sp, m: *m, w_in, w_out: bs.wi, pdf_l: bs.pdf_w });
             }
             beta *= w;
             o = offset_origin(hit.p, hit.ng, bs.wi);
@@ -310,7 +311,8 @@ impl<'a, P: CameraPdf> Tracer<'a, P> {
         let imp = pinhole_importance(cam, -wc);
         let Some(pixel) = pixel_of(cam, sp.p) else { return };
         let cos_in = sp.ng.dot(w_in).abs();
-        let f = bsdf::eval(m, sp, wc, w_in);
+        // f(x; toward the camera, toward the light) as radiance sees it: the adjoint BSDF of the light path
+        let f = bsdf::eval(m, sp, wc, w_in, Mode::Radiance);
         if imp <= 0.0 || cos_in <= 0.0 || f == Rgb::ZERO {
             return;
         }
@@ -350,7 +352,7 @@ fn light_weight(
     let mut num = sp.ng.dot(wc).abs() * q(sp, m, (wc, w_in), 0);
     let mut den = n as f32 * p0 * sp.ng.dot(w_in).abs();
     for (k, v) in verts.iter().rev().enumerate() {
-        num *= v.sp.ng.dot(v.w_out).abs() * q(&v.sp, v.m, (v.w_out, v.w_in), k as u32 + 1);
+        num *= v.sp.ng.dot(v.w_out).abs() * q(&v.sp, &v.m, (v.w_out, v.w_in), k as u32 + 1);
         den *= v.pdf_l * v.sp.ng.dot(v.w_in).abs();
     }
     let rho = num / den;
@@ -483,7 +485,7 @@ emission = [5.0, 5.0, 5.0]
                 let (q1, q2) = (bsdf::pdf_w(m1, &sp1, wo1, wi1), bsdf::pdf_w(m2, &sp2, wo2, wi2));
                 let ratio = first_ratio(&cam, d0, h1.t, h1.ng, (wo1, wi1), q1) * next_ratio(m2, &sp2, (wo2, wi2), q2);
                 let w_e = camera_weight(&world, &light, &cam, &hy, d, ratio);
-                let v = Vertex { sp: sp2, m: m2, w_in: wi2, w_out: wo2, pdf_l: bsdf::pdf_w(m2, &sp2, wi2, wo2) };
+                let v = Vertex { sp: sp2, m: *m2, w_in: wi2, w_out: wo2, pdf_l: bsdf::pdf_w(m2, &sp2, wi2, wo2) };
                 let w_l = light_weight(N_L, &[v], (&sp1, m1), (wo1, wi1), p0, &mut q);
                 assert!((w_e + w_l - 1.0).abs() < 1e-5, "two vertices: w_E {w_e} + w_L {w_l} ({:?})", h2.p);
                 checked2 += 1;

@@ -290,8 +290,8 @@ impl GuidedPathTracer {
 
     /// Enters the non-emitter vertex `hit` (material `m`) of `st`, counting it.
     #[inline(always)]
-    fn enter<'m>(&self, st: &mut PathState, m: &'m Material, hit: &Hit) -> SurfaceVertex<'m> {
-        let v = SurfaceVertex::at(m, hit, st.walk.d, st.vertex);
+    fn enter<'m>(&self, st: &mut PathState, m: &'m Material, sp: ShadingPoint, hit: &Hit) -> SurfaceVertex<'m> {
+        let v = SurfaceVertex::at(m, sp, hit, st.walk.d, st.vertex);
         st.vertex += 1;
         st.class.push(m.is_dirac());
         v
@@ -317,8 +317,8 @@ impl GuidedPathTracer {
                 self.add_emitted(world, &st, &hit, ctx, &mut l);
                 break; // emitters reflect nothing
             }
-            let m = s.material_of(hit.prim);
-            let v = self.enter(&mut st, m, &hit);
+            let (m, sp) = world.shade(&hit, -st.walk.d);
+            let v = self.enter(&mut st, &m, sp, &hit);
             let Some(g) = self.guide_of(&st, &v, ctx) else {
                 // a `pt` vertex
                 let (beta, class) = (st.walk.t.beta, st.class);
@@ -332,7 +332,7 @@ impl GuidedPathTracer {
                 continue;
             };
             st.diffuse += 1;
-            let (sp, wo) = (&v.sp, v.wo);
+            let (m, sp, wo) = (v.m, &v.sp, v.wo);
             let mix = DefensiveMixture::new(m, sp, wo, &g.tables, g.frame, g.weights);
             let n = g.n as f32;
             let nee = st.walk.t.beta * direct::sample_light_mis(world, sp, m, wo, &mut ctx.rng, |wi| n * mix.pdf_w(wi));

@@ -94,16 +94,16 @@ impl GuidedPathTracer {
             self.add_emitted(world, &w.live[k].st, &hit, ctx, &mut out[i as usize]);
             return false; // emitters reflect nothing
         }
-        let m = s.material_of(hit.prim);
+        let (m, sp) = world.shade(&hit, -w.live[k].st.walk.d);
         // the state is updated in place, not copied out and back (a copy right after a field's
         // store stalls on store forwarding)
-        let v = self.enter(&mut w.live[k].st, m, &hit);
+        let v = self.enter(&mut w.live[k].st, &m, sp, &hit);
         if let Some(g) = self.guide_of(&w.live[k].st, &v, ctx) {
             let live = w.live[k];
             self.guided(world, w, GuidedVertex { live, v, g }, ctx, out);
             return false;
         }
-        if let (true, &Material::Diffuse { albedo }) = (w.lanes_on, m) {
+        if let (true, Material::Diffuse { albedo }) = (w.lanes_on, m) {
             w.live[k].st.diffuse += 1;
             cw.t[w.lanes.n] = hit.t;
             return w.lanes.push(Vertex::draw(world, k, &v, albedo, &mut ctx.rng));

@@ -1,7 +1,9 @@
 //! Mitsuba BSDF plugins → `Material`: `diffuse` → Diffuse, smooth `conductor` → Mirror (preset
 //! `none`) or Conductor (η, k), `dielectric` → Glass with η = int_ior/ext_ior, 0.6's `phong` →
 //! Glossy (the same energy-conserving modified Phong), `twosided` around any of the reflective
-//! ones (the renderer's BSDFs are two-sided). `ref`/`id` resolve through `Cx::ids`.
+//! ones. As in Mitsuba, a BSDF not wrapped in `twosided` is black from behind
+//! (`scene::Surface`); the dielectric scatters from both sides. `ref`/`id` resolve through
+//! `Cx::ids`.
 //!
 //! Invariants: anything else (rough or layered BSDFs, textures, `twosided` with two different
 //! sides) is an error naming the file, line, plugin and parameter; reflectances in [0, 1].
@@ -11,7 +13,7 @@ use super::presets;
 use super::xml::Node;
 use super::Cx;
 use crate::math::Rgb;
-use crate::scene::{Material, SceneError};
+use crate::scene::{Material, SceneError, Surface};
 
 /// The material index of a `<bsdf>` or `<ref>` element (registering inline BSDFs and ids).
 pub(super) fn resolve(cx: &mut Cx, n: &Node) -> Result<u32, SceneError> {
@@ -22,7 +24,9 @@ pub(super) fn resolve(cx: &mut Cx, n: &Node) -> Result<u32, SceneError> {
         });
     }
     let m = material(cx, n)?;
-    let idx = cx.b.material(m);
+    // Mitsuba's BSDFs scatter from the front only, unless wrapped in `twosided`
+    let s = if n.ty() == "twosided" { Surface::TWO_SIDED } else { Surface::one_sided(&m) };
+    let idx = cx.b.material_with(m, s);
     if let Some(id) = n.attr("id") {
         cx.ids.insert(id.to_string(), idx);
     }
