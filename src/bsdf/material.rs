@@ -1,4 +1,5 @@
-//! Material parameters (no sampling code; see `bsdf`). The D/S partition of the spec §1 is
+//! A BSDF's parameters at one point: what `Scene::shade` resolves a scene material to (no
+//! sampling code; see `bsdf`). The D/S partition of the spec §1 is
 //! `Material::is_dirac`: mirrors and glass are Dirac (S), everything else non-specular (D).
 
 use crate::math::Rgb;
@@ -49,6 +50,12 @@ impl Material {
     #[inline]
     pub fn is_dirac(&self) -> bool {
         matches!(self, Material::Mirror { .. } | Material::Conductor { .. } | Material::Glass { .. })
+    }
+    /// True for BSDFs that scatter from both sides of a surface by nature (the dielectrics:
+    /// Mitsuba refuses `twosided` around them).
+    #[inline]
+    pub fn is_two_sided_by_nature(&self) -> bool {
+        matches!(self, Material::Glass { .. })
     }
     /// True when the BSDF is identically zero.
     #[inline]
