@@ -14,6 +14,7 @@ mod dielectric;
 pub mod diffuse;
 mod material;
 mod phong;
+pub mod plastic;
 #[cfg(test)]
 pub(crate) mod testing;
 
