@@ -17,6 +17,7 @@ mod phong;
 pub mod plastic;
 #[cfg(test)]
 pub(crate) mod testing;
+pub mod thindielectric;
 
 pub use conductor::fresnel_conductor;
 pub use dielectric::fresnel_dielectric;
