@@ -35,4 +35,5 @@ pub mod scene;
 pub mod scenegen;
 pub mod spatial;
 pub mod stats;
+pub mod texture;
 pub mod transport;

@@ -92,6 +92,18 @@ pub enum ImageError {
         /// Its value.
         value: [f32; 3],
     },
+    /// A texture header whose `width * height` exceeds `limit` texels
+    /// ([`super::MAX_TEXELS`]); refused before anything is allocated.
+    TooLarge {
+        /// File concerned.
+        path: PathBuf,
+        /// Width the header claims.
+        width: u64,
+        /// Height the header claims.
+        height: u64,
+        /// The most texels allowed.
+        limit: u64,
+    },
     /// Encoding failed: the EXR encoder's message (`path` always given), or a PNG's (raw RGB
     /// bytes that do not fit the size, a size PNG cannot hold, the encoder's message), with the
     /// file when the caller named one ([`ImageError::in_file`]).
@@ -154,6 +166,11 @@ impl std::fmt::Display for ImageError {
             BadPixels { path, count, what, first: (x, y), value } => {
                 write!(f, "{}: {count} pixel(s) {what}, the first at ({x}, {y}): {value:?}", path.display())
             }
+            TooLarge { path, width, height, limit } => write!(
+                f,
+                "{}: image of {width}x{height} texels is larger than the {limit} texels a texture may have",
+                path.display()
+            ),
             Encode { path: Some(path), format: "EXR", reason } => {
                 write!(f, "cannot encode EXR {}: {reason}", path.display())
             }

@@ -20,7 +20,9 @@ pub use crate::atomic_io::{atomic_path, atomic_write};
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
+mod decode;
 mod error;
+pub use decode::{decode_texture, decode_texture_bytes, DecodedImage, TexelData, MAX_TEXELS};
 pub use error::ImageError;
 
 /// Names of the per-pixel variance-of-the-mean channels written by [`write_exr_layers`].
