@@ -255,7 +255,7 @@ fn caustic_chain_roulette_sees_the_whole_sample_weight() {
     let cf = ForecastCaustics::new(product);
     let hit = w.intersect(Vec3::new(0.45, 1.0, 0.75), Vec3::new(0.0, -1.0, 0.0), f32::INFINITY).unwrap();
     assert!(hit.p.y.abs() < 1e-4, "the floor in front of the glass ball");
-    let x = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
+    let x = ShadingPoint::new(hit.p, hit.ng, hit.ns);
     let q = ShadingQuery { x: &x, m: w.scene.material_of(hit.prim), wo: Vec3::new(0.0, 1.0, 0.0), depth: 1 };
     let (mut nonzero, mut max) = (0u32, 0.0f32);
     for i in 0..100_000 {

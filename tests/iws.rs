@@ -261,7 +261,7 @@ fn gather_stats(w: &World, est: &mut Iws, n: u64) -> Vec<(f64, f64, f64)> {
         if m.is_dirac() || m.is_black() || w.scene.emitter_of(hit.prim) != forecast::scene::NO_EMITTER {
             continue;
         }
-        let x = ShadingPoint { p: hit.p, ng: hit.ng, ns: hit.ns };
+        let x = ShadingPoint::new(hit.p, hit.ng, hit.ns);
         let q = ShadingQuery { x: &x, m, wo: -dir, depth: 0 };
         let mut ctx = Context::new(Rng::keyed(3, stream::MISC, 0, i as u64));
         let exact = est.gather_exact(w, &q).y as f64; // every point light, deterministic

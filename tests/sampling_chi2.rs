@@ -42,7 +42,7 @@ fn check(name: &str, r: &Chi2Result) {
 }
 
 fn sp_z() -> ShadingPoint {
-    ShadingPoint { p: Vec3::ZERO, ng: Vec3::Z, ns: Vec3::Z }
+    ShadingPoint::new(Vec3::ZERO, Vec3::Z, Vec3::Z)
 }
 
 /// Unit direction at polar angle `theta_deg` from +z, in the xz plane.
@@ -165,7 +165,7 @@ fn diffuse_sample_matches_pdf() {
     }
     // A tilted shading normal (20° from ng): the cosine lobe is around ns and clipped at ng's horizon.
     let ns = Vec3::new(20f32.to_radians().sin(), 0.0, 20f32.to_radians().cos());
-    let sp = ShadingPoint { p: Vec3::ZERO, ng: Vec3::Z, ns };
+    let sp = ShadingPoint::new(Vec3::ZERO, Vec3::Z, ns);
     let r = bsdf_chi2(m, sp, dir_at(-30.0), 203);
     check("diffuse, tilted shading normal", &r);
 }
@@ -258,7 +258,7 @@ fn weight_is_eval_cos_over_pdf() {
 #[test]
 fn weight_is_eval_cos_over_pdf_with_shading_normal() {
     let ns = Vec3::new(0.2, -0.1, 1.0).normalize();
-    weight_check(&[ShadingPoint { p: Vec3::ONE, ng: Vec3::Z, ns }], 401);
+    weight_check(&[ShadingPoint::new(Vec3::ONE, Vec3::Z, ns)], 401);
 }
 
 #[test]

@@ -305,7 +305,7 @@ fn photon_set(n: usize, theta: f32, phi: f32, spread: f32, seed: u64) -> Vec<(Ve
 }
 
 fn sp_with(ns: Vec3) -> ShadingPoint {
-    ShadingPoint { p: Vec3::ZERO, ng: Vec3::Z, ns }
+    ShadingPoint::new(Vec3::ZERO, Vec3::Z, ns)
 }
 
 fn lambert() -> Material {

@@ -215,7 +215,7 @@ impl Hit {
     /// Its position and normals as a BSDF sees them.
     #[inline(always)]
     pub fn shading_point(&self) -> ShadingPoint {
-        ShadingPoint { p: self.p, ng: self.ng, ns: self.ns }
+        ShadingPoint::new(self.p, self.ng, self.ns)
     }
 }
 

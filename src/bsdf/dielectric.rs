@@ -81,7 +81,7 @@ mod tests {
 
     #[test]
     fn refraction_obeys_snell() {
-        let sp = ShadingPoint { p: Vec3::ZERO, ng: Vec3::Z, ns: Vec3::Z };
+        let sp = ShadingPoint::new(Vec3::ZERO, Vec3::Z, Vec3::Z);
         let wo = Vec3::new(0.5f32.sin(), 0.0, 0.5f32.cos());
         // u = 0.999 chooses refraction (F is small at 0.5 rad)
         let s = sample(1.5, &sp, wo, 0.999, Mode::Importance).unwrap();

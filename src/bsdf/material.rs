@@ -1,7 +1,10 @@
 //! A BSDF's parameters at one point: what `Scene::shade` resolves a scene material to (no
 //! sampling code; see `bsdf`). The D/S partition of the spec §1 is
-//! `Material::is_dirac`: mirrors and glass are Dirac (S), everything else non-specular (D).
+//! `Material::is_dirac`: mirrors, glass and thin glass are Dirac (S), everything else, a plastic's
+//! coat over its diffuse base included, non-specular (D).
 
+use super::plastic::Plastic;
+use super::thindielectric::ThinDielectric;
 use crate::math::Rgb;
 
 /// A surface material, by the scene file's `type`.
@@ -41,21 +44,84 @@ pub enum Material {
         /// Index of refraction inside (outside is 1).
         ior: f32,
     },
+    /// Mitsuba's `plastic`: a smooth dielectric coat (Dirac) over a diffuse base.
+    Plastic(Plastic),
+    /// Mitsuba's `thindielectric`: a thin slab, Dirac reflection and straight transmission.
+    ThinDielectric(ThinDielectric),
     /// The black BSDF of an area light: it reflects nothing.
     Black,
 }
 
+/// A parameter of a material that a texture may set at each point (Mitsuba's parameter names).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Slot {
+    /// `diffuse`'s `reflectance`.
+    Reflectance,
+    /// `diffuse_reflectance` (`phong`, the plastics).
+    DiffuseReflectance,
+    /// `specular_reflectance` (conductors, `phong`, the plastics, the dielectrics).
+    SpecularReflectance,
+    /// `specular_transmittance` (the dielectrics).
+    SpecularTransmittance,
+    /// `alpha` (the rough BSDFs; a monochrome texture).
+    Alpha,
+}
+
+impl Slot {
+    /// Mitsuba's name of the parameter.
+    pub fn name(self) -> &'static str {
+        match self {
+            Slot::Reflectance => "reflectance",
+            Slot::DiffuseReflectance => "diffuse_reflectance",
+            Slot::SpecularReflectance => "specular_reflectance",
+            Slot::SpecularTransmittance => "specular_transmittance",
+            Slot::Alpha => "alpha",
+        }
+    }
+
+    /// True for a parameter that takes one value (a texture's `eval_1`), not a colour.
+    pub fn is_monochrome(self) -> bool {
+        matches!(self, Slot::Alpha)
+    }
+}
+
 impl Material {
+    /// Sets parameter `slot` to `v` (a colour, or for a monochrome slot `v.x`); false when this
+    /// material has no such parameter.
+    pub fn set(&mut self, slot: Slot, v: Rgb) -> bool {
+        match (self, slot) {
+            (Material::Diffuse { albedo }, Slot::Reflectance) => *albedo = v,
+            (Material::Glossy { albedo, .. }, Slot::DiffuseReflectance) => *albedo = v,
+            (Material::Glossy { specular, .. }, Slot::SpecularReflectance) => *specular = v,
+            (Material::Mirror { reflectance } | Material::Conductor { reflectance, .. }, Slot::SpecularReflectance) => {
+                *reflectance = v
+            }
+            (Material::Plastic(p), Slot::DiffuseReflectance) => {
+                *p = Plastic::new(v, p.specular_reflectance(), p.eta(), p.nonlinear())
+            }
+            (Material::Plastic(p), Slot::SpecularReflectance) => {
+                *p = Plastic::new(p.diffuse_reflectance(), v, p.eta(), p.nonlinear())
+            }
+            (Material::ThinDielectric(t), Slot::SpecularReflectance) => t.specular_reflectance = v,
+            (Material::ThinDielectric(t), Slot::SpecularTransmittance) => t.specular_transmittance = v,
+            _ => return false,
+        }
+        true
+    }
+
     /// True for Dirac (delta) BSDFs: the S side of the L_d / L_c split.
     #[inline]
     pub fn is_dirac(&self) -> bool {
-        matches!(self, Material::Mirror { .. } | Material::Conductor { .. } | Material::Glass { .. })
+        matches!(
+            self,
+            Material::Mirror { .. } | Material::Conductor { .. } | Material::Glass { .. } | Material::ThinDielectric(_)
+        )
     }
     /// True for BSDFs that scatter from both sides of a surface by nature (the dielectrics:
     /// Mitsuba refuses `twosided` around them).
     #[inline]
     pub fn is_two_sided_by_nature(&self) -> bool {
-        matches!(self, Material::Glass { .. })
+        matches!(self, Material::Glass { .. } | Material::ThinDielectric(_))
     }
     /// True when the BSDF is identically zero.
     #[inline]

@@ -21,7 +21,7 @@ pub mod thindielectric;
 
 pub use conductor::fresnel_conductor;
 pub use dielectric::fresnel_dielectric;
-pub use material::Material;
+pub use material::{Material, Slot};
 
 use crate::math::{Frame, Rgb, Vec3};
 
@@ -43,6 +43,9 @@ pub struct ShadingPoint {
     pub ng: Vec3,
     /// Unit shading normal on the `ng` side.
     pub ns: Vec3,
+    /// The shading normal before a normal map tilted it into `ns` (equal to `ns` where none
+    /// did): the frame of the normal map's shadowing term ([`shadow_terminator`]).
+    pub n0: Vec3,
 }
 
 /// A sampled direction.
@@ -89,6 +92,12 @@ pub trait LocalBsdf {
 }
 
 impl ShadingPoint {
+    /// The point `p` with geometric normal `ng` and shading normal `ns` (no normal map).
+    #[inline(always)]
+    pub fn new(p: Vec3, ng: Vec3, ns: Vec3) -> ShadingPoint {
+        ShadingPoint { p, ng, ns, n0: ns }
+    }
+
     /// Normals flipped to `wo`'s geometric side: (ng', ns').
     #[inline]
     fn oriented(&self, wo: Vec3) -> (Vec3, Vec3) {
@@ -126,10 +135,40 @@ fn shading_correction(mode: Mode, sp: &ShadingPoint, wo: Vec3, wi: Vec3) -> f32 
     (wo.dot(sp.ns).abs() * wi.dot(sp.ng).abs()) / den
 }
 
+/// The shadowing term of a normal-mapped point toward `wi` (Estevez, Barla, Conty and Kulla
+/// 2019, "A Microfacet-Based Shadowing Function to Solve the Bump Terminator Problem"; Mitsuba's
+/// `normalmap` with `use_shadowing_function`): G = 2/(1 + √(1 + α² tan²θ_i)), α² = min(tan²θ_n/8,
+/// 1), θ_n the tilted normal's angle and θ_i `wi`'s against the untilted one (`n0`); 0 where `wi`
+/// lies on different sides of the two normals. 1 where no normal map tilted the normal.
+#[inline]
+pub fn shadow_terminator(sp: &ShadingPoint, wi: Vec3) -> f32 {
+    if sp.n0 == sp.ns {
+        return 1.0;
+    }
+    let (c_i, c_n) = (wi.dot(sp.n0), sp.ns.dot(sp.n0));
+    if c_i * wi.dot(sp.ns) <= 0.0 {
+        return 0.0;
+    }
+    let tan2 = |c: f32| (1.0 - c * c).max(0.0) / (c * c);
+    let alpha2 = (0.125 * tan2(c_n)).min(1.0);
+    2.0 / (1.0 + (1.0 + alpha2 * tan2(c_i)).sqrt())
+}
+
 /// BSDF value f(wo, wi) without the cosine, as `mode` transports it (they differ only across a
-/// refraction); zero for Dirac and black materials.
+/// refraction), with a normal map's shadowing term; zero for Dirac and black materials.
 #[inline]
 pub fn eval(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3, mode: Mode) -> Rgb {
+    let f = eval_untilted(m, sp, wo, wi, mode);
+    if sp.n0 == sp.ns {
+        f
+    } else {
+        f * shadow_terminator(sp, wi)
+    }
+}
+
+/// `eval` without the normal map's shadowing term.
+#[inline(always)]
+fn eval_untilted(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3, mode: Mode) -> Rgb {
     match *m {
         Material::Diffuse { albedo } => diffuse::eval(albedo, sp.ng, sp.ns, wo, wi),
         Material::Glossy { albedo, specular, exponent } => {
@@ -139,6 +178,7 @@ pub fn eval(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3, mode: Mode) -> 
             }
             phong::eval(albedo, specular, exponent, ns, wo, wi)
         }
+        Material::Plastic(b) => eval_local(&b, m, sp, wo, wi, mode),
         _ => {
             let _ = mode;
             Rgb::ZERO
@@ -204,9 +244,13 @@ fn sample_local(
     Some(BsdfSample { wi, ..s })
 }
 
-/// Solid-angle pdf of `sample` producing `wi` (0 for Dirac and black materials).
+/// Solid-angle pdf of `sample` producing `wi` (0 for Dirac and black materials, and where a
+/// normal map's shadowing term is 0).
 #[inline]
 pub fn pdf_w(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3) -> f32 {
+    if sp.n0 != sp.ns && wi.dot(sp.n0) * wi.dot(sp.ns) <= 0.0 {
+        return 0.0;
+    }
     match *m {
         Material::Diffuse { .. } => diffuse::pdf_w(sp.ng, sp.ns, wo, wi),
         Material::Glossy { albedo, specular, exponent } => {
@@ -216,13 +260,25 @@ pub fn pdf_w(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3) -> f32 {
             }
             phong::pdf_w(albedo, specular, exponent, ns, wo, wi)
         }
+        Material::Plastic(b) => pdf_local(&b, m, sp, wo, wi),
         _ => 0.0,
     }
 }
 
-/// Samples `wi` given `wo` with three uniforms.
+/// Samples `wi` given `wo` with three uniforms; its weight has a normal map's shadowing term.
 #[inline]
 pub fn sample(m: &Material, sp: &ShadingPoint, wo: Vec3, u: [f32; 3], mode: Mode) -> Option<BsdfSample> {
+    let s = sample_untilted(m, sp, wo, u, mode)?;
+    if sp.n0 == sp.ns {
+        return Some(s);
+    }
+    let g = shadow_terminator(sp, s.wi);
+    (g > 0.0).then_some(BsdfSample { weight: s.weight * g, ..s })
+}
+
+/// `sample` without the normal map's shadowing term.
+#[inline(always)]
+fn sample_untilted(m: &Material, sp: &ShadingPoint, wo: Vec3, u: [f32; 3], mode: Mode) -> Option<BsdfSample> {
     let (ng, ns) = sp.oriented(wo);
     let s = match *m {
         Material::Diffuse { albedo } => {
@@ -256,6 +312,8 @@ pub fn sample(m: &Material, sp: &ShadingPoint, wo: Vec3, u: [f32; 3], mode: Mode
             BsdfSample { wi, weight: reflectance * f, pdf_w: 1.0, is_delta: true, eta: 1.0 }
         }
         Material::Glass { ior } => dielectric::sample(ior, sp, wo, u[0], mode)?,
+        Material::Plastic(b) => sample_local(&b, m, sp, wo, u, mode)?,
+        Material::ThinDielectric(b) => sample_local(&b, m, sp, wo, u, mode)?,
         Material::Black => return None,
     };
     // Veach's adjoint factor on light paths, Dirac glass included (pbrt-v3's

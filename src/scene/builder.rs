@@ -23,9 +23,10 @@ use super::{
     light_power, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere, Surface,
     Triangle, NO_EMITTER,
 };
-use crate::math::{Rgb, Vec3, PI};
+use crate::math::{Rgb, Vec2, Vec3, PI};
 use crate::param_limits as params;
 use crate::sampling::distribution::Distribution1D;
+use crate::texture::Texture;
 
 /// A scene loading error with its location.
 #[derive(Clone, Debug, PartialEq)]
@@ -112,6 +113,15 @@ struct ShapeRec {
     kept: usize,
 }
 
+/// What a triangle's corners carry beside their positions.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Corners {
+    /// Shading normals (smooth meshes).
+    pub n: Option<[Vec3; 3]>,
+    /// Texture coordinates.
+    pub uv: Option<[Vec2; 3]>,
+}
+
 /// The builder (see the module docs).
 pub(super) struct SceneBuilder {
     file: String,
@@ -123,6 +133,7 @@ pub(super) struct SceneBuilder {
     pub render: RenderDefaults,
     materials: Vec<Material>,
     surfaces: Vec<Surface>,
+    textures: Vec<Texture>,
     triangles: Vec<Triangle>,
     tri_shape: Vec<u32>,
     spheres: Vec<Sphere>,
@@ -154,6 +165,7 @@ impl SceneBuilder {
             },
             materials: vec![Material::Black],
             surfaces: vec![Surface::TWO_SIDED],
+            textures: Vec::new(),
             triangles: Vec::new(),
             tri_shape: Vec::new(),
             spheres: Vec::new(),
@@ -197,8 +209,24 @@ impl SceneBuilder {
     }
 
     /// The surface properties of material `i`.
-    pub fn surface_at(&self, i: u32) -> Surface {
-        self.surfaces[i as usize]
+    pub fn surface_at(&self, i: u32) -> &Surface {
+        &self.surfaces[i as usize]
+    }
+
+    /// The texture at `i`.
+    pub fn texture_at(&self, i: u32) -> &Texture {
+        &self.textures[i as usize]
+    }
+
+    /// Records an image file the scene reads (an input no output may name).
+    pub fn image_file(&mut self, path: &std::path::Path) {
+        self.mesh_files.push(path.to_path_buf());
+    }
+
+    /// Adds a texture; returns its index.
+    pub fn texture(&mut self, t: Texture) -> u32 {
+        self.textures.push(t);
+        self.textures.len() as u32 - 1
     }
 
     /// The material at `i`.
@@ -277,7 +305,7 @@ impl SceneBuilder {
         &mut self,
         s: usize,
         (p, raw): ([Vec3; 3], [Vec3; 3]),
-        n: Option<[Vec3; 3]>,
+        corners: Corners,
         blame: &Origin,
         face: Option<usize>,
     ) -> Result<(), SceneError> {
@@ -289,11 +317,11 @@ impl SceneBuilder {
             return Err(self.err(blame, format!("{}{at}", extent_message("mesh vertex", *q))));
         }
         let rec = &mut self.shapes[s];
-        let Some(t) = make_triangle(p, n, rec.shape.material, rec.shape.exact_normals) else {
+        let Some(t) = make_triangle(p, corners, rec.shape.material, rec.shape.exact_normals) else {
             rec.skipped += 1;
             return Ok(());
         };
-        rec.flat += (n.is_some() && t.n.is_none()) as usize;
+        rec.flat += (corners.n.is_some() && t.n.is_none()) as usize;
         rec.kept += 1;
         self.triangles.push(t);
         self.tri_shape.push(s as u32);
@@ -307,6 +335,7 @@ impl SceneBuilder {
         (center, cat): (Vec3, &Origin),
         (radius, rat): (f32, &Origin),
         inward: bool,
+        axes: [Vec3; 3],
     ) -> Result<(), SceneError> {
         if !within_extent(center) {
             return Err(self.err(cat, extent_message("sphere center", center)));
@@ -321,7 +350,7 @@ impl SceneBuilder {
         let rec = &mut self.shapes[s];
         rec.kept += 1;
         let material = rec.shape.material;
-        self.spheres.push(Sphere { center, radius, inward, material, emitter: NO_EMITTER });
+        self.spheres.push(Sphere { center, radius, inward, axes, material, emitter: NO_EMITTER });
         self.sph_shape.push(s as u32);
         Ok(())
     }
@@ -493,6 +522,7 @@ impl SceneBuilder {
             render: self.render,
             materials: self.materials,
             surfaces: self.surfaces,
+            textures: self.textures,
             triangles: self.triangles,
             spheres: self.spheres,
             emitters,
@@ -533,7 +563,8 @@ fn bounds(triangles: &[Triangle], spheres: &[Sphere]) -> (Vec3, Vec3) {
 /// Builds a triangle, or `None` when degenerate (zero area or non-finite). Shading normals must
 /// be finite and non-zero (else the triangle is shaded flat); they are normalised (kept as they
 /// are when `exact` and of unit length to 1e-5) and flipped onto the geometric normal's side.
-pub(super) fn make_triangle(p: [Vec3; 3], n: Option<[Vec3; 3]>, material: u32, exact: bool) -> Option<Triangle> {
+pub(super) fn make_triangle(p: [Vec3; 3], corners: Corners, material: u32, exact: bool) -> Option<Triangle> {
+    let Corners { n, uv } = corners;
     let c = (p[1] - p[0]).cross(p[2] - p[0]);
     // scaled by the largest component first, so that |c|² cannot overflow (|c| up to 1e25)
     let m = c.abs().max_element();
@@ -555,7 +586,7 @@ pub(super) fn make_triangle(p: [Vec3; 3], n: Option<[Vec3; 3]>, material: u32, e
             })
         })
     });
-    Some(Triangle { p, n, ng, area: 0.5 * len, material, emitter: NO_EMITTER })
+    Some(Triangle { p, n, uv, ng, area: 0.5 * len, material, emitter: NO_EMITTER })
 }
 
 /// Parses a duration such as `500ms`, `30s`, `4m`, `1h` or `1m30s` into seconds.

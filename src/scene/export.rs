@@ -21,6 +21,7 @@
 use super::ply::{write_binary, IndexedMesh};
 use super::schema::Doc;
 use super::{Material, Scene, Triangle};
+use crate::math::Vec2;
 use crate::math::{Rgb, Vec3};
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -239,6 +240,21 @@ fn bsdf(m: &Material, id: Option<&str>, warnings: &mut Vec<String>) -> String {
             "    <bsdf type=\"dielectric\"{id}>\n        <float name=\"int_ior\" value=\"{ior}\"/>\n        \
              <float name=\"ext_ior\" value=\"1\"/>\n    </bsdf>"
         ),
+        Material::Plastic(pl) => two(format!(
+            "<bsdf type=\"plastic\">{}{}<float name=\"int_ior\" value=\"{}\"/><float name=\"ext_ior\" \
+             value=\"1\"/><boolean name=\"nonlinear\" value=\"{}\"/></bsdf>",
+            rgb("diffuse_reflectance", pl.diffuse_reflectance()),
+            rgb("specular_reflectance", pl.specular_reflectance()),
+            pl.eta(),
+            pl.nonlinear()
+        )),
+        Material::ThinDielectric(t) => format!(
+            "    <bsdf type=\"thindielectric\"{id}>\n        <float name=\"int_ior\" value=\"{}\"/>\n        \
+             <float name=\"ext_ior\" value=\"1\"/>\n        {}\n        {}\n    </bsdf>",
+            t.eta,
+            rgb("specular_reflectance", t.specular_reflectance),
+            rgb("specular_transmittance", t.specular_transmittance)
+        ),
         Material::Black => format!("    <bsdf type=\"diffuse\"{id}>{}</bsdf>", rgb("reflectance", Rgb::ZERO)),
     }
 }
@@ -265,5 +281,6 @@ fn run_mesh(run: &[Triangle]) -> IndexedMesh {
     let positions = run.iter().flat_map(|t| t.p).collect();
     let normals = run[0].n.map(|_| run.iter().flat_map(|t| t.n.unwrap_or([t.ng; 3])).collect());
     let faces = (0..run.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
-    IndexedMesh { positions, normals, faces, bytes_hash: 0 }
+    let uvs = run[0].uv.map(|_| run.iter().flat_map(|t| t.uv.unwrap_or([Vec2::ZERO; 3])).collect());
+    IndexedMesh { positions, normals, uvs, faces, bytes_hash: 0 }
 }

@@ -8,11 +8,11 @@
 //! warning; everything else that is wrong (NaN, negative values, zero-area lights, a bad fov, a
 //! missing OBJ, an empty scene) is an error, never a panic.
 
-use super::builder::{CameraSpec, Origin, SceneBuilder, ShapeIn, View};
+use super::builder::{CameraSpec, Corners, Origin, SceneBuilder, ShapeIn, View};
 use super::limits::{self, extent_message, within_extent};
 use super::schema::{Doc, LightDef, MaterialDef, ShapeDef};
 use super::{locate, Material, Scene, SceneError};
-use crate::math::{fnv1a, Vec3};
+use crate::math::{fnv1a, Vec2, Vec3};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -329,8 +329,9 @@ fn shape(
                 };
                 return Err(cx.err(ss, &key("v"), m));
             }
-            for p in [[c, c + u, c + u + v], [c, c + u + v, c + v]] {
-                b.triangle(id, (p, p), None, &at("v"), None)?;
+            let (o, x, xy, y) = (Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y);
+            for (p, uv) in [([c, c + u, c + u + v], [o, x, xy]), ([c, c + u + v, c + v], [o, xy, y])] {
+                b.triangle(id, (p, p), Corners { n: None, uv: Some(uv) }, &at("v"), None)?;
             }
         }
         ShapeDef::Sphere { center, radius, material, emission, inward } => {
@@ -338,7 +339,7 @@ fn shape(
                 return Err(cx.err(ss, &key("center"), "center must be finite"));
             }
             let id = begin(b, material, emission, "radius", format!("sphere shape[{idx}]"))?;
-            b.sphere(id, (v3(*center), &at("center")), (*radius, &at("radius")), *inward)?;
+            b.sphere(id, (v3(*center), &at("center")), (*radius, &at("radius")), *inward, Vec3::AXES)?;
         }
         ShapeDef::Mesh { material, emission, file, .. } => {
             let id = begin(b, material, emission, "file", dir.join(file).display().to_string())?;
@@ -394,7 +395,8 @@ fn mesh(
             "translate"
         };
         let n = mesh.normals.as_ref().map(|ns| ns[k].map(rot));
-        b.triangle(id, (tri.map(xf), *tri), n, &at(blame), Some(k))?;
+        let uv = mesh.uvs.as_ref().map(|t| t[k]);
+        b.triangle(id, (tri.map(xf), *tri), Corners { n, uv }, &at(blame), Some(k))?;
     }
     Ok(())
 }

@@ -2,10 +2,10 @@
 //! mesh as stored in a file, and the flat per-triangle `Mesh` of the TOML loader. The lowest of
 //! the mesh modules: `obj` and `ply` import it, it imports neither.
 //!
-//! Invariants: `IndexedMesh::normals`, when present, has one normal per position; every face
-//! index is below `positions.len()` (the readers check both).
+//! Invariants: `IndexedMesh::normals` and `uvs`, when present, have one entry per position;
+//! every face index is below `positions.len()` (the readers check these).
 
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 
 /// An indexed triangle mesh as stored in a file (OBJ or PLY).
 #[derive(Clone, Debug)]
@@ -14,6 +14,9 @@ pub struct IndexedMesh {
     pub positions: Vec<Vec3>,
     /// Per-vertex normals, when the file has them.
     pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates, when the file has them (as written: OBJ's `v` flip is
+    /// the Mitsuba reader's `flip_tex_coords`).
+    pub uvs: Option<Vec<Vec2>>,
     /// Triangles (indices into `positions`).
     pub faces: Vec<[u32; 3]>,
     /// Hash of the file bytes (scene hashing).
@@ -26,6 +29,8 @@ pub struct Mesh {
     pub triangles: Vec<[Vec3; 3]>,
     /// Per-triangle vertex normals (smooth meshes only).
     pub normals: Option<Vec<[Vec3; 3]>>,
+    /// Per-triangle texture coordinates (meshes with UVs).
+    pub uvs: Option<Vec<[Vec2; 3]>>,
     /// Hash of the file bytes (scene hashing).
     pub bytes_hash: u64,
 }
@@ -39,6 +44,7 @@ impl Mesh {
         Mesh {
             triangles: m.faces.iter().map(p).collect(),
             normals: vn.map(|vn| m.faces.iter().map(|f| f.map(|i| vn[i as usize])).collect()),
+            uvs: m.uvs.as_ref().map(|t| m.faces.iter().map(|f| f.map(|i| t[i as usize])).collect()),
             bytes_hash: m.bytes_hash,
         }
     }

@@ -104,12 +104,13 @@ fn load_mesh_file(path: &std::path::Path, smooth: bool) -> Result<mesh::Mesh, St
     obj::load_mesh(path, smooth)
 }
 pub use crate::bsdf::Material;
-pub use surface::Surface;
+pub use surface::{SlotTexture, Surface};
 
 use crate::bsdf::ShadingPoint;
-use crate::math::{luminance, Rgb, Vec3, PI};
+use crate::math::{luminance, Rgb, Vec2, Vec3, PI};
 use crate::sampling::distribution::Distribution1D;
 use crate::sampling::warp;
+use crate::texture::Texture;
 
 /// Sentinel for "no emitter".
 pub const NO_EMITTER: u32 = u32::MAX;
@@ -121,6 +122,8 @@ pub struct Triangle {
     pub p: [Vec3; 3],
     /// Per-vertex shading normals (smooth meshes).
     pub n: Option<[Vec3; 3]>,
+    /// Per-vertex texture coordinates (meshes with UVs, rectangles, quads).
+    pub uv: Option<[Vec2; 3]>,
     /// Unit geometric normal, normalize((p1−p0)×(p2−p0)).
     pub ng: Vec3,
     /// Area.
@@ -140,6 +143,9 @@ pub struct Sphere {
     pub radius: f32,
     /// Normals point inwards (closed rooms).
     pub inward: bool,
+    /// Its own frame's unit axes in world space (the rotation of Mitsuba's `to_world`), which
+    /// orient its texture coordinates; the world axes where none is given.
+    pub axes: [Vec3; 3],
     /// Material index.
     pub material: u32,
     /// Emitter index or `NO_EMITTER`.
@@ -242,8 +248,10 @@ pub struct Scene {
     pub render: RenderDefaults,
     /// Materials (index = material id).
     pub materials: Vec<Material>,
-    /// Each material's sides (index = material id).
+    /// Each material's sides, textures and normal map (index = material id).
     pub surfaces: Vec<Surface>,
+    /// The textures `surfaces` name (decoded images shared between them).
+    pub textures: Vec<Texture>,
     /// Triangles.
     pub triangles: Vec<Triangle>,
     /// Spheres.
@@ -300,10 +308,32 @@ impl Scene {
     #[inline]
     pub fn shade(&self, prim: u32, sp: ShadingPoint, wo: Vec3) -> (Material, ShadingPoint) {
         let id = self.material_id(prim);
-        if !self.surfaces[id].two_sided && wo.dot(sp.ng) <= 0.0 {
+        let s = &self.surfaces[id];
+        if !s.two_sided && wo.dot(sp.ng) <= 0.0 {
             return (Material::Black, sp);
         }
-        (self.materials[id], sp)
+        if s.is_constant() {
+            return (self.materials[id], sp);
+        }
+        self.shade_varying(prim, id, sp, wo)
+    }
+
+    /// `shade` where the material has textures or a normal map: its parameters and shading
+    /// normal at the hit's texture coordinates.
+    #[inline(never)]
+    fn shade_varying(&self, prim: u32, id: usize, sp: ShadingPoint, wo: Vec3) -> (Material, ShadingPoint) {
+        let (uv, dpdu) = if prim < self.ntri() {
+            surface::triangle_uv(&self.triangles[prim as usize], sp.p)
+        } else {
+            surface::sphere_uv(&self.spheres[(prim - self.ntri()) as usize], sp.p)
+        };
+        let s = &self.surfaces[id];
+        let m = s.material_at(&self.materials[id], &self.textures, uv);
+        let sp = match s.normalmap {
+            Some(t) => surface::tilt(sp, &surface::shading_frame(sp.ns, dpdu), self.textures[t as usize].eval(uv), wo),
+            None => sp,
+        };
+        (m, sp)
     }
 
     /// Emitter of a primitive, or `NO_EMITTER`.

@@ -1,56 +1,18 @@
 //! OBJ meshes via tobj (the only module that touches tobj): triangulated positions and, for
-//! smooth shading, per-vertex normals (the file's `vn`, else area-weighted vertex normals).
+//! smooth shading, per-vertex normals (the file's `vn`, else area-weighted vertex normals), and
+//! texture coordinates (`vt`).
 //!
 //! Invariants: degenerate faces are returned as-is; the caller skips them with a warning.
 
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 use std::path::Path;
 
 use super::mesh::{IndexedMesh, Mesh};
 
-/// Loads an OBJ file; errors are messages that name the file.
+/// Loads an OBJ file as the TOML loader's flat `Mesh` (`Mesh::from_indexed`); errors are
+/// messages that name the file.
 pub fn load_mesh(path: &Path, smooth: bool) -> Result<Mesh, String> {
-    let (models, bytes_hash) = read_models(path)?;
-    let mut triangles = Vec::new();
-    let mut normals = Vec::new();
-    for m in &models {
-        let mesh = &m.mesh;
-        let pos = |i: u32| -> Option<Vec3> {
-            let i = i as usize * 3;
-            mesh.positions.get(i..i + 3).map(|s| Vec3::new(s[0], s[1], s[2]))
-        };
-        let has_vn = mesh.normals.len() == mesh.positions.len() && !mesh.normals.is_empty();
-        let mut vnorm: Vec<Vec3> = Vec::new();
-        if smooth {
-            if has_vn {
-                vnorm = mesh.normals.chunks_exact(3).map(|s| Vec3::new(s[0], s[1], s[2])).collect();
-            } else {
-                vnorm = vec![Vec3::ZERO; mesh.positions.len() / 3];
-                for f in mesh.indices.chunks_exact(3) {
-                    if let (Some(a), Some(b), Some(c)) = (pos(f[0]), pos(f[1]), pos(f[2])) {
-                        let n = (b - a).cross(c - a); // area-weighted
-                        for &i in f {
-                            vnorm[i as usize] += n;
-                        }
-                    }
-                }
-            }
-        }
-        for f in mesh.indices.chunks_exact(3) {
-            let (Some(a), Some(b), Some(c)) = (pos(f[0]), pos(f[1]), pos(f[2])) else {
-                return Err(format!("OBJ `{}`: face index out of range", path.display()));
-            };
-            triangles.push([a, b, c]);
-            if smooth {
-                let n = |i: u32| vnorm.get(i as usize).copied().unwrap_or(Vec3::ZERO);
-                normals.push([n(f[0]), n(f[1]), n(f[2])]);
-            }
-        }
-    }
-    if triangles.is_empty() {
-        return Err(format!("OBJ `{}` has no faces", path.display()));
-    }
-    Ok(Mesh { triangles, normals: smooth.then_some(normals), bytes_hash })
+    Ok(Mesh::from_indexed(&load_indexed(path)?, smooth))
 }
 
 /// Loads an OBJ file as one indexed mesh (all objects merged; a vertex per distinct
@@ -58,7 +20,8 @@ pub fn load_mesh(path: &Path, smooth: bool) -> Result<Mesh, String> {
 pub fn load_indexed(path: &Path) -> Result<IndexedMesh, String> {
     let (models, bytes_hash) = read_models(path)?;
     let (mut positions, mut normals, mut faces) = (Vec::new(), Vec::new(), Vec::new());
-    let mut all_normals = true;
+    let mut uvs = Vec::new();
+    let (mut all_normals, mut all_uvs) = (true, true);
     for m in &models {
         let mesh = &m.mesh;
         let base = positions.len() as u32;
@@ -66,6 +29,10 @@ pub fn load_indexed(path: &Path) -> Result<IndexedMesh, String> {
         positions.extend(mesh.positions.chunks_exact(3).map(|s| Vec3::new(s[0], s[1], s[2])));
         all_normals &= mesh.normals.len() == mesh.positions.len() && !mesh.normals.is_empty();
         normals.extend(mesh.normals.chunks_exact(3).map(|s| Vec3::new(s[0], s[1], s[2])));
+        all_uvs &= mesh.texcoords.len() == 2 * nv && nv > 0;
+        // `vt` has its origin at the bottom left, an image at the top left: v is flipped (Mitsuba's
+        // `flip_tex_coords`, default true)
+        uvs.extend(mesh.texcoords.chunks_exact(2).map(|s| Vec2::new(s[0], 1.0 - s[1])));
         for f in mesh.indices.chunks_exact(3) {
             if f.iter().any(|&i| i as usize >= nv) {
                 return Err(format!("OBJ `{}`: face index out of range", path.display()));
@@ -77,7 +44,11 @@ pub fn load_indexed(path: &Path) -> Result<IndexedMesh, String> {
         return Err(format!("OBJ `{}` has no faces", path.display()));
     }
     let normals = (all_normals && normals.len() == positions.len()).then_some(normals);
-    Ok(IndexedMesh { positions, normals, faces, bytes_hash })
+    let uvs = (all_uvs && uvs.len() == positions.len()).then_some(uvs);
+    if let Some(k) = uvs.iter().flatten().position(|t| !t.is_finite()) {
+        return Err(format!("OBJ `{}`: texture coordinate {} is not finite", path.display(), k + 1));
+    }
+    Ok(IndexedMesh { positions, normals, uvs, faces, bytes_hash })
 }
 
 /// Reads and parses an OBJ file (a regular file only: a FIFO would block), triangulated with one

@@ -7,7 +7,7 @@
 //! Invariants: face indices are checked against the vertex count; a body cut short is an error,
 //! never a panic; a mesh without faces is an error.
 
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 use std::path::Path;
 
 pub use super::mesh::IndexedMesh;
@@ -331,14 +331,16 @@ pub fn parse(bytes: &[u8]) -> Result<IndexedMesh, String> {
     let mut body = Body { bytes, pos: start, format, line: header_lines + 1, row_end: start };
     let mut positions: Vec<Vec3> = Vec::new();
     let mut normals = Vec::new();
-    let mut has_normals = false;
+    let mut uvs = Vec::new();
+    let (mut has_normals, mut has_uvs) = (false, false);
     let mut vertex_read = false;
     let mut faces: Vec<[u32; 3]> = Vec::new();
     let mut vals = Vec::new();
     for el in &elements {
-        let (xyz, nxyz, face_list) = columns(el)?;
+        let (xyz, nxyz, uv, face_list) = columns(el)?;
         if el.name == "vertex" {
             has_normals = nxyz.iter().all(|c| c.is_some());
+            has_uvs = uv.iter().all(|c| c.is_some());
         }
         if el.props.is_empty() {
             continue; // rows of no properties occupy no bytes: nothing to read, whatever the count
@@ -356,6 +358,13 @@ pub fn parse(bytes: &[u8]) -> Result<IndexedMesh, String> {
                 if has_normals {
                     normals.push(Vec3::from_array(v(nxyz)));
                 }
+                if has_uvs {
+                    let t = uv.map(|c| c.map_or(0.0, |c| vals[c] as f32));
+                    if !t.iter().all(|x| x.is_finite()) {
+                        return Err(format!("vertex {}: texture coordinates {t:?} are not finite", positions.len()));
+                    }
+                    uvs.push(Vec2::from_array(t));
+                }
             }
         }
         vertex_read |= el.name == "vertex";
@@ -371,7 +380,13 @@ pub fn parse(bytes: &[u8]) -> Result<IndexedMesh, String> {
     if faces.is_empty() {
         return Err("no faces".into());
     }
-    Ok(IndexedMesh { positions, normals: has_normals.then_some(normals), faces, bytes_hash })
+    Ok(IndexedMesh {
+        positions,
+        normals: has_normals.then_some(normals),
+        uvs: has_uvs.then_some(uvs),
+        faces,
+        bytes_hash,
+    })
 }
 
 /// Reads one row of `el` into `vals` (a list's value: 0), its faces (the element's list `face`
@@ -412,11 +427,17 @@ fn read_row(
 
 /// An element's x, y, z and nx, ny, nz columns and its face list (`vertex` needs x, y, z;
 /// `face` needs `vertex_indices`).
-type Columns = ([Option<usize>; 3], [Option<usize>; 3], Option<usize>);
+type Columns = ([Option<usize>; 3], [Option<usize>; 3], [Option<usize>; 2], Option<usize>);
 
 fn columns(el: &Element) -> Result<Columns, String> {
     let col = |n: &str| el.props.iter().position(|p| p.name == n && p.list.is_none());
     let (xyz, nxyz) = ([col("x"), col("y"), col("z")], [col("nx"), col("ny"), col("nz")]);
+    // texture coordinates under Mitsuba's three names
+    let uv = [["u", "v"], ["texture_u", "texture_v"], ["s", "t"]]
+        .map(|[a, b]| [col(a), col(b)])
+        .into_iter()
+        .find(|c| c.iter().all(|c| c.is_some()))
+        .unwrap_or([None, None]);
     if el.name == "vertex" && xyz.iter().any(|c| c.is_none()) {
         return Err("element `vertex` needs float properties x, y, z".into());
     }
@@ -424,7 +445,7 @@ fn columns(el: &Element) -> Result<Columns, String> {
     if el.name == "face" && face_list.is_none() {
         return Err("element `face` needs a list property `vertex_indices`".into());
     }
-    Ok((xyz, nxyz, face_list))
+    Ok((xyz, nxyz, uv, face_list))
 }
 
 /// A face index read as `i`: a whole number in `[0, nv)` (`nv` once known, else `[0, 2³²)`).

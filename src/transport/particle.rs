@@ -111,6 +111,8 @@ pub struct SurfaceVertex<'a> {
     pub ng: Vec3,
     /// Shading normal (on the `ng` side).
     pub ns: Vec3,
+    /// Shading normal before a normal map (`ShadingPoint::n0`).
+    pub n0: Vec3,
     /// Material at the hit (never Dirac).
     pub material: &'a Material,
     /// Direction toward the previous vertex (unit, away from the surface).
@@ -262,8 +264,8 @@ fn follow(
         let (m, sp) = world.shade(&hit, w_in);
         let m = &m;
         if !m.is_dirac() {
-            let (p, ng, ns) = (hit.p, hit.ng, hit.ns);
-            let v = SurfaceVertex { p, ng, ns, material: m, w_in, beta: beta * inv_n, prev_dirac, depth };
+            let ShadingPoint { p, ng, ns, n0 } = sp;
+            let v = SurfaceVertex { p, ng, ns, n0, material: m, w_in, beta: beta * inv_n, prev_dirac, depth };
             let keep_going = visitor.surface(&v);
             counts.surface_vertices += 1;
             counts.caustic_vertices += prev_dirac as u64;

@@ -28,6 +28,8 @@ pub struct Vpl {
     pub ng: Vec3,
     /// Shading normal.
     pub ns: Vec3,
+    /// Shading normal before a normal map (`ShadingPoint::n0`).
+    pub n0: Vec3,
     /// Direction toward the previous light-path vertex.
     pub w_in: Vec3,
     /// `W0·Le`, `W0·I` or `β/N`.
@@ -41,12 +43,12 @@ struct VplCollector(Vec<Vpl>);
 impl ParticleVisitor for VplCollector {
     fn emitter(&mut self, v: &EmitterVertex) {
         let kind = if v.point { VplKind::Point } else { VplKind::Area };
-        self.0.push(Vpl { p: v.p, ng: v.n, ns: v.n, w_in: v.n, power: v.emission * v.weight, kind });
+        self.0.push(Vpl { p: v.p, ng: v.n, ns: v.n, n0: v.n, w_in: v.n, power: v.emission * v.weight, kind });
     }
     fn surface(&mut self, v: &SurfaceVertex) -> bool {
         if !v.material.is_black() {
             let kind = VplKind::Surface(*v.material);
-            self.0.push(Vpl { p: v.p, ng: v.ng, ns: v.ns, w_in: v.w_in, power: v.beta, kind });
+            self.0.push(Vpl { p: v.p, ng: v.ng, ns: v.ns, n0: v.n0, w_in: v.w_in, power: v.beta, kind });
         }
         true
     }

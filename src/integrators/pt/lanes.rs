@@ -178,7 +178,7 @@ impl Lanes {
         LaneOut {
             nee: self.nee_ok[j].then(|| LightSample { value: self.value.get(j), shadow: ray }),
             bsdf: self.bsdf_ok[j].then(|| diffuse::sampled(self.albedo.get(j), self.wi.get(j), self.pdf_w[j])),
-            sp: ShadingPoint { p: self.p.get(j), ng: self.ng.get(j), ns: self.ns.get(j) },
+            sp: ShadingPoint::new(self.p.get(j), self.ng.get(j), self.ns.get(j)),
             wo: self.wo.get(j),
             albedo: self.albedo.get(j),
         }

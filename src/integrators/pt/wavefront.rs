@@ -213,7 +213,8 @@ fn shade(world: &World, w: &mut Wave, k: usize, depth: u32, rngs: &mut [Rng], ou
     }
     let (m, sp) = world.shade(&hit, -walk.d);
     let v = SurfaceVertex::at(&m, sp, &hit, walk.d, depth);
-    if let (true, Material::Diffuse { albedo }) = (w.lanes_on, m) {
+    // the lanes run the untilted Lambertian BSDF: a normal-mapped point takes the scalar path
+    if let (true, Material::Diffuse { albedo }, true) = (w.lanes_on, m, v.sp.n0 == v.sp.ns) {
         w.live[k].prefix = false;
         return w.lanes.push(Vertex::draw(world, k, &v, albedo, rng));
     }

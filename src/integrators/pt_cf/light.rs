@@ -428,7 +428,7 @@ emission = [5.0, 5.0, 5.0]
     }
 
     fn point(h: &Hit) -> ShadingPoint {
-        ShadingPoint { p: h.p, ng: h.ng, ns: h.ns }
+        ShadingPoint::new(h.p, h.ng, h.ns)
     }
 
     /// For enumerated paths of C with one and with two non-Dirac vertices, `w_E` computed along

@@ -103,7 +103,8 @@ impl GuidedPathTracer {
             self.guided(world, w, GuidedVertex { live, v, g }, ctx, out);
             return false;
         }
-        if let (true, Material::Diffuse { albedo }) = (w.lanes_on, m) {
+        // the lanes run the untilted Lambertian BSDF: a normal-mapped point takes the scalar path
+        if let (true, Material::Diffuse { albedo }, true) = (w.lanes_on, m, v.sp.n0 == v.sp.ns) {
             w.live[k].st.diffuse += 1;
             cw.t[w.lanes.n] = hit.t;
             return w.lanes.push(Vertex::draw(world, k, &v, albedo, &mut ctx.rng));

@@ -1,19 +1,24 @@
-//! Mitsuba BSDF plugins → `Material`: `diffuse` → Diffuse, smooth `conductor` → Mirror (preset
-//! `none`) or Conductor (η, k), `dielectric` → Glass with η = int_ior/ext_ior, 0.6's `phong` →
-//! Glossy (the same energy-conserving modified Phong), `twosided` around any of the reflective
-//! ones. As in Mitsuba, a BSDF not wrapped in `twosided` is black from behind
-//! (`scene::Surface`); the dielectric scatters from both sides. `ref`/`id` resolve through
-//! `Cx::ids`.
+//! Mitsuba BSDF plugins → `Material` and `Surface`: `diffuse` → Diffuse, smooth `conductor` →
+//! Mirror (preset `none`) or Conductor (η, k), `dielectric` → Glass with η = int_ior/ext_ior,
+//! 0.6's `phong` → Glossy (the same energy-conserving modified Phong), `twosided` around any of
+//! the reflective ones, `normalmap` around any BSDF. As in Mitsuba, a BSDF not wrapped in
+//! `twosided` is black from behind (`scene::Surface`); the dielectric scatters from both sides.
+//! Reflectances may be textures (`super::texture`). `ref`/`id` resolve through `Cx::ids`.
 //!
-//! Invariants: anything else (rough or layered BSDFs, textures, `twosided` with two different
-//! sides) is an error naming the file, line, plugin and parameter; reflectances in [0, 1].
+//! Invariants: anything else (`twosided` with two different sides, a `normalmap` in a
+//! `normalmap`) is an error naming the file, line, plugin and parameter; constant reflectances in
+//! [0, 1].
 
 use super::params::Plugin;
 use super::presets;
+use super::texture::Param;
 use super::xml::Node;
 use super::Cx;
+use crate::bsdf::plastic::Plastic;
+use crate::bsdf::thindielectric::ThinDielectric;
+use crate::bsdf::Slot;
 use crate::math::Rgb;
-use crate::scene::{Material, SceneError, Surface};
+use crate::scene::{Material, SceneError, SlotTexture, Surface};
 
 /// The material index of a `<bsdf>` or `<ref>` element (registering inline BSDFs and ids).
 pub(super) fn resolve(cx: &mut Cx, n: &Node) -> Result<u32, SceneError> {
@@ -23,38 +28,69 @@ pub(super) fn resolve(cx: &mut Cx, n: &Node) -> Result<u32, SceneError> {
             cx.err(n.line, &format!("ref.{id}"), format!("`<ref id=\"{id}\">` names no BSDF defined before it"))
         });
     }
-    let m = material(cx, n)?;
-    // Mitsuba's BSDFs scatter from the front only, unless wrapped in `twosided`
-    let s = if n.ty() == "twosided" { Surface::TWO_SIDED } else { Surface::one_sided(&m) };
-    let idx = cx.b.material_with(m, s);
+    let Parsed { m, surface } = material(cx, n)?;
+    let idx = cx.b.material_with(m, surface);
     if let Some(id) = n.attr("id") {
         cx.ids.insert(id.to_string(), idx);
     }
     Ok(idx)
 }
 
-/// Parses one `<bsdf>` into a material (not registered).
-pub(super) fn material(cx: &mut Cx, n: &Node) -> Result<Material, SceneError> {
+/// A parsed `<bsdf>`: its parameters (a textured one at the texture's mean) and its surface.
+pub(super) struct Parsed {
+    /// The material.
+    pub m: Material,
+    /// Its sides, textures and normal map.
+    pub surface: Surface,
+}
+
+/// The one nested BSDF of a wrapper plugin (`twosided`, `normalmap`).
+fn nested(cx: &mut Cx, p: &mut Plugin) -> Result<Parsed, SceneError> {
+    let kids = p.objects(&["bsdf", "ref"]);
+    if kids.len() != 1 {
+        let msg = "exactly one nested BSDF is supported (different front and back sides are not)";
+        return Err(p.err(cx, p.node.line, "bsdf", msg));
+    }
+    material(cx, kids[0])
+}
+
+/// Parses one `<bsdf>` into a material and its surface (not registered).
+pub(super) fn material(cx: &mut Cx, n: &Node) -> Result<Parsed, SceneError> {
     if n.tag == "ref" {
         let i = resolve(cx, n)?;
-        return Ok(cx.b.material_at(i));
+        return Ok(Parsed { m: cx.b.material_at(i), surface: cx.b.surface_at(i).clone() });
     }
     let mut p = Plugin::new(n);
+    let mut textures = Vec::new();
     let m = match n.ty() {
         "twosided" => {
-            let kids = p.objects(&["bsdf", "ref"]);
-            if kids.len() != 1 {
-                let msg = "exactly one nested BSDF is supported (different front and back sides are not)";
-                return Err(p.err(cx, n.line, "bsdf", msg));
+            let inner = nested(cx, &mut p)?;
+            if inner.m.is_two_sided_by_nature() {
+                let msg = "`twosided` around `dielectric` is not a valid BSDF";
+                return Err(p.err(cx, p.line_of("bsdf"), "bsdf", msg));
             }
-            let inner = material(cx, kids[0])?;
-            if matches!(inner, Material::Glass { .. }) {
-                return Err(p.err(cx, kids[0].line, "bsdf", "`twosided` around `dielectric` is not a valid BSDF"));
+            p.finish(cx);
+            return Ok(Parsed { surface: Surface { two_sided: true, ..inner.surface }, ..inner });
+        }
+        "normalmap" => {
+            let inner = nested(cx, &mut p)?;
+            if inner.surface.normalmap.is_some() {
+                return Err(p.err(cx, p.line_of("bsdf"), "bsdf", "a `normalmap` inside a `normalmap`"));
             }
-            inner
+            let line = p.line_of("normalmap");
+            let Some(Param::Texture(t)) = super::texture::param(cx, &mut p, "normalmap")? else {
+                return Err(p.err(cx, line, "normalmap", "needs a `normalmap` texture (a `bitmap` with `raw` true)"));
+            };
+            for k in ["flip_invalid_normals", "use_shadowing_function"] {
+                if p.boolean(cx, k)? == Some(false) {
+                    return Err(p.err(cx, p.line_of(k), k, "only Mitsuba's default, true, is supported"));
+                }
+            }
+            p.finish(cx);
+            return Ok(Parsed { surface: Surface { normalmap: Some(t), ..inner.surface }, ..inner });
         }
         "diffuse" => {
-            let c = p.color(cx, "reflectance")?.unwrap_or(Rgb::splat(0.5));
+            let c = colour(cx, &mut p, "reflectance", 0.5, Slot::Reflectance, &mut textures)?;
             Material::Diffuse { albedo: refl(cx, &p, c, "reflectance")? }
         }
         "conductor" => conductor(cx, &mut p)?,
@@ -66,11 +102,29 @@ pub(super) fn material(cx: &mut Cx, n: &Node) -> Result<Material, SceneError> {
                     return Err(p.err(cx, n.line, k, "only the default 1 is supported (lossless glass)"));
                 }
             }
-            let eta = int / ext;
-            if !(eta.is_finite() && eta > 0.0 && eta <= 10.0) {
-                return Err(p.err(cx, n.line, "int_ior", format!("int_ior/ext_ior = {eta} must be in (0, 10]")));
-            }
-            Material::Glass { ior: eta }
+            Material::Glass { ior: eta(cx, &p, int, ext)? }
+        }
+        "thindielectric" => {
+            let int = ior(cx, &mut p, "int_ior", 1.5046)?;
+            let ext = ior(cx, &mut p, "ext_ior", 1.000277)?;
+            let eta = eta(cx, &p, int, ext)?;
+            let r = colour(cx, &mut p, "specular_reflectance", 1.0, Slot::SpecularReflectance, &mut textures)?;
+            let t = colour(cx, &mut p, "specular_transmittance", 1.0, Slot::SpecularTransmittance, &mut textures)?;
+            Material::ThinDielectric(ThinDielectric::new(
+                eta,
+                refl(cx, &p, r, "specular_reflectance")?,
+                refl(cx, &p, t, "specular_transmittance")?,
+            ))
+        }
+        "plastic" => {
+            let d = colour(cx, &mut p, "diffuse_reflectance", 0.5, Slot::DiffuseReflectance, &mut textures)?;
+            let s = colour(cx, &mut p, "specular_reflectance", 1.0, Slot::SpecularReflectance, &mut textures)?;
+            let int = ior(cx, &mut p, "int_ior", 1.49)?;
+            let ext = ior(cx, &mut p, "ext_ior", 1.000277)?;
+            let eta = eta(cx, &p, int, ext)?;
+            let nonlinear = p.boolean(cx, "nonlinear")?.unwrap_or(false);
+            let (d, s) = (refl(cx, &p, d, "diffuse_reflectance")?, refl(cx, &p, s, "specular_reflectance")?);
+            Material::Plastic(Plastic::new(d, s, eta, nonlinear))
         }
         "phong" => {
             let a = p.color(cx, "diffuse_reflectance")?.unwrap_or(Rgb::splat(0.5));
@@ -88,14 +142,35 @@ pub(super) fn material(cx: &mut Cx, n: &Node) -> Result<Material, SceneError> {
         }
         t => {
             let why = match t {
-                "roughconductor" | "roughdielectric" | "roughplastic" | "plastic" => "rough and layered BSDFs",
-                _ => "supported: diffuse, conductor, dielectric, twosided, phong",
+                "roughconductor" | "roughdielectric" | "roughplastic" => "rough BSDFs",
+                _ => "supported: diffuse, conductor, dielectric, thindielectric, plastic, twosided, normalmap, phong",
             };
             return Err(cx.err(n.line, &format!("bsdf.{t}"), format!("bsdf `{t}` is not supported ({why})")));
         }
     };
     p.finish(cx);
-    Ok(m)
+    // Mitsuba's BSDFs scatter from the front only, unless wrapped in `twosided`
+    Ok(Parsed { m, surface: Surface { textures, ..Surface::one_sided(&m) } })
+}
+
+/// A colour parameter (default `default`) that may be a texture: a texture is recorded for
+/// `slot` in `textures`, and the value returned is its mean (what is known of it at load).
+fn colour(
+    cx: &mut Cx,
+    p: &mut Plugin,
+    name: &str,
+    default: f32,
+    slot: Slot,
+    textures: &mut Vec<SlotTexture>,
+) -> Result<Rgb, SceneError> {
+    match super::texture::param(cx, p, name)? {
+        None => Ok(Rgb::splat(default)),
+        Some(Param::Constant(c)) => Ok(c),
+        Some(Param::Texture(t)) => {
+            textures.push(SlotTexture { slot, texture: t });
+            Ok(Rgb::splat(cx.b.texture_at(t).mean()))
+        }
+    }
 }
 
 /// Smooth conductor: `material` preset (default `none`) or explicit `eta`/`k`, times
@@ -120,6 +195,15 @@ fn conductor(cx: &mut Cx, p: &mut Plugin) -> Result<Material, SceneError> {
         return Ok(Material::Mirror { reflectance: spec }); // F = 1 exactly
     }
     Ok(Material::Conductor { reflectance: spec, eta: eta / ext, k: k / ext })
+}
+
+/// The relative index η = int_ior/ext_ior, in (0, 10].
+fn eta(cx: &Cx, p: &Plugin, int: f32, ext: f32) -> Result<f32, SceneError> {
+    let eta = int / ext;
+    if !(eta.is_finite() && eta > 0.0 && eta <= 10.0) {
+        return Err(p.err(cx, p.line_of("int_ior"), "int_ior", format!("int_ior/ext_ior = {eta} must be in (0, 10]")));
+    }
+    Ok(eta)
 }
 
 /// An IOR given as a number or a preset name.

@@ -19,6 +19,7 @@ mod bsdf;
 mod params;
 mod presets;
 mod shapes;
+mod texture;
 mod xml;
 
 pub use shapes::SEGMENTS;
@@ -26,6 +27,7 @@ pub use shapes::SEGMENTS;
 use crate::math::Vec3;
 use crate::scene::builder::{CameraSpec, Origin, SceneBuilder, View};
 use crate::scene::{Material, Scene, SceneError};
+use crate::texture::TextureCache;
 use params::Plugin;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -37,6 +39,10 @@ pub(super) struct Cx {
     dir: PathBuf,
     b: SceneBuilder,
     ids: BTreeMap<String, u32>,
+    /// Top-level textures by `id`.
+    texture_ids: BTreeMap<String, u32>,
+    /// The images decoded so far.
+    textures: TextureCache,
     default_diffuse: Option<u32>,
 }
 
@@ -75,6 +81,8 @@ pub fn load_str(src: &str, file: &str, dir: &Path, defines: &[(String, String)])
         dir: dir.to_path_buf(),
         b: SceneBuilder::new(file, crate::math::fnv1a(0xcbf2_9ce4_8422_2325, src.as_bytes())),
         ids: BTreeMap::new(),
+        texture_ids: BTreeMap::new(),
+        textures: TextureCache::default(),
         default_diffuse: None,
     };
     let (root, _version, vars) = xml::parse(src, defines).map_err(|(l, m)| cx.err(l, "", m))?;
@@ -94,6 +102,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path, defines: &[(String, String)])
             "bsdf" => {
                 bsdf::resolve(&mut cx, n)?;
             }
+            "texture" => texture::declare(&mut cx, n)?,
             "shape" => shapes::shape(&mut cx, n)?,
             "emitter" => point(&mut cx, n)?,
             t => {

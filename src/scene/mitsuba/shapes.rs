@@ -13,8 +13,8 @@
 use super::params::{Plugin, Xform};
 use super::xml::Node;
 use super::Cx;
-use crate::math::{Rgb, Vec3};
-use crate::scene::builder::{Origin, ShapeIn};
+use crate::math::{Rgb, Vec2, Vec3};
+use crate::scene::builder::{Corners, Origin, ShapeIn};
 use crate::scene::limits;
 use crate::scene::ply::IndexedMesh;
 use crate::scene::SceneError;
@@ -98,7 +98,7 @@ fn shape_material(cx: &mut Cx, p: &mut Plugin, emits: bool) -> Result<u32, Scene
     }
     if emits {
         let black = match bs.first() {
-            Some(b) => super::bsdf::material(cx, b)?.is_black_diffuse(),
+            Some(b) => super::bsdf::material(cx, b)?.m.is_black_diffuse(),
             None => false,
         };
         if !black {
@@ -139,7 +139,12 @@ fn file_mesh(cx: &mut Cx, p: &mut Plugin) -> Result<(IndexedMesh, usize), SceneE
     } else if m.normals.is_none() {
         m.normals = Some(angle_weighted_normals(&m));
     }
-    let _ = p.boolean(cx, "flip_tex_coords")?; // texture coordinates are not used
+    // OBJ's `vt` has its origin at the bottom left: the reader flips v, as Mitsuba's
+    // `flip_tex_coords` (default true for OBJ, false for PLY)
+    let flip_default = p.node.ty() == "obj";
+    if p.boolean(cx, "flip_tex_coords")?.unwrap_or(flip_default) != flip_default {
+        m.uvs.iter_mut().flatten().for_each(|t| t.y = 1.0 - t.y);
+    }
     Ok((m, fl))
 }
 
@@ -165,12 +170,14 @@ fn angle_weighted_normals(m: &IndexedMesh) -> Vec<Vec3> {
 }
 
 fn mesh(positions: Vec<Vec3>, normals: Option<Vec<Vec3>>, faces: Vec<[u32; 3]>) -> IndexedMesh {
-    IndexedMesh { positions, normals, faces, bytes_hash: 0 }
+    IndexedMesh { positions, normals, uvs: None, faces, bytes_hash: 0 }
 }
 
 fn rectangle() -> IndexedMesh {
     let p = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]].map(|[x, y]| Vec3::new(x, y, 0.0));
-    mesh(p.to_vec(), None, vec![[0, 1, 2], [2, 3, 0]])
+    // Mitsuba's uv = (x + 1, y + 1)/2
+    let uvs = p.iter().map(|p| Vec2::new(p.x + 1.0, p.y + 1.0) * 0.5).collect();
+    IndexedMesh { uvs: Some(uvs), ..mesh(p.to_vec(), None, vec![[0, 1, 2], [2, 3, 0]]) }
 }
 
 fn cube() -> IndexedMesh {
@@ -242,8 +249,8 @@ fn sphere(
     if r.is_nan() || r <= 0.0 {
         return Err(cx.b.err(&rat, "radius must be positive"));
     }
-    let (center, radius) = match &xf {
-        None => (Vec3::from_array(c), r),
+    let (center, radius, axes) = match &xf {
+        None => (Vec3::from_array(c), r, Vec3::AXES),
         Some(x) => {
             let m3 = DMat3::from_mat4(x.m);
             let s = [m3.x_axis.length(), m3.y_axis.length(), m3.z_axis.length()];
@@ -255,12 +262,13 @@ fn sphere(
                 return Err(p.err(cx, p.node.line, "to_world", msg));
             }
             let cc = x.m.transform_point3(DVec3::from_array(c.map(f64::from)));
-            (cc.as_vec3(), (r as f64 * s[0]) as f32)
+            let axes = [m3.x_axis, m3.y_axis, m3.z_axis].map(|a| a.normalize().as_vec3());
+            (cc.as_vec3(), (r as f64 * s[0]) as f32, axes)
         }
     };
     // after a transform, what leaves the extent (or shrinks the radius to 0) is the transform's
     let (cat, rat) = if xf.is_some() { (xf_at, xf_at) } else { (&cat, &rat) };
-    cx.b.sphere(id, (center, cat), (radius, rat), flip)
+    cx.b.sphere(id, (center, cat), (radius, rat), flip, axes)
 }
 
 /// A mesh's world-space triangles → the builder (which skips degenerate ones with a warning and
@@ -278,12 +286,14 @@ fn triangles(
     let xp = |v: Vec3| xf.map_or(v, |x| x.m.transform_point3(v.as_dvec3()).as_vec3());
     let xn = |v: Vec3| nm.map_or(v, |n: DMat3| (n * v.as_dvec3()).as_vec3());
     let normals = m.normals.as_ref().filter(|ns| ns.len() == m.positions.len());
+    let uvs = m.uvs.as_ref().filter(|t| t.len() == m.positions.len());
     for (k, f) in m.faces.iter().enumerate() {
         let f = if flip { [f[0], f[2], f[1]] } else { *f };
         let raw = f.map(|i| m.positions[i as usize]);
         let n = normals.map(|ns| f.map(|i| if flip { -xn(ns[i as usize]) } else { xn(ns[i as usize]) }));
+        let uv = uvs.map(|t| f.map(|i| t[i as usize]));
         let blame = if raw.iter().any(|r| r.is_finite() && !limits::within_extent(*r)) { raw_at } else { xf_at };
-        cx.b.triangle(id, (raw.map(xp), raw), n, blame, Some(k))?;
+        cx.b.triangle(id, (raw.map(xp), raw), Corners { n, uv }, blame, Some(k))?;
     }
     Ok(())
 }
