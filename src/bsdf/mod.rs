@@ -13,8 +13,10 @@ mod conductor;
 mod dielectric;
 pub mod diffuse;
 mod material;
+pub mod microfacet;
 mod phong;
 pub mod plastic;
+pub mod roughconductor;
 #[cfg(test)]
 pub(crate) mod testing;
 pub mod thindielectric;
