@@ -17,6 +17,7 @@ pub mod microfacet;
 mod phong;
 pub mod plastic;
 pub mod roughconductor;
+pub mod roughdielectric;
 #[cfg(test)]
 pub(crate) mod testing;
 pub mod thindielectric;
