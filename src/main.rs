@@ -33,7 +33,7 @@ fn on_cluster_usage<T, E: std::fmt::Display>(
     f: impl FnOnce(&dyn distributed::Cluster) -> Result<T, E>,
     usage: impl FnOnce(&E) -> bool,
 ) -> Result<T, Failure> {
-    let cluster = distributed::try_init()?;
+    let cluster = distributed::try_init().map_err(String::from)?;
     let print = cluster.rank() == 0;
     f(cluster.as_ref()).map_err(|e| Failure { usage: usage(&e), message: e.to_string(), print, interrupted: false })
 }
@@ -115,7 +115,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                     Err(e) => errln!("mpi self-test FAILED: {e}"),
                 }
             }
-            r
+            Ok(r?)
         }),
     }
 }

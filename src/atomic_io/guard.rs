@@ -3,21 +3,17 @@
 //! its other outputs, their temporaries and backups, and whether it can be created, before
 //! anything is written.
 
-use super::{atomic_path, backup_path};
+use super::{AtomicIoError, Sibling, SiblingClash};
 use std::io;
 use std::path::{Path, PathBuf};
 
 /// Refuses an output prefix whose last component is empty, `.` or `..` (`--out dir/` would
 /// otherwise write the hidden files `dir/.exr`, `dir/.png`, `dir/.json`).
-pub fn check_output_prefix(prefix: &Path) -> Result<(), String> {
+pub fn check_output_prefix(prefix: &Path) -> Result<(), AtomicIoError> {
     let raw = prefix.as_os_str().to_string_lossy();
     let last = raw.rsplit(std::path::is_separator).next().unwrap_or("");
     if last.is_empty() || last == "." || last == ".." {
-        return Err(format!(
-            "output prefix `{raw}` has no file name (the files would be `{raw}.exr`, …); \
-             give one, e.g. `--out {}`",
-            Path::new(raw.as_ref()).join("render").display()
-        ));
+        return Err(AtomicIoError::NoFileName { prefix: prefix.to_path_buf() });
     }
     Ok(())
 }
@@ -91,16 +87,17 @@ pub fn resolve(p: &Path) -> PathBuf {
 /// Refuses, before any work, an output that cannot be written: a file output that is a
 /// directory, a directory output that is a file, or one whose nearest existing ancestor is not a
 /// directory.
-fn writable(flag: &str, out: &Path, want_dir: bool) -> Result<(), String> {
+fn writable(flag: &str, out: &Path, want_dir: bool) -> Result<(), AtomicIoError> {
     if out.is_dir() != want_dir && out.exists() {
-        let (is, want) = if want_dir { ("a file", "directory") } else { ("a directory", "file") };
-        return Err(format!("{flag} `{}` is {is}; name a {want}", out.display()));
+        return Err(AtomicIoError::WrongKind { flag: flag.to_string(), output: out.to_path_buf(), want_dir });
     }
     let abs = std::path::absolute(out).unwrap_or_else(|_| out.to_path_buf());
     match abs.ancestors().skip(1).find(|a| a.symlink_metadata().is_ok()) {
-        Some(a) if !a.is_dir() => {
-            Err(format!("{flag} `{}` cannot be created: `{}` is not a directory", out.display(), a.display()))
-        }
+        Some(a) if !a.is_dir() => Err(AtomicIoError::NotCreatable {
+            flag: flag.to_string(),
+            output: out.to_path_buf(),
+            blocker: a.to_path_buf(),
+        }),
         _ => Ok(()),
     }
 }
@@ -188,37 +185,27 @@ impl OutputSet {
     }
 
     /// Every output is written through its temporary `PATH.tmp` and, in a set, a backup
-    /// `PATH.old` ([`atomic_path`], [`backup_path`]): neither may be an input or another output,
-    /// nor an existing file, which the write would replace and then delete.
-    fn check_siblings(&self, inputs: &[(FileId, PathBuf)]) -> Result<(), String> {
+    /// `PATH.old` ([`Sibling`]: [`super::atomic_path`], [`super::backup_path`]): neither may be an
+    /// input or another output, nor an existing file, which the write would replace and then
+    /// delete.
+    fn check_siblings(&self, inputs: &[(FileId, PathBuf)]) -> Result<(), AtomicIoError> {
         let outs: Vec<PathBuf> = self.outputs.iter().map(|(_, p, _)| resolve(p)).collect();
         for (flag, out, _) in &self.outputs {
-            for (role, sib) in [("temporary", atomic_path(out)), ("backup", backup_path(out))] {
+            for sibling in [Sibling::Temporary, Sibling::Backup] {
+                let sib = sibling.path(out);
                 let (id, r) = (file_id(&sib), resolve(&sib));
-                let why = |which: String| {
-                    format!(
-                        "{flag} `{}` is written through its {role} `{}`, which {which}",
-                        out.display(),
-                        sib.display()
-                    )
-                };
-                if let Some(((w, p), _)) = self.inputs.iter().zip(inputs).find(|(_, (iid, ir))| *iid == id || *ir == r)
+                let clash = if let Some(((what, path), _)) =
+                    self.inputs.iter().zip(inputs).find(|(_, (iid, ir))| *iid == id || *ir == r)
                 {
-                    return Err(why(format!(
-                        "is {w} `{}`: writing would destroy it (name another output)",
-                        p.display()
-                    )));
-                }
-                if outs.contains(&r) {
-                    return Err(why("is also an output of this run (name another output)".into()));
-                }
-                if sib.symlink_metadata().is_ok() {
-                    return Err(why(
-                        "exists (left by an interrupted write?): it would be replaced and then deleted; move it \
-                         away, or name another output"
-                            .into(),
-                    ));
-                }
+                    SiblingClash::Input { what: what.clone(), path: path.clone() }
+                } else if outs.contains(&r) {
+                    SiblingClash::Output
+                } else if sib.symlink_metadata().is_ok() {
+                    SiblingClash::Exists
+                } else {
+                    continue;
+                };
+                return Err(AtomicIoError::Sibling { flag: flag.clone(), output: out.clone(), sibling, clash });
             }
         }
         Ok(())
@@ -226,7 +213,7 @@ impl OutputSet {
 
     /// The rules of [`OutputSet`]; the error names the output, where it comes from, and the file
     /// it would destroy.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), AtomicIoError> {
         let inputs: Vec<(FileId, PathBuf)> = self.inputs.iter().map(|(_, p)| (file_id(p), resolve(p))).collect();
         let mut seen: Vec<(FileId, PathBuf)> = Vec::new();
         for (flag, out, replaces) in &self.outputs {
@@ -235,20 +222,22 @@ impl OutputSet {
             for ((what, input), (iid, ir)) in self.inputs.iter().zip(&inputs) {
                 let same = *iid == id || *ir == r;
                 if same && allowed.as_ref().is_none_or(|(aid, ar)| aid != iid && ar != ir) {
-                    return Err(format!(
-                        "{flag} `{}` is {what} `{}`: writing it would destroy it (name another output)",
-                        out.display(),
-                        input.display()
-                    ));
+                    return Err(AtomicIoError::OutputIsInput {
+                        flag: flag.clone(),
+                        output: out.clone(),
+                        what: what.clone(),
+                        input: input.clone(),
+                    });
                 }
             }
             if let Some(k) = seen.iter().position(|(sid, sr)| *sid == id || *sr == r) {
                 let (other_flag, other, _) = &self.outputs[k];
-                return Err(format!(
-                    "{flag} `{}` is also the output `{}` ({other_flag}): one would overwrite the other",
-                    out.display(),
-                    other.display()
-                ));
+                return Err(AtomicIoError::OutputTwice {
+                    flag: flag.clone(),
+                    output: out.clone(),
+                    other_flag: other_flag.clone(),
+                    other: other.clone(),
+                });
             }
             seen.push((id, r));
             if !self.best_effort.contains(out) {
@@ -260,12 +249,12 @@ impl OutputSet {
             writable(flag, dir, true)?;
             let d = resolve(dir);
             if let Some(((what, input), _)) = self.inputs.iter().zip(&inputs).find(|(_, (_, ir))| ir.starts_with(&d)) {
-                return Err(format!(
-                    "{what} `{}` lies in `{}`, which {flag} writes: it could be overwritten (move it or name \
-                     another output)",
-                    input.display(),
-                    dir.display()
-                ));
+                return Err(AtomicIoError::InputInOutputDir {
+                    what: what.clone(),
+                    input: input.clone(),
+                    flag: flag.clone(),
+                    dir: dir.clone(),
+                });
             }
         }
         Ok(())
@@ -307,7 +296,7 @@ mod tests {
                 g.output("--out", o);
             });
             g.output("--checkpoint-path", out);
-            g.check()
+            g.check().map_err(|e| e.to_string())
         };
         let e = check(&via_dots, &[]).unwrap_err();
         assert!(e.contains("--checkpoint-path") && e.contains("destroy"), "{e}");
@@ -329,11 +318,12 @@ mod tests {
         g.input("--resume", &ckpt).input("the scene", &scene).output_replacing("--checkpoint-path", &ckpt, &ckpt);
         g.check().unwrap();
         g.output_replacing("--out", &scene, &ckpt);
-        assert!(g.check().unwrap_err().contains("the scene"));
+        assert!(matches!(g.check().unwrap_err(), AtomicIoError::OutputIsInput { what, .. } if what == "the scene"));
         // an input inside an output directory
         let mut g = OutputSet::new();
         g.input("--reference", &dir.join("sub/ref.exr")).output_dir("compare --out", &dir.join("sub"));
-        assert!(g.check().unwrap_err().contains("--reference"));
+        let e = g.check().unwrap_err();
+        assert!(matches!(&e, AtomicIoError::InputInOutputDir { what, .. } if what == "--reference"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
@@ -351,7 +341,7 @@ mod tests {
             outs.iter().for_each(|o| {
                 g.output("--out", o);
             });
-            g.check()
+            g.check().map_err(|e| e.to_string())
         };
         // the scene is the backup of an output: refused, and kept
         let e = check(&[&out]).unwrap_err();
@@ -375,7 +365,8 @@ mod tests {
         check(&[&dir.join("new/sub/r.exr")]).unwrap();
         // the writer itself never truncates a temporary it did not create, nor removes it
         let e = write_set_with(&mut RealFs, &[(dir.join("r.json"), b"{}".to_vec())]).unwrap_err();
-        assert!(e.contains("r.json.tmp"), "{e}");
+        assert!(e.to_string().contains("r.json.tmp"), "{e}");
+        assert!(matches!(&e, AtomicIoError::Write { source, .. } if source.kind() == io::ErrorKind::AlreadyExists));
         assert_eq!(std::fs::read(&notes).unwrap(), b"notes");
         assert_eq!(std::fs::read(&scene).unwrap(), b"scene");
         std::fs::remove_dir_all(&dir).unwrap();
@@ -385,7 +376,8 @@ mod tests {
     fn prefixes_without_a_file_name_are_refused() {
         for bad in ["dir/", "dir/.", "dir/..", "", "/", "a/b//"] {
             let e = check_output_prefix(Path::new(bad)).unwrap_err();
-            assert!(e.contains("no file name"), "{bad}: {e}");
+            assert!(e.to_string().contains("no file name"), "{bad}: {e}");
+            assert_eq!(e.path(), Path::new(bad));
         }
         for good in ["x", "dir/x", "dir/.x", "./x", "../x"] {
             check_output_prefix(Path::new(good)).unwrap();

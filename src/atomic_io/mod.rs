@@ -1,7 +1,7 @@
 //! Atomic file writes: one file, or a set of files (a render's `PREFIX.{exr,png,json}`) that is
 //! replaced as a whole or not at all.
 //!
-//! [`write_set`] (and [`FileSet::commit`]) runs three phases:
+//! [`write_set_with`] (and [`FileSet::write`], [`atomic_write`]) runs three phases:
 //! 1. **temporaries**: every file's bytes go to [`atomic_path`]`(path)` (`PATH.tmp`, same
 //!    directory), each fsynced. A failure here (a full disk) removes every temporary and leaves
 //!    the old files untouched.
@@ -20,13 +20,16 @@
 //! refuses unlinks can leave a `.tmp` behind.
 //!
 //! All file-system calls go through [`FileOps`], so tests inject a failure at any single step
-//! ([`RealFs`] is the real thing). Nothing here panics; errors are `String`s naming the file.
+//! ([`RealFs`] is the real thing). Nothing here panics; errors are [`AtomicIoError`]s naming the
+//! file (`error`).
 //!
 //! Also the guards around them (`guard`): [`read_regular`] (every whole-file read of an input: a
 //! FIFO would block forever, `/dev/zero` would fill the memory) and [`OutputSet`], the one output
 //! guard of every command that writes (no output names an input or another output of the run).
 
+mod error;
 mod guard;
+pub use error::{AtomicIoError, Sibling, SiblingClash};
 pub use guard::{check_output_prefix, read_regular, require_regular, resolve, same_file, OutputSet};
 
 use std::io::{self, Write};
@@ -87,7 +90,7 @@ pub fn atomic_path(path: &Path) -> PathBuf {
     suffixed(path, ".tmp")
 }
 
-/// Where [`write_set`] keeps the previous version of `path` while it renames: `PATH.old`.
+/// Where [`write_set_with`] keeps the previous version of `path` while it renames: `PATH.old`.
 pub fn backup_path(path: &Path) -> PathBuf {
     suffixed(path, ".old")
 }
@@ -100,7 +103,7 @@ fn suffixed(path: &Path, suffix: &str) -> PathBuf {
 
 /// Writes `bytes` to [`atomic_path`]`(path)`, fsyncs, then renames it to `path`; on failure the
 /// temporary is removed and `path` is untouched. Creates no directories.
-pub fn atomic_write(path: &Path, bytes: &[u8]) -> Result<(), String> {
+pub fn atomic_write(path: &Path, bytes: &[u8]) -> Result<(), AtomicIoError> {
     write_set_with(&mut RealFs, &[(path.to_path_buf(), bytes.to_vec())])
 }
 
@@ -127,24 +130,36 @@ impl FileSet {
     }
 
     /// Writes the set on the real file system.
-    pub fn commit(self) -> Result<(), String> {
+    pub fn write(self) -> Result<(), AtomicIoError> {
         write_set_with(&mut RealFs, &self.files)
     }
 
     /// Writes the set through `fs` (tests inject failures here).
-    pub fn commit_with(self, fs: &mut dyn FileOps) -> Result<(), String> {
+    pub fn write_with(self, fs: &mut dyn FileOps) -> Result<(), AtomicIoError> {
         write_set_with(fs, &self.files)
+    }
+
+    /// [`FileSet::write`] with the error as its message, for the callers whose own errors are
+    /// still messages (`scene::export`, `chart`).
+    pub fn commit(self) -> Result<(), String> {
+        Ok(self.write()?)
+    }
+
+    /// [`FileSet::write_with`] with the error as its message (the failure-injection tests match
+    /// on it).
+    pub fn commit_with(self, fs: &mut dyn FileOps) -> Result<(), String> {
+        Ok(self.write_with(fs)?)
     }
 }
 
 /// Writes `files` as a whole or not at all through `fs` (see the module docs).
-pub fn write_set_with(fs: &mut dyn FileOps, files: &[(PathBuf, Vec<u8>)]) -> Result<(), String> {
+pub fn write_set_with(fs: &mut dyn FileOps, files: &[(PathBuf, Vec<u8>)]) -> Result<(), AtomicIoError> {
     for (i, (p, _)) in files.iter().enumerate() {
         if fs.is_dir(p) {
-            return Err(format!("cannot write {}: it is a directory", p.display()));
+            return Err(AtomicIoError::IsDirectory { path: p.clone() });
         }
         if files[..i].iter().any(|(q, _)| q == p) {
-            return Err(format!("cannot write {}: named twice in one set", p.display()));
+            return Err(AtomicIoError::NamedTwice { path: p.clone() });
         }
     }
     let tmps: Vec<PathBuf> = files.iter().map(|(p, _)| atomic_path(p)).collect();
@@ -153,7 +168,7 @@ pub fn write_set_with(fs: &mut dyn FileOps, files: &[(PathBuf, Vec<u8>)]) -> Res
             // a temporary that was already there is not ours to remove
             let ours = if e.kind() == io::ErrorKind::AlreadyExists { i } else { i + 1 };
             remove_all(fs, &tmps[..ours]);
-            return Err(format!("cannot write {}: {e}", tmps[i].display()));
+            return Err(AtomicIoError::Write { path: tmps[i].clone(), source: e });
         }
     }
     let backups = match make_backups(fs, files) {
@@ -164,17 +179,11 @@ pub fn write_set_with(fs: &mut dyn FileOps, files: &[(PathBuf, Vec<u8>)]) -> Res
         }
     };
     for (i, (p, _)) in files.iter().enumerate() {
-        if let Err(e) = fs.rename(&tmps[i], p) {
-            let restore = roll_back(fs, &files[..i], &backups[..i]);
+        if let Err(source) = fs.rename(&tmps[i], p) {
+            let mixed = roll_back(fs, &files[..i], &backups[..i]);
             remove_all(fs, &tmps);
             remove_all(fs, &backups.iter().flatten().cloned().collect::<Vec<_>>());
-            let mut msg = format!("cannot rename {} to {}: {e}", tmps[i].display(), p.display());
-            if restore.is_empty() {
-                msg.push_str(" (the previous files are unchanged)");
-            } else {
-                msg.push_str(&format!("; the set is now mixed: {}", restore.join("; ")));
-            }
-            return Err(msg);
+            return Err(AtomicIoError::Rename { from: tmps[i].clone(), to: p.clone(), source, mixed });
         }
     }
     remove_all(fs, &backups.into_iter().flatten().collect::<Vec<_>>());
@@ -183,7 +192,7 @@ pub fn write_set_with(fs: &mut dyn FileOps, files: &[(PathBuf, Vec<u8>)]) -> Res
 }
 
 /// Phase 2: backups of the existing targets (none for a single file, whose rename is atomic).
-fn make_backups(fs: &mut dyn FileOps, files: &[(PathBuf, Vec<u8>)]) -> Result<Vec<Option<PathBuf>>, String> {
+fn make_backups(fs: &mut dyn FileOps, files: &[(PathBuf, Vec<u8>)]) -> Result<Vec<Option<PathBuf>>, AtomicIoError> {
     let mut backups: Vec<Option<PathBuf>> = Vec::with_capacity(files.len());
     for (p, _) in files {
         if files.len() < 2 || !fs.exists(p) {
@@ -191,20 +200,24 @@ fn make_backups(fs: &mut dyn FileOps, files: &[(PathBuf, Vec<u8>)]) -> Result<Ve
             continue;
         }
         let b = backup_path(p);
-        if let Err(e) = fs.backup(p, &b) {
-            if e.kind() != io::ErrorKind::AlreadyExists {
+        if let Err(source) = fs.backup(p, &b) {
+            if source.kind() != io::ErrorKind::AlreadyExists {
                 backups.push(Some(b.clone()));
             }
             remove_all(fs, &backups.iter().flatten().cloned().collect::<Vec<_>>());
-            return Err(format!("cannot keep the previous {} as {}: {e}", p.display(), b.display()));
+            return Err(AtomicIoError::Backup { path: p.clone(), backup: b, source });
         }
         backups.push(Some(b));
     }
     Ok(backups)
 }
 
-/// Puts back the targets already replaced; returns a description of each one that could not be.
-fn roll_back(fs: &mut dyn FileOps, done: &[(PathBuf, Vec<u8>)], backups: &[Option<PathBuf>]) -> Vec<String> {
+/// Puts back the targets already replaced; returns each one that could not be, with its error.
+fn roll_back(
+    fs: &mut dyn FileOps,
+    done: &[(PathBuf, Vec<u8>)],
+    backups: &[Option<PathBuf>],
+) -> Vec<(PathBuf, io::Error)> {
     let mut failed = Vec::new();
     for ((p, _), b) in done.iter().zip(backups) {
         let r = match b {
@@ -212,7 +225,7 @@ fn roll_back(fs: &mut dyn FileOps, done: &[(PathBuf, Vec<u8>)], backups: &[Optio
             None => fs.remove(p),
         };
         if let Err(e) = r {
-            failed.push(format!("{} is the new version ({e})", p.display()));
+            failed.push((p.clone(), e));
         }
     }
     failed

@@ -204,7 +204,7 @@ fn write_mean(
     };
     let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
     outputs.add(with_ext(prefix, "json"), text.into_bytes());
-    outputs.commit()?;
+    outputs.write()?;
     Ok(report)
 }
 

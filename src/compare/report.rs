@@ -230,7 +230,8 @@ pub fn write_compare_report(dir: &Path, o: &CompareOutcome, reference: &Image) -
         notes,
     };
     atomic_write(&dir.join("report.md"), report_md(o, &sections).as_bytes())?;
-    atomic_write(&dir.join("report.html"), html_page("Time-boxed comparison", &report_html(o, &sections)).as_bytes())
+    atomic_write(&dir.join("report.html"), html_page("Time-boxed comparison", &report_html(o, &sections)).as_bytes())?;
+    Ok(())
 }
 
 /// The relMSE charts (against wall time and against spp) of every region; a chart that cannot

@@ -429,5 +429,6 @@ pub fn write_stability_report(dir: &Path, cfg: &StabilityConfig, recs: &[Stabili
     atomic_write(&dir.join("stability.md"), md.as_bytes())?;
     let mut body = format!("<p>{}</p>\n<h2>Runs</h2>\n{}", esc(&summary), table_html(&headers, &rows));
     let _ = write!(body, "<h2>Cases</h2>\n{}", table_html(&case_h, &case_rows));
-    atomic_write(&dir.join("stability.html"), html_page("Stability suite", &body).as_bytes())
+    atomic_write(&dir.join("stability.html"), html_page("Stability suite", &body).as_bytes())?;
+    Ok(())
 }

@@ -12,29 +12,31 @@
 //!   The watchdog only reads clocks and never touches the render's state, so it cannot change an
 //!   image; it is armed for time-boxed renders only (an spp render has no bound to hold it to).
 
-use super::Cluster;
+use super::{Cluster, ClusterError};
 use std::time::{Duration, Instant};
 
 /// One field of a job as the ranks compare it: its name (the option, or what it covers) and its
 /// value (the value itself when short, else a hash of it).
 pub type JobField = (&'static str, String);
 
-/// Checks that every rank runs the same `fields` (collective; see the module docs). The error is
-/// the same on every rank and names every differing field.
-pub fn agree_job(c: &dyn Cluster, fields: &[JobField]) -> Result<(), String> {
+/// Checks that every rank runs the same `fields` (collective; see the module docs). The error
+/// ([`ClusterError::JobMismatch`]) is the same on every rank and names every differing field.
+pub fn agree_job(c: &dyn Cluster, fields: &[JobField]) -> Result<(), ClusterError> {
     if c.size() == 1 {
         return Ok(());
     }
     let mine = encode(fields);
+    // rank 0's verdict, one differing field a line (none: the jobs agree)
     let mut verdict = match c.gather_bytes(&mine) {
-        Some(all) => compare(fields, &all).into_bytes(),
+        Some(all) => compare(fields, &all).join("\n").into_bytes(),
         None => Vec::new(),
     };
     c.broadcast_bytes(&mut verdict);
     if verdict.is_empty() {
         return Ok(());
     }
-    Err(String::from_utf8_lossy(&verdict).into_owned())
+    let differences = String::from_utf8_lossy(&verdict).lines().map(str::to_string).collect();
+    Err(ClusterError::JobMismatch { differences })
 }
 
 /// `name=value` lines (a value never holds a newline: [`JobField`] values are short or hashed).
@@ -42,8 +44,9 @@ fn encode(fields: &[JobField]) -> Vec<u8> {
     fields.iter().map(|(k, v)| format!("{k}={}\n", v.replace('\n', " "))).collect::<String>().into_bytes()
 }
 
-/// Rank 0's verdict on the gathered jobs: empty when they all equal rank 0's.
-fn compare(fields: &[JobField], all: &[Vec<u8>]) -> String {
+/// Rank 0's verdict on the gathered jobs, one entry per field that differs (a value never holds a
+/// newline): empty when they all equal rank 0's.
+fn compare(fields: &[JobField], all: &[Vec<u8>]) -> Vec<String> {
     let mut differ = Vec::new();
     for (k, v) in fields {
         let line = |b: &Vec<u8>| {
@@ -63,13 +66,7 @@ fn compare(fields: &[JobField], all: &[Vec<u8>]) -> String {
             differ.push(format!("{k} differs (rank 0 `{v}`, {})", others.join(", ")));
         }
     }
-    if differ.is_empty() {
-        return String::new();
-    }
-    format!(
-        "the MPI ranks were started with different jobs: {}; start every rank with the same scene and options",
-        differ.join("; ")
-    )
+    differ
 }
 
 /// How long past the budget's end a rank may wait in one collective: 10 s plus a quarter of the
@@ -98,12 +95,14 @@ mod tests {
     fn a_differing_field_is_named_with_every_value() {
         let a: Vec<JobField> = vec![("--method", "pt".into()), ("--seed", "1".into())];
         let b: Vec<JobField> = vec![("--method", "iws".into()), ("--seed", "1".into())];
-        assert_eq!(compare(&a, &[encode(&a), encode(&a)]), "");
-        let e = compare(&a, &[encode(&a), encode(&b), encode(&a)]);
+        let verdict = |all: &[Vec<u8>]| ClusterError::JobMismatch { differences: compare(&a, all) }.to_string();
+        assert!(compare(&a, &[encode(&a), encode(&a)]).is_empty());
+        let e = verdict(&[encode(&a), encode(&b), encode(&a)]);
         assert!(e.contains("--method differs (rank 0 `pt`, rank 1 `iws`)"), "{e}");
         assert!(!e.contains("--seed"), "{e}");
-        let e = compare(&a, &[encode(&a), encode(&a[..1])]);
+        let e = verdict(&[encode(&a), encode(&a[..1])]);
         assert!(e.contains("--seed differs (rank 0 `1`, rank 1 `missing`)"), "{e}");
+        assert!(e.starts_with("the MPI ranks were started with different jobs: "), "{e}");
         let c = super::super::local::Local::new();
         assert_eq!(agree_job(&c, &a), Ok(()));
     }

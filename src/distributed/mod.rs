@@ -9,6 +9,7 @@
 //! * [`schedule`] holds the pure pass-ownership and time-box arithmetic.
 //! * [`job`]: the ranks' agreement on the job before any work ([`job::agree_job`]) and the
 //!   watchdog's limit ([`Cluster::watch`], armed by [`shared_deadline`] for a time box).
+//! * `error`: [`ClusterError`], the errors of this module's functions.
 //!
 //! Invariants every implementation keeps:
 //! * `rank() < size()` and `size() >= 1`.
@@ -19,6 +20,7 @@
 //! * Message sizes are unlimited: payloads whose element count exceeds `i32::MAX` are split
 //!   into chunks internally.
 
+mod error;
 pub mod job;
 pub mod local;
 #[cfg(feature = "mpi")]
@@ -27,6 +29,7 @@ pub mod schedule;
 
 use std::time::Instant;
 
+pub use error::ClusterError;
 use schedule::Deadline;
 
 /// Collective operations over a group of cooperating processes ("ranks").
@@ -82,7 +85,7 @@ pub fn init() -> Box<dyn Cluster> {
 /// * no feature `mpi`: the process was started by a launcher (`mpirun`/`srun`) that says
 ///   there are several ranks. Each rank would otherwise render the whole image alone and
 ///   they would all write the same output files.
-pub fn try_init() -> Result<Box<dyn Cluster>, String> {
+pub fn try_init() -> Result<Box<dyn Cluster>, ClusterError> {
     #[cfg(feature = "mpi")]
     {
         let c = mpi::MpiCluster::init()?;
@@ -92,11 +95,7 @@ pub fn try_init() -> Result<Box<dyn Cluster>, String> {
     {
         if let Some((var, n)) = launcher_world_size() {
             if n > 1 {
-                return Err(format!(
-                    "this binary was built without the `mpi` feature but was started as one of {n} ranks \
-                     ({var}={n}); rebuild with `cargo build --release --features mpi` \
-                     (needs .ci/install-mpi.sh) or run it without mpirun"
-                ));
+                return Err(ClusterError::NoMpiFeature { var, ranks: n });
             }
         }
         Ok(Box::new(local::Local::new()))
@@ -130,15 +129,16 @@ pub fn all_agree(c: &dyn Cluster, local_ok: bool) -> bool {
 /// `result` if it is `Ok` on every rank; an error on every rank otherwise (collective).
 ///
 /// The failing ranks' messages are gathered to rank 0, whose error names them all (one message
-/// when they agree, else `rank r: …` each); the other ranks' error is a stand-in, which the
-/// binary does not print (rank 0 prints the job's error once). Costs one 8-byte all-reduce when
+/// when they agree, else `rank r: …` each: [`ClusterError::Failed`]); the other ranks' error is a
+/// stand-in ([`ClusterError::FailedElsewhere`]), which the binary does not print (rank 0 prints
+/// the job's error once). Costs one 8-byte all-reduce when
 /// every rank succeeded. Any error that could end one rank early goes through here, so no rank
 /// is left waiting in a collective for a rank that has left.
 ///
 /// A typed error (`E`, sent as its message) comes back as itself where the agreed message is
 /// its own (rank 0's error, alone or the same on every failing rank), else as the agreed
-/// message (`E::from`).
-pub fn agree<T, E: std::fmt::Display + From<String>>(c: &dyn Cluster, result: Result<T, E>) -> Result<T, E> {
+/// [`ClusterError`] (`E::from`).
+pub fn agree<T, E: std::fmt::Display + From<ClusterError>>(c: &dyn Cluster, result: Result<T, E>) -> Result<T, E> {
     let failed = c.all_reduce_max(if result.is_err() { 1.0 } else { 0.0 }) > 0.0;
     if !failed {
         return result;
@@ -146,38 +146,36 @@ pub fn agree<T, E: std::fmt::Display + From<String>>(c: &dyn Cluster, result: Re
     let mine = result.as_ref().err().map(|e| e.to_string()).unwrap_or_default();
     let agreed = match c.gather_bytes(mine.as_bytes()) {
         Some(blobs) => combine_errors(&blobs),
-        None => "the job failed on another rank (rank 0 reports it)".to_string(),
+        None => ClusterError::FailedElsewhere,
     };
     match result {
-        Err(e) if agreed == mine => Err(e),
+        Err(e) if agreed.to_string() == mine => Err(e),
         _ => Err(E::from(agreed)),
     }
 }
 
-/// One message per distinct error, naming the ranks when there is more than one rank.
-fn combine_errors(blobs: &[Vec<u8>]) -> String {
-    let mut distinct: Vec<(String, Vec<usize>)> = Vec::new();
+/// The gathered messages (empty: that rank did not fail), one entry per distinct message with
+/// the ranks that had it ([`ClusterError::Failed`] names the ranks when there is more than one).
+fn combine_errors(blobs: &[Vec<u8>]) -> ClusterError {
+    let mut failures: Vec<(Vec<usize>, String)> = Vec::new();
     for (rank, b) in blobs.iter().enumerate().filter(|(_, b)| !b.is_empty()) {
         let msg = String::from_utf8_lossy(b).into_owned();
-        match distinct.iter_mut().find(|(m, _)| *m == msg) {
-            Some((_, ranks)) => ranks.push(rank),
-            None => distinct.push((msg, vec![rank])),
+        match failures.iter_mut().find(|(_, m)| *m == msg) {
+            Some((ranks, _)) => ranks.push(rank),
+            None => failures.push((vec![rank], msg)),
         }
     }
-    match distinct.as_slice() {
-        [(msg, ranks)] if ranks.len() == blobs.len() || ranks == &[0] => msg.clone(),
-        _ => distinct
-            .iter()
-            .map(|(m, r)| format!("rank {}: {m}", r.iter().map(|r| r.to_string()).collect::<Vec<_>>().join(",")))
-            .collect::<Vec<_>>()
-            .join("; "),
-    }
+    ClusterError::Failed { failures, ranks: blobs.len() }
 }
 
 /// The once-per-round agreement of the pass loop (collective): `Ok(true)` when every rank wants
 /// another round, `Ok(false)` when one wants to stop (time box), and the [`agree`]d error on every
 /// rank when one has a `failure` (a failed write inside the loop, say).
-pub fn agree_round(c: &dyn Cluster, go: bool, failure: Option<String>) -> Result<bool, String> {
+pub fn agree_round<E: std::fmt::Display + From<ClusterError>>(
+    c: &dyn Cluster,
+    go: bool,
+    failure: Option<E>,
+) -> Result<bool, E> {
     let status = if failure.is_some() {
         2.0
     } else if go {
@@ -204,10 +202,14 @@ pub fn agree_min(c: &dyn Cluster, v: u64) -> u64 {
 }
 
 /// Rank 0's `v` on every rank (collective); `what` names it in the error of a malformed broadcast.
-pub fn broadcast_u64(c: &dyn Cluster, v: u64, what: &str) -> Result<u64, String> {
+pub fn broadcast_u64(c: &dyn Cluster, v: u64, what: &str) -> Result<u64, ClusterError> {
     let mut bytes = v.to_le_bytes().to_vec();
     c.broadcast_bytes(&mut bytes);
-    bytes.as_slice().try_into().map(u64::from_le_bytes).map_err(|_| format!("bad {what} broadcast"))
+    bytes
+        .as_slice()
+        .try_into()
+        .map(u64::from_le_bytes)
+        .map_err(|_| ClusterError::BadBroadcast { what: what.to_string(), len: bytes.len() })
 }
 
 /// Builds a [`Deadline`] shared by all ranks for a time box of `budget_secs` seconds
@@ -245,10 +247,10 @@ pub fn shared_deadline(c: &dyn Cluster, local_start: Instant, budget_secs: Optio
 /// message lists the failures of all ranks. Exercises: a 3 MB and an empty broadcast,
 /// `reduce_sum`, `all_reduce_sum`, `all_reduce_max` (with negative values), `gather_bytes`
 /// with per-rank lengths (rank 0's blob is empty) and `barrier`.
-pub fn self_test(c: &dyn Cluster) -> Result<(), String> {
+pub fn self_test(c: &dyn Cluster) -> Result<(), ClusterError> {
     let (rank, size) = (c.rank(), c.size());
     if size == 0 || rank >= size {
-        return Err(format!("bad topology: rank {rank}, size {size}"));
+        return Err(ClusterError::BadTopology { rank, size });
     }
     let mut errs: Vec<String> = Vec::new();
     check_broadcast(c, &mut errs);
@@ -334,7 +336,7 @@ fn check_gather(c: &dyn Cluster, errs: &mut Vec<String>) {
 }
 
 /// Agrees on `self_test`'s verdict and brings every rank's messages to rank 0.
-fn self_test_verdict(c: &dyn Cluster, errs: &[String]) -> Result<(), String> {
+fn self_test_verdict(c: &dyn Cluster, errs: &[String]) -> Result<(), ClusterError> {
     let rank = c.rank();
     let text = errs.iter().map(|e| format!("rank {rank}: {e}")).collect::<Vec<_>>().join("\n");
     let all_text = c.gather_bytes(text.as_bytes());
@@ -342,16 +344,14 @@ fn self_test_verdict(c: &dyn Cluster, errs: &[String]) -> Result<(), String> {
     if failures == 0.0 {
         return Ok(());
     }
-    let msg = match all_text {
-        Some(v) => v
-            .iter()
+    let report = all_text.map(|v| {
+        v.iter()
             .filter(|b| !b.is_empty())
             .map(|b| String::from_utf8_lossy(b).into_owned())
             .collect::<Vec<_>>()
-            .join("\n"),
-        None => format!("{failures} check(s) failed (details on rank 0)"),
-    };
-    Err(msg)
+            .join("\n")
+    });
+    Err(ClusterError::SelfTest { failures: failures as u64, report })
 }
 
 #[cfg(test)]
@@ -376,14 +376,20 @@ mod tests {
         let c = local::Local::new();
         assert_eq!(agree(&c, Ok::<u8, String>(3)), Ok(3));
         assert_eq!(agree(&c, Err::<u8, String>("disk full".into())), Err("disk full".into()));
-        assert_eq!(agree_round(&c, true, None), Ok(true));
-        assert_eq!(agree_round(&c, false, None), Ok(false));
-        assert_eq!(agree_round(&c, true, Some("x".into())), Err("x".into()));
+        assert_eq!(agree_round(&c, true, None::<String>), Ok(true));
+        assert_eq!(agree_round(&c, false, None::<String>), Ok(false));
+        assert_eq!(agree_round(&c, true, Some("x".to_string())), Err("x".to_string()));
         let blobs = |v: &[&str]| v.iter().map(|s| s.as_bytes().to_vec()).collect::<Vec<_>>();
-        assert_eq!(combine_errors(&blobs(&["a", "a"])), "a");
-        assert_eq!(combine_errors(&blobs(&["a", ""])), "a");
-        assert_eq!(combine_errors(&blobs(&["", "b"])), "rank 1: b");
-        assert_eq!(combine_errors(&blobs(&["a", "b", "a"])), "rank 0,2: a; rank 1: b");
+        let combined = |v: &[&str]| combine_errors(&blobs(v)).to_string();
+        assert_eq!(combined(&["a", "a"]), "a");
+        assert_eq!(combined(&["a", ""]), "a");
+        assert_eq!(combined(&["", "b"]), "rank 1: b");
+        assert_eq!(combined(&["a", "b", "a"]), "rank 0,2: a; rank 1: b");
+        assert_eq!(
+            combine_errors(&blobs(&["", "b"])),
+            ClusterError::Failed { failures: vec![(vec![1], "b".into())], ranks: 2 }
+        );
+        assert_eq!(ClusterError::FailedElsewhere.to_string(), "the job failed on another rank (rank 0 reports it)");
     }
 
     /// A rank's own typed error comes back as itself (one rank: the agreed message is its own).
@@ -402,9 +408,9 @@ mod tests {
                 }
             }
         }
-        impl From<String> for Typed {
-            fn from(m: String) -> Typed {
-                Typed::Agreed(m)
+        impl From<ClusterError> for Typed {
+            fn from(e: ClusterError) -> Typed {
+                Typed::Agreed(e.to_string())
             }
         }
         let c = local::Local::new();

@@ -25,7 +25,7 @@ use ::mpi::topology::SimpleCommunicator;
 use ::mpi::traits::*;
 use ::mpi::Threading;
 
-use super::{job, Cluster};
+use super::{job, Cluster, ClusterError};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -113,18 +113,18 @@ impl MpiCluster {
     /// Errors when MPI is already initialised in this process. Prints a warning on stderr
     /// when the library provides less than `Funneled` (the renderer still only calls MPI
     /// from the main thread, which works in practice).
-    pub fn init() -> Result<Self, String> {
-        let (universe, provided) = ::mpi::initialize_with_threading(Threading::Funneled).ok_or_else(|| {
-            "MPI is already initialised in this process; call distributed::init() only once".to_string()
-        })?;
+    pub fn init() -> Result<Self, ClusterError> {
+        let (universe, provided) =
+            ::mpi::initialize_with_threading(Threading::Funneled).ok_or(ClusterError::AlreadyInitialised)?;
         if provided < Threading::Funneled {
             crate::errln!("warning: MPI provides thread level {provided:?}, asked for Funneled");
         }
         let world = universe.world();
-        let rank = usize::try_from(world.rank()).map_err(|_| format!("negative MPI rank {}", world.rank()))?;
-        let size = usize::try_from(world.size()).map_err(|_| format!("bad MPI size {}", world.size()))?;
+        let bad_world = || ClusterError::BadWorld { rank: world.rank().into(), size: world.size().into() };
+        let rank = usize::try_from(world.rank()).map_err(|_| bad_world())?;
+        let size = usize::try_from(world.size()).map_err(|_| bad_world())?;
         if size == 0 || rank >= size {
-            return Err(format!("inconsistent MPI world: rank {rank}, size {size}"));
+            return Err(bad_world());
         }
         let watch = start_watchdog(rank);
         Ok(MpiCluster {

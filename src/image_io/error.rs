@@ -1,6 +1,7 @@
 //! `ImageError`: what went wrong reading, writing or shaping an image, with the file and the
 //! figures its message names (`Display` is the message).
 
+use crate::atomic_io::AtomicIoError;
 use std::path::{Path, PathBuf};
 
 /// What went wrong reading, writing or shaping an image; each variant keeps the file (where
@@ -115,13 +116,9 @@ pub enum ImageError {
         /// What went wrong.
         reason: String,
     },
-    /// The file could not be written (`atomic_io`'s message, which names the file).
-    Write {
-        /// File concerned.
-        path: PathBuf,
-        /// The message.
-        message: String,
-    },
+    /// The file (or the set of files) could not be written: `atomic_io`'s error, which names the
+    /// file.
+    Write(AtomicIoError),
 }
 
 impl ImageError {
@@ -176,7 +173,7 @@ impl std::fmt::Display for ImageError {
             }
             Encode { path: Some(path), reason, .. } => write!(f, "{}: {reason}", path.display()),
             Encode { path: None, reason, .. } => write!(f, "{reason}"),
-            Write { message, .. } => write!(f, "{message}"),
+            Write(e) => write!(f, "{e}"),
         }
     }
 }
@@ -185,8 +182,15 @@ impl std::error::Error for ImageError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
             ImageError::Io { source, .. } => Some(source),
+            ImageError::Write(e) => Some(e),
             _ => None,
         }
+    }
+}
+
+impl From<AtomicIoError> for ImageError {
+    fn from(e: AtomicIoError) -> ImageError {
+        ImageError::Write(e)
     }
 }
 

@@ -30,7 +30,7 @@ pub const VARIANCE_CHANNELS: [&str; 3] = ["var.R", "var.G", "var.B"];
 
 /// [`atomic_write`] with its failure as an [`ImageError::Write`].
 fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ImageError> {
-    atomic_write(path, bytes).map_err(|message| ImageError::Write { path: path.to_path_buf(), message })
+    Ok(atomic_write(path, bytes)?)
 }
 
 /// A linear-RGB float image, row-major, `(0, 0)` at the top-left.

@@ -50,7 +50,7 @@ impl Run<'_> {
             set.add(with_ext(&self.job.out, "json"), serde_json::to_vec_pretty(&report).map_err(|e| e.to_string())?);
             // last, so that once the new checkpoint is visible its images and JSON are too
             set.add(self.ckpt_path(), self.checkpoint(p.passes_done, &total).to_bytes());
-            set.commit()
+            Ok(set.write()?)
         });
         if let Err(e) = written {
             let what = format!("checkpoint after {} passes not written ({e}); the previous one is kept", p.passes_done);
@@ -99,7 +99,7 @@ pub fn image_from_film(f: &Film) -> Image {
 pub fn write_images(prefix: &Path, film: &Film) -> Result<Image, ImageError> {
     let mut set = FileSet::new();
     let img = image_files(prefix, film, &mut set)?;
-    set.commit().map_err(|message| ImageError::Write { path: prefix.to_path_buf(), message })?;
+    set.write()?;
     Ok(img)
 }
 

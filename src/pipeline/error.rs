@@ -1,6 +1,8 @@
 //! `RenderError`: why a render failed, wrapping the typed errors of the modules it calls
 //! (`Display` is the message rank 0 prints).
 
+use crate::atomic_io::AtomicIoError;
+use crate::distributed::ClusterError;
 use crate::image_io::ImageError;
 use crate::integrators::MethodError;
 use crate::scene::SceneError;
@@ -32,8 +34,14 @@ pub enum RenderError {
     },
     /// The images cannot be encoded or written.
     Image(ImageError),
-    /// Anything else, as its message; also an error agreed across ranks that is not this rank's
-    /// own (`distributed::agree`: it names the failing ranks).
+    /// An output refused before any work (`--out`'s prefix, the output guard), or the outputs
+    /// (`PREFIX.{exr,png,json}` as one set) could not be written.
+    Output(AtomicIoError),
+    /// The ranks: a job that differs between them, a malformed broadcast, or an error agreed
+    /// across ranks that is not this rank's own (`distributed::agree`: it names the failing
+    /// ranks).
+    Cluster(ClusterError),
+    /// Anything else, as its message.
     Other(String),
 }
 
@@ -58,6 +66,8 @@ impl std::fmt::Display for RenderError {
             RenderError::Checkpoint(e) => write!(f, "{e}"),
             RenderError::Resume { path, mismatch } => write!(f, "{}: cannot resume: {mismatch}", path.display()),
             RenderError::Image(e) => write!(f, "{e}"),
+            RenderError::Output(e) => write!(f, "{e}"),
+            RenderError::Cluster(e) => write!(f, "{e}"),
             RenderError::Other(m) => write!(f, "{m}"),
         }
     }
@@ -72,6 +82,8 @@ impl std::error::Error for RenderError {
             RenderError::Checkpoint(e) => Some(e),
             RenderError::Resume { mismatch, .. } => Some(mismatch),
             RenderError::Image(e) => Some(e),
+            RenderError::Output(e) => Some(e),
+            RenderError::Cluster(e) => Some(e),
             RenderError::Other(_) => None,
         }
     }
@@ -104,6 +116,18 @@ impl From<crate::checkpoint::CheckpointError> for RenderError {
 impl From<ImageError> for RenderError {
     fn from(e: ImageError) -> RenderError {
         RenderError::Image(e)
+    }
+}
+
+impl From<AtomicIoError> for RenderError {
+    fn from(e: AtomicIoError) -> RenderError {
+        RenderError::Output(e)
+    }
+}
+
+impl From<ClusterError> for RenderError {
+    fn from(e: ClusterError) -> RenderError {
+        RenderError::Cluster(e)
     }
 }
 

@@ -178,7 +178,11 @@ pub fn wanted(plan: &Plan) -> bool {
 
 /// Rank 0's count (the rule's; without a light side, where the count does not matter, the
 /// default per pixel), broadcast to every rank (collective).
-pub fn broadcast_count(cluster: &dyn Cluster, plan: &Plan, rule: Option<&LightPathRule>) -> Result<u64, String> {
+pub fn broadcast_count(
+    cluster: &dyn Cluster,
+    plan: &Plan,
+    rule: Option<&LightPathRule>,
+) -> Result<u64, crate::distributed::ClusterError> {
     let (w, h) = plan.resolution;
     let n = rule.map_or(crate::integrators::pt_cf::light::default_paths(w, h), |r| r.light_paths);
     crate::distributed::broadcast_u64(cluster, n, "light-path")

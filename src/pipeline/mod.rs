@@ -297,7 +297,7 @@ fn finish(
     let report = run.report(passes, reduced.parts, timings, stats, &image, true);
     let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
     outputs.add(with_ext(&run.job.out, "json"), text.into_bytes());
-    outputs.commit()?;
+    outputs.write()?;
     Ok(RenderResult { film: reduced.film, report })
 }
 

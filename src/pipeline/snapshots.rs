@@ -197,5 +197,5 @@ fn write_snapshot(out: &Path, img: &Image, var: &Image, report: &SnapshotReport)
     let mut set = FileSet::new();
     set.add(exr.clone(), image_io::encode_exr_layers(&exr, img, Some(var))?);
     set.add(with_ext(&prefix, "json"), serde_json::to_vec_pretty(report).map_err(|e| e.to_string())?);
-    set.commit()
+    Ok(set.write()?)
 }
