@@ -18,6 +18,7 @@ mod phong;
 pub mod plastic;
 pub mod roughconductor;
 pub mod roughdielectric;
+pub mod roughplastic;
 #[cfg(test)]
 pub(crate) mod testing;
 pub mod thindielectric;
