@@ -1,13 +1,13 @@
 //! `thindielectric` (Mitsuba 3's `ThinDielectric`): a dielectric slab so thin that it neither
 //! displaces nor bends the light: a Dirac reflection (wi = mirror of wo) and a Dirac transmission
 //! straight through (wi = −wo), on both sides of the surface. The slab's two parallel interfaces
-//! reflect light back and forth; summing the geometric series of internal reflections with
-//! R = F(|cos θ_o|, η) at both interfaces gives
+//! reflect light back and forth; summing the incoherent geometric series of internal
+//! reflections with R = F(|cos θ_o|, η) at both interfaces (T = 1 − R) gives
 //!
-//!   R' = R + T²R/(1 − R²) + … = 2R/(1 + R),   T' = 1 − R'   (T = 1 − R),
+//!   R' = R + T²R(1 + R² + R⁴ + …) = R + T²R/(1 − R²) = 2R/(1 + R),   T' = 1 − R',
 //!
-//! the formula Mitsuba uses (after Mitsuba 0.5's `thindielectric`; the series is the one of
-//! Stokes' relations for a plane-parallel plate, e.g. Born & Wolf §7.6). F is the unpolarised
+//! the formula of Mitsuba's plugin (derived the same way for pbrt-v4's `ThinDielectricBxDF`:
+//! Pharr, Jakob & Humphreys, "Physically Based Rendering", 4th ed., ch. 9). F is the unpolarised
 //! dielectric Fresnel term ([`fresnel_dielectric`]) with η = η_int/η_ext, evaluated at |cos θ_o|
 //! from either side (the slab is symmetric).
 //!
