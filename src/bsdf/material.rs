@@ -3,7 +3,10 @@
 //! `Material::is_dirac`: mirrors, glass and thin glass are Dirac (S), everything else, a plastic's
 //! coat over its diffuse base included, non-specular (D).
 
+use super::microfacet::MicrofacetDistribution;
 use super::plastic::Plastic;
+use super::roughconductor::RoughConductor;
+use super::roughdielectric::RoughDielectric;
 use super::thindielectric::ThinDielectric;
 use crate::math::Rgb;
 
@@ -48,6 +51,10 @@ pub enum Material {
     Plastic(Plastic),
     /// Mitsuba's `thindielectric`: a thin slab, Dirac reflection and straight transmission.
     ThinDielectric(ThinDielectric),
+    /// Mitsuba's `roughconductor`: microfacet reflection with the conductor Fresnel term.
+    RoughConductor(RoughConductor),
+    /// Mitsuba's `roughdielectric`: microfacet reflection and refraction.
+    RoughDielectric(RoughDielectric),
     /// The black BSDF of an area light: it reflects nothing.
     Black,
 }
@@ -85,6 +92,14 @@ impl Slot {
     }
 }
 
+impl MicrofacetDistribution {
+    /// The distribution with isotropic roughness `alpha` (a textured `alpha`), its kind and
+    /// sampling kept.
+    fn textured_alpha(&self, alpha: f32) -> MicrofacetDistribution {
+        MicrofacetDistribution::isotropic(self.kind, alpha, self.sample_visible)
+    }
+}
+
 impl Material {
     /// Sets parameter `slot` to `v` (a colour, or for a monochrome slot `v.x`); false when this
     /// material has no such parameter.
@@ -104,6 +119,11 @@ impl Material {
             }
             (Material::ThinDielectric(t), Slot::SpecularReflectance) => t.specular_reflectance = v,
             (Material::ThinDielectric(t), Slot::SpecularTransmittance) => t.specular_transmittance = v,
+            (Material::RoughConductor(c), Slot::SpecularReflectance) => c.specular_reflectance = v,
+            (Material::RoughConductor(c), Slot::Alpha) => c.distribution = c.distribution.textured_alpha(v.x),
+            (Material::RoughDielectric(d), Slot::SpecularReflectance) => d.specular_reflectance = v,
+            (Material::RoughDielectric(d), Slot::SpecularTransmittance) => d.specular_transmittance = v,
+            (Material::RoughDielectric(d), Slot::Alpha) => d.distribution = d.distribution.textured_alpha(v.x),
             _ => return false,
         }
         true
@@ -121,7 +141,13 @@ impl Material {
     /// Mitsuba refuses `twosided` around them).
     #[inline]
     pub fn is_two_sided_by_nature(&self) -> bool {
-        matches!(self, Material::Glass { .. } | Material::ThinDielectric(_))
+        matches!(self, Material::Glass { .. } | Material::ThinDielectric(_) | Material::RoughDielectric(_))
+    }
+    /// True for BSDFs with both a Dirac and a non-Dirac lobe (`plastic`: a smooth coat over a
+    /// diffuse base).
+    #[inline]
+    pub fn has_mixed_lobes(&self) -> bool {
+        matches!(self, Material::Plastic(_))
     }
     /// True when the BSDF is identically zero.
     #[inline]

@@ -182,6 +182,8 @@ fn eval_untilted(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3, mode: Mode
             }
             phong::eval(albedo, specular, exponent, ns, wo, wi)
         }
+        Material::RoughConductor(b) => eval_local(&b, m, sp, wo, wi, mode),
+        Material::RoughDielectric(b) => eval_local(&b, m, sp, wo, wi, mode),
         Material::Plastic(b) => eval_local(&b, m, sp, wo, wi, mode),
         _ => {
             let _ = mode;
@@ -264,6 +266,8 @@ pub fn pdf_w(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3) -> f32 {
             }
             phong::pdf_w(albedo, specular, exponent, ns, wo, wi)
         }
+        Material::RoughConductor(b) => pdf_local(&b, m, sp, wo, wi),
+        Material::RoughDielectric(b) => pdf_local(&b, m, sp, wo, wi),
         Material::Plastic(b) => pdf_local(&b, m, sp, wo, wi),
         _ => 0.0,
     }
@@ -316,6 +320,8 @@ fn sample_untilted(m: &Material, sp: &ShadingPoint, wo: Vec3, u: [f32; 3], mode:
             BsdfSample { wi, weight: reflectance * f, pdf_w: 1.0, is_delta: true, eta: 1.0 }
         }
         Material::Glass { ior } => dielectric::sample(ior, sp, wo, u[0], mode)?,
+        Material::RoughConductor(b) => sample_local(&b, m, sp, wo, u, mode)?,
+        Material::RoughDielectric(b) => sample_local(&b, m, sp, wo, u, mode)?,
         Material::Plastic(b) => sample_local(&b, m, sp, wo, u, mode)?,
         Material::ThinDielectric(b) => sample_local(&b, m, sp, wo, u, mode)?,
         Material::Black => return None,

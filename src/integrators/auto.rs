@@ -79,8 +79,22 @@ fn point_light_note(scene: &Scene) -> &'static str {
     }
 }
 
+/// Why only `pt` renders `scene` unbiased, where it has a material with both a Dirac and a
+/// non-Dirac lobe (`plastic`): the other methods split L by material, not yet by the lobe a
+/// vertex samples (docs/spec.md, the lobe rule), and would leave its coat's reflections out.
+pub fn mixed_lobes(scene: &Scene) -> Option<String> {
+    scene.materials.iter().any(|m| m.has_mixed_lobes()).then(|| {
+        "the scene has a `plastic` (a Dirac coat over a diffuse base), which only pt splits by the lobe a \
+         vertex samples"
+            .to_string()
+    })
+}
+
 /// The method `auto` picks for `scene`, and why (the rule of the module docs).
 pub fn choose(scene: &Scene) -> (Method, String) {
+    if let Some(why) = mixed_lobes(scene) {
+        return (Method::Pt, format!("pt: {why}"));
+    }
     let note = point_light_note(scene);
     if !has_dirac(scene) {
         return (Method::Pt, "no mirror or glass objects: pt, the cheapest unbiased method".into());
@@ -111,6 +125,10 @@ pub fn resolve(requested: Option<MethodChoice>, scene: &Scene) -> Result<(Method
         None => (from_scene()?, "the scene's [render] method"),
     };
     Ok(match choice {
+        MethodChoice::Named(m) if m != Method::Pt && mixed_lobes(scene).is_some() => {
+            let why = mixed_lobes(scene).unwrap_or_default();
+            return Err(format!("{}: --method {} ({source}): {why}; render it with --method pt", scene.path, m.name()));
+        }
         MethodChoice::Named(m) => (m, format!("{} named by {source}", m.name())),
         MethodChoice::Auto => {
             let (m, why) = choose(scene);

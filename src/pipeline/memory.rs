@@ -17,7 +17,8 @@ impl Plan {
     /// rank 0 (built, encoded, decoded) and one on every other rank of the node. The camera values
     /// of a pass group (`render::pass_group_limit` passes for `pt` and `pt-cf`, else one; 12 bytes
     /// per pixel and pass) and, for `pt-cf` with light paths, one splat image per pass of the
-    /// group (as much again), on every rank.
+    /// group (as much again), on every rank. The scene's decoded images, on every rank of the
+    /// node.
     pub fn memory_estimate(&self, scene: &Scene, checkpoints: bool) -> (u64, String) {
         let pixels = self.resolution.0 as u64 * self.resolution.1 as u64;
         let film = pixels.saturating_mul((crate::render::film::STRIDE * 8) as u64);
@@ -41,10 +42,15 @@ impl Plan {
         let splats = self.method == Method::PtCf && self.args.ptcf.light_paths != Some(0);
         let per_pass = 12 * local * if splats { 2 } else { 1 };
         let film_total = film_total.saturating_add(pixels.saturating_mul(per_pass * group));
-        let need = film_total.saturating_add(product.saturating_mul(2 + local));
+        // every rank of the node holds the scene's decoded images
+        let textures = scene.texture_bytes().saturating_mul(local);
+        let need = film_total.saturating_add(product.saturating_mul(2 + local)).saturating_add(textures);
         let (w, h) = self.resolution;
-        let what =
+        let mut what =
             format!("a {w}x{h} film of {:.1} GiB per copy; preprocess product {:.1} GiB", gib(film), gib(product));
+        if textures > 0 {
+            what += &format!("; textures {:.2} GiB", gib(textures));
+        }
         (need, what)
     }
 }

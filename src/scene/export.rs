@@ -21,6 +21,7 @@
 use super::ply::{write_binary, IndexedMesh};
 use super::schema::Doc;
 use super::{Material, Scene, Triangle};
+use crate::bsdf::microfacet::{MicrofacetDistribution, MicrofacetKind};
 use crate::math::Vec2;
 use crate::math::{Rgb, Vec3};
 use serde::Serialize;
@@ -211,6 +212,19 @@ fn header(x: &mut String, scene: &Scene, doc: &Doc) {
     );
 }
 
+/// Mitsuba's parameters of a microfacet distribution.
+fn microfacet(d: &MicrofacetDistribution) -> String {
+    let kind = match d.kind {
+        MicrofacetKind::Beckmann => "beckmann",
+        MicrofacetKind::Ggx => "ggx",
+    };
+    format!(
+        "<string name=\"distribution\" value=\"{kind}\"/><float name=\"alpha_u\" value=\"{}\"/>\
+         <float name=\"alpha_v\" value=\"{}\"/><boolean name=\"sample_visible\" value=\"{}\"/>",
+        d.alpha_u, d.alpha_v, d.sample_visible
+    )
+}
+
 /// A `<bsdf>` for a material (with `id` when named).
 fn bsdf(m: &Material, id: Option<&str>, warnings: &mut Vec<String>) -> String {
     let id = id.map_or(String::new(), |i| format!(" id=\"{}\"", esc(i)));
@@ -254,6 +268,21 @@ fn bsdf(m: &Material, id: Option<&str>, warnings: &mut Vec<String>) -> String {
             t.eta,
             rgb("specular_reflectance", t.specular_reflectance),
             rgb("specular_transmittance", t.specular_transmittance)
+        ),
+        Material::RoughConductor(c) => two(format!(
+            "<bsdf type=\"roughconductor\">{}{}{}{}</bsdf>",
+            microfacet(&c.distribution),
+            rgb("specular_reflectance", c.specular_reflectance),
+            rgb("eta", c.eta),
+            rgb("k", c.k)
+        )),
+        Material::RoughDielectric(d) => format!(
+            "    <bsdf type=\"roughdielectric\"{id}>\n        {}<float name=\"int_ior\" value=\"{}\"/>\n        \
+             <float name=\"ext_ior\" value=\"1\"/>\n        {}\n        {}\n    </bsdf>",
+            microfacet(&d.distribution),
+            d.eta,
+            rgb("specular_reflectance", d.specular_reflectance),
+            rgb("specular_transmittance", d.specular_transmittance)
         ),
         Material::Black => format!("    <bsdf type=\"diffuse\"{id}>{}</bsdf>", rgb("reflectance", Rgb::ZERO)),
     }

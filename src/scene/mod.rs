@@ -361,6 +361,20 @@ impl Scene {
         }
     }
 
+    /// The bytes the scene's decoded images hold (each shared image once).
+    pub fn texture_bytes(&self) -> u64 {
+        let mut seen = std::collections::HashSet::new();
+        let mut bytes = 0u64;
+        for t in &self.textures {
+            t.for_each_image(&mut |img| {
+                if seen.insert(std::sync::Arc::as_ptr(img)) {
+                    bytes += img.memory_bytes() as u64;
+                }
+            });
+        }
+        bytes
+    }
+
     /// Total area of non-Dirac, non-emitting surfaces (IWS's A_D).
     pub fn non_specular_area(&self) -> f32 {
         let tri: f32 = self

@@ -14,7 +14,10 @@ use super::presets;
 use super::texture::Param;
 use super::xml::Node;
 use super::Cx;
+use crate::bsdf::microfacet::{MicrofacetDistribution, MicrofacetKind};
 use crate::bsdf::plastic::Plastic;
+use crate::bsdf::roughconductor::RoughConductor;
+use crate::bsdf::roughdielectric::RoughDielectric;
 use crate::bsdf::thindielectric::ThinDielectric;
 use crate::bsdf::Slot;
 use crate::math::Rgb;
@@ -93,7 +96,9 @@ pub(super) fn material(cx: &mut Cx, n: &Node) -> Result<Parsed, SceneError> {
             let c = colour(cx, &mut p, "reflectance", 0.5, Slot::Reflectance, &mut textures)?;
             Material::Diffuse { albedo: refl(cx, &p, c, "reflectance")? }
         }
-        "conductor" => conductor(cx, &mut p)?,
+        "conductor" => conductor(cx, &mut p, &mut textures)?,
+        "roughconductor" => roughconductor(cx, &mut p, &mut textures)?,
+        "roughdielectric" => roughdielectric(cx, &mut p, &mut textures)?,
         "dielectric" => {
             let int = ior(cx, &mut p, "int_ior", 1.5046)?;
             let ext = ior(cx, &mut p, "ext_ior", 1.000277)?;
@@ -142,8 +147,11 @@ pub(super) fn material(cx: &mut Cx, n: &Node) -> Result<Parsed, SceneError> {
         }
         t => {
             let why = match t {
-                "roughconductor" | "roughdielectric" | "roughplastic" => "rough BSDFs",
-                _ => "supported: diffuse, conductor, dielectric, thindielectric, plastic, twosided, normalmap, phong",
+                "roughplastic" => "not yet",
+                _ => {
+                    "supported: diffuse, conductor, roughconductor, dielectric, roughdielectric, thindielectric, \
+                      plastic, twosided, normalmap, phong"
+                }
             };
             return Err(cx.err(n.line, &format!("bsdf.{t}"), format!("bsdf `{t}` is not supported ({why})")));
         }
@@ -175,9 +183,76 @@ fn colour(
 
 /// Smooth conductor: `material` preset (default `none`) or explicit `eta`/`k`, times
 /// `specular_reflectance`; η and k are relative to `ext_eta` (default 1).
-fn conductor(cx: &mut Cx, p: &mut Plugin) -> Result<Material, SceneError> {
+fn conductor(cx: &mut Cx, p: &mut Plugin, textures: &mut Vec<SlotTexture>) -> Result<Material, SceneError> {
+    let (spec, eta, k) = conductor_params(cx, p, textures)?;
+    if eta == Rgb::ZERO && k == Rgb::ONE && textures.is_empty() {
+        return Ok(Material::Mirror { reflectance: spec }); // F = 1 exactly
+    }
+    Ok(Material::Conductor { reflectance: spec, eta, k })
+}
+
+/// `roughconductor`: the smooth conductor's parameters and a microfacet distribution.
+fn roughconductor(cx: &mut Cx, p: &mut Plugin, textures: &mut Vec<SlotTexture>) -> Result<Material, SceneError> {
+    let (specular_reflectance, eta, k) = conductor_params(cx, p, textures)?;
+    let distribution = distribution(cx, p, textures)?;
+    Ok(Material::RoughConductor(RoughConductor { distribution, eta, k, specular_reflectance }))
+}
+
+/// `roughdielectric`: η = int_ior/ext_ior, its tints and a microfacet distribution.
+fn roughdielectric(cx: &mut Cx, p: &mut Plugin, textures: &mut Vec<SlotTexture>) -> Result<Material, SceneError> {
+    let int = ior(cx, p, "int_ior", 1.5046)?;
+    let ext = ior(cx, p, "ext_ior", 1.000277)?;
+    eta(cx, p, int, ext)?;
+    let r = colour(cx, p, "specular_reflectance", 1.0, Slot::SpecularReflectance, textures)?;
+    let t = colour(cx, p, "specular_transmittance", 1.0, Slot::SpecularTransmittance, textures)?;
+    let distribution = distribution(cx, p, textures)?;
+    let mut d = RoughDielectric::new(distribution, int, ext);
+    d.specular_reflectance = refl(cx, p, r, "specular_reflectance")?;
+    d.specular_transmittance = refl(cx, p, t, "specular_transmittance")?;
+    Ok(Material::RoughDielectric(d))
+}
+
+/// Mitsuba's microfacet parameters: `distribution` (`beckmann`, default, or `ggx`), `alpha`
+/// (default 0.1; a texture sets it per point) or `alpha_u` and `alpha_v`, `sample_visible`
+/// (default true).
+fn distribution(
+    cx: &mut Cx,
+    p: &mut Plugin,
+    textures: &mut Vec<SlotTexture>,
+) -> Result<MicrofacetDistribution, SceneError> {
+    let kind = match p.string(cx, "distribution")? {
+        None => MicrofacetKind::Beckmann,
+        Some((s, _)) if s == "beckmann" => MicrofacetKind::Beckmann,
+        Some((s, _)) if s == "ggx" => MicrofacetKind::Ggx,
+        Some((s, l)) => return Err(p.err(cx, l, "distribution", format!("`{s}`: use beckmann or ggx"))),
+    };
+    let visible = p.boolean(cx, "sample_visible")?.unwrap_or(true);
+    let alpha_at = |cx: &mut Cx, p: &mut Plugin, name: &str, textures: &mut Vec<SlotTexture>| {
+        let a = colour(cx, p, name, 0.1, Slot::Alpha, textures)?.x;
+        if !(a.is_finite() && a >= 0.0) {
+            return Err(p.err(cx, p.line_of(name), name, format!("{a} must be a non-negative number")));
+        }
+        Ok(a)
+    };
+    if p.node.children.iter().any(|c| c.name() == "alpha_u" || c.name() == "alpha_v") {
+        let (au, av) = (alpha_at(cx, p, "alpha_u", textures)?, alpha_at(cx, p, "alpha_v", textures)?);
+        if !textures.iter().all(|t| t.slot != Slot::Alpha) {
+            return Err(p.err(cx, p.line_of("alpha_u"), "alpha_u", "textured anisotropic roughness is not supported"));
+        }
+        return Ok(MicrofacetDistribution::new(kind, au, av, visible));
+    }
+    let a = alpha_at(cx, p, "alpha", textures)?;
+    Ok(MicrofacetDistribution::isotropic(kind, a, visible))
+}
+
+/// A conductor's (specular_reflectance, η, k).
+fn conductor_params(
+    cx: &mut Cx,
+    p: &mut Plugin,
+    textures: &mut Vec<SlotTexture>,
+) -> Result<(Rgb, Rgb, Rgb), SceneError> {
     let line = p.node.line;
-    let spec = p.color(cx, "specular_reflectance")?.unwrap_or(Rgb::ONE);
+    let spec = colour(cx, p, "specular_reflectance", 1.0, Slot::SpecularReflectance, textures)?;
     if spec.min_element() < 0.0 || spec.max_element() > 1.0 {
         return Err(p.err(cx, line, "specular_reflectance", "must be in [0, 1]"));
     }
@@ -191,10 +266,7 @@ fn conductor(cx: &mut Cx, p: &mut Plugin) -> Result<Material, SceneError> {
     if eta.min_element() < 0.0 || k.min_element() < 0.0 || ext.is_nan() || ext <= 0.0 {
         return Err(p.err(cx, line, "eta", "eta, k must be non-negative and ext_eta positive"));
     }
-    if eta == Rgb::ZERO && k == Rgb::ONE {
-        return Ok(Material::Mirror { reflectance: spec }); // F = 1 exactly
-    }
-    Ok(Material::Conductor { reflectance: spec, eta: eta / ext, k: k / ext })
+    Ok((spec, eta / ext, k / ext))
 }
 
 /// The relative index η = int_ior/ext_ior, in (0, 10].
