@@ -35,6 +35,10 @@ pub(super) fn shape(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
     let emission = emitter(cx, &mut p)?;
     let material = shape_material(cx, &mut p, emission.is_some())?;
     let ty = n.ty();
+    if matches!(ty, "cube" | "disk" | "cylinder") && !cx.b.surface_at(material).is_constant() {
+        let msg = format!("shape `{ty}` has no texture coordinates yet: its BSDF cannot take textures or a normal map");
+        return Err(cx.err(n.line, &format!("shape.{ty}"), msg));
+    }
     // the key blamed when a vertex leaves the extent before the transform (the file, the
     // cylinder's points) and after it
     let (mesh, raw_at) = match ty {
