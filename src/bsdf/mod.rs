@@ -244,7 +244,8 @@ fn sample_local(
     let lo = f.to_local(wo);
     let s = b.sample(lo, u, mode)?;
     let wi = f.to_world(s.wi);
-    if !sides_agree(sp, wo, wi, lo, s.wi) || !(s.pdf_w > 0.0) {
+    // a pdf that is not positive (0 or NaN) cannot weight a sample
+    if !sides_agree(sp, wo, wi, lo, s.wi) || s.pdf_w.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return None;
     }
     Some(BsdfSample { wi, ..s })

@@ -102,7 +102,8 @@ pub fn sphere_uv(s: &Sphere, p: Vec3) -> (Vec2, Vec3) {
 pub fn shading_frame(n: Vec3, dpdu: Vec3) -> Frame {
     let s = dpdu - n * n.dot(dpdu);
     let len = s.length();
-    if !(len > 1e-12 * dpdu.length().max(1e-30)) || !len.is_finite() {
+    let tiny = 1e-12 * dpdu.length().max(1e-30);
+    if !len.is_finite() || len.partial_cmp(&tiny) != Some(std::cmp::Ordering::Greater) {
         return Frame::from_normal(n);
     }
     let s = s / len;
