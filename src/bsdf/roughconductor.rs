@@ -140,21 +140,6 @@ mod tests {
         }
     }
 
-    /// The mean weight of `n` importance samples and its standard error.
-    fn albedo_and_error(b: &impl LocalBsdf, wo: Vec3, n: usize) -> (f64, f64) {
-        let mut r = rng(11);
-        let (mut s, mut s2) = (0.0f64, 0.0f64);
-        for _ in 0..n {
-            if let Some(x) = b.sample(wo, u3(&mut r), Mode::Importance) {
-                let w = x.weight.max_element() as f64;
-                s += w;
-                s2 += w * w;
-            }
-        }
-        let mean = s / n as f64;
-        (mean, ((s2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt())
-    }
-
     /// White furnace with F = 1: the albedo is at most 1 within 5 standard errors of its
     /// estimate (a passive BSDF; single scattering loses energy at high roughness), and within
     /// 1% of 1 at α = 0.05, where masking hardly loses any. `albedo` agrees with the mean.

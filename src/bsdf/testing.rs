@@ -154,6 +154,22 @@ pub fn albedo(b: &impl LocalBsdf, wo: Vec3, n: usize) -> Rgb {
     (sum / n as f64).as_vec3()
 }
 
+/// The mean of the largest channel of `n` importance-mode weights (Dirac lobes included) and
+/// its standard error: a furnace's estimate with the error its bound is derived from.
+pub fn albedo_and_error(b: &impl LocalBsdf, wo: Vec3, n: usize) -> (f64, f64) {
+    let mut r = rng(11);
+    let (mut s, mut s2) = (0.0f64, 0.0f64);
+    for _ in 0..n {
+        if let Some(x) = b.sample(wo, u3(&mut r), Mode::Importance) {
+            let w = x.weight.max_element() as f64;
+            s += w;
+            s2 += w * w;
+        }
+    }
+    let mean = s / n as f64;
+    (mean, ((s2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt())
+}
+
 /// One row of a Mitsuba table: a case name, `wo`, `wi`, Mitsuba's f (its eval / |cos θ_i|) and
 /// pdf.
 #[derive(Clone, Debug)]

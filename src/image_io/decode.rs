@@ -201,7 +201,6 @@ fn decode_with_image(
 /// OpenEXR: the header's sizes are checked first, then the `R`, `G`, `B` channels of the first
 /// layer that has them (or a lone `Y` of the first layer) are read as `f32`.
 fn decode_exr(path: &Path, bytes: &[u8]) -> Result<DecodedImage, ImageError> {
-    use exr::image::read::{image::ReadLayers, layers::ReadChannels, read};
     let meta =
         exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(|e| decode_error(path, "EXR", e))?;
     let mut total: u64 = 0;
@@ -220,15 +219,7 @@ fn decode_exr(path: &Path, bytes: &[u8]) -> Result<DecodedImage, ImageError> {
             limit: MAX_TEXELS,
         });
     }
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .all_layers()
-        .all_attributes()
-        .from_buffered(Cursor::new(bytes))
-        .map_err(|e| decode_error(path, "EXR", e))?;
-    let layers = &image.layer_data;
+    let layers = &super::read_exr_layers(path, bytes)?;
     let rgb = layers.iter().find_map(|l| find_channels(l, &["R", "G", "B"]).map(|i| (l, i)));
     let (layer, idx) = rgb
         .or_else(|| layers.first().and_then(|l| find_channels(l, &["Y"]).map(|i| (l, i))))

@@ -202,9 +202,9 @@ pub fn encode_exr_layers(path: &Path, img: &Image, variance: Option<&Image>) -> 
 
 type FlatLayer = exr::image::Layer<exr::image::AnyChannels<exr::image::FlatSamples>>;
 
-fn read_first_layer(path: &Path) -> Result<FlatLayer, ImageError> {
+/// Every layer of the EXR `bytes` (of `path`, for messages), all channels as flat samples.
+fn read_exr_layers(path: &Path, bytes: &[u8]) -> Result<Vec<FlatLayer>, ImageError> {
     use exr::image::read::{image::ReadLayers, layers::ReadChannels, read};
-    let bytes = crate::atomic_io::read_regular(path).map_err(|e| io_error(path, "read", e))?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -213,7 +213,12 @@ fn read_first_layer(path: &Path) -> Result<FlatLayer, ImageError> {
         .all_attributes()
         .from_buffered(Cursor::new(bytes))
         .map_err(|e| decode_error(path, "EXR", e))?;
-    let mut layers = image.layer_data.into_iter();
+    Ok(image.layer_data.into_vec())
+}
+
+fn read_first_layer(path: &Path) -> Result<FlatLayer, ImageError> {
+    let bytes = crate::atomic_io::read_regular(path).map_err(|e| io_error(path, "read", e))?;
+    let mut layers = read_exr_layers(path, &bytes)?.into_iter();
     let first = layers.next().ok_or_else(|| unsupported(path, "EXR has no layers".into()))?;
     if find_channels(&first, &["R", "G", "B"]).is_some() || find_channels(&first, &["Y"]).is_some() {
         return Ok(first);
