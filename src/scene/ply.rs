@@ -458,12 +458,16 @@ fn face_index(i: f64, nv: Option<usize>) -> Result<u32, String> {
     Ok(i as u32)
 }
 
-/// Writes a binary little-endian PLY (float positions, optional float normals, uchar/uint faces).
+/// Writes a binary little-endian PLY (float positions, optional float normals and `u`, `v`,
+/// uchar/uint faces).
 pub fn write_binary(mesh: &IndexedMesh) -> Vec<u8> {
     let mut h = format!("ply\nformat binary_little_endian 1.0\nelement vertex {}\n", mesh.positions.len());
     h.push_str("property float x\nproperty float y\nproperty float z\n");
     if mesh.normals.is_some() {
         h.push_str("property float nx\nproperty float ny\nproperty float nz\n");
+    }
+    if mesh.uvs.is_some() {
+        h.push_str("property float u\nproperty float v\n");
     }
     h.push_str(&format!("element face {}\nproperty list uchar uint vertex_indices\nend_header\n", mesh.faces.len()));
     let mut out = h.into_bytes();
@@ -472,6 +476,9 @@ pub fn write_binary(mesh: &IndexedMesh) -> Vec<u8> {
         put(*p);
         if let Some(n) = &mesh.normals {
             put(n[i]);
+        }
+        if let Some(t) = &mesh.uvs {
+            t[i].to_array().iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
         }
     }
     for f in &mesh.faces {
