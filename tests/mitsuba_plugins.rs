@@ -344,10 +344,6 @@ scene_tests! {
     roughconductor_beckmann => "roughconductor-beckmann",
     roughdielectric_ggx => "roughdielectric-ggx",
     roughdielectric_beckmann => "roughdielectric-beckmann",
-    // `roughplastic` is not read yet (src/scene/mitsuba/bsdf.rs: "not yet"); its references are
-    // committed, so un-ignore these when the loader takes it.
-    #[ignore = "roughplastic is not wired into the Mitsuba loader yet"]
     roughplastic_ggx => "roughplastic-ggx",
-    #[ignore = "roughplastic is not wired into the Mitsuba loader yet"]
     roughplastic_beckmann => "roughplastic-beckmann",
 }

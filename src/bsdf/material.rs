@@ -7,6 +7,7 @@ use super::microfacet::MicrofacetDistribution;
 use super::plastic::Plastic;
 use super::roughconductor::RoughConductor;
 use super::roughdielectric::RoughDielectric;
+use super::roughplastic::RoughPlastic;
 use super::thindielectric::ThinDielectric;
 use crate::math::Rgb;
 
@@ -49,6 +50,9 @@ pub enum Material {
     },
     /// Mitsuba's `plastic`: a smooth dielectric coat (Dirac) over a diffuse base.
     Plastic(Plastic),
+    /// Mitsuba's `roughplastic`: a rough dielectric coat over a diffuse base (both lobes
+    /// non-Dirac).
+    RoughPlastic(RoughPlastic),
     /// Mitsuba's `thindielectric`: a thin slab, Dirac reflection and straight transmission.
     ThinDielectric(ThinDielectric),
     /// Mitsuba's `roughconductor`: microfacet reflection with the conductor Fresnel term.
@@ -111,11 +115,13 @@ impl Material {
             (Material::Mirror { reflectance } | Material::Conductor { reflectance, .. }, Slot::SpecularReflectance) => {
                 *reflectance = v
             }
-            (Material::Plastic(p), Slot::DiffuseReflectance) => {
-                *p = Plastic::new(v, p.specular_reflectance(), p.eta(), p.nonlinear())
+            (Material::Plastic(p), Slot::DiffuseReflectance) => *p = p.with_reflectances(v, p.specular_reflectance()),
+            (Material::Plastic(p), Slot::SpecularReflectance) => *p = p.with_reflectances(p.diffuse_reflectance(), v),
+            (Material::RoughPlastic(p), Slot::DiffuseReflectance) => {
+                *p = p.with_reflectances(v, p.specular_reflectance())
             }
-            (Material::Plastic(p), Slot::SpecularReflectance) => {
-                *p = Plastic::new(p.diffuse_reflectance(), v, p.eta(), p.nonlinear())
+            (Material::RoughPlastic(p), Slot::SpecularReflectance) => {
+                *p = p.with_reflectances(p.diffuse_reflectance(), v)
             }
             (Material::ThinDielectric(t), Slot::SpecularReflectance) => t.specular_reflectance = v,
             (Material::ThinDielectric(t), Slot::SpecularTransmittance) => t.specular_transmittance = v,

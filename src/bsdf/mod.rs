@@ -185,6 +185,7 @@ fn eval_untilted(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3, mode: Mode
         Material::RoughConductor(b) => eval_local(&b, m, sp, wo, wi, mode),
         Material::RoughDielectric(b) => eval_local(&b, m, sp, wo, wi, mode),
         Material::Plastic(b) => eval_local(&b, m, sp, wo, wi, mode),
+        Material::RoughPlastic(b) => eval_local(&b, m, sp, wo, wi, mode),
         _ => {
             let _ = mode;
             Rgb::ZERO
@@ -270,6 +271,7 @@ pub fn pdf_w(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3) -> f32 {
         Material::RoughConductor(b) => pdf_local(&b, m, sp, wo, wi),
         Material::RoughDielectric(b) => pdf_local(&b, m, sp, wo, wi),
         Material::Plastic(b) => pdf_local(&b, m, sp, wo, wi),
+        Material::RoughPlastic(b) => pdf_local(&b, m, sp, wo, wi),
         _ => 0.0,
     }
 }
@@ -324,6 +326,7 @@ fn sample_untilted(m: &Material, sp: &ShadingPoint, wo: Vec3, u: [f32; 3], mode:
         Material::RoughConductor(b) => sample_local(&b, m, sp, wo, u, mode)?,
         Material::RoughDielectric(b) => sample_local(&b, m, sp, wo, u, mode)?,
         Material::Plastic(b) => sample_local(&b, m, sp, wo, u, mode)?,
+        Material::RoughPlastic(b) => sample_local(&b, m, sp, wo, u, mode)?,
         Material::ThinDielectric(b) => sample_local(&b, m, sp, wo, u, mode)?,
         Material::Black => return None,
     };

@@ -77,6 +77,13 @@ impl Plastic {
         }
     }
 
+    /// This BSDF with reflectances ρ and k_s at one point of their textures: F_dr and the
+    /// specular sampling weight stay those of the parameters' means, as in Mitsuba (which
+    /// computes the weight from the textures' means).
+    pub fn with_reflectances(&self, diffuse_reflectance: Rgb, specular_reflectance: Rgb) -> Self {
+        Plastic { diffuse_reflectance, specular_reflectance, ..*self }
+    }
+
     /// ρ.
     pub fn diffuse_reflectance(&self) -> Rgb {
         self.diffuse_reflectance

@@ -41,8 +41,9 @@ use crate::sampling::warp::sample_cosine_hemisphere;
 pub const TRANSMITTANCE_RES: usize = 64;
 
 /// Mitsuba's `roughplastic` in its local frame. Built by [`RoughPlastic::new`], which derives
-/// the precomputed terms from the parameters.
-#[derive(Clone, Debug, PartialEq)]
+/// the precomputed terms from the parameters. `Copy` and small: the 64-entry table is shared by
+/// reference (see `new`), so a `Material` holding it stays a plain value.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RoughPlastic {
     distribution: MicrofacetDistribution,
     diffuse_reflectance: Rgb,
@@ -51,7 +52,7 @@ pub struct RoughPlastic {
     nonlinear: bool,
     inv_eta_2: f32,
     specular_sampling_weight: f32,
-    external_transmittance: [f32; TRANSMITTANCE_RES],
+    external_transmittance: &'static [f32; TRANSMITTANCE_RES],
     internal_reflectance: f32,
 }
 
@@ -63,7 +64,9 @@ impl RoughPlastic {
     /// Precomputes 1/η², the specular sampling weight mean(k_s)/(mean(ρ) + mean(k_s)) (½ where
     /// both means are 0, where Mitsuba's is 0/0), the transmittance table and R_int (about 1.1M
     /// visible-normal samples either way: 0.2 s for GGX, 0.7 s for Beckmann in the test
-    /// profile).
+    /// profile). The table is allocated once here and never freed (256 bytes per call: a scene
+    /// builds one per `roughplastic` it reads), which keeps the BSDF `Copy`; texturing the
+    /// reflectances (`with_reflectances`) shares it.
     pub fn new(
         diffuse_reflectance: Rgb,
         specular_reflectance: Rgb,
@@ -97,9 +100,16 @@ impl RoughPlastic {
             nonlinear,
             inv_eta_2: 1.0 / (eta * eta),
             specular_sampling_weight: if total > 0.0 { s_mean / total } else { 0.5 },
-            external_transmittance,
+            external_transmittance: Box::leak(Box::new(external_transmittance)),
             internal_reflectance: sum / TRANSMITTANCE_RES as f32 * 2.0,
         }
+    }
+
+    /// This BSDF with reflectances ρ and k_s at one point of their textures: the coat terms and
+    /// the specular sampling weight stay those of the parameters' means, as in Mitsuba (which
+    /// computes the weight from the textures' means).
+    pub fn with_reflectances(&self, diffuse_reflectance: Rgb, specular_reflectance: Rgb) -> Self {
+        RoughPlastic { diffuse_reflectance, specular_reflectance, ..*self }
     }
 
     /// The microfacet distribution of the coat (α clamped, `sample_visible` as given).
@@ -128,7 +138,7 @@ impl RoughPlastic {
     }
     /// T at μ = k/63 (μ ≥ 1e-6), k = 0..64: Mitsuba's `m_external_transmittance`.
     pub fn external_transmittance_table(&self) -> &[f32; TRANSMITTANCE_RES] {
-        &self.external_transmittance
+        self.external_transmittance
     }
     /// R_int: Mitsuba's `m_internal_reflectance`.
     pub fn internal_reflectance(&self) -> f32 {

@@ -262,6 +262,15 @@ fn bsdf(m: &Material, id: Option<&str>, warnings: &mut Vec<String>) -> String {
             pl.eta(),
             pl.nonlinear()
         )),
+        Material::RoughPlastic(pl) => two(format!(
+            "<bsdf type=\"roughplastic\">{}{}{}<float name=\"int_ior\" value=\"{}\"/><float name=\"ext_ior\" \
+             value=\"1\"/><boolean name=\"nonlinear\" value=\"{}\"/></bsdf>",
+            microfacet(pl.distribution()),
+            rgb("diffuse_reflectance", pl.diffuse_reflectance()),
+            rgb("specular_reflectance", pl.specular_reflectance()),
+            pl.eta(),
+            pl.nonlinear()
+        )),
         Material::ThinDielectric(t) => format!(
             "    <bsdf type=\"thindielectric\"{id}>\n        <float name=\"int_ior\" value=\"{}\"/>\n        \
              <float name=\"ext_ior\" value=\"1\"/>\n        {}\n        {}\n    </bsdf>",

@@ -18,6 +18,7 @@ use crate::bsdf::microfacet::{MicrofacetDistribution, MicrofacetKind};
 use crate::bsdf::plastic::Plastic;
 use crate::bsdf::roughconductor::RoughConductor;
 use crate::bsdf::roughdielectric::RoughDielectric;
+use crate::bsdf::roughplastic::RoughPlastic;
 use crate::bsdf::thindielectric::ThinDielectric;
 use crate::bsdf::Slot;
 use crate::math::Rgb;
@@ -122,15 +123,10 @@ pub(super) fn material(cx: &mut Cx, n: &Node) -> Result<Parsed, SceneError> {
             ))
         }
         "plastic" => {
-            let d = colour(cx, &mut p, "diffuse_reflectance", 0.5, Slot::DiffuseReflectance, &mut textures)?;
-            let s = colour(cx, &mut p, "specular_reflectance", 1.0, Slot::SpecularReflectance, &mut textures)?;
-            let int = ior(cx, &mut p, "int_ior", 1.49)?;
-            let ext = ior(cx, &mut p, "ext_ior", 1.000277)?;
-            let eta = eta(cx, &p, int, ext)?;
-            let nonlinear = p.boolean(cx, "nonlinear")?.unwrap_or(false);
-            let (d, s) = (refl(cx, &p, d, "diffuse_reflectance")?, refl(cx, &p, s, "specular_reflectance")?);
-            Material::Plastic(Plastic::new(d, s, eta, nonlinear))
+            let c = coat(cx, &mut p, &mut textures)?;
+            Material::Plastic(Plastic::new(c.diffuse, c.specular, c.eta, c.nonlinear))
         }
+        "roughplastic" => roughplastic(cx, &mut p, &mut textures)?,
         "phong" => {
             let a = p.color(cx, "diffuse_reflectance")?.unwrap_or(Rgb::splat(0.5));
             let a = refl(cx, &p, a, "diffuse_reflectance")?;
@@ -146,13 +142,8 @@ pub(super) fn material(cx: &mut Cx, n: &Node) -> Result<Parsed, SceneError> {
             Material::Glossy { albedo: a, specular: s, exponent: e }
         }
         t => {
-            let why = match t {
-                "roughplastic" => "not yet",
-                _ => {
-                    "supported: diffuse, conductor, roughconductor, dielectric, roughdielectric, thindielectric, \
-                      plastic, twosided, normalmap, phong"
-                }
-            };
+            let why = "supported: diffuse, conductor, roughconductor, dielectric, roughdielectric, thindielectric, \
+                       plastic, roughplastic, twosided, normalmap, phong";
             return Err(cx.err(n.line, &format!("bsdf.{t}"), format!("bsdf `{t}` is not supported ({why})")));
         }
     };
@@ -210,6 +201,46 @@ fn roughdielectric(cx: &mut Cx, p: &mut Plugin, textures: &mut Vec<SlotTexture>)
     d.specular_reflectance = refl(cx, p, r, "specular_reflectance")?;
     d.specular_transmittance = refl(cx, p, t, "specular_transmittance")?;
     Ok(Material::RoughDielectric(d))
+}
+
+/// The parameters `plastic` and `roughplastic` share: a coat of η = int_ior/ext_ior (defaults
+/// 1.49, 1.000277) over a base of `diffuse_reflectance` (default 0.5) with
+/// `specular_reflectance` (default 1) and `nonlinear` (default false).
+struct Coat {
+    diffuse: Rgb,
+    specular: Rgb,
+    eta: f32,
+    nonlinear: bool,
+}
+
+fn coat(cx: &mut Cx, p: &mut Plugin, textures: &mut Vec<SlotTexture>) -> Result<Coat, SceneError> {
+    let d = colour(cx, p, "diffuse_reflectance", 0.5, Slot::DiffuseReflectance, textures)?;
+    let s = colour(cx, p, "specular_reflectance", 1.0, Slot::SpecularReflectance, textures)?;
+    let int = ior(cx, p, "int_ior", 1.49)?;
+    let ext = ior(cx, p, "ext_ior", 1.000277)?;
+    let eta = eta(cx, p, int, ext)?;
+    let nonlinear = p.boolean(cx, "nonlinear")?.unwrap_or(false);
+    let (diffuse, specular) = (refl(cx, p, d, "diffuse_reflectance")?, refl(cx, p, s, "specular_reflectance")?);
+    Ok(Coat { diffuse, specular, eta, nonlinear })
+}
+
+/// `roughplastic`: the plastic's parameters under an isotropic microfacet coat (`alpha` a
+/// number, as Mitsuba reads it; η ≠ 1, which Mitsuba requires).
+fn roughplastic(cx: &mut Cx, p: &mut Plugin, textures: &mut Vec<SlotTexture>) -> Result<Material, SceneError> {
+    let c = coat(cx, p, textures)?;
+    if c.eta == 1.0 {
+        return Err(p.err(cx, p.line_of("int_ior"), "int_ior", "int_ior and ext_ior must differ"));
+    }
+    let n = textures.len();
+    let d = distribution(cx, p, textures)?;
+    if textures.len() > n {
+        return Err(p.err(cx, p.line_of("alpha"), "alpha", "roughplastic's alpha is a number, not a texture"));
+    }
+    if d.alpha_u != d.alpha_v {
+        return Err(p.err(cx, p.line_of("alpha_u"), "alpha_u", "roughplastic does not support anisotropic roughness"));
+    }
+    let rp = RoughPlastic::new(c.diffuse, c.specular, c.eta, c.nonlinear, d.kind, d.alpha_u, d.sample_visible);
+    Ok(Material::RoughPlastic(rp))
 }
 
 /// Mitsuba's microfacet parameters: `distribution` (`beckmann`, default, or `ggx`), `alpha`
