@@ -262,6 +262,16 @@ pub struct Bitmap {
     pub to_uv: UvTransform,
 }
 
+/// The cell of a bilinear lookup: its texels' wrapped indices and the fractional position in it.
+struct BilinearCell {
+    x0: usize,
+    x1: usize,
+    y0: usize,
+    y1: usize,
+    fx: f32,
+    fy: f32,
+}
+
 /// `floor(v)` as an index; saturates for huge values, 0 for NaN.
 #[inline]
 fn floor_index(v: f32) -> i64 {
@@ -293,18 +303,66 @@ impl Bitmap {
                 img.texel(x, y)
             }
             FilterType::Bilinear => {
-                let (px, py) = (p.x * w as f32 - 0.5, p.y * h as f32 - 0.5);
-                let (ix, iy) = (floor_index(px), floor_index(py));
-                let (fx, fy) = (px - ix as f32, py - iy as f32);
-                let (x0, x1) = (wrap.wrap(ix, w), wrap.wrap(ix.saturating_add(1), w));
-                let (y0, y1) = (wrap.wrap(iy, h), wrap.wrap(iy.saturating_add(1), h));
-                let (gx, gy) = (1.0 - fx, 1.0 - fy);
-                img.texel(x0, y0) * (gx * gy)
-                    + img.texel(x1, y0) * (fx * gy)
-                    + img.texel(x0, y1) * (gx * fy)
-                    + img.texel(x1, y1) * (fx * fy)
+                let c = self.bilinear_cell(p);
+                let (gx, gy) = (1.0 - c.fx, 1.0 - c.fy);
+                img.texel(c.x0, c.y0) * (gx * gy)
+                    + img.texel(c.x1, c.y0) * (c.fx * gy)
+                    + img.texel(c.x0, c.y1) * (gx * c.fy)
+                    + img.texel(c.x1, c.y1) * (c.fx * c.fy)
             }
         }
+    }
+
+    /// The four texels a bilinear lookup at `p` (after `to_uv`) blends, wrapped, and the
+    /// weights toward the second of each pair (Mitsuba's `bilinear_weights`: `w1`).
+    #[inline]
+    fn bilinear_cell(&self, p: Vec2) -> BilinearCell {
+        let (w, h) = (self.image.width, self.image.height);
+        let wrap = self.wrap_mode;
+        let (px, py) = (p.x * w as f32 - 0.5, p.y * h as f32 - 0.5);
+        let (ix, iy) = (floor_index(px), floor_index(py));
+        BilinearCell {
+            x0: wrap.wrap(ix, w),
+            x1: wrap.wrap(ix.saturating_add(1), w),
+            y0: wrap.wrap(iy, h),
+            y1: wrap.wrap(iy.saturating_add(1), h),
+            fx: px - ix as f32,
+            fy: py - iy as f32,
+        }
+    }
+
+    /// Mitsuba's `eval_1_grad`: the gradient (∂f/∂u, ∂f/∂v) of [`Bitmap::eval_1`] with respect to
+    /// the surface's uv (before `to_uv`), as Mitsuba 3.9.1's bitmap computes it (what `bumpmap`
+    /// perturbs the normal by). `nearest`: zero (the lookup is piecewise constant). `bilinear`:
+    /// the derivative of the bilinear blend inside the cell that contains the point, the four
+    /// texels read through `wrap_mode` as `eval` reads them, their luminance (or the one
+    /// channel): per texel coordinate `∂f/∂x = (1 − f_y)(f10 − f00) + f_y(f11 − f01)` and
+    /// `∂f/∂y = (1 − f_x)(f01 − f00) + f_x(f11 − f10)`; then through `to_uv`'s linear part
+    /// transposed, `A^T (∂f/∂x, ∂f/∂y)`, and **then** times the resolution per component
+    /// (Mitsuba's order: for a `to_uv` that mixes u and v on an image that is not square this is
+    /// not the exact derivative, which would scale by the resolution before `A^T`; Mitsuba is
+    /// the spec). On a cell edge the derivative is the one-sided one of the cell `floor` picks.
+    #[inline]
+    pub fn eval_1_grad(&self, uv: Vec2) -> Vec2 {
+        if self.filter_type == FilterType::Nearest {
+            return Vec2::ZERO;
+        }
+        let img = &*self.image;
+        let c = self.bilinear_cell(self.to_uv.apply(uv));
+        let value = |x: usize, y: usize| {
+            let t = img.texel(x, y);
+            if img.channels == 1 {
+                t.x
+            } else {
+                luminance(t)
+            }
+        };
+        let (f00, f10) = (value(c.x0, c.y0), value(c.x1, c.y0));
+        let (f01, f11) = (value(c.x0, c.y1), value(c.x1, c.y1));
+        let dfdx = (1.0 - c.fy) * (f10 - f00) + c.fy * (f11 - f01);
+        let dfdy = (1.0 - c.fx) * (f01 - f00) + c.fx * (f11 - f10);
+        let [r0, r1] = self.to_uv.rows;
+        Vec2::new((r0[0] * dfdx + r1[0] * dfdy) * img.width as f32, (r0[1] * dfdx + r1[1] * dfdy) * img.height as f32)
     }
 
     /// Mitsuba's `eval_1`: the luminance ([`super::LUMINANCE`]) of [`Bitmap::eval`], or the

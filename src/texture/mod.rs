@@ -8,6 +8,8 @@
 //!   (a roughness): a bitmap's luminance (Mitsuba's coefficients [`LUMINANCE`]) or its one
 //!   channel, a constant's channel mean. [`Texture::mean`]: Mitsuba's `mean()`, a bitmap's mean
 //!   luminance over its texels, a constant's channel mean, a checkerboard's mean of its two.
+//!   [`Texture::eval_1_grad`]: Mitsuba's gradient of `eval_1` in uv (a bump map's slopes),
+//!   the derivative of the bilinear blend in its cell, zero for `nearest` and constants.
 //! * UV convention: the texture's `to_uv` ([`UvTransform`], an affine 2D map) is applied first;
 //!   then `(0, 0)` is the **top-left** corner of the image and `v` grows downward (row 0 of the
 //!   file is `v` in `[0, 1/height)`). The texture itself does **not** flip `v`: Mitsuba flips it
@@ -87,6 +89,24 @@ impl Texture {
             Texture::Bitmap(b) => b.eval_1(uv),
             Texture::Checkerboard(c) => c.eval_1(uv),
         }
+    }
+
+    /// Mitsuba's `eval_1_grad`: the gradient (∂/∂u, ∂/∂v) of [`Texture::eval_1`] at `uv`, what
+    /// `bumpmap` tilts the normal by: a bitmap's ([`Bitmap::eval_1_grad`]), zero for a constant
+    /// (Mitsuba's `uniform`). Mitsuba has none for a checkerboard ([`Texture::has_eval_1_grad`]):
+    /// zero here.
+    #[inline]
+    pub fn eval_1_grad(&self, uv: Vec2) -> Vec2 {
+        match self {
+            Texture::Bitmap(b) => b.eval_1_grad(uv),
+            Texture::Constant(_) | Texture::Checkerboard(_) => Vec2::ZERO,
+        }
+    }
+
+    /// `false` for a texture Mitsuba's `eval_1_grad` refuses (a checkerboard): a scene reader
+    /// rejects it as a bump map's height.
+    pub fn has_eval_1_grad(&self) -> bool {
+        !matches!(self, Texture::Checkerboard(_))
     }
 
     /// Mitsuba's `mean()`: a constant's channel mean, a bitmap's mean luminance over its texels

@@ -391,3 +391,204 @@ fn agrees_with_mitsuba() {
         worst.0, worst.1, worst_unfloored, worst_16
     );
 }
+
+/// One row of `mitsuba-grad.csv` (`scripts/mitsuba-texture-grad.py`): Mitsuba 3.9.1's bitmap
+/// `eval_1_grad` and `eval_1` at a uv point of a case.
+struct GradRow {
+    case: u32,
+    params: BitmapParams,
+    uv: Vec2,
+    grad: Vec2,
+    eval_1: f32,
+}
+
+fn read_grad_rows() -> Vec<GradRow> {
+    let text = std::fs::read_to_string(data_dir().join("mitsuba-grad.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "case,filename,filter_type,wrap_mode,raw,m00,m01,m02,m10,m11,m12,u,v,du,dv,eval_1"
+    );
+    lines
+        .map(|line| {
+            let f: Vec<&str> = line.split(',').collect();
+            assert_eq!(f.len(), 16, "{line}");
+            let n = |i: usize| f[i].parse::<f32>().unwrap_or_else(|e| panic!("{line}: field {i}: {e}"));
+            GradRow {
+                case: f[0].parse().unwrap(),
+                params: BitmapParams {
+                    filename: data_dir().join(f[1]),
+                    filter_type: FilterType::parse(f[2]).unwrap(),
+                    wrap_mode: WrapMode::parse(f[3]).unwrap(),
+                    raw: f[4] == "true",
+                    to_uv: UvTransform { rows: [[n(5), n(6), n(7)], [n(8), n(9), n(10)]] },
+                },
+                uv: Vec2::new(n(11), n(12)),
+                grad: Vec2::new(n(13), n(14)),
+                eval_1: n(15),
+            }
+        })
+        .collect()
+}
+
+/// The largest value `eval_1` reads anywhere in `b`'s image (a texel's luminance, or its one
+/// channel).
+fn max_value(b: &Bitmap) -> f32 {
+    let img = &b.image;
+    let mut m = 0.0f32;
+    for y in 0..img.height() {
+        for x in 0..img.width() {
+            let t = img.texel(x, y);
+            m = m.max(if img.channels() == 1 { t.x } else { luminance(t) });
+        }
+    }
+    m
+}
+
+/// The bound on a gradient's difference from Mitsuba's that comes from its texels' differences
+/// alone: each of the four texels of the cell within `tol` relative of Mitsuba's (the `eval`
+/// agreement above: 1e-5, 1e-3 for the half-float 16-bit PNG), each weighted by at most
+/// `resolution · Σ|A|` (`A` the linear part of `to_uv`).
+fn grad_bound(b: &Bitmap, tol: f32) -> f32 {
+    let [r0, r1] = b.to_uv.rows;
+    let a = r0[0].abs() + r0[1].abs() + r1[0].abs() + r1[1].abs();
+    let res = b.image.width().max(b.image.height()) as f32;
+    4.0 * tol * max_value(b) * res * a
+}
+
+/// Every row of `mitsuba-grad.csv` (Mitsuba 3.9.1's bitmap `eval_1_grad` on the committed images:
+/// each image, both filters, each wrap mode, `raw` both ways, to_uv scalings, rotations, shears and
+/// mirrorings, on square and non-square images, 18 uv points inside and outside [0, 1]² away from
+/// the cells' edges): `|ours − Mitsuba| <= grad_bound` per component, and `eval_1` as in
+/// `agrees_with_mitsuba`.
+#[test]
+fn grad_agrees_with_mitsuba() {
+    let rows = read_grad_rows();
+    assert!(rows.len() >= 600, "{} rows", rows.len());
+    let mut cache = TextureCache::new();
+    let (mut worst, mut cases, mut nonzero) = ((0.0f32, String::new()), std::collections::BTreeSet::new(), 0);
+    for r in &rows {
+        cases.insert(r.case);
+        let b = cache.bitmap(&r.params).unwrap();
+        let tol = tolerance(&r.params.filename.to_string_lossy());
+        let what = format!(
+            "case {} {} {} {} raw={} at {}",
+            r.case,
+            r.params.filename.file_name().unwrap().to_string_lossy(),
+            r.params.filter_type.name(),
+            r.params.wrap_mode.name(),
+            r.params.raw,
+            r.uv
+        );
+        let t = Texture::Bitmap(b.clone());
+        let (g, bound) = (t.eval_1_grad(r.uv), grad_bound(&b, tol));
+        for (c, ours, theirs) in [("du", g.x, r.grad.x), ("dv", g.y, r.grad.y)] {
+            let err = (ours - theirs).abs();
+            assert!(err <= bound, "{what}: {c} {ours} vs Mitsuba {theirs} (|difference| {err:.2e} > {bound:.2e})");
+            if tol < 1e-4 && err / theirs.abs().max(bound) > worst.0 {
+                worst = (err / theirs.abs().max(bound), format!("{what}: {c}"));
+            }
+        }
+        nonzero += (r.grad != Vec2::ZERO) as usize;
+        if r.params.filter_type == FilterType::Nearest {
+            assert_eq!(g, Vec2::ZERO, "{what}: nearest");
+        }
+        let y = t.eval_1(r.uv);
+        assert!((y - r.eval_1).abs() <= tol * r.eval_1.abs().max(1e-2), "{what}: eval_1 {y} vs Mitsuba {}", r.eval_1);
+    }
+    assert!(cases.len() >= 35 && nonzero >= 350, "{} cases, {nonzero} non-zero gradients", cases.len());
+    eprintln!(
+        "eval_1_grad: worst difference to Mitsuba relative to max(|Mitsuba|, its bound): {:.2e} ({})",
+        worst.0, worst.1
+    );
+}
+
+/// The central difference of `eval_1` along `d` at `uv` (step `h`, inside one bilinear cell, where
+/// `eval_1` is linear along each texel axis).
+fn central_difference(t: &Texture, uv: Vec2, d: Vec2, h: f32) -> f32 {
+    (t.eval_1(uv + d * h) - t.eval_1(uv - d * h)) / (2.0 * h)
+}
+
+/// True when `uv`, after `to_uv`, lies within `margin` texels of a bilinear cell's edge.
+fn near_edge(b: &Bitmap, uv: Vec2, margin: f32) -> bool {
+    let p = b.to_uv.apply(uv);
+    let (w, h) = (b.image.width() as f32, b.image.height() as f32);
+    [p.x * w - 0.5, p.y * h - 0.5].iter().any(|q| {
+        let f = q - q.floor();
+        f.min(1.0 - f) < margin
+    })
+}
+
+/// `eval_1_grad` is the derivative of `eval_1`: against central differences (a step of at most
+/// 1e-2 texel, inside the cell; the rounding of the texel position, ~1e-6 texel at |uv| ≤ 8, is
+/// 1e-4 of the difference quotient, within the tolerance's 2e-3 of the scale `resolution · Σ|A|
+/// · max value`) on 400 points of each committed image, each wrap mode,
+/// to_uv the identity, a scaling with a translation, a mirroring, and, where the image is
+/// square (rgb.hdr, 3×3), a rotation (where Mitsuba's order of resolution and `A^T` is exact).
+/// For a rotation on a non-square image Mitsuba's formula is not the derivative, and neither is
+/// ours (it is Mitsuba's): the last check asserts that difference is there.
+#[test]
+fn grad_is_the_derivative_of_eval_1() {
+    let mut cache = TextureCache::new();
+    let shift_scale = UvTransform::scale(Vec2::new(2.0, 3.0)).then(UvTransform::translate(Vec2::new(0.25, -0.1)));
+    let mirror = UvTransform::scale(Vec2::new(-1.5, 0.75)).then(UvTransform::translate(Vec2::new(0.3, 0.2)));
+    let rotate = UvTransform::rotate(30.0).then(shift_scale);
+    let mut cases = vec![];
+    for file in ["rgb8.png", "grey8.png", "rgb.exr", "grey.exr", "rgb.hdr"] {
+        for wrap in [WrapMode::Repeat, WrapMode::Mirror, WrapMode::Clamp] {
+            for to_uv in [UvTransform::IDENTITY, shift_scale, mirror] {
+                cases.push((file, wrap, to_uv));
+            }
+        }
+    }
+    cases.push(("rgb.hdr", WrapMode::Repeat, rotate));
+    cases.push(("rgb.hdr", WrapMode::Mirror, rotate));
+    let (mut checked, mut worst) = (0, 0.0f32);
+    for (file, wrap, to_uv) in cases {
+        let mut p = BitmapParams::new(data_dir().join(file));
+        (p.wrap_mode, p.to_uv) = (wrap, to_uv);
+        let b = cache.bitmap(&p).unwrap();
+        let t = Texture::Bitmap(b.clone());
+        let scale = grad_bound(&b, 1.0) / 4.0;
+        // a step of at most 1e-2 texel after to_uv (which scales by up to 3)
+        let h = 1e-2 / (b.image.width().max(b.image.height()) as f32 * 3.0);
+        for k in 0..400 {
+            let uv = Vec2::new(-1.3 + 3.7 * ((k as f32 * 0.618034) % 1.0), -1.1 + 3.3 * ((k as f32 * 0.754878) % 1.0));
+            if near_edge(&b, uv, 0.03) {
+                continue;
+            }
+            let g = t.eval_1_grad(uv);
+            let fd = Vec2::new(central_difference(&t, uv, Vec2::X, h), central_difference(&t, uv, Vec2::Y, h));
+            let err = (g - fd).abs().max_element() / scale;
+            assert!(err <= 2e-3, "{file} {wrap:?} {to_uv:?} at {uv}: grad {g} vs central difference {fd} ({err:.1e})");
+            worst = worst.max(err);
+            checked += 1;
+        }
+    }
+    assert!(checked >= 12_000, "{checked} points");
+    eprintln!("eval_1_grad vs central differences: {checked} points, worst {worst:.1e} of the scale");
+
+    // a rotation on the 5×4 rgb8.png: Mitsuba's order (A^T, then the resolution) is off the
+    // derivative by up to |w − h|/max(w, h) of the slope, and so is ours
+    let mut p = BitmapParams::new(data_dir().join("rgb8.png"));
+    p.to_uv = rotate;
+    let t = Texture::Bitmap(cache.bitmap(&p).unwrap());
+    let uv = (0..100)
+        .map(|k| Vec2::new(0.05 + 0.009 * k as f32, 0.31 + 0.004 * k as f32))
+        .find(|uv| !near_edge(&cache.bitmap(&p).unwrap(), *uv, 0.05))
+        .unwrap();
+    let (g, h) = (t.eval_1_grad(uv), 1e-4);
+    let fd = Vec2::new(central_difference(&t, uv, Vec2::X, h), central_difference(&t, uv, Vec2::Y, h));
+    assert!((g - fd).length() > 0.05 * fd.length(), "rotated non-square: grad {g} equals the derivative {fd}");
+}
+
+/// A constant's gradient is zero, a checkerboard has none in Mitsuba (a bump map refuses it).
+#[test]
+fn grad_of_constants_and_checkerboards() {
+    let c = Texture::Constant(Rgb::new(0.2, 0.5, 0.9));
+    assert_eq!(c.eval_1_grad(Vec2::new(0.3, 0.7)), Vec2::ZERO);
+    assert!(c.has_eval_1_grad());
+    let k = Texture::Checkerboard(Checkerboard::new(c.clone(), Texture::Constant(Rgb::ONE), UvTransform::IDENTITY));
+    assert!(!k.has_eval_1_grad());
+    assert!(Texture::Bitmap(bitmap(FilterType::Nearest, WrapMode::Repeat)).has_eval_1_grad());
+}
