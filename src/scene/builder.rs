@@ -19,6 +19,7 @@
 //! emitters then the point lights, picked ∝ power (`light_power`).
 
 use super::limits::{extent_message, light_value_error, within_extent, MAX_INTENSITY, MAX_RADIANCE};
+use super::shape_uv::{ShapeUv, ShapeUvs};
 use super::{
     light_power, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere, Surface,
     Triangle, NO_EMITTER,
@@ -139,6 +140,8 @@ pub(super) struct SceneBuilder {
     spheres: Vec<Sphere>,
     sph_shape: Vec<u32>,
     shapes: Vec<ShapeRec>,
+    /// The shapes with an analytic parametrisation (shape id, its record).
+    shape_uvs: Vec<(u32, ShapeUv)>,
     point_lights: Vec<(PointLight, Origin)>,
     /// Each ROI with where its name was given.
     rois: Vec<(Roi, Origin)>,
@@ -171,6 +174,7 @@ impl SceneBuilder {
             spheres: Vec::new(),
             sph_shape: Vec::new(),
             shapes: Vec::new(),
+            shape_uvs: Vec::new(),
             point_lights: Vec::new(),
             rois: Vec::new(),
             forecast_target: None,
@@ -326,6 +330,12 @@ impl SceneBuilder {
         self.triangles.push(t);
         self.tri_shape.push(s as u32);
         Ok(())
+    }
+
+    /// Gives the triangles of shape `s` the analytic parametrisation `uv` (a tessellated `disk`
+    /// or `cylinder`) in place of per-vertex UVs.
+    pub fn shape_uv(&mut self, s: usize, uv: ShapeUv) {
+        self.shape_uvs.push((s as u32, uv));
     }
 
     /// Adds the analytic sphere of shape `s`: a positive finite radius, its bounds in the extent.
@@ -525,6 +535,7 @@ impl SceneBuilder {
             textures: self.textures,
             triangles: self.triangles,
             spheres: self.spheres,
+            shape_uvs: ShapeUvs::new(&self.tri_shape, &self.shape_uvs),
             emitters,
             point_lights,
             lights,

@@ -21,6 +21,7 @@ pub mod mitsuba;
 mod obj;
 pub mod ply;
 mod schema;
+mod shape_uv;
 mod surface;
 
 pub use builder::{parse_duration, SceneError};
@@ -28,6 +29,7 @@ pub use camera::Camera;
 pub use dirac_target::{MAX_OBJECTS, MAX_TARGETS, SPHERE_PAD};
 pub use file::load_str;
 pub use limits::{within_extent, MAX_EXTENT};
+pub use shape_uv::ShapeUvs;
 
 /// How a scene file is loaded: the `-D NAME=VALUE` substitutions for Mitsuba XML `$NAME`
 /// parameters (ignored by TOML scenes).
@@ -256,6 +258,9 @@ pub struct Scene {
     pub triangles: Vec<Triangle>,
     /// Spheres.
     pub spheres: Vec<Sphere>,
+    /// The triangles of tessellated analytic shapes (`disk`, `cylinder`) whose uv and ∂p/∂u come
+    /// from the hit point in the shape's frame (`uv_at`), not from per-vertex UVs.
+    pub shape_uvs: ShapeUvs,
     /// Area emitters.
     pub emitters: Vec<Emitter>,
     /// Point lights.
@@ -322,11 +327,7 @@ impl Scene {
     /// normal at the hit's texture coordinates.
     #[inline(never)]
     fn shade_varying(&self, prim: u32, id: usize, sp: ShadingPoint, wo: Vec3) -> (Material, ShadingPoint) {
-        let (uv, dpdu) = if prim < self.ntri() {
-            surface::triangle_uv(&self.triangles[prim as usize], sp.p)
-        } else {
-            surface::sphere_uv(&self.spheres[(prim - self.ntri()) as usize], sp.p)
-        };
+        let (uv, dpdu) = self.uv_at(prim, sp.p);
         let s = &self.surfaces[id];
         let m = s.material_at(&self.materials[id], &self.textures, uv);
         let sp = match s.normalmap {

@@ -6,6 +6,9 @@
 //! 1.9e-5 r, both far below the noise of any render; the cylinder carries exact radial vertex
 //! normals. `sphere` stays analytic (uniform `to_world` scale only). `to_world` maps positions,
 //! and normals by the inverse transpose; `flip_normals` reverses the winding (and the emitting side).
+//! Texture coordinates are Mitsuba's: per-vertex on `rectangle` and `cube` (its 24 vertices and
+//! per-face UVs), the analytic (r, φ/2π) and (φ/2π, z) of the hit point on `disk` and `cylinder`
+//! (`scene::shape_uv`, whose frame needs an invertible `to_world` when the BSDF is textured).
 //!
 //! Invariants: degenerate triangles are skipped with a warning; a missing or malformed mesh file
 //! is an error naming the scene file and line.
@@ -17,8 +20,9 @@ use crate::math::{Rgb, Vec2, Vec3};
 use crate::scene::builder::{Corners, Origin, ShapeIn};
 use crate::scene::limits;
 use crate::scene::ply::IndexedMesh;
+use crate::scene::shape_uv::{ShapeKind, ShapeUv};
 use crate::scene::SceneError;
-use glam::{DMat3, DVec3};
+use glam::{DMat3, DMat4, DVec3};
 
 /// Slices of the tessellated `disk` and `cylinder`.
 pub const SEGMENTS: u32 = 512;
@@ -35,12 +39,9 @@ pub(super) fn shape(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
     let emission = emitter(cx, &mut p)?;
     let material = shape_material(cx, &mut p, emission.is_some())?;
     let ty = n.ty();
-    if matches!(ty, "cube" | "disk" | "cylinder") && !cx.b.surface_at(material).is_constant() {
-        let msg = format!("shape `{ty}` has no texture coordinates yet: its BSDF cannot take textures or a normal map");
-        return Err(cx.err(n.line, &format!("shape.{ty}"), msg));
-    }
     // the key blamed when a vertex leaves the extent before the transform (the file, the
-    // cylinder's points) and after it
+    // cylinder's points) and after it; the analytic parametrisation and its local frame
+    let mut local = None;
     let (mesh, raw_at) = match ty {
         "obj" | "ply" => {
             let (m, fl) = file_mesh(cx, &mut p)?;
@@ -48,8 +49,15 @@ pub(super) fn shape(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
         }
         "rectangle" => (Some(rectangle()), Origin::new(n.line, ty)),
         "cube" => (Some(cube()), Origin::new(n.line, ty)),
-        "disk" => (Some(disk()), Origin::new(n.line, ty)),
-        "cylinder" => (Some(cylinder(cx, &mut p)?), Origin::new(p.line_of("p1"), "cylinder.p1")),
+        "disk" => {
+            local = Some((ShapeKind::Disk, DMat4::IDENTITY));
+            (Some(disk()), Origin::new(n.line, ty))
+        }
+        "cylinder" => {
+            let (m, frame) = cylinder(cx, &mut p)?;
+            local = Some((ShapeKind::Cylinder, frame));
+            (Some(m), Origin::new(p.line_of("p1"), "cylinder.p1"))
+        }
         "sphere" => (None, Origin::new(n.line, ty)),
         t => {
             let msg = format!("shape `{t}` is not supported (obj, ply, rectangle, cube, sphere, disk, cylinder)");
@@ -63,6 +71,17 @@ pub(super) fn shape(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
     };
     let at = Origin::new(n.line, format!("shape.{ty}"));
     let id = cx.b.shape(ShapeIn { at, material, emission, what, exact_normals: true });
+    if let Some((kind, frame)) = local {
+        let to_world = xf.as_ref().map_or(frame, |x| x.m * frame);
+        match ShapeUv::new(kind, to_world) {
+            Some(uv) => cx.b.shape_uv(id, uv),
+            None if !cx.b.surface_at(material).is_constant() => {
+                let msg = format!("`to_world` must be invertible for the texture coordinates of shape `{ty}`");
+                return Err(p.err(cx, xl, "to_world", msg));
+            }
+            None => {}
+        }
+    }
     match mesh {
         Some(m) => triangles(cx, id, &m, xf.as_ref(), flip, (&raw_at, &xf_at))?,
         None => sphere(cx, &mut p, id, xf, flip, &xf_at)?,
@@ -184,20 +203,24 @@ fn rectangle() -> IndexedMesh {
     IndexedMesh { uvs: Some(uvs), ..mesh(p.to_vec(), None, vec![[0, 1, 2], [2, 3, 0]]) }
 }
 
+/// Mitsuba 3's `cube` (cube.cpp): 24 vertices, four per face (−y, +y, +x, +z, −x, −z), each face
+/// with the UVs (0, 1), (1, 1), (1, 0), (0, 0) at its vertices and the triangles {0, 1, 2},
+/// {3, 0, 2}, counter-clockwise seen from outside.
 fn cube() -> IndexedMesh {
-    let (mut pos, mut faces) = (Vec::new(), Vec::new());
-    for axis in 0..3 {
-        for s in [-1.0f32, 1.0] {
-            let (u, v) = (Vec3::AXES[(axis + 1) % 3], Vec3::AXES[(axis + 2) % 3]);
-            let c = Vec3::AXES[axis] * s;
-            let b = pos.len() as u32;
-            // u × v = +axis: counter-clockwise seen from outside for s = +1
-            let (u, v) = if s > 0.0 { (u, v) } else { (v, u) };
-            pos.extend([c - u - v, c + u - v, c + u + v, c - u + v]);
-            faces.extend([[b, b + 1, b + 2], [b, b + 2, b + 3]]);
-        }
-    }
-    mesh(pos, None, faces)
+    #[rustfmt::skip]
+    const P: [[i8; 3]; 24] = [
+        [1, -1, -1], [1, -1, 1], [-1, -1, 1], [-1, -1, -1],
+        [1, 1, -1], [-1, 1, -1], [-1, 1, 1], [1, 1, 1],
+        [1, -1, -1], [1, 1, -1], [1, 1, 1], [1, -1, 1],
+        [1, -1, 1], [1, 1, 1], [-1, 1, 1], [-1, -1, 1],
+        [-1, -1, 1], [-1, 1, 1], [-1, 1, -1], [-1, -1, -1],
+        [1, 1, -1], [1, -1, -1], [-1, -1, -1], [-1, 1, -1],
+    ];
+    const UV: [[f32; 2]; 4] = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
+    let pos = P.iter().map(|p| Vec3::from_array(p.map(f32::from))).collect();
+    let uvs = (0..24).map(|i| Vec2::from_array(UV[i % 4])).collect();
+    let faces = (0..6u32).flat_map(|f| [[4 * f, 4 * f + 1, 4 * f + 2], [4 * f + 3, 4 * f, 4 * f + 2]]).collect();
+    IndexedMesh { uvs: Some(uvs), ..mesh(pos, None, faces) }
 }
 
 fn disk() -> IndexedMesh {
@@ -211,8 +234,10 @@ fn disk() -> IndexedMesh {
     mesh(pos, None, faces)
 }
 
-/// Unit open cylinder around +z from z = 0 to 1, mapped to `p0`, `p1`, `radius`.
-fn cylinder(cx: &Cx, p: &mut Plugin) -> Result<IndexedMesh, SceneError> {
+/// Unit open cylinder around +z from z = 0 to 1, mapped to `p0`, `p1`, `radius`, with that map
+/// (Mitsuba's translate(p0) · frame(p1 − p0) · scale(r, r, |p1 − p0|): glam's
+/// `any_orthonormal_pair` is Mitsuba's `coordinate_system`, Duff et al. 2017).
+fn cylinder(cx: &Cx, p: &mut Plugin) -> Result<(IndexedMesh, DMat4), SceneError> {
     let p0 = p.point(cx, "p0")?.map_or(DVec3::ZERO, |a| DVec3::from_array(a.map(f64::from)));
     let p1 = p.point(cx, "p1")?.map_or(DVec3::Z, |a| DVec3::from_array(a.map(f64::from)));
     let r = p.float(cx, "radius")?.unwrap_or(1.0) as f64;
@@ -235,7 +260,8 @@ fn cylinder(cx: &Cx, p: &mut Plugin) -> Result<IndexedMesh, SceneError> {
         let (a0, a1, b0, b1) = (2 * i, 2 * i + 1, 2 * ((i + 1) % SEGMENTS), 2 * ((i + 1) % SEGMENTS) + 1);
         faces.extend([[a0, b0, b1], [a0, b1, a1]]);
     }
-    Ok(mesh(pos, Some(nrm), faces))
+    let frame = DMat4::from_cols(local.x_axis.extend(0.0), local.y_axis.extend(0.0), d.extend(0.0), p0.extend(1.0));
+    Ok((mesh(pos, Some(nrm), faces), frame))
 }
 
 fn sphere(
