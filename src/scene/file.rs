@@ -10,11 +10,14 @@
 
 use super::builder::{CameraSpec, Corners, Origin, SceneBuilder, ShapeIn, View};
 use super::limits::{self, extent_message, within_extent};
-use super::schema::{Doc, LightDef, MaterialDef, ShapeDef};
-use super::{locate, Material, Scene, SceneError};
-use crate::math::{fnv1a, Vec2, Vec3};
+use super::plugins::{self, IorValue, Param};
+use super::schema::{Doc, IorRaw, LightDef, MaterialDef, MaterialRaw, ParamRaw, ShapeDef, TextureRaw, UvRaw};
+use super::{locate, Material, Scene, SceneError, Surface};
+use crate::math::{fnv1a, Rgb, Vec2, Vec3};
+use crate::texture::{BitmapParams, Checkerboard, FilterType, Texture, TextureCache, UvTransform, WrapMode};
 use std::collections::BTreeMap;
 use std::path::Path;
+use toml::Spanned;
 
 struct Ctx<'a> {
     file: String,
@@ -46,8 +49,21 @@ impl Ctx<'_> {
             off += line.len();
         }
         let end = end.max(span.end.min(self.src.len()));
-        let text = &self.src[start..end];
-        let mut at = start;
+        self.err_between(start..end, key, message)
+    }
+    /// Error at `key` inside the value spanning `span`: within an inline table `{ ... }` its key
+    /// is searched for there only; a table given under its own header as `err`.
+    fn err_in(&self, span: std::ops::Range<usize>, key: &str, message: impl Into<String>) -> SceneError {
+        let inline = self.src.get(span.clone()).is_some_and(|t| t.starts_with('{'));
+        if inline {
+            return self.err_between(span, key, message);
+        }
+        self.err(span, key, message)
+    }
+    /// Error at the first `leaf =` of `key` in `range` (the range's start when there is none).
+    fn err_between(&self, range: std::ops::Range<usize>, key: &str, message: impl Into<String>) -> SceneError {
+        let text = &self.src[range.clone()];
+        let mut at = range.start;
         if !key.is_empty() {
             let leaf = key.rsplit('.').next().unwrap_or(key);
             let mut search = 0;
@@ -57,7 +73,7 @@ impl Ctx<'_> {
                 let before_ok = pos == 0 || !(b[pos - 1].is_ascii_alphanumeric() || b[pos - 1] == b'_');
                 let rest = text[pos + leaf.len()..].trim_start();
                 if before_ok && rest.starts_with('=') {
-                    at = start + pos;
+                    at = range.start + pos;
                     break;
                 }
                 search = pos + leaf.len();
@@ -96,7 +112,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
     let mut b = SceneBuilder::new(file, fnv1a(0xcbf2_9ce4_8422_2325, src.as_bytes()));
     camera(&cx, &mut b, &doc)?;
     render(&cx, &mut b, &doc)?;
-    let names = materials(&cx, &mut b, &doc)?;
+    let names = materials(&cx, &mut b, &doc, dir)?;
     for idx in 0..doc.shape.len() {
         shape(&cx, &mut b, &doc, &names, dir, idx)?;
     }
@@ -131,10 +147,14 @@ fn parse_doc(cx: &Ctx) -> Result<Doc, SceneError> {
                 return SceneError { file: cx.file.clone(), line: l, key: path, message: m };
             }
         }
+        let missing = msg.contains("missing field");
+        if let Some((l, path)) = e.span().and_then(|_| inline_path(cx, from, &key, missing)) {
+            return SceneError { file: cx.file.clone(), line: l, key: path, message: msg };
+        }
         if !key.is_empty() {
             // the span may cover a whole table (or array of tables): find the key's own line
             // (a missing key: the table's header) and name the key with its table's path
-            let missing = msg.contains("missing field") && key != "camera"; // `camera`: the document's
+            let missing = missing && key != "camera"; // `camera`: the document's
             if let Some((l, path)) = e.span().and_then(|_| locate::field_at(src, from, &key, missing)) {
                 return SceneError { file: cx.file.clone(), line: l, key: path, message: msg };
             }
@@ -146,10 +166,70 @@ fn parse_doc(cx: &Ctx) -> Result<Doc, SceneError> {
     })
 }
 
+/// The line and dotted key path of a deserialization error at byte `from` inside an inline table
+/// (`reflectance = { type = "bitmap", raw = 1 }`): the key at `from` (an unknown one), or the key
+/// whose value starts at `from`, and with `missing` the table at `from` and the missing `key`
+/// (`materials.wood.reflectance.raw`). `None` outside inline tables (`locate` finds those).
+fn inline_path(cx: &Ctx, from: usize, key: &str, missing: bool) -> Option<(usize, String)> {
+    let src = cx.src;
+    let (key_line, base) = locate::key_path_at(src, from)?;
+    let line_start = *cx.starts.get(key_line - 1)?;
+    let text = src.get(line_start..from)?;
+    let is_word = |c: u8| c.is_ascii_alphanumeric() || c == b'_' || c == b'-';
+    // the keys of the inline tables open at `from`, and the last `key =` read
+    let (mut open, mut last) = (Vec::<Option<&str>>::new(), None::<&str>);
+    let b = text.as_bytes();
+    let mut i = text.find('=')? + 1;
+    while i < b.len() {
+        match b[i] {
+            q @ (b'"' | b'\'') => {
+                i += 1;
+                while i < b.len() && b[i] != q {
+                    i += if b[i] == b'\\' && q == b'"' { 2 } else { 1 };
+                }
+            }
+            b'{' => open.push(last.take()),
+            b'}' => {
+                open.pop();
+                last = None;
+            }
+            c if is_word(c) => {
+                let s = i;
+                while i < b.len() && is_word(b[i]) {
+                    i += 1;
+                }
+                if text[i..].trim_start().starts_with('=') {
+                    last = Some(&text[s..i]);
+                }
+                continue;
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    let rest = &src[from..];
+    let at_table = rest.starts_with('{');
+    if open.is_empty() && !at_table {
+        return None;
+    }
+    // the first `{` opens the value of the line's own key (`base`)
+    let mut path: Vec<&str> = std::iter::once(base.as_str()).chain(open.into_iter().flatten()).collect();
+    let word = rest.bytes().take_while(|c| is_word(*c)).count();
+    if word > 0 && rest[word..].trim_start().starts_with('=') {
+        path.push(&rest[..word]);
+    } else if let Some(l) = last {
+        path.push(l);
+    }
+    if missing && at_table {
+        path.push(key);
+    }
+    Some((cx.line_of(from), path.join(".")))
+}
+
 /// serde's messages name the schema's Rust types (`expected struct MaterialRaw`): the words a
 /// scene author knows instead.
 fn in_words(msg: &str) -> String {
-    const WORDS: [(&str, &str); 8] = [
+    const WORDS: [(&str, &str); 10] = [
         ("struct Doc", "a scene file ([camera], [render], [materials.NAME], [[shape]], [[light]], ...)"),
         ("struct CameraDef", "the [camera] table"),
         ("struct RenderDef", "the [render] table"),
@@ -161,6 +241,8 @@ fn in_words(msg: &str) -> String {
         ("struct LightRaw", "a `[[light]]` table"),
         ("struct RoiDef", "a `[[roi]]` table"),
         ("struct ForecastDef", "the [forecast] table"),
+        ("struct TextureRaw", "a texture table (`{ type = \"bitmap\", filename = ... }`)"),
+        ("struct UvRaw", "a `to_uv` table (`{ scale = [su, sv], rotate = degrees, translate = [tu, tv] }`)"),
     ];
     let mut m = msg.to_string();
     for (rust, words) in WORDS {
@@ -224,41 +306,234 @@ fn render(cx: &Ctx, b: &mut SceneBuilder, doc: &Doc) -> Result<(), SceneError> {
     Ok(())
 }
 
-fn materials<'d>(cx: &Ctx, b: &mut SceneBuilder, doc: &'d Doc) -> Result<BTreeMap<&'d str, u32>, SceneError> {
+fn materials<'d>(
+    cx: &Ctx,
+    b: &mut SceneBuilder,
+    doc: &'d Doc,
+    dir: &Path,
+) -> Result<BTreeMap<&'d str, u32>, SceneError> {
     let mut names = BTreeMap::new();
+    let mut cache = TextureCache::default();
     for (name, m) in &doc.materials {
-        let ms = m.span();
-        let bad = |k: &str, msg: &str| cx.err(ms.clone(), &format!("materials.{name}.{k}"), msg);
-        let refl = |k: &str, a: [f32; 3]| -> Result<Vec3, SceneError> {
-            if !finite3(a) || a.iter().any(|&x| !(0.0..=1.0).contains(&x)) {
-                return Err(bad(k, "must be three finite values in [0, 1]"));
-            }
-            Ok(v3(a))
-        };
-        let def = m.get_ref().resolve().map_err(|(k, msg)| bad(&k, &msg))?;
-        let mat = match &def {
-            MaterialDef::Diffuse { albedo } => Material::Diffuse { albedo: refl("albedo", *albedo)? },
+        let (ms, raw) = (m.span(), m.get_ref());
+        let key = format!("materials.{name}");
+        let bad = |k: &str, msg: &str| cx.err(ms.clone(), &format!("{key}.{k}"), msg);
+        let def = raw.resolve().map_err(|(k, msg)| bad(&k, &msg))?;
+        let mut p = TomlParams { cx, b, cache: &mut cache, dir, raw, span: ms.clone(), key: key.clone(), read: Vec::new() };
+        let mut textures = Vec::new();
+        let mat = match def {
+            MaterialDef::Diffuse => plugins::diffuse(&mut p, "albedo", &mut textures)?,
             MaterialDef::Glossy { albedo, specular, exponent } => {
-                let (a, s) = (refl("albedo", *albedo)?, refl("specular", *specular)?);
+                let a = plugins::refl(&p, v3(albedo), "albedo")?;
+                let s = plugins::refl(&p, v3(specular), "specular")?;
                 if (a + s).max_element() > 1.0 + 1e-6 {
                     return Err(bad("specular", "albedo + specular must be <= 1 per channel (energy conservation)"));
                 }
-                if !(exponent.is_finite() && *exponent >= 0.0 && *exponent <= 1e6) {
+                if !(exponent.is_finite() && (0.0..=1e6).contains(&exponent)) {
                     return Err(bad("exponent", "exponent must be finite and in [0, 1e6]"));
                 }
-                Material::Glossy { albedo: a, specular: s, exponent: *exponent }
+                Material::Glossy { albedo: a, specular: s, exponent }
             }
-            MaterialDef::Mirror { reflectance } => Material::Mirror { reflectance: refl("reflectance", *reflectance)? },
+            MaterialDef::Mirror { reflectance } => {
+                Material::Mirror { reflectance: plugins::refl(&p, v3(reflectance), "reflectance")? }
+            }
             MaterialDef::Glass { ior } => {
-                if !(ior.is_finite() && *ior >= 1.0 && *ior <= 10.0) {
+                if !(ior.is_finite() && (1.0..=10.0).contains(&ior)) {
                     return Err(bad("ior", "ior must be finite and in [1, 10]"));
                 }
-                Material::Glass { ior: *ior }
+                Material::Glass { ior }
+            }
+            MaterialDef::Plugin(kind) => {
+                if raw.has("alpha") && (raw.has("alpha_u") || raw.has("alpha_v")) {
+                    return Err(bad("alpha", "give `alpha`, or `alpha_u` and `alpha_v`, not both"));
+                }
+                let built = plugins::plugin(&mut p, kind)?.expect("every plugin type of the schema is built");
+                if let Some(k) = PARAM_KEYS.iter().find(|k| raw.has(k) && !p.read.contains(k)) {
+                    return Err(bad(k, &format!("key `{k}` has no effect with the other keys of this `{kind}`")));
+                }
+                textures = built.textures;
+                built.m
             }
         };
-        names.insert(name.as_str(), b.material(mat));
+        // a normal map's texture after the material's own, as the XML reader registers them
+        let normalmap = match raw.normalmap() {
+            Some(f) => {
+                let params = BitmapParams { raw: true, ..BitmapParams::new(dir.join(f)) };
+                let t = plugins::bitmap(b, &mut cache, &params).map_err(|e| bad("normalmap", &e))?;
+                Some(b.texture(t))
+            }
+            None => None,
+        };
+        let two_sided = raw.twosided() || mat.is_two_sided_by_nature();
+        let surface = Surface { two_sided, textures, normalmap, ..Surface::one_sided(&mat) };
+        names.insert(name.as_str(), b.material_with(mat, surface));
     }
     Ok(names)
+}
+
+/// The parameters of Mitsuba's plugin types that `TomlParams` hands to `scene::plugins`.
+const PARAM_KEYS: [&str; 15] = [
+    "diffuse_reflectance",
+    "specular_reflectance",
+    "specular_transmittance",
+    "int_ior",
+    "ext_ior",
+    "nonlinear",
+    "material",
+    "eta",
+    "k",
+    "distribution",
+    "alpha",
+    "alpha_u",
+    "alpha_v",
+    "sample_visible",
+    "albedo",
+];
+
+/// A `[materials.NAME]` table as `plugins::Params`: its keys by Mitsuba's names, a texture table
+/// registered with the builder, errors at the key's line (`materials.NAME.KEY`).
+struct TomlParams<'a, 'c> {
+    cx: &'a Ctx<'c>,
+    b: &'a mut SceneBuilder,
+    cache: &'a mut TextureCache,
+    dir: &'a Path,
+    raw: &'a MaterialRaw,
+    span: std::ops::Range<usize>,
+    /// `materials.NAME`.
+    key: String,
+    /// The keys read so far.
+    read: Vec<&'static str>,
+}
+
+impl TomlParams<'_, '_> {
+    fn mark(&mut self, name: &str) {
+        if let Some(k) = PARAM_KEYS.iter().find(|k| **k == name) {
+            self.read.push(k);
+        }
+    }
+}
+
+impl plugins::Params for TomlParams<'_, '_> {
+    fn has(&self, name: &str) -> bool {
+        self.raw.has(name)
+    }
+    fn param(&mut self, name: &str) -> Result<Option<Param>, SceneError> {
+        self.mark(name);
+        let Some(v) = self.raw.param(name) else { return Ok(None) };
+        let key = format!("{}.{name}", self.key);
+        let monochrome = name.starts_with("alpha");
+        match v.get_ref() {
+            ParamRaw::Texture(t) => {
+                let t = texture(self.cx, (self.b, self.cache, self.dir), t, v.span(), &key)?;
+                Ok(Some(Param::Texture(self.b.texture(t))))
+            }
+            ParamRaw::Rgb(_) if monochrome => Err(self.err(name, "takes a number or a texture, not a colour")),
+            c => constant(self.cx, c, v.span(), &key).map(|c| Some(Param::Constant(c))),
+        }
+    }
+    fn color(&mut self, name: &str) -> Result<Option<Rgb>, SceneError> {
+        self.mark(name);
+        let Some(v) = self.raw.param(name) else { return Ok(None) };
+        constant(self.cx, v.get_ref(), v.span(), &format!("{}.{name}", self.key)).map(Some)
+    }
+    fn float(&mut self, name: &str) -> Result<Option<f32>, SceneError> {
+        self.mark(name);
+        Ok(None) // no TOML type takes a plain number outside `param` and `ior_value`
+    }
+    fn boolean(&mut self, name: &str) -> Result<Option<bool>, SceneError> {
+        self.mark(name);
+        Ok(self.raw.boolean(name))
+    }
+    fn string(&mut self, name: &str) -> Result<Option<String>, SceneError> {
+        self.mark(name);
+        Ok(self.raw.string(name).map(str::to_string))
+    }
+    fn ior_value(&mut self, name: &str) -> Result<Option<IorValue>, SceneError> {
+        self.mark(name);
+        Ok(self.raw.ior(name).map(|v| match v {
+            IorRaw::Number(x) => IorValue { number: Some(*x), text: x.to_string() },
+            IorRaw::Name(s) => IorValue { number: None, text: s.clone() },
+        }))
+    }
+    fn err(&self, name: &str, message: &str) -> SceneError {
+        self.cx.err(self.span.clone(), &format!("{}.{name}", self.key), message)
+    }
+    fn texture(&self, t: u32) -> &Texture {
+        self.b.texture_at(t)
+    }
+}
+
+/// A constant: a finite number (grey) or three finite numbers.
+fn constant(cx: &Ctx, v: &ParamRaw, span: std::ops::Range<usize>, key: &str) -> Result<Rgb, SceneError> {
+    let c = match v {
+        ParamRaw::Number(x) => Rgb::splat(*x),
+        ParamRaw::Rgb(c) => v3(*c),
+        ParamRaw::Texture(_) => return Err(cx.err_in(span, key, "takes a constant here, not a texture")),
+    };
+    if !c.is_finite() {
+        return Err(cx.err_in(span, key, format!("must be finite, got {:?}", c.to_array())));
+    }
+    Ok(c)
+}
+
+/// A texture table (`key` its dotted path, `span` its value's): Mitsuba's `bitmap` (the image
+/// file relative to the scene's folder) or `checkerboard` (whose colours may be textures).
+fn texture(
+    cx: &Ctx,
+    (b, cache, dir): (&mut SceneBuilder, &mut TextureCache, &Path),
+    t: &TextureRaw,
+    span: std::ops::Range<usize>,
+    key: &str,
+) -> Result<Texture, SceneError> {
+    let bad = |k: &str, m: String| cx.err_in(span.clone(), &format!("{key}.{k}"), m);
+    t.check_keys().map_err(|(k, m)| bad(&k, m))?;
+    let to_uv = uv_transform(t.to_uv.as_ref()).map_err(|m| bad("to_uv", m))?;
+    if t.kind == "checkerboard" {
+        let default = Checkerboard::default();
+        let mut colour = |k: &str, c: &Option<Spanned<ParamRaw>>, d: Texture| -> Result<Texture, SceneError> {
+            let Some(c) = c else { return Ok(d) };
+            let k = format!("{key}.{k}");
+            match c.get_ref() {
+                ParamRaw::Texture(t) => texture(cx, (&mut *b, &mut *cache, dir), t, c.span(), &k),
+                v => constant(cx, v, c.span(), &k).map(Texture::Constant),
+            }
+        };
+        let c0 = colour("color0", &t.color0, *default.color0)?;
+        let c1 = colour("color1", &t.color1, *default.color1)?;
+        return Ok(Texture::Checkerboard(Checkerboard::new(c0, c1, to_uv)));
+    }
+    let Some(f) = &t.filename else { return Err(bad("filename", "a `bitmap` needs `filename`".into())) };
+    let mut params = BitmapParams::new(dir.join(f));
+    if let Some(v) = &t.filter_type {
+        params.filter_type = FilterType::parse(v).map_err(|m| bad("filter_type", m))?;
+    }
+    if let Some(v) = &t.wrap_mode {
+        params.wrap_mode = WrapMode::parse(v).map_err(|m| bad("wrap_mode", m))?;
+    }
+    params.raw = t.raw.unwrap_or(false);
+    params.to_uv = to_uv;
+    plugins::bitmap(b, cache, &params).map_err(|m| bad("filename", m))
+}
+
+/// `to_uv = { scale = [su, sv], rotate = degrees, translate = [tu, tv] }`, applied in that order.
+fn uv_transform(uv: Option<&UvRaw>) -> Result<UvTransform, String> {
+    let Some(uv) = uv else { return Ok(UvTransform::IDENTITY) };
+    let s = uv.scale.unwrap_or([1.0; 2]);
+    let (r, t) = (uv.rotate.unwrap_or(0.0), uv.translate.unwrap_or([0.0; 2]));
+    if !(s.iter().chain(&t).all(|x| x.is_finite()) && r.is_finite()) {
+        return Err(format!("scale {s:?}, rotate {r} and translate {t:?} must be finite"));
+    }
+    let mut x = UvTransform::IDENTITY;
+    if uv.scale.is_some() {
+        x = x.then(UvTransform::scale(Vec2::from_array(s)));
+    }
+    if uv.rotate.is_some() {
+        x = x.then(UvTransform::rotate(r));
+    }
+    if uv.translate.is_some() {
+        x = x.then(UvTransform::translate(Vec2::from_array(t)));
+    }
+    Ok(x)
 }
 
 /// A shape's material index and emission: emitters reflect nothing (material 0) but a material

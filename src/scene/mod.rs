@@ -20,6 +20,7 @@ mod mesh;
 pub mod mitsuba;
 mod obj;
 pub mod ply;
+mod plugins;
 mod schema;
 mod shape_uv;
 mod surface;

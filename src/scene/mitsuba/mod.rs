@@ -17,7 +17,7 @@
 
 mod bsdf;
 mod params;
-mod presets;
+pub(super) mod presets;
 mod shapes;
 mod texture;
 mod xml;

@@ -18,7 +18,7 @@
 pub(super) const UNIFORM_EMISSION_RGB: [f32; 3] = [1.204_793_9, 0.948_291, 0.908_916_06];
 
 /// Dielectric IOR by Mitsuba's preset name.
-pub(super) fn dielectric_ior(name: &str) -> Option<f32> {
+pub(in crate::scene) fn dielectric_ior(name: &str) -> Option<f32> {
     Some(match name {
         "vacuum" => 1.0,
         "helium" => 1.000036,
@@ -49,7 +49,7 @@ pub(super) fn dielectric_ior(name: &str) -> Option<f32> {
 
 /// Conductor (η, k) as RGB by Mitsuba's preset name; `none` is (0, 1), a perfect mirror.
 #[allow(clippy::excessive_precision)] // measured data, kept as tabulated
-pub(super) fn conductor(name: &str) -> Option<([f32; 3], [f32; 3])> {
+pub(in crate::scene) fn conductor(name: &str) -> Option<([f32; 3], [f32; 3])> {
     const T: &[(&str, [f32; 3], [f32; 3])] = &[
         ("a-C", [2.9440999, 2.2271503, 1.9681669], [0.8874329, 0.7993216, 0.8152863]),
         ("Ag", [0.15526465, 0.1167233, 0.1383807], [4.8283433, 3.122246, 2.1469504]),

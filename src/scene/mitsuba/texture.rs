@@ -16,13 +16,7 @@ use crate::scene::SceneError;
 use crate::texture::{BitmapParams, Checkerboard, FilterType, Texture, UvTransform, WrapMode};
 
 /// A BSDF parameter that may be a colour or a texture.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum Param {
-    /// A constant.
-    Constant(Rgb),
-    /// A texture (index into the scene's textures).
-    Texture(u32),
-}
+pub(super) use crate::scene::plugins::Param;
 
 /// True for a child element that is a texture plugin rather than a constant.
 fn is_texture(n: &Node) -> bool {
@@ -109,9 +103,7 @@ fn bitmap(cx: &mut Cx, p: &mut Plugin) -> Result<Texture, SceneError> {
     b.raw = p.boolean(cx, "raw")?.unwrap_or(false);
     b.to_uv = to_uv(cx, p)?;
     p.reject(cx, &["format", "accel"], "the texture is read as linear RGB with bilinear or nearest filtering")?;
-    let t = cx.textures.bitmap(&b).map_err(|e| p.err(cx, fl, "filename", e))?;
-    cx.b.image_file(&b.filename);
-    Ok(Texture::Bitmap(t))
+    crate::scene::plugins::bitmap(&mut cx.b, &mut cx.textures, &b).map_err(|e| p.err(cx, fl, "filename", e))
 }
 
 /// `to_uv`: the 4×4 `<transform>`'s action on the plane (its upper-left 2×2 block and the first
