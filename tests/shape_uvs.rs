@@ -203,7 +203,7 @@ fn singular_frame_of_a_textured_disk_is_an_error() {
         panic!("{e}");
     }
     let textured = r#"<bsdf type="diffuse"><texture name="reflectance" type="checkerboard"/></bsdf>"#;
-    let e = load(&scene(textured)).err().expect("refused");
+    let e = load(&scene(textured)).expect_err("refused");
     assert_eq!((e.line, e.key.as_str()), (4, "disk.to_world"), "{e}");
     assert!(e.to_string().contains("invertible"), "{e}");
 }
