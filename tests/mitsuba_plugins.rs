@@ -64,6 +64,11 @@ const SCENES: &[(&str, u64)] = &[
     ("roughdielectric-beckmann", 512),
     ("roughplastic-ggx", 512),
     ("roughplastic-beckmann", 512),
+    ("bumpmap-diffuse", 512),
+    ("bumpmap-conductor", 512),
+    ("roughconductor-aniso", 512),
+    ("roughdielectric-aniso", 512),
+    ("aniso-maps", 512),
 ];
 
 /// The reference's passes (the `var.*` channels are the variance of the mean of this many).
@@ -277,6 +282,18 @@ fn negative_controls_fail() {
             "rotate x=\"0\" y=\"1\" z=\"0\" angle=\"-20\"",
             "the turned-away panel turned around",
         ),
+        (
+            "roughconductor-aniso",
+            r#"value="beckmann"/><float name="alpha_u" value="0.4"/><float name="alpha_v" value="0.05"/>"#,
+            r#"value="beckmann"/><float name="alpha_u" value="0.05"/><float name="alpha_v" value="0.4"/>"#,
+            "the sphere's anisotropy turned by 90 degrees",
+        ),
+        (
+            "bumpmap-diffuse",
+            r#"<bsdf type="twosided"><bsdf type="bumpmap"><texture name="height" type="bitmap"><string name="filename" value="height32.png"/><boolean name="raw" value="true"/></texture><float name="scale" value="0.3"/><bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.7, 0.3"/></bsdf></bsdf></bsdf>"#,
+            r#"<bsdf type="bumpmap"><texture name="height" type="bitmap"><string name="filename" value="height32.png"/><boolean name="raw" value="true"/></texture><float name="scale" value="0.3"/><bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.7, 0.3"/></bsdf></bsdf></bsdf>"#,
+            "twosided(bumpmap) seen from behind read as bumpmap(twosided)",
+        ),
     ];
     let dir = root().join("tests/scenes/mitsuba-plugins");
     for (name, from, to, what) in cases {
@@ -346,4 +363,9 @@ scene_tests! {
     roughdielectric_beckmann => "roughdielectric-beckmann",
     roughplastic_ggx => "roughplastic-ggx",
     roughplastic_beckmann => "roughplastic-beckmann",
+    bumpmap_diffuse => "bumpmap-diffuse",
+    bumpmap_conductor => "bumpmap-conductor",
+    roughconductor_aniso => "roughconductor-aniso",
+    roughdielectric_aniso => "roughdielectric-aniso",
+    aniso_maps => "aniso-maps",
 }

@@ -39,6 +39,16 @@ pub enum Mode {
 }
 
 /// The local geometry a BSDF needs.
+///
+/// The tangent `s` is there only where a BSDF's value depends on it: Mitsuba orients every local
+/// frame by `si.sh_frame.s` (∂p/∂u made orthogonal to the shading normal, then turned with it by a
+/// normal or bump map), but an isotropic BSDF is the same under any rotation of the frame about
+/// the normal, so `Scene::shade` computes the tangent (which needs the hit's ∂p/∂u: barycentrics
+/// or a sphere's angles, per hit) only for a material with an anisotropic roughness, and leaves
+/// it zero everywhere else: there the frame is `Frame::from_normal(ns)`, as it always was, which
+/// keeps isotropic images bit for bit (a rotated frame would round differently) and the
+/// untextured path free of the work. Lazily here means at `shade`, once per hit, not per
+/// evaluation: the frame's BSDF calls then only read it.
 #[derive(Clone, Copy, Debug)]
 pub struct ShadingPoint {
     /// Position.
@@ -47,9 +57,14 @@ pub struct ShadingPoint {
     pub ng: Vec3,
     /// Unit shading normal on the `ng` side.
     pub ns: Vec3,
-    /// The shading normal before a normal map tilted it into `ns` (equal to `ns` where none
-    /// did): the frame of the normal map's shadowing term ([`shadow_terminator`]).
+    /// The shading normal before a normal or bump map tilted it into `ns` (equal to `ns` where
+    /// none did): the frame of the map's shadowing term ([`shadow_terminator`]).
     pub n0: Vec3,
+    /// The shading tangent where the BSDF is anisotropic: unit, orthogonal to `ns`, on the line
+    /// of Mitsuba's `sh_frame.s` at this point (its sign, and the handedness of the frame, do not
+    /// change a microfacet BSDF, which is symmetric under x → −x and y → −y). Zero where the BSDF
+    /// does not need one: the local frame is then `Frame::from_normal(ns)`.
+    pub s: Vec3,
 }
 
 /// A sampled direction.
@@ -73,7 +88,8 @@ pub struct BsdfSample {
 /// `BSDF::eval`, `pdf` and `sample`, with forecast's names).
 ///
 /// - The frame: `z` is the shading normal as the shape orients it (never flipped toward `wo`), `x`
-///   the tangent ∂p/∂u where the surface has UVs (anisotropic roughness is measured along it).
+///   Mitsuba's tangent `sh_frame.s` (∂p/∂u orthogonal to the normal; `ShadingPoint::s`) where the
+///   BSDF is anisotropic (its roughness `alpha_u` is measured along it), any tangent otherwise.
 /// - `wo` is the given direction (toward the viewer on eye paths, the light on particle paths;
 ///   Mitsuba's `si.wi`), `wi` the sampled or evaluated one (Mitsuba's `wo`); both unit, pointing
 ///   away from the surface.
@@ -96,10 +112,11 @@ pub trait LocalBsdf {
 }
 
 impl ShadingPoint {
-    /// The point `p` with geometric normal `ng` and shading normal `ns` (no normal map).
+    /// The point `p` with geometric normal `ng` and shading normal `ns` (no normal map, no
+    /// tangent).
     #[inline(always)]
     pub fn new(p: Vec3, ng: Vec3, ns: Vec3) -> ShadingPoint {
-        ShadingPoint { p, ng, ns, n0: ns }
+        ShadingPoint { p, ng, ns, n0: ns, s: Vec3::ZERO }
     }
 
     /// Normals flipped to `wo`'s geometric side: (ng', ns').
@@ -195,11 +212,15 @@ fn eval_untilted(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3, mode: Mode
 
 /// The local frame of a BSDF at `sp` seen from `wo`: around the shading normal, flipped to
 /// `wo`'s side for a two-sided reflecting BSDF (Mitsuba's `twosided`), as the shape orients it
-/// for one that scatters from both sides by nature (a dielectric).
+/// for one that scatters from both sides by nature (a dielectric); its `x` axis the tangent
+/// `sp.s` where there is one (Mitsuba's `sh_frame.s`), else any (`Frame::from_normal`).
 #[inline]
 fn frame(m: &Material, sp: &ShadingPoint, wo: Vec3) -> Frame {
     let ns = if m.is_two_sided_by_nature() { sp.ns } else { sp.oriented(wo).1 };
-    Frame::from_normal(ns)
+    if sp.s == Vec3::ZERO {
+        return Frame::from_normal(ns);
+    }
+    Frame { s: sp.s, t: ns.cross(sp.s), n: ns }
 }
 
 /// True when the geometric normal agrees with the local directions `(lo, li)` about whether

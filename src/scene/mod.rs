@@ -107,7 +107,7 @@ fn load_mesh_file(path: &std::path::Path, smooth: bool) -> Result<mesh::Mesh, St
     obj::load_mesh(path, smooth)
 }
 pub use crate::bsdf::Material;
-pub use surface::{SlotTexture, Surface};
+pub use surface::{BumpMap, SlotTexture, Surface};
 
 use crate::bsdf::ShadingPoint;
 use crate::math::{luminance, Rgb, Vec2, Vec3, PI};
@@ -324,18 +324,16 @@ impl Scene {
         self.shade_varying(prim, id, sp, wo)
     }
 
-    /// `shade` where the material has textures or a normal map: its parameters and shading
-    /// normal at the hit's texture coordinates.
+    /// `shade` where the material has textures, a normal or bump map or an anisotropic BSDF: its
+    /// parameters, shading normal and tangent at the hit's texture coordinates
+    /// (`Surface::shading_point`).
     #[inline(never)]
     fn shade_varying(&self, prim: u32, id: usize, sp: ShadingPoint, wo: Vec3) -> (Material, ShadingPoint) {
         let (uv, dpdu) = self.uv_at(prim, sp.p);
         let s = &self.surfaces[id];
         let m = s.material_at(&self.materials[id], &self.textures, uv);
-        let sp = match s.normalmap {
-            Some(t) => surface::tilt(sp, &surface::shading_frame(sp.ns, dpdu), self.textures[t as usize].eval(uv), wo),
-            None => sp,
-        };
-        (m, sp)
+        let dpdv = || self.dpdv_at(prim, sp, dpdu);
+        (m, s.shading_point(sp, (uv, dpdu), dpdv, &self.textures, wo))
     }
 
     /// Emitter of a primitive, or `NO_EMITTER`.

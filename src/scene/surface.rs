@@ -1,14 +1,36 @@
 //! What a scene material adds to its BSDF's parameters: the sides it scatters from (Mitsuba's
-//! `twosided`), the textures that set its parameters at each point, and the normal map that tilts
-//! its shading normal (`normalmap`). [`super::Scene::shade`] resolves a hit into the `Material`
-//! and `ShadingPoint` every method works with; the surface parametrisation it needs is here too
-//! ([`uv_at`]: Mitsuba's `uv` and `dp_du` for triangles and spheres).
+//! `twosided`), the textures that set its parameters at each point, the normal map or bump map
+//! that tilts its shading frame (`normalmap`, `bumpmap`), and whether its BSDF needs the shading
+//! tangent (an anisotropic roughness). [`super::Scene::shade`] resolves a hit into the `Material`
+//! and `ShadingPoint` every method works with ([`Surface::shading_point`]); the surface
+//! parametrisation it needs is here too (Mitsuba's `uv`, `dp_du` and `dp_dv` of triangles and
+//! spheres: [`triangle_uv`], [`triangle_dpdv`], [`sphere_uv`], [`sphere_dpdv`]).
+//!
+//! The shading frame is Mitsuba's `sh_frame` (interaction.h `initialize_sh_frame`): the shading
+//! normal, and `s` = ∂p/∂u made orthogonal to it (Gram–Schmidt), or `coordinate_system(n)` where
+//! ∂p/∂u is zero. A map replaces it by the frame of its own `frame()`:
+//! - `normalmap` (normalmap.cpp): n = 2·rgb − 1 in the shading frame, mirrored about the normal
+//!   where `wo` would lie on different sides of it and of the untilted normal
+//!   (`flip_invalid_normals`); `s` = the shading frame's `s` made orthogonal to n.
+//! - `bumpmap` (bumpmap.cpp): with the height texture's gradient g = `scale`·∇(u,v) (Mitsuba's
+//!   `eval_1_grad`), ∂p/∂u' = ∂p/∂u + n (g_u − n·∂p/∂u) and ∂p/∂v' likewise, n' = ∂p/∂u' ×
+//!   ∂p/∂v' normalised and turned to the geometric normal's side, taken into the shading frame and
+//!   flipped as the normal map's; `s` = ∂p/∂u made orthogonal to n' with ∂p/∂u's **world**
+//!   components read as shading-frame coordinates (Mitsuba's `frame()` mixes the two spaces
+//!   there; only an anisotropic BSDF under a bump map sees it, and Mitsuba is the spec).
+//! - Nested in `twosided` (twosided(normalmap(..)), twosided(bumpmap(..))), a map seen from
+//!   behind sees `wo` mirrored through the surface, as Mitsuba's `twosided` flips the local z
+//!   before the map's `frame()` runs; so the tilt is the front's mirrored. Around `twosided`
+//!   (normalmap(twosided(..))) the map sees `wo` itself.
 //!
 //! Invariants: a one-sided BSDF is black where the given direction `wo` lies behind the geometric
 //! normal (Mitsuba's rule: its BSDFs are one-sided unless wrapped in `twosided`; the dielectrics
 //! scatter from both sides by nature); a two-sided one is the same BSDF on both sides. A surface
-//! with no textures and no normal map resolves to its material as stored, with the shading point
-//! as hit (`ShadingPoint::n0 == ns`).
+//! with no textures, no map and an isotropic BSDF resolves to its material as stored, with the
+//! shading point as hit (`ShadingPoint::n0 == ns`, no tangent). The tangent `ShadingPoint::s`
+//! is set only where the BSDF is anisotropic ([`Surface::anisotropic`]): an isotropic BSDF keeps
+//! `Frame::from_normal(ns)`, so its images do not change with the tangent (bit for bit), and a
+//! map's tilted normal is computed the same way with or without it.
 
 use super::{Sphere, Triangle};
 use crate::bsdf::{Material, ShadingPoint, Slot};
@@ -26,6 +48,24 @@ pub struct Surface {
     /// The texture of a tangent-space normal map (Mitsuba's `normalmap`, its `normalmap`
     /// parameter), an index into `Scene::textures`.
     pub normalmap: Option<u32>,
+    /// A bump map (Mitsuba's `bumpmap`); never together with `normalmap`.
+    pub bumpmap: Option<BumpMap>,
+    /// The map (`normalmap` or `bumpmap`) is nested in Mitsuba's `twosided`
+    /// (twosided(normalmap(..))): seen from behind it tilts the frame as from the front, mirrored
+    /// through the surface. False for a map around `twosided` (normalmap(twosided(..))).
+    pub map_in_twosided: bool,
+    /// The BSDF's roughness is anisotropic (`alpha_u` ≠ `alpha_v`): its local frame needs the
+    /// shading tangent (`ShadingPoint::s`).
+    pub anisotropic: bool,
+}
+
+/// Mitsuba's `bumpmap`: a height texture and its gradient's multiplier.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BumpMap {
+    /// The height texture (its `eval_1_grad`), an index into `Scene::textures`.
+    pub texture: u32,
+    /// `scale` (default 1).
+    pub scale: f32,
 }
 
 /// A texture that sets one parameter of a material.
@@ -38,18 +78,64 @@ pub struct SlotTexture {
 }
 
 impl Surface {
-    /// Both sides, constant parameters.
-    pub const TWO_SIDED: Surface = Surface { two_sided: true, textures: Vec::new(), normalmap: None };
+    /// Both sides, constant parameters (an isotropic BSDF: see [`Surface::of`]).
+    pub const TWO_SIDED: Surface = Surface {
+        two_sided: true,
+        textures: Vec::new(),
+        normalmap: None,
+        bumpmap: None,
+        map_in_twosided: false,
+        anisotropic: false,
+    };
 
-    /// One side, unless `m` scatters from both sides by nature (a dielectric).
-    pub fn one_sided(m: &Material) -> Surface {
-        Surface { two_sided: m.is_two_sided_by_nature(), ..Surface::TWO_SIDED }
+    /// The surface of BSDF `m` on both sides, constant parameters; `anisotropic` as `m` is.
+    pub fn of(m: &Material) -> Surface {
+        Surface { anisotropic: is_anisotropic(m), ..Surface::TWO_SIDED }
     }
 
-    /// True when the material is the same at every point (no texture, no normal map).
+    /// One side, unless `m` scatters from both sides by nature (a dielectric); `anisotropic` as
+    /// `m` is.
+    pub fn one_sided(m: &Material) -> Surface {
+        Surface { two_sided: m.is_two_sided_by_nature(), ..Surface::of(m) }
+    }
+
+    /// True when the material and its shading point are the hit's at every point: no texture, no
+    /// map, an isotropic BSDF (no tangent needed).
     #[inline(always)]
     pub fn is_constant(&self) -> bool {
-        self.textures.is_empty() && self.normalmap.is_none()
+        self.textures.is_empty() && self.normalmap.is_none() && self.bumpmap.is_none() && !self.anisotropic
+    }
+
+    /// True when the surface has a normal or bump map.
+    #[inline]
+    pub fn has_map(&self) -> bool {
+        self.normalmap.is_some() || self.bumpmap.is_some()
+    }
+
+    /// The shading point of hit `sp` (seen from `wo`) on this surface, at texture coordinates
+    /// `uv` with ∂p/∂u `dpdu` (∂p/∂v from `dpdv`, asked only for a bump map): tilted by the
+    /// normal or bump map, with the tangent where the BSDF is anisotropic (the module docs).
+    pub fn shading_point(
+        &self,
+        sp: ShadingPoint,
+        (uv, dpdu): (Vec2, Vec3),
+        dpdv: impl FnOnce() -> Vec3,
+        textures: &[Texture],
+        wo: Vec3,
+    ) -> ShadingPoint {
+        let f = shading_frame(sp.ns, dpdu);
+        let tilted = if let Some(t) = self.normalmap {
+            normal_mapped(sp, &f, textures[t as usize].eval(uv), wo, self.map_in_twosided)
+        } else if let Some(b) = self.bumpmap {
+            let grad = textures[b.texture as usize].eval_1_grad(uv) * b.scale;
+            bump_mapped(sp, &f, (dpdu, dpdv()), grad, wo, self.map_in_twosided)
+        } else {
+            Tilted { sp, s: f.s }
+        };
+        if !self.anisotropic {
+            return tilted.sp;
+        }
+        ShadingPoint { s: tilted.s, ..tilted.sp }
     }
 
     /// The material `base` at a point of texture coordinates `uv`, its textured parameters looked
@@ -65,9 +151,37 @@ impl Surface {
     }
 }
 
+impl super::Scene {
+    /// ∂p/∂v at the hit `sp` of primitive `prim` whose ∂p/∂u is `dpdu` (a bump map's second
+    /// tangent): Mitsuba's for triangles ([`triangle_dpdv`]) and spheres ([`sphere_dpdv`]). The
+    /// tessellated `disk` and `cylinder` (`Scene::shape_uvs`) record their ∂p/∂u only: there it is
+    /// `ns × ∂p/∂u`, which has the direction of Mitsuba's ∂p/∂v (both shapes' are orthogonal to
+    /// ∂p/∂u) but not its length (a bump map's slope along v on them is not Mitsuba's).
+    pub(super) fn dpdv_at(&self, prim: u32, sp: ShadingPoint, dpdu: Vec3) -> Vec3 {
+        if self.shape_uvs.get(prim).is_some() {
+            return sp.ns.cross(dpdu);
+        }
+        if prim < self.ntri() {
+            triangle_dpdv(&self.triangles[prim as usize])
+        } else {
+            sphere_dpdv(&self.spheres[(prim - self.ntri()) as usize], sp.p)
+        }
+    }
+}
+
+/// True for a BSDF whose local frame needs the tangent: an anisotropic microfacet roughness.
+pub fn is_anisotropic(m: &Material) -> bool {
+    match m {
+        Material::RoughConductor(c) => !c.distribution.is_isotropic(),
+        Material::RoughDielectric(d) => !d.distribution.is_isotropic(),
+        _ => false,
+    }
+}
+
 /// The texture coordinates and ∂p/∂u of a point `p` of triangle `t`, as Mitsuba's meshes give
 /// them: interpolated UVs where the mesh has them, else the barycentric coordinates (b1, b2)
-/// with ∂p/∂u = p1 − p0.
+/// with ∂p/∂u = p1 − p0; where the UVs are degenerate (zero area), ∂p/∂u is the first tangent of
+/// `coordinate_system(ng)` (`Frame::from_normal`), as Mitsuba's.
 pub fn triangle_uv(t: &Triangle, p: Vec3) -> (Vec2, Vec3) {
     let (e1, e2, v) = (t.p[1] - t.p[0], t.p[2] - t.p[0], p - t.p[0]);
     let (d00, d01, d11) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
@@ -78,15 +192,34 @@ pub fn triangle_uv(t: &Triangle, p: Vec3) -> (Vec2, Vec3) {
     let Some(uv) = t.uv else { return (Vec2::new(b1, b2), e1) };
     let (duv0, duv1) = (uv[1] - uv[0], uv[2] - uv[0]);
     let det = duv0.x * duv1.y - duv0.y * duv1.x;
-    let inv_det = if det != 0.0 { 1.0 / det } else { 0.0 };
-    (uv[0] + duv0 * b1 + duv1 * b2, (e1 * duv1.y - e2 * duv0.y) * inv_det)
+    let dpdu = if det != 0.0 { (e1 * duv1.y - e2 * duv0.y) * (1.0 / det) } else { Frame::from_normal(t.ng).s };
+    (uv[0] + duv0 * b1 + duv1 * b2, dpdu)
+}
+
+/// ∂p/∂v of triangle `t` (the same at every point), as Mitsuba's meshes give it: from the UVs
+/// where the mesh has them (`coordinate_system(ng)`'s second tangent where they are degenerate),
+/// else p2 − p0.
+pub fn triangle_dpdv(t: &Triangle) -> Vec3 {
+    let (e1, e2) = (t.p[1] - t.p[0], t.p[2] - t.p[0]);
+    let Some(uv) = t.uv else { return e2 };
+    let (duv0, duv1) = (uv[1] - uv[0], uv[2] - uv[0]);
+    let det = duv0.x * duv1.y - duv0.y * duv1.x;
+    if det == 0.0 {
+        return Frame::from_normal(t.ng).t;
+    }
+    (e2 * duv0.x - e1 * duv1.x) * (1.0 / det)
+}
+
+/// The point `p` of sphere `s` in its own frame (`Sphere::axes`), on the unit sphere.
+fn sphere_local(s: &Sphere, p: Vec3) -> Vec3 {
+    let d = p - s.center;
+    Vec3::new(d.dot(s.axes[0]), d.dot(s.axes[1]), d.dot(s.axes[2])) / s.radius
 }
 
 /// The texture coordinates and ∂p/∂u of a point `p` of sphere `s`, as Mitsuba's `sphere`:
 /// u = φ/2π, v = θ/π in the sphere's own frame (`Sphere::axes`).
 pub fn sphere_uv(s: &Sphere, p: Vec3) -> (Vec2, Vec3) {
-    let d = p - s.center;
-    let local = Vec3::new(d.dot(s.axes[0]), d.dot(s.axes[1]), d.dot(s.axes[2])) / s.radius;
+    let local = sphere_local(s, p);
     let theta = local.z.clamp(-1.0, 1.0).acos();
     let mut phi = local.y.atan2(local.x);
     if phi < 0.0 {
@@ -97,8 +230,19 @@ pub fn sphere_uv(s: &Sphere, p: Vec3) -> (Vec2, Vec3) {
     (Vec2::new(phi / (2.0 * PI), theta / PI), dpdu)
 }
 
+/// ∂p/∂v at a point `p` of sphere `s`, as Mitsuba's `sphere`: π·r·(z cos φ, z sin φ, −r_xy) in
+/// its own frame (r_xy = √(x² + y²)), π·r·(1, 0, 0) at the poles.
+pub fn sphere_dpdv(s: &Sphere, p: Vec3) -> Vec3 {
+    let local = sphere_local(s, p);
+    let rd = (local.x * local.x + local.y * local.y).sqrt();
+    let d = if rd == 0.0 { Vec3::X } else { Vec3::new(local.z * local.x / rd, local.z * local.y / rd, -rd) }
+        * (PI * s.radius);
+    s.axes[0] * d.x + s.axes[1] * d.y + s.axes[2] * d.z
+}
+
 /// The shading frame around `n` with its tangent along `dpdu` (Gram–Schmidt), Mitsuba's
-/// `sh_frame`; any tangent where `dpdu` is parallel to `n` or zero.
+/// `sh_frame`; `coordinate_system(n)` (`Frame::from_normal`) where `dpdu` is parallel to `n`
+/// or zero.
 pub fn shading_frame(n: Vec3, dpdu: Vec3) -> Frame {
     let s = dpdu - n * n.dot(dpdu);
     let len = s.length();
@@ -110,19 +254,80 @@ pub fn shading_frame(n: Vec3, dpdu: Vec3) -> Frame {
     Frame { s, t: n.cross(s), n }
 }
 
-/// `sp` with its shading normal tilted by a tangent-space normal map of value `rgb` in the
-/// frame `f` (Mitsuba's `normalmap`: n = 2·rgb − 1, mirrored about the normal where it would
-/// face away from `wo` as the untilted normal does, `flip_invalid_normals`). `n0` keeps the
-/// untilted normal for the shadowing term.
-pub fn tilt(sp: ShadingPoint, f: &Frame, rgb: Vec3, wo: Vec3) -> ShadingPoint {
-    let mut n = rgb * 2.0 - Vec3::ONE;
+/// A shading point tilted by a map, and the tangent of the map's frame (unit, orthogonal to its
+/// normal; zero where Mitsuba's would be undefined).
+struct Tilted {
+    sp: ShadingPoint,
+    s: Vec3,
+}
+
+/// `v` with its component along the unit `n` removed, normalised; zero where nothing is left.
+fn orthogonal_unit(v: Vec3, n: Vec3) -> Vec3 {
+    (v - n * n.dot(v)).normalize_or_zero()
+}
+
+/// The frame a map's local normal `n` lives in, and `wo` as the map sees it in the shading frame
+/// `f`: as it is, or for a map nested in `twosided` seen from behind, mirrored through the
+/// surface (Mitsuba's `twosided` flips the local z first), the local frame then mapped to the
+/// world by `f` turned half a turn about its normal (so that the tilted normal, flipped to
+/// `wo`'s side by the BSDF's frame, is the mirror image of the front's).
+fn map_space(f: &Frame, wo: Vec3, in_twosided: bool) -> (Frame, Vec3) {
     let wl = f.to_local(wo);
+    if in_twosided && wl.z < 0.0 {
+        (Frame { s: -f.s, t: -f.t, n: f.n }, Vec3::new(wl.x, wl.y, -wl.z))
+    } else {
+        (*f, wl)
+    }
+}
+
+/// Mitsuba's `flip_invalid_normals`: the local normal `n` mirrored about the frame's normal where
+/// `wl` lies on different sides of it and of the frame's normal.
+#[inline]
+fn flip_invalid(n: Vec3, wl: Vec3) -> Vec3 {
     if wl.z * wl.dot(n) <= 0.0 {
-        n = Vec3::new(-n.x, -n.y, n.z);
+        Vec3::new(-n.x, -n.y, n.z)
+    } else {
+        n
     }
-    let n = n.normalize_or_zero();
+}
+
+/// `sp` with its shading normal tilted by a tangent-space normal map of value `rgb` in the
+/// shading frame `f` (Mitsuba's `normalmap`: n = 2·rgb − 1, flipped by `flip_invalid`), and
+/// the map frame's tangent (the shading frame's `s` made orthogonal to n). `n0` keeps the
+/// untilted normal for the shadowing term.
+fn normal_mapped(sp: ShadingPoint, f: &Frame, rgb: Vec3, wo: Vec3, in_twosided: bool) -> Tilted {
+    let (fw, wl) = map_space(f, wo, in_twosided);
+    let n = flip_invalid(rgb * 2.0 - Vec3::ONE, wl).normalize_or_zero();
     if n == Vec3::ZERO {
-        return sp;
+        return Tilted { sp, s: f.s };
     }
-    ShadingPoint { ns: f.to_world(n).normalize(), n0: f.n, ..sp }
+    let s = fw.to_world(orthogonal_unit(Vec3::X, n));
+    Tilted { sp: ShadingPoint { ns: fw.to_world(n).normalize(), n0: f.n, ..sp }, s }
+}
+
+/// `sp` with its shading normal tilted by a bump map whose height has the gradient `grad`
+/// (`scale` included) in uv, on a surface with ∂p/∂u and ∂p/∂v `dp`, in the shading frame `f`
+/// (Mitsuba's `bumpmap`, the module docs), and the bump frame's tangent. Where the perturbed
+/// tangents are parallel (no normal), the point is left as it is.
+fn bump_mapped(
+    sp: ShadingPoint,
+    f: &Frame,
+    (dpdu, dpdv): (Vec3, Vec3),
+    grad: Vec2,
+    wo: Vec3,
+    in_twosided: bool,
+) -> Tilted {
+    let n = f.n;
+    let du = dpdu + n * (grad.x - n.dot(dpdu));
+    let dv = dpdv + n * (grad.y - n.dot(dpdv));
+    let nb = du.cross(dv).normalize_or_zero();
+    if nb == Vec3::ZERO {
+        return Tilted { sp, s: f.s };
+    }
+    let nb = if sp.ng.dot(nb) < 0.0 { -nb } else { nb };
+    let (fw, wl) = map_space(f, wo, in_twosided);
+    let nl = flip_invalid(f.to_local(nb), wl);
+    // Mitsuba's bump frame's s: ∂p/∂u's world components against the local normal
+    let s = fw.to_world(orthogonal_unit(dpdu, nl));
+    Tilted { sp: ShadingPoint { ns: fw.to_world(nl).normalize(), n0: f.n, ..sp }, s }
 }

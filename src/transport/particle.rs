@@ -264,7 +264,7 @@ fn follow(
         let (m, sp) = world.shade(&hit, w_in);
         let m = &m;
         if !m.is_dirac() {
-            let ShadingPoint { p, ng, ns, n0 } = sp;
+            let ShadingPoint { p, ng, ns, n0, .. } = sp;
             let v = SurfaceVertex { p, ng, ns, n0, material: m, w_in, beta: beta * inv_n, prev_dirac, depth };
             let keep_going = visitor.surface(&v);
             counts.surface_vertices += 1;

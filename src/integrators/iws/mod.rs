@@ -218,7 +218,7 @@ impl Iws {
                 (Rgb::ONE, (cos_x * cos_y / r2).min(self.b))
             }
             VplKind::Surface(my) => {
-                let sy = ShadingPoint { p: v.p, ng: v.ng, ns: v.ns, n0: v.n0 };
+                let sy = ShadingPoint { n0: v.n0, ..ShadingPoint::new(v.p, v.ng, v.ns) };
                 let fy = bsdf::eval(&my, &sy, v.w_in, -w, Mode::Importance); // real BSDF, one-sided checks
                 let cin_g = v.w_in.dot(v.ng).abs();
                 if fy == Rgb::ZERO || cin_g <= 0.0 {

@@ -1,15 +1,18 @@
 //! Mitsuba BSDF plugins → `Material` and `Surface`: `diffuse` → Diffuse, smooth `conductor` →
 //! Mirror (preset `none`) or Conductor (η, k), `dielectric` → Glass with η = int_ior/ext_ior,
 //! 0.6's `phong` → Glossy (the same energy-conserving modified Phong), `twosided` around any of
-//! the reflective ones, `normalmap` around any BSDF. As in Mitsuba, a BSDF not wrapped in
+//! the reflective ones, `normalmap` and `bumpmap` (a nested height texture and `scale`) around
+//! any BSDF, inside or around `twosided` (the two orders differ from behind:
+//! `scene::surface`). As in Mitsuba, a BSDF not wrapped in
 //! `twosided` is black from behind (`scene::Surface`); the dielectric scatters from both sides.
 //! Reflectances may be textures (`super::texture`). `ref`/`id` resolve through `Cx::ids`. The
 //! plugins themselves (defaults, presets, checks) are built by `scene::plugins`, which the TOML
 //! reader shares; this file reads their XML and wraps them.
 //!
-//! Invariants: anything else (`twosided` with two different sides, a `normalmap` in a
-//! `normalmap`) is an error naming the file, line, plugin and parameter; constant reflectances in
-//! [0, 1].
+//! Invariants: anything else (`twosided` with two different sides, a map in a map, a bump map
+//! without exactly one texture or with a `checkerboard`, `flip_invalid_normals` or
+//! `use_shadowing_function` false) is an error naming the file, line, plugin and parameter;
+//! constant reflectances in [0, 1].
 
 use super::params::Plugin;
 use super::texture::Param;
@@ -17,7 +20,7 @@ use super::xml::Node;
 use super::Cx;
 use crate::math::Rgb;
 use crate::scene::plugins;
-use crate::scene::{Material, SceneError, Surface};
+use crate::scene::{BumpMap, Material, SceneError, Surface};
 use crate::texture::Texture;
 
 /// The material index of a `<bsdf>` or `<ref>` element (registering inline BSDFs and ids).
@@ -54,6 +57,68 @@ fn nested(cx: &mut Cx, p: &mut Plugin) -> Result<Parsed, SceneError> {
     material(cx, kids[0])
 }
 
+/// Mitsuba's `bumpmap`: its one nested BSDF and its one nested height texture, each taken by its
+/// type whatever its name (a `<ref>` by the kind of object its id names), `scale` (default 1),
+/// `flip_invalid_normals` and `use_shadowing_function` at their default, true. The texture must
+/// have Mitsuba's `eval_1_grad` (a `bitmap`; a constant's is zero; not a `checkerboard`).
+fn bumpmap(cx: &mut Cx, mut p: Plugin) -> Result<Parsed, SceneError> {
+    let node = p.node;
+    let id = |c: &Node| c.attr("id").unwrap_or("").to_string();
+    let is_bsdf = |cx: &Cx, c: &Node| c.tag == "bsdf" || (c.tag == "ref" && !cx.texture_ids.contains_key(&id(c)));
+    let is_texture = |cx: &Cx, c: &Node| {
+        c.tag == "texture"
+            || (c.tag == "ref" && !is_bsdf(cx, c))
+            || (matches!(c.tag.as_str(), "spectrum" | "rgb") && c.attr("type").is_some())
+    };
+    let bsdfs: Vec<&Node> = node.children.iter().filter(|c| is_bsdf(cx, c)).collect();
+    let heights: Vec<&Node> = node.children.iter().filter(|c| is_texture(cx, c)).collect();
+    if bsdfs.len() != 1 {
+        return Err(p.err(cx, node.line, "bsdf", "needs exactly one nested BSDF"));
+    }
+    if heights.len() != 1 {
+        let msg = "needs exactly one nested texture, the height map (Mitsuba 2's `filename` form is not read)";
+        return Err(p.err(cx, node.line, "texture", msg));
+    }
+    p.objects(&["bsdf", "texture", "ref"]);
+    let h = heights[0];
+    if h.tag != "texture" && h.tag != "ref" {
+        p.find(h.name());
+    }
+    // the texture alone under its name (or `texture`), so that `texture::param` reads it
+    let name = if h.name().is_empty() { "texture" } else { h.name() };
+    let mut attrs: Vec<(String, String)> = h.attrs.iter().filter(|(k, _)| k != "name").cloned().collect();
+    attrs.push(("name".into(), name.into()));
+    let holder = Node {
+        tag: node.tag.clone(),
+        attrs: vec![("type".into(), "bumpmap".into())],
+        line: node.line,
+        children: vec![Node { attrs, ..h.clone() }],
+    };
+    let t = match super::texture::param(cx, &mut Plugin::new(&holder), name)? {
+        Some(Param::Texture(t)) => t,
+        Some(Param::Constant(c)) => cx.b.texture(Texture::Constant(c)),
+        None => return Err(p.err(cx, h.line, name, "the height map is not a texture")),
+    };
+    if !cx.b.texture_at(t).has_eval_1_grad() {
+        let msg = "Mitsuba's `checkerboard` has no gradient (`eval_1_grad`): a bump map's height must be a `bitmap`";
+        return Err(p.err(cx, h.line, name, msg));
+    }
+    let scale = p.float(cx, "scale")?.unwrap_or(1.0);
+    for k in ["flip_invalid_normals", "use_shadowing_function"] {
+        if p.boolean(cx, k)? == Some(false) {
+            return Err(p.err(cx, p.line_of(k), k, "only Mitsuba's default, true, is supported"));
+        }
+    }
+    let inner = material(cx, bsdfs[0])?;
+    if inner.surface.has_map() {
+        let msg = "a `bumpmap` around a `normalmap` or `bumpmap` is not supported";
+        return Err(p.err(cx, bsdfs[0].line, "bsdf", msg));
+    }
+    p.finish(cx);
+    let bump = BumpMap { texture: t, scale };
+    Ok(Parsed { surface: Surface { bumpmap: Some(bump), map_in_twosided: false, ..inner.surface }, ..inner })
+}
+
 /// Parses one `<bsdf>` into a material and its surface (not registered).
 pub(super) fn material(cx: &mut Cx, n: &Node) -> Result<Parsed, SceneError> {
     if n.tag == "ref" {
@@ -70,12 +135,16 @@ pub(super) fn material(cx: &mut Cx, n: &Node) -> Result<Parsed, SceneError> {
                 return Err(p.err(cx, p.line_of("bsdf"), "bsdf", msg));
             }
             p.finish(cx);
-            return Ok(Parsed { surface: Surface { two_sided: true, ..inner.surface }, ..inner });
+            // a map inside `twosided` sees the back mirrored (scene::surface's docs)
+            let map_in_twosided = inner.surface.has_map();
+            return Ok(Parsed { surface: Surface { two_sided: true, map_in_twosided, ..inner.surface }, ..inner });
         }
+        "bumpmap" => return bumpmap(cx, p),
         "normalmap" => {
             let inner = nested(cx, &mut p)?;
-            if inner.surface.normalmap.is_some() {
-                return Err(p.err(cx, p.line_of("bsdf"), "bsdf", "a `normalmap` inside a `normalmap`"));
+            if inner.surface.has_map() {
+                let msg = "a `normalmap` around a `normalmap` or `bumpmap` is not supported";
+                return Err(p.err(cx, p.line_of("bsdf"), "bsdf", msg));
             }
             let line = p.line_of("normalmap");
             let Some(Param::Texture(t)) = super::texture::param(cx, &mut p, "normalmap")? else {
@@ -105,8 +174,8 @@ pub(super) fn material(cx: &mut Cx, n: &Node) -> Result<Parsed, SceneError> {
         }
         t => {
             let Some(built) = plugins::plugin(&mut Xml { cx, p: &mut p }, t)? else {
-                let why = "supported: diffuse, conductor, roughconductor, dielectric, roughdielectric, thindielectric, \
-                           plastic, roughplastic, twosided, normalmap, phong";
+                let why = "supported: diffuse, conductor, roughconductor, dielectric, roughdielectric, \
+                           thindielectric, plastic, roughplastic, twosided, normalmap, bumpmap, phong";
                 return Err(cx.err(n.line, &format!("bsdf.{t}"), format!("bsdf `{t}` is not supported ({why})")));
             };
             textures = built.textures;
