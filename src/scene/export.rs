@@ -20,10 +20,12 @@
 
 use super::ply::{write_binary, IndexedMesh};
 use super::schema::Doc;
-use super::{Material, Scene, Triangle};
+use super::{Material, Scene, Surface, Triangle};
 use crate::bsdf::microfacet::{MicrofacetDistribution, MicrofacetKind};
+use crate::bsdf::Slot;
 use crate::math::Vec2;
 use crate::math::{Rgb, Vec3};
+use crate::texture::{Texture, UvTransform};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -68,8 +70,15 @@ pub fn export_mitsuba(scene_path: &Path, out: &Path) -> Result<ExportReport, Str
     let _ = writeln!(x, "<!-- exported by `forecast export-mitsuba {}` -->", esc(&scene_path.display().to_string()));
     let _ = writeln!(x, "<scene version=\"3.0.0\">");
     header(&mut x, &scene, &doc);
+    let out_dir = out.parent().unwrap_or(Path::new("."));
+    let mut images = Images {
+        dir: out_dir.join(format!("{stem}_textures")),
+        dir_name: format!("{stem}_textures"),
+        names: Vec::new(),
+    };
     for (i, m) in scene.materials.iter().enumerate().skip(1) {
-        let _ = writeln!(x, "{}", bsdf(m, Some(&names[i - 1]), &mut rep.warnings));
+        let (s, t) = (&scene.surfaces[i], &scene.textures);
+        let _ = writeln!(x, "{}", bsdf(m, s, t, Some(&names[i - 1]), (&mut rep.warnings, &mut images)));
     }
     let meshes = triangle_runs(&mut x, &scene, &names, &mesh_dir, &mesh_dir_name);
     rep.meshes = meshes.iter().map(|(p, _)| p.clone()).collect();
@@ -95,32 +104,37 @@ pub fn export_mitsuba(scene_path: &Path, out: &Path) -> Result<ExportReport, Str
         );
     }
     let _ = writeln!(x, "</scene>");
-    write_export(scene_path, &scene, out, x, meshes, &mesh_dir)?;
+    let images = images.files()?;
+    write_export(scene_path, &scene, out, x, [(meshes, mesh_dir), (images, out_dir.join(format!("{stem}_textures")))])?;
     Ok(rep)
 }
 
-/// Writes the XML and its meshes as one set (`atomic_io::FileSet`: a failure leaves the previous
-/// export whole), after the output guard: no file of the set may name the scene or its meshes.
+/// Writes the XML, its meshes and its images as one set (`atomic_io::FileSet`: a failure leaves
+/// the previous export whole), after the output guard: no file of the set may name the scene or
+/// one of its inputs (meshes, images). `groups`: the files of each folder, and the folder.
 fn write_export(
     scene_path: &Path,
     scene: &Scene,
     out: &Path,
     xml: String,
-    meshes: Vec<(PathBuf, Vec<u8>)>,
-    mesh_dir: &Path,
+    groups: [(Vec<(PathBuf, Vec<u8>)>, PathBuf); 2],
 ) -> Result<(), String> {
     let mut guard = crate::atomic_io::OutputSet::new();
     guard.scene_inputs(scene_path, &scene.mesh_files);
     guard.output("--out", out);
-    meshes.iter().for_each(|(p, _)| {
-        guard.output("the exported mesh", p);
-    });
-    guard.check()?;
-    if !meshes.is_empty() {
-        std::fs::create_dir_all(mesh_dir).map_err(|e| format!("cannot create {}: {e}", mesh_dir.display()))?;
+    for (files, _) in &groups {
+        files.iter().for_each(|(p, _)| {
+            guard.output("an exported mesh or image", p);
+        });
     }
+    guard.check()?;
     let mut set = crate::atomic_io::FileSet::new();
-    meshes.into_iter().for_each(|(p, b)| set.add(p, b));
+    for (files, dir) in groups {
+        if !files.is_empty() {
+            std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        }
+        files.into_iter().for_each(|(p, b)| set.add(p, b));
+    }
     set.add(out.to_path_buf(), xml.into_bytes()); // last: once the XML is new, its meshes are too
     set.commit()
 }
@@ -212,89 +226,187 @@ fn header(x: &mut String, scene: &Scene, doc: &Doc) {
     );
 }
 
-/// Mitsuba's parameters of a microfacet distribution.
-fn microfacet(d: &MicrofacetDistribution) -> String {
+/// The image files a scene's bitmaps read, copied beside the XML into `DIR/` (`SCENE_textures`):
+/// one copy per source file, under its own name (`k_NAME` where two sources share a name).
+struct Images {
+    dir: PathBuf,
+    dir_name: String,
+    /// (source, name in `dir`).
+    names: Vec<(PathBuf, String)>,
+}
+
+impl Images {
+    /// The XML's path of the copy of `source`.
+    fn name(&mut self, source: &Path) -> String {
+        if let Some((_, n)) = self.names.iter().find(|(s, _)| s == source) {
+            return format!("{}/{n}", self.dir_name);
+        }
+        let base = source.file_name().map_or("image".into(), |f| f.to_string_lossy().into_owned());
+        let taken = |n: &str| self.names.iter().any(|(_, m)| m == n);
+        let mut name = base.clone();
+        let mut k = 1;
+        while taken(&name) {
+            name = format!("{k}_{base}");
+            k += 1;
+        }
+        self.names.push((source.to_path_buf(), name.clone()));
+        format!("{}/{name}", self.dir_name)
+    }
+
+    /// The copies: (destination, bytes of the source).
+    fn files(&self) -> Result<Vec<(PathBuf, Vec<u8>)>, String> {
+        let read = |s: &Path| std::fs::read(s).map_err(|e| format!("cannot read the image {}: {e}", s.display()));
+        self.names.iter().map(|(s, n)| Ok((self.dir.join(n), read(s)?))).collect()
+    }
+}
+
+/// Mitsuba's `to_uv` as a 4×4 matrix (row-major): the affine map's 2×2 block and translation.
+fn to_uv(t: &UvTransform) -> String {
+    if t.is_identity() {
+        return String::new();
+    }
+    let [[a, b, c], [d, e, f]] = t.rows;
+    format!("<transform name=\"to_uv\"><matrix value=\"{a} {b} 0 {c} {d} {e} 0 {f} 0 0 1 0 0 0 0 1\"/></transform>")
+}
+
+/// A texture as the parameter `name`: a constant (inside a checkerboard) as `<rgb>`, a bitmap
+/// reading the copy of its image, a checkerboard with its colours.
+fn texture(name: &str, t: &Texture, images: &mut Images) -> String {
+    match t {
+        Texture::Constant(c) => format!("<rgb name=\"{name}\" value=\"{}\"/>", v3(*c)),
+        Texture::Bitmap(b) => format!(
+            "<texture name=\"{name}\" type=\"bitmap\"><string name=\"filename\" value=\"{}\"/><string \
+             name=\"filter_type\" value=\"{}\"/><string name=\"wrap_mode\" value=\"{}\"/><boolean name=\"raw\" \
+             value=\"{}\"/>{}</texture>",
+            esc(&images.name(b.image.path())),
+            b.filter_type.name(),
+            b.wrap_mode.name(),
+            b.image.raw(),
+            to_uv(&b.to_uv)
+        ),
+        Texture::Checkerboard(c) => format!(
+            "<texture name=\"{name}\" type=\"checkerboard\">{}{}{}</texture>",
+            texture("color0", &c.color0, images),
+            texture("color1", &c.color1, images),
+            to_uv(&c.to_uv)
+        ),
+    }
+}
+
+/// Mitsuba's parameters of a microfacet distribution (`alpha` as written by `textured` when a
+/// texture sets it).
+fn microfacet(d: &MicrofacetDistribution, alpha: Option<String>) -> String {
     let kind = match d.kind {
         MicrofacetKind::Beckmann => "beckmann",
         MicrofacetKind::Ggx => "ggx",
     };
+    let alpha = alpha.unwrap_or_else(|| {
+        format!("<float name=\"alpha_u\" value=\"{}\"/><float name=\"alpha_v\" value=\"{}\"/>", d.alpha_u, d.alpha_v)
+    });
     format!(
-        "<string name=\"distribution\" value=\"{kind}\"/><float name=\"alpha_u\" value=\"{}\"/>\
-         <float name=\"alpha_v\" value=\"{}\"/><boolean name=\"sample_visible\" value=\"{}\"/>",
-        d.alpha_u, d.alpha_v, d.sample_visible
+        "<string name=\"distribution\" value=\"{kind}\"/>{alpha}<boolean name=\"sample_visible\" value=\"{}\"/>",
+        d.sample_visible
     )
 }
 
-/// A `<bsdf>` for a material (with `id` when named).
-fn bsdf(m: &Material, id: Option<&str>, warnings: &mut Vec<String>) -> String {
+/// A `<bsdf>` for material `m` with its surface (with `id` when named): the plugin, its textured
+/// parameters as textures, in `twosided` where it scatters from both sides and is not a
+/// dielectric, in `normalmap` (outermost, around `twosided`, as the TOML reader builds it) where
+/// it has one.
+fn bsdf(
+    m: &Material,
+    s: &Surface,
+    textures: &[Texture],
+    id: Option<&str>,
+    out: (&mut Vec<String>, &mut Images),
+) -> String {
+    let (warnings, images) = out;
     let id = id.map_or(String::new(), |i| format!(" id=\"{}\"", esc(i)));
+    let mut p = |n: &str, slot: Slot, c: Rgb| match s.textures.iter().find(|t| t.slot == slot) {
+        Some(t) => texture(n, &textures[t.texture as usize], images),
+        None => format!("<rgb name=\"{n}\" value=\"{}\"/>", v3(c)),
+    };
+    let alpha = |p: &mut dyn FnMut(&str, Slot, Rgb) -> String| {
+        s.textures.iter().any(|t| t.slot == Slot::Alpha).then(|| p("alpha", Slot::Alpha, Rgb::ZERO))
+    };
     let rgb = |n: &str, c: Rgb| format!("<rgb name=\"{n}\" value=\"{}\"/>", v3(c));
-    let two = |inner: String| format!("    <bsdf type=\"twosided\"{id}>\n        {inner}\n    </bsdf>");
-    match *m {
-        Material::Diffuse { albedo } => two(format!("<bsdf type=\"diffuse\">{}</bsdf>", rgb("reflectance", albedo))),
+    let ior = |eta: f32| format!("<float name=\"int_ior\" value=\"{eta}\"/><float name=\"ext_ior\" value=\"1\"/>");
+    let inner = match *m {
+        Material::Diffuse { albedo } => {
+            format!("<bsdf type=\"diffuse\">{}</bsdf>", p("reflectance", Slot::Reflectance, albedo))
+        }
         Material::Glossy { albedo, specular, exponent } => {
             warnings.push(format!("a glossy material{id} is written as Mitsuba 0.6's `phong` (Mitsuba 3 has none)"));
-            two(format!(
+            format!(
                 "<bsdf type=\"phong\">{}{}<float name=\"exponent\" value=\"{exponent}\"/></bsdf>",
                 rgb("diffuse_reflectance", albedo),
                 rgb("specular_reflectance", specular)
-            ))
+            )
         }
-        Material::Mirror { reflectance } => two(format!(
+        Material::Mirror { reflectance } => format!(
             "<bsdf type=\"conductor\"><string name=\"material\" value=\"none\"/>{}</bsdf>",
-            rgb("specular_reflectance", reflectance)
-        )),
-        Material::Conductor { reflectance, eta, k } => two(format!(
+            p("specular_reflectance", Slot::SpecularReflectance, reflectance)
+        ),
+        Material::Conductor { reflectance, eta, k } => format!(
             "<bsdf type=\"conductor\">{}{}{}</bsdf>",
-            rgb("specular_reflectance", reflectance),
+            p("specular_reflectance", Slot::SpecularReflectance, reflectance),
             rgb("eta", eta),
             rgb("k", k)
-        )),
-        Material::Glass { ior } => format!(
-            "    <bsdf type=\"dielectric\"{id}>\n        <float name=\"int_ior\" value=\"{ior}\"/>\n        \
-             <float name=\"ext_ior\" value=\"1\"/>\n    </bsdf>"
         ),
-        Material::Plastic(pl) => two(format!(
-            "<bsdf type=\"plastic\">{}{}<float name=\"int_ior\" value=\"{}\"/><float name=\"ext_ior\" \
-             value=\"1\"/><boolean name=\"nonlinear\" value=\"{}\"/></bsdf>",
-            rgb("diffuse_reflectance", pl.diffuse_reflectance()),
-            rgb("specular_reflectance", pl.specular_reflectance()),
-            pl.eta(),
+        Material::Glass { ior: eta } => format!("<bsdf type=\"dielectric\">{}</bsdf>", ior(eta)),
+        Material::Plastic(pl) => format!(
+            "<bsdf type=\"plastic\">{}{}{}<boolean name=\"nonlinear\" value=\"{}\"/></bsdf>",
+            p("diffuse_reflectance", Slot::DiffuseReflectance, pl.diffuse_reflectance()),
+            p("specular_reflectance", Slot::SpecularReflectance, pl.specular_reflectance()),
+            ior(pl.eta()),
             pl.nonlinear()
-        )),
-        Material::RoughPlastic(pl) => two(format!(
-            "<bsdf type=\"roughplastic\">{}{}{}<float name=\"int_ior\" value=\"{}\"/><float name=\"ext_ior\" \
-             value=\"1\"/><boolean name=\"nonlinear\" value=\"{}\"/></bsdf>",
-            microfacet(pl.distribution()),
-            rgb("diffuse_reflectance", pl.diffuse_reflectance()),
-            rgb("specular_reflectance", pl.specular_reflectance()),
-            pl.eta(),
+        ),
+        Material::RoughPlastic(pl) => format!(
+            "<bsdf type=\"roughplastic\">{}{}{}{}<boolean name=\"nonlinear\" value=\"{}\"/></bsdf>",
+            microfacet(
+                pl.distribution(),
+                Some(format!("<float name=\"alpha\" value=\"{}\"/>", pl.distribution().alpha_u))
+            ),
+            p("diffuse_reflectance", Slot::DiffuseReflectance, pl.diffuse_reflectance()),
+            p("specular_reflectance", Slot::SpecularReflectance, pl.specular_reflectance()),
+            ior(pl.eta()),
             pl.nonlinear()
-        )),
+        ),
         Material::ThinDielectric(t) => format!(
-            "    <bsdf type=\"thindielectric\"{id}>\n        <float name=\"int_ior\" value=\"{}\"/>\n        \
-             <float name=\"ext_ior\" value=\"1\"/>\n        {}\n        {}\n    </bsdf>",
-            t.eta,
-            rgb("specular_reflectance", t.specular_reflectance),
-            rgb("specular_transmittance", t.specular_transmittance)
+            "<bsdf type=\"thindielectric\">{}{}{}</bsdf>",
+            ior(t.eta),
+            p("specular_reflectance", Slot::SpecularReflectance, t.specular_reflectance),
+            p("specular_transmittance", Slot::SpecularTransmittance, t.specular_transmittance)
         ),
-        Material::RoughConductor(c) => two(format!(
+        Material::RoughConductor(c) => format!(
             "<bsdf type=\"roughconductor\">{}{}{}{}</bsdf>",
-            microfacet(&c.distribution),
-            rgb("specular_reflectance", c.specular_reflectance),
+            microfacet(&c.distribution, alpha(&mut p)),
+            p("specular_reflectance", Slot::SpecularReflectance, c.specular_reflectance),
             rgb("eta", c.eta),
             rgb("k", c.k)
-        )),
-        Material::RoughDielectric(d) => format!(
-            "    <bsdf type=\"roughdielectric\"{id}>\n        {}<float name=\"int_ior\" value=\"{}\"/>\n        \
-             <float name=\"ext_ior\" value=\"1\"/>\n        {}\n        {}\n    </bsdf>",
-            microfacet(&d.distribution),
-            d.eta,
-            rgb("specular_reflectance", d.specular_reflectance),
-            rgb("specular_transmittance", d.specular_transmittance)
         ),
-        Material::Black => format!("    <bsdf type=\"diffuse\"{id}>{}</bsdf>", rgb("reflectance", Rgb::ZERO)),
-    }
+        Material::RoughDielectric(d) => format!(
+            "<bsdf type=\"roughdielectric\">{}{}{}{}</bsdf>",
+            microfacet(&d.distribution, alpha(&mut p)),
+            ior(d.eta),
+            p("specular_reflectance", Slot::SpecularReflectance, d.specular_reflectance),
+            p("specular_transmittance", Slot::SpecularTransmittance, d.specular_transmittance)
+        ),
+        Material::Black => format!("<bsdf type=\"diffuse\">{}</bsdf>", rgb("reflectance", Rgb::ZERO)),
+    };
+    let inner = if s.two_sided && !m.is_two_sided_by_nature() {
+        format!("<bsdf type=\"twosided\">{inner}</bsdf>")
+    } else {
+        inner
+    };
+    let outer = match s.normalmap {
+        Some(t) => {
+            format!("<bsdf type=\"normalmap\">{}{inner}</bsdf>", texture("normalmap", &textures[t as usize], images))
+        }
+        None => inner,
+    };
+    // the id on the outermost element
+    format!("    {}", outer.replacen("<bsdf type=\"", &format!("<bsdf{id} type=\""), 1))
 }
 
 /// The BSDF reference or the emitter (with its black BSDF) of a shape.

@@ -319,7 +319,8 @@ fn materials<'d>(
         let key = format!("materials.{name}");
         let bad = |k: &str, msg: &str| cx.err(ms.clone(), &format!("{key}.{k}"), msg);
         let def = raw.resolve().map_err(|(k, msg)| bad(&k, &msg))?;
-        let mut p = TomlParams { cx, b, cache: &mut cache, dir, raw, span: ms.clone(), key: key.clone(), read: Vec::new() };
+        let mut p =
+            TomlParams { cx, b, cache: &mut cache, dir, raw, span: ms.clone(), key: key.clone(), read: Vec::new() };
         let mut textures = Vec::new();
         let mat = match def {
             MaterialDef::Diffuse => plugins::diffuse(&mut p, "albedo", &mut textures)?,

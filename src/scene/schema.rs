@@ -269,7 +269,9 @@ fn constant(v: &Option<Spanned<ParamRaw>>, key: &str, kind: &str) -> Result<[f32
         None => Err(missing(key, kind)),
         Some(ParamRaw::Number(x)) => Ok([*x; 3]),
         Some(ParamRaw::Rgb(c)) => Ok(*c),
-        Some(ParamRaw::Texture(_)) => Err((key.to_string(), format!("type `{kind}` takes a constant `{key}`, not a texture"))),
+        Some(ParamRaw::Texture(_)) => {
+            Err((key.to_string(), format!("type `{kind}` takes a constant `{key}`, not a texture")))
+        }
     }
 }
 
@@ -294,21 +296,58 @@ const MATERIAL_KEYS: [(&str, &[&str]); 11] = [
     ("mirror", &["reflectance", "twosided", "normalmap"]),
     ("glass", &["ior", "normalmap"]),
     ("conductor", &["material", "eta", "k", "specular_reflectance", "twosided", "normalmap"]),
-    ("roughconductor", &[
-        "material", "eta", "k", "specular_reflectance", "distribution", "alpha", "alpha_u", "alpha_v",
-        "sample_visible", "twosided", "normalmap",
-    ]),
+    (
+        "roughconductor",
+        &[
+            "material",
+            "eta",
+            "k",
+            "specular_reflectance",
+            "distribution",
+            "alpha",
+            "alpha_u",
+            "alpha_v",
+            "sample_visible",
+            "twosided",
+            "normalmap",
+        ],
+    ),
     ("dielectric", &["int_ior", "ext_ior", "normalmap"]),
     ("thindielectric", &["int_ior", "ext_ior", "specular_reflectance", "specular_transmittance", "normalmap"]),
-    ("roughdielectric", &[
-        "int_ior", "ext_ior", "specular_reflectance", "specular_transmittance", "distribution", "alpha", "alpha_u",
-        "alpha_v", "sample_visible", "normalmap",
-    ]),
-    ("plastic", &["diffuse_reflectance", "specular_reflectance", "int_ior", "ext_ior", "nonlinear", "twosided", "normalmap"]),
-    ("roughplastic", &[
-        "diffuse_reflectance", "specular_reflectance", "int_ior", "ext_ior", "nonlinear", "distribution", "alpha",
-        "sample_visible", "twosided", "normalmap",
-    ]),
+    (
+        "roughdielectric",
+        &[
+            "int_ior",
+            "ext_ior",
+            "specular_reflectance",
+            "specular_transmittance",
+            "distribution",
+            "alpha",
+            "alpha_u",
+            "alpha_v",
+            "sample_visible",
+            "normalmap",
+        ],
+    ),
+    (
+        "plastic",
+        &["diffuse_reflectance", "specular_reflectance", "int_ior", "ext_ior", "nonlinear", "twosided", "normalmap"],
+    ),
+    (
+        "roughplastic",
+        &[
+            "diffuse_reflectance",
+            "specular_reflectance",
+            "int_ior",
+            "ext_ior",
+            "nonlinear",
+            "distribution",
+            "alpha",
+            "sample_visible",
+            "twosided",
+            "normalmap",
+        ],
+    ),
 ];
 
 impl MaterialRaw {
@@ -413,7 +452,10 @@ impl MaterialRaw {
 
     /// True when the table gives `key` (any type).
     pub(super) fn has(&self, key: &str) -> bool {
-        self.param(key).is_some() || self.ior(key).is_some() || self.string(key).is_some() || self.boolean(key).is_some()
+        self.param(key).is_some()
+            || self.ior(key).is_some()
+            || self.string(key).is_some()
+            || self.boolean(key).is_some()
     }
 }
 
