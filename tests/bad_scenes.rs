@@ -1025,3 +1025,182 @@ fn a_foreign_integrator_and_its_parameters_are_warnings() {
         assert!(w.contains(p), "no warning about {p}: {w}");
     }
 }
+
+// ---- issue 61: texture coordinates of OBJ and PLY meshes (UV indices, partial UVs, meshes without) ----
+
+/// The texture coordinates of the triangles of the XML scene around the mesh `file` (written
+/// with `body` in a fresh folder), in the file's face order; Err(the loader's message).
+fn mesh_uvs(file: &str, body: &str) -> Result<Vec<Option<[forecast::math::Vec2; 3]>>, String> {
+    let dir = tmp_dir(&format!("uv-{}", file.replace('.', "-")));
+    std::fs::write(dir.join(file), body).unwrap();
+    let ty = if file.ends_with(".ply") { "ply" } else { "obj" };
+    let src = ply_scene(&format!("<shape type=\"{ty}\"><string name=\"filename\" value=\"{file}\"/></shape>"));
+    let scene = xml(&src, &dir).map_err(|e| {
+        assert!(e.message.contains(&format!("{file}`")) && e.key == format!("{ty}.filename"), "{e}");
+        e.to_string()
+    })?;
+    Ok(scene.triangles.iter().map(|t| t.uv).collect())
+}
+
+const TRI3: &str = "v 0 0 0\nv 1 0 0\nv 0 0 1\n";
+
+#[test]
+fn obj_uv_indices_out_of_range_are_errors_naming_the_line() {
+    use forecast::math::Vec2;
+    let err = |name: &str, body: &str| mesh_uvs(name, body).err().unwrap_or_else(|| panic!("{name}: accepted"));
+    // `vt` 7 of 2 (tobj and Mitsuba refuse it; the line was not named)
+    let m = err("vt7.obj", &format!("{TRI3}vt 0 0\nvt 1 0\nf 1/1 2/2 3/7\n"));
+    assert!(m.contains("line 6") && m.contains("`f`") && m.contains("vt index 7 out of range (2 `vt`"), "{m}");
+    // the same where the file has no `vt` at all: tobj ignored the index (the mesh loaded without UVs)
+    let m = err("novt.obj", &format!("{TRI3}f 1/7 2/7 3/7\n"));
+    assert!(m.contains("line 4") && m.contains("vt index 7 out of range (0 `vt`"), "{m}");
+    // a `vt` the face names before it is defined
+    let m = err("later.obj", &format!("{TRI3}f 1/1 2/1 3/1\nvt 0 0\n"));
+    assert!(m.contains("line 4") && m.contains("vt index 1 out of range"), "{m}");
+    // relative indices count back from the line; past the first `vt` is an error
+    let m = err("rel.obj", &format!("{TRI3}vt 0 0\nvt 1 0\nf 1/-1 2/-2 3/-3\n"));
+    assert!(m.contains("line 6") && m.contains("vt index -3 out of range"), "{m}");
+    // zero, not a number, four parts, no position
+    let m = err("zero.obj", &format!("{TRI3}vt 0 0\nf 1/0 2/1 3/1\n"));
+    assert!(m.contains("line 5") && m.contains("vt index 0 (OBJ indices start at 1)"), "{m}");
+    let m = err("nan-index.obj", &format!("{TRI3}vt 0 0\nf 1/x 2/1 3/1\n"));
+    assert!(m.contains("line 5") && m.contains("`x` is not an index"), "{m}");
+    let m = err("parts.obj", &format!("{TRI3}vt 0 0\nf 1/1/1/1 2/1 3/1\n"));
+    assert!(m.contains("line 5") && m.contains("more than three"), "{m}");
+    let m = err("nopos.obj", &format!("{TRI3}vt 0 0\nf /1 2/1 3/1\n"));
+    assert!(m.contains("line 5") && m.contains("no position index"), "{m}");
+    // a `vt` needs two numbers, both finite (tobj refused `vt 0.5` without naming the line)
+    let m = err("vt1.obj", &format!("{TRI3}vt 0.5\nf 1/1 2/1 3/1\n"));
+    assert!(m.contains("line 4") && m.contains("`vt`") && m.contains("needs 2 numbers"), "{m}");
+    let m = err("vtnan.obj", &format!("{TRI3}vt 0 0\nvt nan 1\nf 1/1 2/2 3/1\n"));
+    assert!(m.contains("line 5") && m.contains("not finite"), "{m}");
+    let m = err("vtinf.obj", &format!("{TRI3}vt 1e39 0\nf 1/1 2/1 3/1\n"));
+    assert!(m.contains("line 4") && m.contains("not finite"), "{m}");
+    // in range, relative indices read the `vt` they count back to (v flipped as Mitsuba's OBJ)
+    let uvs = mesh_uvs("relok.obj", &format!("{TRI3}vt 0.1 0.2\nvt 0.3 0.4\nvt 0.5 0.6\nf 1/-3 2/-2 3/-1\n")).unwrap();
+    let want = [Vec2::new(0.1, 0.8), Vec2::new(0.3, 0.6), Vec2::new(0.5, 0.4)];
+    assert_eq!(uvs.len(), 1);
+    let got = uvs[0].expect("UVs");
+    assert!(got.iter().zip(want).all(|(a, b)| (*a - b).abs().max_element() < 1e-6), "{got:?}");
+    // and through the TOML loader: the mesh's `file =` line and key
+    let m = mesh_err("vt9.obj", &format!("{TRI3}vt 0 0\nf 1/1 2/9 3/1\n"));
+    assert!(m.contains("line 5") && m.contains("vt index 9 out of range"), "{m}");
+}
+
+#[test]
+fn obj_corners_without_vt_read_zero_uvs_as_mitsuba() {
+    use forecast::math::Vec2;
+    let near = |a: [Vec2; 3], b: [Vec2; 3]| a.iter().zip(b).all(|(a, b)| (*a - b).abs().max_element() < 1e-6);
+    // one face with UVs on two corners (they were dropped for the whole mesh): the bare corner
+    // reads (0, 0) after the flip, as Mitsuba 3 gives it (3.9.1 left it uninitialised)
+    let uvs = mesh_uvs("partial.obj", &format!("{TRI3}vt 0.25 0.5\nvt 0.75 0.25\nf 1/1 2/2 3\n")).unwrap();
+    let got = uvs[0].expect("UVs");
+    assert!(near(got, [Vec2::new(0.25, 0.5), Vec2::new(0.75, 0.75), Vec2::ZERO]), "{got:?}");
+    // objects with and without `vt` in one file (and `v//vn` corners): the bare ones read (0, 0),
+    // the others keep theirs; relative indices still reach their `vt`
+    let body = "o a\nv 0 0 0\nv 1 0 0\nv 0 0 1\nvn 0 1 0\nvt 0.5 0.5\nvt 1 0.5\nvt 0.5 1\nf 1/1/1 2/-2/1 3/3/1\n\
+o b\nv 1 0 1\nf 2//1 4//1 3//1\n";
+    let uvs = mesh_uvs("objects.obj", body).unwrap();
+    assert_eq!(uvs.len(), 2, "{uvs:?}");
+    let (a, b) = (uvs[0].expect("UVs"), uvs[1].expect("UVs"));
+    assert!(near(a, [Vec2::new(0.5, 0.5), Vec2::new(1.0, 0.5), Vec2::new(0.5, 0.0)]), "{a:?}");
+    assert!(near(b, [Vec2::ZERO; 3]), "{b:?}");
+    // `vt` that no face names: no UVs (Mitsuba 3.9.1 read uninitialised ones; later versions none)
+    assert_eq!(mesh_uvs("unused.obj", &format!("{TRI3}vt 0.5 0.5\nf 1 2 3\n")).unwrap(), vec![None]);
+    // a comment after a statement is a comment, as in Mitsuba (tobj read it as an index)
+    let uvs = mesh_uvs("comment.obj", &format!("{TRI3}vt 0 0 # origin\nf 1/1 2/1 3/1 # one face\n")).unwrap();
+    assert!(near(uvs[0].expect("UVs"), [Vec2::new(0.0, 1.0); 3]), "{uvs:?}");
+}
+
+#[test]
+fn ply_uv_errors_name_the_line() {
+    const HEAD: &str =
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
+    // per-corner UVs as a face list (MeshLab's `texcoord`): Mitsuba refuses it ("i0 already
+    // exists"); it was read and dropped without a word
+    let body = format!(
+        "{HEAD}element face 1\nproperty list uchar int vertex_indices\nproperty list uchar float texcoord\nend_header\n\
+0 0 0\n1 0 0\n0 0 1\n3 0 1 2 6 0 0 1 0 0 1\n"
+    );
+    let m = mesh_uvs("wedge.ply", &body).err().expect("accepted");
+    assert!(m.contains("line 9") && m.contains("`texcoord`") && m.contains("per vertex"), "{m}");
+    // a texture coordinate that is not finite: its line and vertex
+    let body = format!(
+        "{HEAD}property float u\nproperty float v\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+0 0 0 0 0\n1 0 0 inf 0\n0 0 1 0 1\n3 0 1 2\n"
+    );
+    let m = mesh_uvs("inf.ply", &body).err().expect("accepted");
+    assert!(m.contains("line 13: vertex 2: texture coordinates") && m.contains("not finite"), "{m}");
+    // `u` without `v`: no UVs, as Mitsuba reads it
+    let body = format!(
+        "{HEAD}property float u\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+0 0 0 0.5\n1 0 0 0.5\n0 0 1 0.5\n3 0 1 2\n"
+    );
+    assert_eq!(mesh_uvs("u-only.ply", &body).unwrap(), vec![None]);
+}
+
+/// One of the tables of `scripts/mitsuba-no-uv-values.py`.
+#[derive(serde::Deserialize)]
+struct NoUvTable {
+    rows: Vec<NoUvRow>,
+}
+
+#[derive(serde::Deserialize)]
+struct NoUvRow {
+    o: [f32; 3],
+    d: [f32; 3],
+    t: f32,
+    reflectance: [f32; 3],
+    wi: Vec<[f32; 3]>,
+    eval: Vec<[f32; 3]>,
+}
+
+#[test]
+fn a_textured_or_normal_mapped_mesh_without_uvs_shades_as_mitsuba() {
+    // Mitsuba 3 renders a bitmap-textured BSDF, alone or under a `normalmap`, on an OBJ without
+    // `vt` and a PLY without u/v: uv = the hit's barycentrics (b1, b2), dp/du = p1 - p0. At 32
+    // rays per scene forecast's textured reflectance and its BSDF value (cosine, tilt and
+    // shadowing term included) must be Mitsuba's: within 2e-4 relative + 2e-5 (float32 hit
+    // points that differ in the last bits move a bilinear lookup by about 1e-5)
+    use forecast::bsdf::{eval, Material, Mode};
+    use forecast::math::Vec3;
+    let dir = root().join("tests/data/no-uv");
+    let worst = std::cell::Cell::new(0.0f32);
+    let close = |a: Vec3, b: Vec3| {
+        let e = (a - b).abs().max_element();
+        worst.set(worst.get().max(e / (b.abs().max_element() + 0.1)));
+        e <= 2e-4 * b.abs().max_element() + 2e-5
+    };
+    for case in ["obj-textured", "obj-normalmap", "ply-normalmap"] {
+        let table: NoUvTable =
+            serde_json::from_str(&std::fs::read_to_string(dir.join(format!("{case}.json"))).unwrap()).unwrap();
+        let scene = load(&dir.join(format!("{case}.xml"))).unwrap_or_else(|e| panic!("{case}: {e}"));
+        assert!(scene.triangles.iter().all(|t| t.uv.is_none()), "{case}: the mesh has no UVs");
+        let world = forecast::accel::World::build(scene).unwrap();
+        let textured = case == "obj-textured";
+        // the rows see many texels (a wrong uv would show): the reflectance spans more than 0.2
+        let red = table.rows.iter().map(|r| r.reflectance[0]);
+        assert!(red.clone().fold(0.0, f32::max) - red.fold(1.0, f32::min) > 0.2, "{case}: one texel");
+        worst.set(0.0);
+        for (k, r) in table.rows.iter().enumerate() {
+            let (o, d) = (Vec3::from_array(r.o), Vec3::from_array(r.d));
+            let hit = world.intersect(o, d, f32::INFINITY).unwrap_or_else(|| panic!("{case} row {k}: no hit"));
+            assert!((hit.t - r.t).abs() <= 1e-4 * r.t, "{case} row {k}: t {} vs Mitsuba's {}", hit.t, r.t);
+            let (m, sp) = world.shade(&hit, -d);
+            let Material::Diffuse { albedo } = m else { panic!("{case} row {k}: {m:?}") };
+            let want = Vec3::from_array(r.reflectance);
+            assert!(close(albedo, want), "{case} row {k}: reflectance {albedo} vs Mitsuba's {want}");
+            assert_eq!(sp.ns == sp.n0, textured, "{case} row {k}: the normal map tilts the normal");
+            for (wi, want) in r.wi.iter().zip(&r.eval) {
+                let (wi, want) = (Vec3::from_array(*wi), Vec3::from_array(*want));
+                let got = eval(&m, &sp, -d, wi, Mode::Radiance) * wi.dot(sp.ns).abs();
+                assert!(close(got, want), "{case} row {k} wi {wi}: f cos = {got} vs Mitsuba's {want}");
+            }
+        }
+        eprintln!(
+            "{case}: {} rows, worst |forecast - Mitsuba| / (|Mitsuba| + 0.1) = {:.2e}",
+            table.rows.len(),
+            worst.get()
+        );
+    }
+}

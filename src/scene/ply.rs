@@ -4,6 +4,11 @@
 //!
 //! Hand-written rather than `ply-rs` (last release 2019, no line numbers in its errors): every
 //! error names the file and the header line, the body line (ASCII) or the byte offset (binary).
+//! Texture coordinates are per vertex, under Mitsuba's three names (`u`, `v`; `texture_u`,
+//! `texture_v`; `s`, `t`; a vertex element with only one of a pair has none, as in Mitsuba), and
+//! must be finite; a face list of per-corner ones (`texcoord`, MeshLab's) is refused, as Mitsuba
+//! refuses it.
+//!
 //! Invariants: face indices are checked against the vertex count; a body cut short is an error,
 //! never a panic; a mesh without faces is an error.
 
@@ -295,6 +300,12 @@ fn parse_header(bytes: &[u8]) -> Result<(Format, Vec<Element>, usize, usize), St
                         (Some(Scalar::F32 | Scalar::F64), _, _) => {
                             return bad("a list's count type must be an integer type")
                         }
+                        (Some(_), Some(_), Some(n)) if el.name == "face" && n.starts_with("texcoord") => {
+                            // MeshLab's per-corner ("wedge") UVs: Mitsuba 3 refuses the second list
+                            return bad(&format!(
+                                "face property `{n}` holds texture coordinates per face corner; Mitsuba 3 reads them only per vertex (`u`, `v`; `texture_u`, `texture_v`; or `s`, `t`)"
+                            ));
+                        }
                         (Some(c), Some(t), Some(n)) => Property { name: n.to_string(), list: Some(c), ty: t },
                         _ => return bad("expected `property list COUNT_TYPE TYPE NAME`"),
                     }
@@ -350,6 +361,7 @@ pub fn parse(bytes: &[u8]) -> Result<IndexedMesh, String> {
         let nv = vertex_read.then_some(positions.len());
         for _ in 0..el.count {
             body.begin_row(el)?;
+            let at = body.at();
             read_row(&mut body, el, (face_list, nv), &mut vals, &mut faces)?;
             body.end_row(el)?;
             if el.name == "vertex" {
@@ -361,7 +373,8 @@ pub fn parse(bytes: &[u8]) -> Result<IndexedMesh, String> {
                 if has_uvs {
                     let t = uv.map(|c| c.map_or(0.0, |c| vals[c] as f32));
                     if !t.iter().all(|x| x.is_finite()) {
-                        return Err(format!("vertex {}: texture coordinates {t:?} are not finite", positions.len()));
+                        let (row, k) = (body.describe(at), positions.len());
+                        return Err(format!("{row}: vertex {k}: texture coordinates {t:?} are not finite"));
                     }
                     uvs.push(Vec2::from_array(t));
                 }
