@@ -1,11 +1,19 @@
-//! Scene-parser robustness (issues #9, #31): fixed-seed mutation corpora of the TOML scenes
+//! Scene-parser robustness (issues #9, #31, #61): fixed-seed mutation corpora of the TOML scenes
 //! (scenes/*.toml, scenes/stability/*.toml, tests/scenes/*.toml), of Mitsuba XML scenes (the SMS
-//! ring and `XML_BASE`, every shape and BSDF kind) and of PLY meshes (ASCII and binary) must
-//! never panic, hang or abort in the loaders + `World::build`, and each case must finish within
-//! `CASE_BOUND_S` (a case past `HANG_S` is a hang: the test fails naming the mutant).
+//! ring and `XML_BASE`, every shape and BSDF kind), of PLY meshes (ASCII and binary), of texture
+//! images (PNG, JPEG, OpenEXR, Radiance HDR: tests/data/texture/ and tests/data/fuzz-images/,
+//! read as a `bitmap` reflectance and normal map of a fixed XML scene) and of OBJ meshes with UVs
+//! (a textured, normal-mapped `obj` shape of a fixed XML scene) must never panic, hang or abort in
+//! the loaders, the decoders + `World::build`, and each case must finish within `CASE_BOUND_S` (a
+//! case past `HANG_S` is a hang: the test fails naming the mutant). An image or OBJ mutant that
+//! does not load must be an error that names its file.
 //!
-//! `FORECAST_FUZZ_SECS=600 cargo test --release --test scene_fuzz -- --ignored` runs the three
+//! `FORECAST_FUZZ_SECS=600 cargo test --release --test scene_fuzz -- --ignored` runs the five
 //! corpora for that long (new seeds) and prints mutants run, panics, hangs and the slowest case.
+//! Images are cut short, have bytes overwritten, bits flipped in their first 64 bytes, runs of
+//! bytes duplicated or removed, and header fields (sizes, PNG bit depth and colour type, JPEG
+//! components, EXR windows and tiles) set to extremes, each format's own way (PNG's CRC kept
+//! valid); OBJ meshes take the TOML mutations and indices past either end.
 //!
 //! Mutations (1 to 3 per case, seeded by the case index): byte replacements with TOML
 //! punctuation, digits and letters; numbers swapped for extreme values (1e39, −0, nan, inf,
@@ -160,19 +168,53 @@ fn run_case(src: &str, dir: &Path) -> Result<bool, String> {
     run_input(&Input::Toml(src.to_string()), dir)
 }
 
-/// One mutant of one of the three formats.
+/// One mutant of one of the five formats: a scene file (TOML, XML), a mesh read alone (PLY), or
+/// a file a fixed XML scene reads (an image as its textures, an OBJ mesh with UVs as a shape).
 #[derive(Clone)]
 enum Input {
     Toml(String),
     Xml(String),
     Ply(Vec<u8>),
+    /// The image's corpus name (its extension kept) and bytes.
+    Image(String, Vec<u8>),
+    Obj(Vec<u8>),
 }
 
 impl Input {
     fn show(&self) -> String {
         match self {
             Input::Toml(s) | Input::Xml(s) => s.chars().take(4000).collect(),
-            Input::Ply(b) => String::from_utf8_lossy(&b[..b.len().min(4000)]).into_owned(),
+            Input::Ply(b) | Input::Obj(b) => String::from_utf8_lossy(&b[..b.len().min(4000)]).into_owned(),
+            Input::Image(name, b) => format!("{name}, {} bytes: {:02x?}", b.len(), &b[..b.len().min(1500)]),
+        }
+    }
+}
+
+/// Writes a mutant the fixed scene `xml` reads (`$FILE` in it) under a name no other case
+/// uses (an abandoned worker may still hold an earlier one), loads the scene: its error must
+/// name that file. Returns the file's name and the load's result.
+fn load_with_file(
+    dir: &Path,
+    name: &str,
+    bytes: &[u8],
+    xml: &str,
+) -> (String, Result<forecast::scene::Scene, forecast::scene::SceneError>) {
+    static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let file = format!("m{}-{name}", NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed));
+    std::fs::write(dir.join(&file), bytes).unwrap();
+    let r = forecast::scene::mitsuba::load_str(&xml.replace("$FILE", &file), "fuzz.xml", dir, &[]);
+    let _ = std::fs::remove_file(dir.join(&file));
+    (file, r)
+}
+
+/// A scene around a mutated file: Ok(it built), or its error names the file (every other part
+/// of the scene is valid).
+fn built_or_names(r: Result<forecast::scene::Scene, forecast::scene::SceneError>, file: &str) -> bool {
+    match r {
+        Ok(scene) => World::build(scene).is_ok(),
+        Err(e) => {
+            assert!(e.file == "fuzz.xml" && e.line > 0 && e.message.contains(file), "error without the file: {e}");
+            false
         }
     }
 }
@@ -183,6 +225,16 @@ fn run_input(input: &Input, dir: &Path) -> Result<bool, String> {
         let (r, file) = match input {
             Input::Toml(s) => (forecast::scene::load_str(s, "fuzz.toml", dir), "fuzz.toml"),
             Input::Xml(s) => (forecast::scene::mitsuba::load_str(s, "fuzz.xml", dir, &[]), "fuzz.xml"),
+            Input::Image(name, b) => {
+                let hdr = name.ends_with(".exr") || name.ends_with(".hdr");
+                let xml = XML_IMAGE.replace("$REFLECTANCE", if hdr { REFLECTANCE_HDR } else { REFLECTANCE_LDR });
+                let (f, r) = load_with_file(dir, name, b, &xml);
+                return built_or_names(r, &f);
+            }
+            Input::Obj(b) => {
+                let (f, r) = load_with_file(dir, "mesh.obj", b, XML_OBJ);
+                return built_or_names(r, &f);
+            }
             Input::Ply(b) => {
                 return match forecast::scene::ply::parse(b) {
                     Ok(m) => {
@@ -262,6 +314,7 @@ fn fuzz_dir(name: &str) -> PathBuf {
     std::fs::write(dir.join("tiny.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n")
         .unwrap();
     std::fs::write(dir.join("tiny.ply"), PLY_ASCII).unwrap();
+    std::fs::copy(root().join("tests/data/texture/rgb8.png"), dir.join("tex.png")).unwrap();
     dir
 }
 
@@ -289,14 +342,23 @@ fn mutated_shipped_scenes_never_panic_or_hang() {
 fn fuzz(what: &str, dir: &Path, inputs: impl Iterator<Item = (String, Input)>) -> usize {
     let mut runner = Runner::new(dir);
     let (mut failures, mut slow, mut loaded, mut n) = (Vec::new(), Vec::new(), 0usize, 0usize);
-    let mut worst = 0.0f64;
+    let (mut worst, mut worst_case) = (0.0f64, String::new());
     let started = Instant::now();
     for (case, (name, input)) in inputs.enumerate() {
         n += 1;
         match runner.run(input.clone()) {
             Outcome::Done(Ok(ok), dt) => {
                 loaded += ok as usize;
-                worst = worst.max(dt);
+                if dt > worst {
+                    (worst, worst_case) = (dt, format!("case {case}, {name}"));
+                }
+                if let Some(out) = std::env::var_os("SCENE_FUZZ_SLOW").filter(|_| dt > 0.05) {
+                    // SCENE_FUZZ_SLOW=DIR keeps the slow mutants
+                    eprintln!("{what} case {case} ({name}): {dt:.3} s");
+                    if let Input::Image(_, b) | Input::Obj(b) | Input::Ply(b) = &input {
+                        let _ = std::fs::write(Path::new(&out).join(format!("{case}-{name}")), b);
+                    }
+                }
                 if dt > CASE_BOUND_S {
                     slow.push(format!("case {case} ({name}): {dt:.2} s"));
                 }
@@ -310,7 +372,7 @@ fn fuzz(what: &str, dir: &Path, inputs: impl Iterator<Item = (String, Input)>) -
         }
     }
     eprintln!(
-        "{what} fuzz: {n} cases, {loaded} loaded and built, worst {worst:.4} s, total {:.2} s",
+        "{what} fuzz: {n} cases, {loaded} loaded and built, worst {worst:.4} s ({worst_case}), total {:.2} s",
         started.elapsed().as_secs_f64()
     );
     assert!(failures.is_empty(), "{} panic(s) or hang(s); first:\n{}", failures.len(), failures[0]);
@@ -572,9 +634,256 @@ fn mutated_ply_meshes_never_panic_or_hang() {
     assert!(loaded > CASES_PLY / 20 && loaded < CASES_PLY, "{loaded} of {CASES_PLY} mutants loaded");
 }
 
+// ---- images (the bitmap textures' decoders) and OBJ meshes with UVs (issue #61) ----
+
+/// Cases in CI for images and OBJ meshes each (as many as XML and PLY).
+const CASES_IMAGE: usize = 3000;
+const CASES_OBJ: usize = 3000;
+
+/// The scene an image mutant is read by: a rectangle (it has UVs) whose normal map reads the
+/// image raw and whose diffuse reflectance (`$REFLECTANCE`) reads it as a colour where its values
+/// are in [0, 1] (PNG, JPEG: `REFLECTANCE_LDR`; EXR and HDR hold larger ones: `REFLECTANCE_HDR`).
+const XML_IMAGE: &str = r#"<scene version="3.0.0">
+<sensor type="perspective"><float name="fov" value="40"/><transform name="to_world"><lookat origin="0, 0, 3" target="0, 0, 0" up="0, 1, 0"/></transform>
+  <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
+<shape type="rectangle">
+  <bsdf type="normalmap">
+    <texture name="normalmap" type="bitmap"><string name="filename" value="$FILE"/><boolean name="raw" value="true"/></texture>
+    <bsdf type="diffuse">$REFLECTANCE</bsdf>
+  </bsdf>
+</shape>
+<emitter type="point"><point name="position" x="0" y="0" z="2"/><rgb name="intensity" value="1"/></emitter>
+</scene>
+"#;
+const REFLECTANCE_LDR: &str = r#"<texture name="reflectance" type="bitmap"><string name="filename" value="$FILE"/>
+      <string name="filter_type" value="nearest"/></texture>"#;
+const REFLECTANCE_HDR: &str = r#"<rgb name="reflectance" value="0.5"/>"#;
+
+/// The scene an OBJ mutant is read by: the mesh with a bitmap reflectance under a normal map
+/// (its UVs used), beside a rectangle (the scene is never empty).
+const XML_OBJ: &str = r#"<scene version="3.0.0">
+<sensor type="perspective"><float name="fov" value="40"/><transform name="to_world"><lookat origin="0, 0, 3" target="0, 0, 0" up="0, 1, 0"/></transform>
+  <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
+<shape type="rectangle"><transform name="to_world"><translate z="-1"/></transform></shape>
+<shape type="obj"><string name="filename" value="$FILE"/>
+  <bsdf type="normalmap">
+    <texture name="normalmap" type="bitmap"><string name="filename" value="tex.png"/><boolean name="raw" value="true"/></texture>
+    <bsdf type="diffuse"><texture name="reflectance" type="bitmap"><string name="filename" value="tex.png"/></texture></bsdf>
+  </bsdf>
+</shape>
+<emitter type="point"><point name="position" x="0" y="0" z="2"/><rgb name="intensity" value="1"/></emitter>
+</scene>
+"#;
+
+/// The committed images: tests/data/texture/ (8- and 16-bit PNG, grey PNG, RGB and Y EXR,
+/// RGBE, baseline JPEG) and tests/data/fuzz-images/ (palette, RGBA, 16-bit grey and Adam7 PNG,
+/// progressive and grey JPEG, ZIP, tiled PIZ and RLE EXR, run-length RGBE;
+/// scripts/fuzz-images.py), a few hundred bytes each.
+fn image_corpus() -> Vec<(String, Vec<u8>)> {
+    let mut out = Vec::new();
+    for dir in ["tests/data/texture", "tests/data/fuzz-images"] {
+        let mut files: Vec<PathBuf> = std::fs::read_dir(root().join(dir))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|x| ["png", "jpg", "exr", "hdr"].iter().any(|e| x == *e)))
+            .collect();
+        files.sort();
+        out.extend(
+            files.iter().map(|p| (p.file_name().unwrap().to_string_lossy().into_owned(), std::fs::read(p).unwrap())),
+        );
+    }
+    assert!(out.len() >= 17, "image corpus too small: {}", out.len());
+    out
+}
+
+/// Sizes a header edit writes (as the field's width allows): empty and tiny; just past the
+/// texel limit's side (16385² > 2^28); 2^16 − 1, 2^16 and past them; the integer extremes. A
+/// product of two of them, or of one and a committed image's side (at most 32), is either
+/// refused by the limit or at most about 3·10⁶ texels. Claims between (2^24 to 2^28 texels) are
+/// left out on purpose: the JPEG decoder fills what the header claims, whatever the file holds
+/// (a 718-byte JPEG claiming 16384 × 16384 decodes, filled, in 5.7 s and 0.8 GB; 4096 × 4096 in
+/// 0.27 s), so a case there measures that cost, not a hang.
+const SIZES: &[i64] = &[0, 1, 2, 3, 16385, 65535, 65536, 100_000, 2_147_483_647, 4_294_967_295, -1];
+
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = !0u32;
+    for &b in bytes {
+        c ^= b as u32;
+        for _ in 0..8 {
+            c = if c & 1 != 0 { 0xedb8_8320 ^ (c >> 1) } else { c >> 1 };
+        }
+    }
+    !c
+}
+
+/// One header field of the image set to an extreme: PNG's IHDR width, height, bit depth, colour
+/// type or interlace method (its CRC kept valid, so the decoder reads the edit); JPEG's frame
+/// height, width or component count; Radiance's `-Y h +X w`; OpenEXR's data or display window
+/// corners or tile size.
+fn edit_header(b: &mut Vec<u8>, rng: &mut Rng) {
+    let size = SIZES[pick(rng, SIZES.len())];
+    if b.starts_with(b"\x89PNG") && b.len() >= 33 {
+        let (at, v): (usize, Vec<u8>) = match pick(rng, 5) {
+            k @ (0 | 1) => (16 + 4 * k, (size as u32).to_be_bytes().to_vec()),
+            2 => (24, vec![[0, 1, 2, 3, 4, 8, 16, 32][pick(rng, 8)]]),
+            3 => (25, vec![[0, 1, 2, 3, 4, 5, 6, 7][pick(rng, 8)]]),
+            _ => (28, vec![[0, 1, 2][pick(rng, 3)]]),
+        };
+        b[at..at + v.len()].copy_from_slice(&v);
+        let crc = crc32(&b[12..29]);
+        b[29..33].copy_from_slice(&crc.to_be_bytes());
+    } else if b.starts_with(&[0xff, 0xd8]) {
+        let sof = b.windows(2).position(|w| w[0] == 0xff && (0xc0..=0xc2).contains(&w[1]));
+        if let Some(i) = sof.filter(|&i| i + 10 <= b.len()) {
+            match pick(rng, 3) {
+                k @ (0 | 1) => b[i + 5 + 2 * k..i + 7 + 2 * k].copy_from_slice(&(size as u16).to_be_bytes()),
+                _ => b[i + 9] = [0, 1, 2, 3, 4, 255][pick(rng, 6)],
+            }
+        }
+    } else if b.starts_with(b"#?") {
+        if let Some(i) = b.windows(3).position(|w| w == b"-Y ") {
+            let end = i + b[i..].iter().position(|&c| c == b'\n').unwrap_or(b.len() - i);
+            let line = String::from_utf8_lossy(&b[i..end]).into_owned();
+            let mut w: Vec<String> = line.split(' ').map(str::to_string).collect();
+            if w.len() == 4 {
+                w[[1, 3][pick(rng, 2)]] = [size.to_string(), "99999999999".into(), "x".into()][pick(rng, 3)].clone();
+                b.splice(i..end, w.join(" ").into_bytes());
+            }
+        }
+    } else {
+        let attr: &[u8] = [&b"dataWindow\0box2i\0"[..], b"displayWindow\0box2i\0", b"tiles\0tiledesc\0"][pick(rng, 3)];
+        if let Some(i) = b.windows(attr.len()).position(|w| w == attr) {
+            let at = i + attr.len() + 4 + 4 * pick(rng, if attr.starts_with(b"tiles") { 2 } else { 4 });
+            if at + 4 <= b.len() {
+                b[at..at + 4].copy_from_slice(&(size as i32).to_le_bytes());
+            }
+        }
+    }
+}
+
+fn mutate_image(src: &[u8], rng: &mut Rng) -> Vec<u8> {
+    let mut b = src.to_vec();
+    for _ in 0..1 + pick(rng, 2) {
+        match pick(rng, 6) {
+            0 => {
+                let n = pick(rng, b.len() + 1);
+                b.truncate(n);
+            }
+            1 => {
+                for _ in 0..1 + pick(rng, 4) {
+                    let i = pick(rng, b.len());
+                    if i < b.len() {
+                        b[i] = rng.next_u32() as u8;
+                    }
+                }
+            }
+            2 | 3 => edit_header(&mut b, rng),
+            4 => {
+                // a bit flipped in the first 64 bytes (headers, chunk lengths)
+                let i = pick(rng, b.len().min(64));
+                if i < b.len() {
+                    b[i] ^= 1 << pick(rng, 8);
+                }
+            }
+            _ => {
+                let (i, n) = (pick(rng, b.len()), 1 + pick(rng, 16));
+                if pick(rng, 2) == 0 {
+                    let chunk: Vec<u8> = b[i.min(b.len())..(i + n).min(b.len())].to_vec();
+                    b.splice(i.min(b.len())..i.min(b.len()), chunk);
+                } else {
+                    b.drain(i.min(b.len())..(i + n).min(b.len()));
+                }
+            }
+        }
+    }
+    b
+}
+
+fn image_inputs(seed: u64, cases: usize) -> impl Iterator<Item = (String, Input)> {
+    let corpus = image_corpus();
+    (0..cases).map(move |case| {
+        let mut rng = Rng::keyed(seed, stream::MISC, case as u64, 4);
+        let (name, src) = &corpus[case % corpus.len()];
+        (name.clone(), Input::Image(name.clone(), mutate_image(src, &mut rng)))
+    })
+}
+
+#[test]
+fn mutated_images_never_panic_or_hang() {
+    let dir = fuzz_dir("scene-fuzz-image");
+    for (name, b) in image_corpus() {
+        assert_eq!(run_input(&Input::Image(name.clone(), b), &dir), Ok(true), "{name} does not load unmutated");
+    }
+    let loaded = fuzz("image", &dir, image_inputs(0x5eed, CASES_IMAGE));
+    assert!(loaded > CASES_IMAGE / 20 && loaded < CASES_IMAGE, "{loaded} of {CASES_IMAGE} mutants loaded");
+}
+
+/// OBJ meshes with UVs: the committed textured cube (per-face `vt` and `vn`) and a mesh of two
+/// objects with relative indices, corners without `vt`, `v//vn` corners, a quad, a `vt` with a
+/// third number and comments after statements.
+fn obj_corpus() -> Vec<(String, Vec<u8>)> {
+    let cube = std::fs::read(root().join("tests/scenes/mitsuba-plugins/box.obj")).unwrap();
+    let mixed = "# two objects\no a\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\nvt 0 0\nvt 1 0 0\nvt 1 1\n\
+vt 0 1 # last\nf 1/1/1 2/2/1 3/3/1 4/4/1\ng b\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf -3/-4 -2/-3 -1\nf 5//1 6//1 7//1 # bare\n";
+    vec![("box.obj".into(), cube), ("mixed.obj".into(), mixed.as_bytes().to_vec())]
+}
+
+const OBJ_BYTES: &[u8] = b"/ /-0123456789.#\nvtfnlpog e+";
+
+/// Text mutations of an OBJ: bytes replaced with OBJ punctuation, digits and keywords' letters;
+/// numbers (indices included) swapped for extremes and for indices past either end; lines
+/// swapped, deleted or duplicated.
+fn mutate_obj(src: &[u8], rng: &mut Rng) -> Vec<u8> {
+    let mut s = String::from_utf8_lossy(src).into_owned();
+    for _ in 0..1 + pick(rng, 3) {
+        match pick(rng, 5) {
+            0 => {
+                let b: Vec<usize> = s.char_indices().filter(|(_, c)| c.is_ascii()).map(|(i, _)| i).collect();
+                if let Some(&i) = b.get(pick(rng, b.len())) {
+                    let c = OBJ_BYTES[pick(rng, OBJ_BYTES.len())] as char;
+                    s.replace_range(i..i + 1, &c.to_string());
+                }
+            }
+            1 | 2 => {
+                let spans = number_spans(&s);
+                if let Some(&(i, j)) = spans.get(pick(rng, spans.len())) {
+                    let v = match pick(rng, 3) {
+                        0 => EXTREMES[pick(rng, EXTREMES.len())].to_string(),
+                        1 => ["0", "-0", "99", "-99", "25", "-25", "2147483648", "-9223372036854775808"][pick(rng, 8)]
+                            .into(),
+                        _ => format!("{}", pick(rng, 30) as i64 - 15),
+                    };
+                    s.replace_range(i..j, &v);
+                }
+            }
+            _ => s = line_op(&s, rng),
+        }
+    }
+    s.into_bytes()
+}
+
+fn obj_inputs(seed: u64, cases: usize) -> impl Iterator<Item = (String, Input)> {
+    let corpus = obj_corpus();
+    (0..cases).map(move |case| {
+        let mut rng = Rng::keyed(seed, stream::MISC, case as u64, 5);
+        let (name, src) = &corpus[case % corpus.len()];
+        (name.clone(), Input::Obj(mutate_obj(src, &mut rng)))
+    })
+}
+
+#[test]
+fn mutated_obj_meshes_with_uvs_never_panic_or_hang() {
+    let dir = fuzz_dir("scene-fuzz-obj");
+    for (name, b) in obj_corpus() {
+        assert_eq!(run_input(&Input::Obj(b), &dir), Ok(true), "{name} does not load unmutated");
+    }
+    let loaded = fuzz("OBJ", &dir, obj_inputs(0x5eed, CASES_OBJ));
+    assert!(loaded > CASES_OBJ / 20 && loaded < CASES_OBJ, "{loaded} of {CASES_OBJ} mutants loaded");
+}
+
 // ---- the long run ----
 
-/// `FORECAST_FUZZ_SECS` seconds (default 600) of TOML, XML and PLY mutants in turn, new seeds;
+/// `FORECAST_FUZZ_SECS` seconds (default 600) of TOML, XML, PLY, image and OBJ mutants in turn, new seeds;
 /// prints the counts and fails on any panic or hang (an abort ends the process: no summary).
 #[test]
 #[ignore]
@@ -584,8 +893,8 @@ fn fuzz_for_a_while() {
     let toml = corpus();
     let mut runner = Runner::new(&dir);
     let started = Instant::now();
-    let mut counts = [[0usize; 4]; 3]; // per format: run, loaded, panics, hangs
-    let mut worst = [0.0f64; 3];
+    let mut counts = [[0usize; 4]; 5]; // per format: run, loaded, panics, hangs
+    let mut worst = [0.0f64; 5];
     let mut found = Vec::new();
     let mut round = 0u64;
     while started.elapsed().as_secs_f64() < secs {
@@ -598,6 +907,8 @@ fn fuzz_for_a_while() {
             })
             .chain(xml_inputs(seed, 200).map(|(n, i)| (1, n, i)))
             .chain(ply_inputs(seed, 200).map(|(n, i)| (2, n, i)))
+            .chain(image_inputs(seed, 200).map(|(n, i)| (3, n, i)))
+            .chain(obj_inputs(seed, 200).map(|(n, i)| (4, n, i)))
             .collect();
         for (f, name, input) in batch {
             counts[f][0] += 1;
@@ -618,7 +929,7 @@ fn fuzz_for_a_while() {
         }
         round += 1;
     }
-    for (f, what) in ["TOML", "XML", "PLY"].iter().enumerate() {
+    for (f, what) in ["TOML", "XML", "PLY", "image", "OBJ"].iter().enumerate() {
         let [n, l, p, h] = counts[f];
         eprintln!("{what}: {n} mutants, {l} loaded, {p} panics, {h} hangs, slowest {:.3} s", worst[f]);
     }
