@@ -376,7 +376,8 @@ impl CausticForecast {
             ctx.profile.cf.samples += 1;
             let u = ctx.rng.next_3d();
             let Some(bs) = bsdf::sample(m, sp, wo, u, Mode::Radiance) else { return Rgb::ZERO };
-            if bs.pdf_w <= 0.0 {
+            // a mixed material's Dirac lobe is not L_c's integrand (spec §1)
+            if bs.is_delta || bs.pdf_w <= 0.0 {
                 return Rgb::ZERO;
             }
             return g(bs.wi, 1.0 / bs.pdf_w, ctx);

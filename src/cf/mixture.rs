@@ -149,10 +149,22 @@ impl<'a> DefensiveMixture<'a> {
         self.q_and_bsdf(wi, local).0
     }
 
-    /// `(q, p_BSDF)` at `wi` (both 0 outside the domain).
+    /// True for a direction the tables do not cover but the BSDF may sample: the far side of a
+    /// material that transmits (the tables hold the reflection hemisphere).
+    #[inline]
+    fn transmits_to(&self, wi: Vec3) -> bool {
+        wi.dot(self.ng) < 0.0 && self.m.is_two_sided_by_nature()
+    }
+
+    /// `(q, p_BSDF)` at `wi` (both 0 outside the BSDF's support and the domain; the BSDF's
+    /// alone across a transmitting material).
     #[inline]
     fn q_and_bsdf(&self, wi: Vec3, local: Vec3) -> (f32, f32) {
         if !self.in_domain(wi) {
+            if self.transmits_to(wi) {
+                let p_bsdf = bsdf::pdf_w(self.m, self.sp, self.wo, wi);
+                return (self.c[0] * p_bsdf, p_bsdf);
+            }
             return (0.0, 0.0);
         }
         let p_bsdf = bsdf::pdf_w(self.m, self.sp, self.wo, wi);
@@ -174,7 +186,8 @@ impl<'a> DefensiveMixture<'a> {
             return 0.0;
         }
         if self.is_bsdf_only() {
-            return if self.in_domain(wi) { bsdf::pdf_w(self.m, self.sp, self.wo, wi) } else { 0.0 };
+            let support = self.in_domain(wi) || self.transmits_to(wi);
+            return if support { bsdf::pdf_w(self.m, self.sp, self.wo, wi) } else { 0.0 };
         }
         self.q(wi, self.frame.to_local(wi))
     }
@@ -195,7 +208,7 @@ impl<'a> DefensiveMixture<'a> {
     pub fn sample_u(&self, pick: f32, u: [f32; 3]) -> Option<MixtureSample> {
         if self.is_bsdf_only() {
             let bs = bsdf::sample(self.m, self.sp, self.wo, u, Mode::Radiance)?;
-            if !bs.is_delta && !self.in_domain(bs.wi) {
+            if !bs.is_delta && !self.in_domain(bs.wi) && !self.transmits_to(bs.wi) {
                 return None;
             }
             let (wi, weight, pdf_w, is_delta, eta) = (bs.wi, bs.weight, bs.pdf_w, bs.is_delta, bs.eta);
@@ -210,6 +223,13 @@ impl<'a> DefensiveMixture<'a> {
         };
         let (wi, local) = if component == 0 {
             let bs = bsdf::sample(self.m, self.sp, self.wo, u, Mode::Radiance)?;
+            if bs.is_delta {
+                // a mixed material's Dirac lobe: a discrete sample of probability c_B times the
+                // lobe's (which its weight already divides by); the tables have no mass there
+                let (wi, eta, bsdf_pdf_w) = (bs.wi, bs.eta, bs.pdf_w);
+                let (weight, pdf_w) = (bs.weight / self.c[0], bs.pdf_w * self.c[0]);
+                return Some(MixtureSample { wi, weight, pdf_w, component: 0, is_delta: true, eta, bsdf_pdf_w });
+            }
             (bs.wi, self.frame.to_local(bs.wi))
         } else {
             let t = self.tables[component - 1]?;

@@ -79,22 +79,19 @@ fn point_light_note(scene: &Scene) -> &'static str {
     }
 }
 
-/// Why only `pt` renders `scene` unbiased, where it has a material with both a Dirac and a
-/// non-Dirac lobe (`plastic`): the other methods split L by material, not yet by the lobe a
-/// vertex samples (docs/spec.md, the lobe rule), and would leave its coat's reflections out.
-pub fn mixed_lobes(scene: &Scene) -> Option<String> {
-    scene.materials.iter().any(|m| m.has_mixed_lobes()).then(|| {
-        "the scene has a `plastic` (a Dirac coat over a diffuse base), which only pt splits by the lobe a \
-         vertex samples"
+/// Why the IWS methods refuse `scene`, where it has a material with both a Dirac and a
+/// non-Dirac lobe (`plastic`): their point-light gather still underestimates the light such a
+/// surface sends to a glossy one (docs/limitations.md); `pt` and `pt-cf` split by lobe and agree.
+pub fn mixed_lobes(scene: &Scene, m: Method) -> Option<String> {
+    let iws = matches!(m, Method::Iws | Method::IwsPm | Method::IwsCf);
+    (iws && scene.materials.iter().any(|m| m.has_mixed_lobes())).then(|| {
+        "the scene has a `plastic` (a Dirac coat over a diffuse base), which the IWS methods do not yet render          unbiased (docs/limitations.md)"
             .to_string()
     })
 }
 
 /// The method `auto` picks for `scene`, and why (the rule of the module docs).
 pub fn choose(scene: &Scene) -> (Method, String) {
-    if let Some(why) = mixed_lobes(scene) {
-        return (Method::Pt, format!("pt: {why}"));
-    }
     let note = point_light_note(scene);
     if !has_dirac(scene) {
         return (Method::Pt, "no mirror or glass objects: pt, the cheapest unbiased method".into());
@@ -125,9 +122,13 @@ pub fn resolve(requested: Option<MethodChoice>, scene: &Scene) -> Result<(Method
         None => (from_scene()?, "the scene's [render] method"),
     };
     Ok(match choice {
-        MethodChoice::Named(m) if m != Method::Pt && mixed_lobes(scene).is_some() => {
-            let why = mixed_lobes(scene).unwrap_or_default();
-            return Err(format!("{}: --method {} ({source}): {why}; render it with --method pt", scene.path, m.name()));
+        MethodChoice::Named(m) if mixed_lobes(scene, m).is_some() => {
+            let why = mixed_lobes(scene, m).unwrap_or_default();
+            return Err(format!(
+                "{}: --method {} ({source}): {why}; render it with --method pt-cf or pt",
+                scene.path,
+                m.name()
+            ));
         }
         MethodChoice::Named(m) => (m, format!("{} named by {source}", m.name())),
         MethodChoice::Auto => {

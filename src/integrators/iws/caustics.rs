@@ -9,6 +9,7 @@ use crate::accel::{offset_origin, Hit, World};
 use crate::bsdf::{self, Mode};
 use crate::math::{Rgb, Vec3};
 use crate::profile::{Phase, Profile};
+use crate::sampling::rng::Rng;
 use crate::scene::NO_EMITTER;
 pub use crate::transport::context::{Context, ShadingQuery};
 use crate::transport::dirac::follow_dirac_chain;
@@ -19,7 +20,8 @@ use crate::transport::roulette::{q_recursion, roulette};
 /// ending at a non-specular vertex can recurse (spec §1 "Chain following").
 pub trait Recurse {
     /// `L̂(y→ω_o)` at `hit` with diffuse depth `depth`: `Le` on emitters, the full estimator at
-    /// non-specular hits, 0 on Dirac hits.
+    /// non-specular hits (a mixed material's Dirac lobe included, spec §1 "Mixed materials"),
+    /// 0 on Dirac hits.
     fn l_hat(&self, world: &World, hit: &Hit, wo: Vec3, depth: u32, ctx: &mut Context) -> Rgb;
 }
 
@@ -67,6 +69,9 @@ impl CausticEstimator for BsdfCaustics {
         let Some(bs) = bsdf::sample(q.m, q.x, q.wo, u, Mode::Radiance) else {
             return Rgb::ZERO;
         };
+        if bs.is_delta {
+            return Rgb::ZERO; // L_c integrates x's non-Dirac lobes only (spec §1)
+        }
         caustic_chain(world, q, bs.wi, bs.weight, ctx, full)
     }
 }
@@ -87,7 +92,8 @@ pub fn caustic_chain(
     let Some(hit) = world.intersect(offset_origin(x.p, x.ng, wi), wi, f32::INFINITY) else {
         return Rgb::ZERO;
     };
-    if world.scene.emitter_of(hit.prim) != NO_EMITTER || !world.scene.material_of(hit.prim).is_dirac() {
+    let m = world.scene.material_of(hit.prim);
+    if world.scene.emitter_of(hit.prim) != NO_EMITTER || !(m.is_dirac() || m.has_mixed_lobes()) {
         return Rgb::ZERO;
     }
     let Some(w) = roulette(weight, q_recursion(weight, q.depth + 1), &mut ctx.rng) else {
@@ -95,10 +101,23 @@ pub fn caustic_chain(
     };
     let t0 = ctx.profile.start(Phase::CfChain);
     ctx.profile.cf_chains += 1;
-    let l = match follow_dirac_chain(world, hit, wi, w, MAX_VERTICES, &mut ctx.rng) {
+    let start = if m.has_mixed_lobes() { dirac_lobe(world, &hit, wi, w, &mut ctx.rng) } else { Some((hit, wi, w)) };
+    let chain = start.and_then(|(hit, wi, w)| follow_dirac_chain(world, hit, wi, w, MAX_VERTICES, &mut ctx.rng));
+    let l = match chain {
         Some((z, d, beta)) => beta * full.l_hat(world, &z, -d, q.depth + 1, ctx),
         None => Rgb::ZERO,
     };
     ctx.profile.record(Phase::CfChain, t0);
     l
+}
+
+/// The Dirac-lobe part of a mixed material at `hit` (reached along `d` with throughput `beta`):
+/// one BSDF sample, which counts only where it picked a Dirac lobe (its weight already divides
+/// by that lobe's probability, so the expectation is the Dirac lobes' light alone, spec §1
+/// "Mixed materials"); returns the next hit, the direction to it and the throughput.
+pub fn dirac_lobe(world: &World, hit: &Hit, d: Vec3, beta: Rgb, rng: &mut Rng) -> Option<(Hit, Vec3, Rgb)> {
+    let (m, sp) = world.shade(hit, -d);
+    let bs = bsdf::sample(&m, &sp, -d, rng.next_3d(), Mode::Radiance).filter(|bs| bs.is_delta)?;
+    let next = world.intersect(offset_origin(hit.p, hit.ng, bs.wi), bs.wi, f32::INFINITY)?;
+    Some((next, bs.wi, beta * bs.weight))
 }

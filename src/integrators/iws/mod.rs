@@ -71,6 +71,15 @@ pub struct IwsArgs {
     pub direct: DirectLight,
 }
 
+/// Which lobes of a vertex's material an estimate owns (spec §1 "Mixed materials"): all of
+/// them where the camera or a Dirac chain arrives, only the non-Dirac ones where a compensation
+/// ray arrives (light leaving by a Dirac lobe is `L_c`'s).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Lobes {
+    All,
+    NonDirac,
+}
+
 /// Where the IWS estimator gets the direct light of the scene's emitters (area and point lights).
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
@@ -302,16 +311,29 @@ impl Iws {
     }
 
     /// Bias compensation `C(x, ω_o, d)` (spec §2): one BSDF ray, weight `(G−b)/G` if `G > b`.
-    fn compensate(&self, world: &World, q: &ShadingQuery, ctx: &mut Context) -> Rgb {
+    /// Where the sample picks a mixed material's Dirac lobe it is not compensation but that
+    /// lobe's light (spec §1 "Mixed materials"): followed when `lobes` is [`Lobes::All`], 0 when
+    /// the caller owns only the non-Dirac lobes ([`Lobes::NonDirac`]).
+    fn compensate(&self, world: &World, q: &ShadingQuery, lobes: Lobes, ctx: &mut Context) -> Rgb {
         let (x, m, wo, depth) = (q.x, q.m, q.wo, q.depth);
         let u = ctx.rng.next_3d();
-        if self.b.is_infinite() || depth + 1 >= MAX_VERTICES {
+        if depth + 1 >= MAX_VERTICES || (self.b.is_infinite() && !m.has_mixed_lobes()) {
             return Rgb::ZERO;
         }
         let t0 = ctx.profile.start(Phase::Compensation);
         let Some(bs) = bsdf::sample(m, x, wo, u, Mode::Radiance) else {
             return Rgb::ZERO;
         };
+        if bs.is_delta {
+            ctx.profile.record(Phase::Compensation, t0);
+            return match lobes {
+                Lobes::All => self.dirac_lobe(world, q, bs.wi, bs.weight, ctx),
+                Lobes::NonDirac => Rgb::ZERO,
+            };
+        }
+        if self.b.is_infinite() {
+            return Rgb::ZERO;
+        }
         let cos_x = x.ng.dot(bs.wi).abs();
         if cos_x <= 0.0 {
             return Rgb::ZERO;
@@ -344,25 +366,29 @@ impl Iws {
         let Some(w) = roulette(w, q_recursion(w, depth + 1), &mut ctx.rng) else {
             return Rgb::ZERO;
         };
-        w * self.l_hat(world, &hit, -bs.wi, depth + 1, ctx)
+        w * self.radiance(world, &hit, -bs.wi, depth + 1, Lobes::NonDirac, ctx)
     }
 
-    /// Estimator at a non-specular, non-emitting point.
-    fn at_surface(&self, world: &World, q: &ShadingQuery, ctx: &mut Context) -> Rgb {
-        if q.m.is_black() {
+    /// The light a mixed material's Dirac lobe brings to `q` along `wi` (sample weight `w`):
+    /// the Dirac chain from there and `L̂` at its end. The recursion depth grows by one, which
+    /// bounds it as compensation's is.
+    fn dirac_lobe(&self, world: &World, q: &ShadingQuery, wi: Vec3, w: Rgb, ctx: &mut Context) -> Rgb {
+        let Some(w) = roulette(w, q_recursion(w, q.depth + 1), &mut ctx.rng) else {
             return Rgb::ZERO;
+        };
+        let x = q.x;
+        let Some(hit) = world.intersect(offset_origin(x.p, x.ng, wi), wi, f32::INFINITY) else {
+            return Rgb::ZERO;
+        };
+        match follow_dirac_chain(world, hit, wi, w, MAX_VERTICES, &mut ctx.rng) {
+            Some((z, d, beta)) => beta * self.l_hat(world, &z, -d, q.depth + 1, ctx),
+            None => Rgb::ZERO,
         }
-        let mut l = self.gather(world, q, ctx);
-        l += self.compensate(world, q, ctx);
-        let t0 = ctx.profile.start(Phase::Caustics);
-        let lc = self.caustics.estimate(world, q, ctx, self);
-        ctx.profile.record(Phase::Caustics, t0);
-        l + lc
     }
-}
 
-impl Recurse for Iws {
-    fn l_hat(&self, world: &World, hit: &Hit, wo: Vec3, depth: u32, ctx: &mut Context) -> Rgb {
+    /// `L̂` at `hit` seen from `wo` over `lobes` of its material: `Le` on emitters, 0 on Dirac
+    /// materials, else [`Self::at_surface`].
+    fn radiance(&self, world: &World, hit: &Hit, wo: Vec3, depth: u32, lobes: Lobes, ctx: &mut Context) -> Rgb {
         let s = &world.scene;
         let e = s.emitter_of(hit.prim);
         if e != NO_EMITTER {
@@ -373,7 +399,26 @@ impl Recurse for Iws {
         if m.is_dirac() {
             return Rgb::ZERO;
         }
-        self.at_surface(world, &ShadingQuery { x: &sp, m: &m, wo, depth }, ctx)
+        self.at_surface(world, &ShadingQuery { x: &sp, m: &m, wo, depth }, lobes, ctx)
+    }
+
+    /// Estimator at a non-specular, non-emitting point.
+    fn at_surface(&self, world: &World, q: &ShadingQuery, lobes: Lobes, ctx: &mut Context) -> Rgb {
+        if q.m.is_black() {
+            return Rgb::ZERO;
+        }
+        let mut l = self.gather(world, q, ctx);
+        l += self.compensate(world, q, lobes, ctx);
+        let t0 = ctx.profile.start(Phase::Caustics);
+        let lc = self.caustics.estimate(world, q, ctx, self);
+        ctx.profile.record(Phase::Caustics, t0);
+        l + lc
+    }
+}
+
+impl Recurse for Iws {
+    fn l_hat(&self, world: &World, hit: &Hit, wo: Vec3, depth: u32, ctx: &mut Context) -> Rgb {
+        self.radiance(world, hit, wo, depth, Lobes::All, ctx)
     }
 }
 

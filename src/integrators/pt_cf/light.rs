@@ -270,18 +270,23 @@ impl<'a, P: CameraPdf> Tracer<'a, P> {
             let w_in = -d;
             let (m, sp) = self.world.shade(&hit, w_in);
             let m = &m;
+            // C is defined by the lobe each vertex sampled (spec §1): its first vertex left by a
+            // Dirac lobe, its later non-Dirac ones connected by their non-Dirac lobes
             if !m.is_dirac() {
-                if depth == 1 {
+                if depth == 1 && !m.has_mixed_lobes() {
                     return; // not a path of C
                 }
-                if depth < self.light.max_depth {
+                if depth > 1 && depth < self.light.max_depth {
                     self.connect(&sp, m, w_in, beta, density, ctx);
                 }
             }
             let u = rng.next_3d();
             let Some(bs) = bsdf::sample(m, &sp, w_in, u, Mode::Importance) else { return };
+            if depth == 1 && !bs.is_delta {
+                return; // not a path of C
+            }
             let Some(w) = roulette(bs.weight, q_particle(bs.weight), &mut rng) else { return };
-            if !m.is_dirac() {
+            if !bs.is_delta {
                 self.verts.push(Vertex { sp, m: *m, w_in, w_out: bs.wi, pdf_l: bs.pdf_w });
             }
             beta *= w;

@@ -249,8 +249,8 @@ impl GuidedPathTracer {
     fn track_mis(&self, st: &mut PathState, v: &SurfaceVertex, ctx: &Context) {
         let (Some(_), Some(cam)) = (&self.light, &ctx.camera) else { return };
         let (m, sp, wo, t) = (v.m, &v.sp, v.wo, v.t);
-        if m.is_dirac() {
-            return;
+        if st.walk.prev_delta {
+            return; // a Dirac lobe: a vertex of the chain, outside the ratio (spec §1, by lobe)
         }
         if v.index == 0 {
             st.mis = Some(light::first_ratio(cam, -wo, t, sp.ng, (wo, st.walk.d), st.walk.prev_pdf_w));
