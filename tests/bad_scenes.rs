@@ -1204,3 +1204,160 @@ fn a_textured_or_normal_mapped_mesh_without_uvs_shades_as_mitsuba() {
         );
     }
 }
+
+// ---- issue 61: the TOML format's Mitsuba materials and textures (tests/toml_materials.rs) ----
+
+/// `BASE` with the material table `wood` (its lines `body`, one marked `#<`) before `white`.
+fn with_wood(body: &str) -> String {
+    with("[materials.white]", &format!("[materials.wood]\n{body}\n\n[materials.white]"))
+}
+
+#[test]
+fn toml_material_and_texture_errors_name_the_file_line_and_key() {
+    let mut f = Vec::new();
+    let png = "filename = \"../mitsuba-plugins/tex16.png\"";
+    // unknown types: of a material, of a texture (inline and under its own header)
+    case(&mut f, "unknown material type", &with_wood("type = \"roughplastik\" #<"), "materials.wood.type");
+    let inline = |v: &str| with_wood(&format!("type = \"diffuse\"\nalbedo = {v} #<"));
+    case(&mut f, "unknown texture type", &inline("{ type = \"marble\" }"), "materials.wood.albedo.type");
+    let table = |lines: &str| with_wood(&format!("type = \"diffuse\"\n\n[materials.wood.albedo]\n{lines}"));
+    case(&mut f, "texture table type", &table("type = \"marble\" #<"), "materials.wood.albedo.type");
+    // unknown keys: in an inline texture, in its to_uv, in a texture table, a key of another type
+    case(
+        &mut f,
+        "inline texture key",
+        &inline("{ type = \"bitmap\", filenme = \"a.png\" }"),
+        "materials.wood.albedo.filenme",
+    );
+    let uv = "{ type = \"checkerboard\", to_uv = { scael = [2, 2] } }";
+    case(&mut f, "to_uv key", &inline(uv), "materials.wood.albedo.to_uv.scael");
+    case(
+        &mut f,
+        "table key",
+        &table(&format!("type = \"bitmap\"\n{png}\nfilenme = \"a\" #<")),
+        "materials.wood.albedo.filenme",
+    );
+    case(&mut f, "key of another type", &with_wood("type = \"plastic\"\nalpha = 0.1 #<"), "materials.wood.alpha");
+    case(
+        &mut f,
+        "bitmap key on a checkerboard",
+        &inline("{ type = \"checkerboard\", raw = true }"),
+        "materials.wood.albedo.raw",
+    );
+    case(
+        &mut f,
+        "twosided on a dielectric",
+        &with_wood("type = \"roughdielectric\"\ntwosided = true #<"),
+        "materials.wood.twosided",
+    );
+    case(&mut f, "missing texture type", &inline("{ filename = \"a.png\" }"), "materials.wood.albedo.type");
+    case(
+        &mut f,
+        "both alphas",
+        &with_wood("type = \"roughconductor\"\nalpha_u = 0.1\nalpha = 0.2 #<"),
+        "materials.wood.alpha",
+    );
+    // values of the wrong type
+    case(
+        &mut f,
+        "raw not a boolean",
+        &inline(&format!("{{ type = \"bitmap\", {png}, raw = 1 }}")),
+        "materials.wood.albedo.raw",
+    );
+    case(
+        &mut f,
+        "twosided a string",
+        &with_wood("type = \"plastic\"\ntwosided = \"no\" #<"),
+        "materials.wood.twosided",
+    );
+    case(
+        &mut f,
+        "colour a string",
+        &with_wood("type = \"plastic\"\ndiffuse_reflectance = \"red\" #<"),
+        "materials.wood.diffuse_reflectance",
+    );
+    case(
+        &mut f,
+        "colour of 2",
+        &with_wood("type = \"plastic\"\nspecular_reflectance = [1, 1] #<"),
+        "materials.wood.specular_reflectance",
+    );
+    case(&mut f, "ior an array", &with_wood("type = \"plastic\"\nint_ior = [1.5] #<"), "materials.wood.int_ior");
+    case(
+        &mut f,
+        "alpha a colour",
+        &with_wood("type = \"roughconductor\"\nalpha = [0.1, 0.1, 0.1] #<"),
+        "materials.wood.alpha",
+    );
+    case(
+        &mut f,
+        "textured glossy",
+        &with("albedo   = [0.3", "albedo = { type = \"checkerboard\" } #<"),
+        "materials.plastic.albedo",
+    );
+    case(
+        &mut f,
+        "scale of 3",
+        &inline("{ type = \"checkerboard\", to_uv = { scale = [1, 2, 3] } }"),
+        "materials.wood.albedo.to_uv.scale",
+    );
+    // values out of range, unknown names
+    case(
+        &mut f,
+        "filter_type",
+        &table(&format!("type = \"bitmap\"\n{png}\nfilter_type = \"cubic\" #<")),
+        "materials.wood.albedo.filter_type",
+    );
+    case(
+        &mut f,
+        "reflectance > 1",
+        &with_wood("type = \"plastic\"\ndiffuse_reflectance = [0.5, 1.5, 0.5] #<"),
+        "materials.wood.diffuse_reflectance",
+    );
+    case(
+        &mut f,
+        "conductor preset",
+        &with_wood("type = \"conductor\"\nmaterial = \"Gold\" #<"),
+        "materials.wood.material",
+    );
+    case(
+        &mut f,
+        "ior preset",
+        &with_wood("type = \"thindielectric\"\nint_ior = \"glass\" #<"),
+        "materials.wood.int_ior",
+    );
+    case(
+        &mut f,
+        "distribution",
+        &with_wood("type = \"roughplastic\"\ndistribution = \"phong\" #<"),
+        "materials.wood.distribution",
+    );
+    case(
+        &mut f,
+        "nan colour",
+        &inline("{ type = \"checkerboard\", color1 = [nan, 0, 0] }"),
+        "materials.wood.albedo.color1",
+    );
+    finish(f);
+}
+
+#[test]
+fn a_missing_image_is_named_with_its_key() {
+    let dir = root().join("tests/scenes/toml-materials");
+    for (body, key) in [
+        ("type = \"diffuse\"\nalbedo = { type = \"bitmap\", filename = \"no-such.png\" } #<", "materials.wood.albedo.filename"),
+        (
+            "type = \"plastic\"\n\n[materials.wood.diffuse_reflectance]\ntype = \"checkerboard\"\ncolor0 = { type = \"bitmap\", filename = \"no-such.png\" } #<",
+            "materials.wood.diffuse_reflectance.color0.filename",
+        ),
+        ("type = \"plastic\"\nnormalmap = \"no-such.png\" #<", "materials.wood.normalmap"),
+    ] {
+        let src = with_wood(body);
+        let e = expect_err(key, &src, &dir, marked_line(&src), key);
+        assert!(e.message.contains("no-such.png"), "{e}");
+    }
+    // a file that is not an image
+    let src = with_wood("type = \"diffuse\"\nalbedo = { type = \"bitmap\", filename = \"every-material.toml\" } #<");
+    let e = expect_err("not an image", &src, &dir, marked_line(&src), "materials.wood.albedo.filename");
+    assert!(e.message.contains("every-material.toml"), "{e}");
+}
