@@ -1122,14 +1122,14 @@ fn ply_uv_errors_name_the_line() {
         "{HEAD}element face 1\nproperty list uchar int vertex_indices\nproperty list uchar float texcoord\nend_header\n\
 0 0 0\n1 0 0\n0 0 1\n3 0 1 2 6 0 0 1 0 0 1\n"
     );
-    let m = mesh_uvs("wedge.ply", &body).err().expect("accepted");
+    let m = mesh_uvs("wedge.ply", &body).expect_err("accepted");
     assert!(m.contains("line 9") && m.contains("`texcoord`") && m.contains("per vertex"), "{m}");
     // a texture coordinate that is not finite: its line and vertex
     let body = format!(
         "{HEAD}property float u\nproperty float v\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
 0 0 0 0 0\n1 0 0 inf 0\n0 0 1 0 1\n3 0 1 2\n"
     );
-    let m = mesh_uvs("inf.ply", &body).err().expect("accepted");
+    let m = mesh_uvs("inf.ply", &body).expect_err("accepted");
     assert!(m.contains("line 13: vertex 2: texture coordinates") && m.contains("not finite"), "{m}");
     // `u` without `v`: no UVs, as Mitsuba reads it
     let body = format!(
