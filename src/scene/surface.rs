@@ -331,3 +331,172 @@ fn bump_mapped(
     let s = fw.to_world(orthogonal_unit(dpdu, nl));
     Tilted { sp: ShadingPoint { ns: fw.to_world(nl).normalize(), n0: f.n, ..sp }, s }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bsdf::microfacet::{MicrofacetDistribution, MicrofacetKind};
+    use crate::bsdf::roughconductor::RoughConductor;
+    use crate::bsdf::{self, Mode};
+    use crate::scene::NO_EMITTER;
+
+    fn close(a: Vec3, b: Vec3, tol: f32) -> bool {
+        (a - b).abs().max_element() <= tol * b.abs().max_element().max(1.0)
+    }
+
+    fn triangle(p: [Vec3; 3], uv: Option<[Vec2; 3]>) -> Triangle {
+        let ng = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
+        Triangle { p, n: None, uv, ng, area: 1.0, material: 0, emitter: NO_EMITTER }
+    }
+
+    /// A triangle's ∂p/∂u and ∂p/∂v map its UV edges onto its edges (p is affine in uv), as
+    /// Mitsuba's mesh computes them; without UVs they are its edges from p0; with degenerate UVs
+    /// `coordinate_system(ng)`.
+    #[test]
+    fn triangle_tangents_are_mitsubas() {
+        let p = [Vec3::new(0.3, -0.2, 1.0), Vec3::new(1.4, 0.5, 0.7), Vec3::new(-0.1, 1.2, 0.4)];
+        let uv = [Vec2::new(0.1, 0.2), Vec2::new(0.9, 0.35), Vec2::new(0.25, 1.1)];
+        let t = triangle(p, Some(uv));
+        let (at, dpdu) = triangle_uv(&t, p[0] * 0.2 + p[1] * 0.5 + p[2] * 0.3);
+        assert!((at - (uv[0] * 0.2 + uv[1] * 0.5 + uv[2] * 0.3)).length() < 1e-5);
+        let dpdv = triangle_dpdv(&t);
+        for k in 1..3 {
+            let (duv, dp) = (uv[k] - uv[0], p[k] - p[0]);
+            assert!(close(dpdu * duv.x + dpdv * duv.y, dp, 1e-5), "edge {k}");
+        }
+        let bare = triangle(p, None);
+        assert_eq!((triangle_uv(&bare, p[0]).1, triangle_dpdv(&bare)), (p[1] - p[0], p[2] - p[0]));
+        let flat = triangle(p, Some([Vec2::ZERO, Vec2::X, Vec2::new(2.0, 0.0)]));
+        let f = Frame::from_normal(flat.ng);
+        assert_eq!((triangle_uv(&flat, p[1]).1, triangle_dpdv(&flat)), (f.s, f.t));
+    }
+
+    /// A sphere's ∂p/∂u and ∂p/∂v are the derivatives of Mitsuba's parametrisation, p = c + r·R
+    /// (sin θ cos φ, sin θ sin φ, cos θ) with φ = 2πu, θ = πv, in its own frame `R`; and its
+    /// uv reads back.
+    #[test]
+    fn sphere_tangents_are_the_derivatives() {
+        let r = 0.7;
+        let a = Frame::from_normal(Vec3::new(0.3, -0.5, 0.8).normalize());
+        let s = Sphere {
+            center: Vec3::new(0.2, 1.0, -0.4),
+            radius: r,
+            inward: false,
+            axes: [a.s, a.t, a.n],
+            material: 0,
+            emitter: NO_EMITTER,
+        };
+        let world = |v: Vec3| a.s * v.x + a.t * v.y + a.n * v.z;
+        for (u, v) in [(0.1, 0.3), (0.45, 0.8), (0.7, 0.05), (0.93, 0.52)] {
+            let (phi, theta) = (2.0 * PI * u, PI * v);
+            let (st, ct, sp, cp) = (theta.sin(), theta.cos(), phi.sin(), phi.cos());
+            let p = s.center + world(Vec3::new(st * cp, st * sp, ct)) * r;
+            let (uv, dpdu) = sphere_uv(&s, p);
+            assert!((uv - Vec2::new(u, v)).length() < 1e-5, "{uv} vs {u}, {v}");
+            let want_u = world(Vec3::new(-st * sp, st * cp, 0.0)) * (2.0 * PI * r);
+            let want_v = world(Vec3::new(ct * cp, ct * sp, -st)) * (PI * r);
+            assert!(close(dpdu, want_u, 1e-5) && close(sphere_dpdv(&s, p), want_v, 1e-5), "{u}, {v}");
+        }
+        // exactly at a pole (in an axis-aligned frame): ∂p/∂u is zero and ∂p/∂v Mitsuba's
+        // π·r·(1, 0, 0)
+        let s = Sphere { axes: [Vec3::X, Vec3::Y, Vec3::Z], ..s };
+        let pole = s.center + Vec3::Z * r;
+        assert_eq!(sphere_uv(&s, pole).1, Vec3::ZERO);
+        assert!(close(sphere_dpdv(&s, pole), Vec3::X * (PI * r), 1e-6));
+    }
+
+    /// A flat point facing +z, ∂p/∂u = (2, 0, 0), ∂p/∂v = (0, 3, 0).
+    fn flat() -> (ShadingPoint, Frame, (Vec3, Vec3)) {
+        let sp = ShadingPoint::new(Vec3::ZERO, Vec3::Z, Vec3::Z);
+        let dp = (Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 3.0, 0.0));
+        (sp, shading_frame(Vec3::Z, dp.0), dp)
+    }
+
+    /// Mitsuba's bump normal on a flat surface: ∂p/∂u' × ∂p/∂v' with the slopes added along the
+    /// normal, (−g_u·|∂p/∂v|, −g_v·|∂p/∂u|, |∂p/∂u|·|∂p/∂v|) normalised; zero slopes leave the
+    /// normal; the frame's tangent is unit and orthogonal to it.
+    #[test]
+    fn bump_normals_are_the_height_fields() {
+        let (sp, f, dp) = flat();
+        let wo = Vec3::new(0.2, -0.3, 0.9).normalize();
+        let t = bump_mapped(sp, &f, dp, Vec2::ZERO, wo, false);
+        assert!(close(t.sp.ns, Vec3::Z, 1e-6) && t.sp.n0 == Vec3::Z);
+        for g in [Vec2::new(0.5, -0.25), Vec2::new(-3.0, 1.5), Vec2::new(0.0, 4.0)] {
+            let t = bump_mapped(sp, &f, dp, g, wo, false);
+            let want = Vec3::new(-g.x * 3.0, -g.y * 2.0, 6.0).normalize();
+            assert!(close(t.sp.ns, want, 1e-6), "{g}: {} vs {want}", t.sp.ns);
+            assert!((t.s.length() - 1.0).abs() < 1e-5 && t.s.dot(t.sp.ns).abs() < 1e-5, "{g}: s {}", t.s);
+        }
+    }
+
+    /// A map nested in `twosided` seen from behind is the front's seen from the mirrored
+    /// direction, mirrored back through the surface: in the shading frame, the stored normal (on
+    /// the front side, flipped by the BSDF's frame) and the tangent have their tangential parts
+    /// negated. A map around `twosided` sees the real direction.
+    #[test]
+    fn twosided_mirrors_a_map_seen_from_behind() {
+        let (sp, f, dp) = flat();
+        let back = Vec3::new(0.3, 0.5, -0.6).normalize();
+        let mirrored = Vec3::new(back.x, back.y, -back.z);
+        let r = |v: Vec3| Vec3::new(-v.x, -v.y, v.z);
+        let g = Vec2::new(0.7, -1.1);
+        let (bump_back, bump_front) =
+            (bump_mapped(sp, &f, dp, g, back, true), bump_mapped(sp, &f, dp, g, mirrored, false));
+        let rgb = Vec3::new(0.75, 0.35, 0.8);
+        let (nm_back, nm_front) = (normal_mapped(sp, &f, rgb, back, true), normal_mapped(sp, &f, rgb, mirrored, false));
+        for (b, fr) in [(bump_back, bump_front), (nm_back, nm_front)] {
+            assert!(close(b.sp.ns, r(fr.sp.ns), 1e-6), "{} vs {}", b.sp.ns, fr.sp.ns);
+            assert!(close(b.s, r(fr.s), 1e-6));
+        }
+        // around twosided, from behind: the map's own normal, as from the front
+        let outside = normal_mapped(sp, &f, rgb, back, false);
+        assert!(close(outside.sp.ns, (rgb * 2.0 - Vec3::ONE).normalize(), 1e-6));
+    }
+
+    fn aniso(au: f32, av: f32) -> Material {
+        Material::RoughConductor(RoughConductor {
+            distribution: MicrofacetDistribution::new(MicrofacetKind::Ggx, au, av, true),
+            eta: Vec3::new(0.2, 0.92, 1.1),
+            k: Vec3::new(3.9, 2.45, 2.2),
+            specular_reflectance: Vec3::ONE,
+        })
+    }
+
+    /// The BSDF's frame takes the tangent: an anisotropic BSDF with its tangent turned a quarter
+    /// turn about the normal is the same BSDF with alpha_u and alpha_v swapped; without a tangent
+    /// (an isotropic surface) `shading_point` leaves it zero, with one it is unit and orthogonal
+    /// to the (tilted) normal.
+    #[test]
+    fn the_local_frame_is_oriented_by_the_tangent() {
+        let n = Vec3::new(0.2, 0.3, 0.9).normalize();
+        let f = shading_frame(n, Vec3::new(1.0, 0.4, -0.2));
+        let at = |s: Vec3| ShadingPoint { s, ..ShadingPoint::new(Vec3::ZERO, n, n) };
+        let (wo, wi) = (Vec3::new(0.5, -0.2, 0.8).normalize(), Vec3::new(-0.3, 0.6, 0.7).normalize());
+        let a = bsdf::eval(&aniso(0.05, 0.4), &at(f.s), wo, wi, Mode::Radiance);
+        let b = bsdf::eval(&aniso(0.4, 0.05), &at(f.t), wo, wi, Mode::Radiance);
+        let c = bsdf::eval(&aniso(0.05, 0.4), &at(f.t), wo, wi, Mode::Radiance);
+        assert!(close(a, b, 1e-4) && !close(a, c, 0.1), "{a} {b} {c}");
+
+        let sp = ShadingPoint::new(Vec3::ZERO, n, n);
+        let uvd = (Vec2::new(0.3, 0.6), Vec3::new(1.0, 0.4, -0.2));
+        let textures = [Texture::Constant(Vec3::new(0.6, 0.45, 0.9))];
+        let dpdv = || n.cross(uvd.1);
+        let iso = Surface::of(&Material::Diffuse { albedo: Vec3::ONE });
+        assert!(iso.is_constant());
+        assert_eq!(iso.shading_point(sp, uvd, dpdv, &textures, wo).s, Vec3::ZERO);
+        let mapped = Surface { normalmap: Some(0), ..iso.clone() };
+        assert_eq!(mapped.shading_point(sp, uvd, dpdv, &textures, wo).s, Vec3::ZERO);
+        let an = Surface::of(&aniso(0.05, 0.4));
+        assert!(an.anisotropic && !an.is_constant());
+        for s in [
+            an.clone(),
+            Surface { normalmap: Some(0), ..an.clone() },
+            Surface { bumpmap: Some(BumpMap { texture: 0, scale: 1.0 }), ..an.clone() },
+        ] {
+            let p = s.shading_point(sp, uvd, dpdv, &textures, wo);
+            assert!((p.s.length() - 1.0).abs() < 1e-5 && p.s.dot(p.ns).abs() < 1e-5, "{s:?}: {p:?}");
+        }
+        // no map: Mitsuba's sh_frame.s
+        assert!(close(an.shading_point(sp, uvd, dpdv, &textures, wo).s, f.s, 1e-6));
+    }
+}
