@@ -8,7 +8,8 @@
 //!    has the best whole image of the unbiased methods at equal time since its light paths
 //!    (`cornell-box` 1 min: 0.49× `pt`'s whole-image RMSE, `iws-cf` 0.64×; `ring`, before the light
 //!    paths: 0.38–0.50×, `iws-cf` 0.44–0.53×). Until 2026-12-03 closed rooms of diffuse walls went to `iws-cf`; the
-//!    light paths moved that line (`results/2026-12-03-auto-rule.md`).
+//!    light paths moved that line (`results/2026-12-03-auto-rule.md`). Glossy receivers change
+//!    nothing; the reason says so (docs/auto.md).
 //!
 //! Invariants: a pure function of the scene (never of time, seed or machine); every choice is
 //! unbiased for what it renders; the reason names the rule and the figures it rests on.
@@ -90,6 +91,26 @@ pub fn mixed_lobes(scene: &Scene, m: Method) -> Option<String> {
     })
 }
 
+/// The note on glossy receivers, where the scene has a glossy material (docs/auto.md).
+fn glossy_note(scene: &Scene) -> &'static str {
+    use crate::bsdf::Material;
+    let glossy = |m: &Material| {
+        matches!(
+            m,
+            Material::Glossy { .. }
+                | Material::RoughConductor(_)
+                | Material::RoughPlastic(_)
+                | Material::RoughDielectric(_)
+        )
+    };
+    if scene.materials.iter().any(glossy) {
+        "; its receivers include glossy ones, which pt-cf guides by a mixture that keeps their BSDF \
+         (its gain there is unmeasured)"
+    } else {
+        ""
+    }
+}
+
 /// The method `auto` picks for `scene`, and why (the rule of the module docs).
 pub fn choose(scene: &Scene) -> (Method, String) {
     let note = point_light_note(scene);
@@ -105,7 +126,8 @@ pub fn choose(scene: &Scene) -> (Method, String) {
     let why = format!(
         "caustics from area lights: pt-cf, the best whole image of the unbiased methods at equal time \
          (cornell-box 1 min: 0.49x pt's whole-image RMSE, iws-cf 0.64x; ring, before the light paths: 0.38-0.50x, \
-         iws-cf 0.44-0.53x; docs/auto.md){note}"
+         iws-cf 0.44-0.53x; docs/auto.md){note}{}",
+        glossy_note(scene)
     );
     (Method::PtCf, why)
 }
