@@ -80,17 +80,6 @@ fn point_light_note(scene: &Scene) -> &'static str {
     }
 }
 
-/// Why the IWS methods refuse `scene`, where it has a material with both a Dirac and a
-/// non-Dirac lobe (`plastic`): their point-light gather still underestimates the light such a
-/// surface sends to a glossy one (docs/limitations.md); `pt` and `pt-cf` split by lobe and agree.
-pub fn mixed_lobes(scene: &Scene, m: Method) -> Option<String> {
-    let iws = matches!(m, Method::Iws | Method::IwsPm | Method::IwsCf);
-    (iws && scene.materials.iter().any(|m| m.has_mixed_lobes())).then(|| {
-        "the scene has a `plastic` (a Dirac coat over a diffuse base), which the IWS methods do not yet render          unbiased (docs/limitations.md)"
-            .to_string()
-    })
-}
-
 /// The note on glossy receivers, where the scene has a glossy material (docs/auto.md).
 fn glossy_note(scene: &Scene) -> &'static str {
     use crate::bsdf::Material;
@@ -144,14 +133,6 @@ pub fn resolve(requested: Option<MethodChoice>, scene: &Scene) -> Result<(Method
         None => (from_scene()?, "the scene's [render] method"),
     };
     Ok(match choice {
-        MethodChoice::Named(m) if mixed_lobes(scene, m).is_some() => {
-            let why = mixed_lobes(scene, m).unwrap_or_default();
-            return Err(format!(
-                "{}: --method {} ({source}): {why}; render it with --method pt-cf or pt",
-                scene.path,
-                m.name()
-            ));
-        }
         MethodChoice::Named(m) => (m, format!("{} named by {source}", m.name())),
         MethodChoice::Auto => {
             let (m, why) = choose(scene);
