@@ -145,25 +145,11 @@ mod tests {
     /// 1% of 1 at α = 0.05, where masking hardly loses any. `albedo` agrees with the mean.
     #[test]
     fn furnace() {
-        let n = 200_000;
-        for kind in [Beckmann, Ggx] {
-            for vis in [true, false] {
-                for (au, av) in [(0.05, 0.05), (0.3, 0.3), (0.8, 0.8), (0.1, 0.4)] {
-                    for theta in [0.0, 45.0, 80.0] {
-                        let b = mirror(kind, au, av, vis);
-                        let (a, se) = albedo_and_error(&b, dir(theta, 30.0), n);
-                        let name = format!("{kind:?} α {au}/{av} vis {vis} θ {theta}");
-                        assert!(a <= 1.0 + 5.0 * se, "{name}: albedo {a} ± {se}");
-                        if au == 0.05 && theta < 60.0 {
-                            assert!(a > 0.99, "{name}: albedo {a} ± {se}");
-                        }
-                        // the shared estimator, on the same samples
-                        let mean = albedo(&b, dir(theta, 30.0), n);
-                        assert!((mean.x as f64 - a).abs() < 1e-6, "{name}: {mean} vs {a}");
-                    }
-                }
-            }
-        }
+        assert_microfacet_furnace(
+            |kind, au, av, vis| mirror(kind, au, av, vis),
+            &[0.0, 45.0, 80.0],
+            |theta| theta < 60.0,
+        );
     }
 
     /// Every case of `tests/data/bsdf/roughconductor.json` against Mitsuba 3.9.1's `eval` and
