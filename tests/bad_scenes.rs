@@ -802,6 +802,9 @@ fn malformed_inputs_are_clear_errors_with_file_and_line() {
     let mut bin = forecast::scene::ply::write_binary(&forecast::scene::ply::parse(PLY_ASCII.as_bytes()).unwrap());
     bin.truncate(bin.len() - 5);
     std::fs::write(dir.join("short.ply"), bin).unwrap();
+    // a texture of mean 2: out of a reflectance's range, named with its image (issue #63)
+    let bright = forecast::image_io::Image::from_fn(2, 2, |_, _| [2.0; 3]);
+    forecast::image_io::write_exr(&dir.join("bright.exr"), &bright).unwrap();
     let ply = |f: &str| {
         format!(
             r#"<shape type="ply">
@@ -824,6 +827,8 @@ fn malformed_inputs_are_clear_errors_with_file_and_line() {
         (ply_scene("<shape type=\"ply\"><string name=\"filename\" value=\"quad.ply\"/>\n<bsdf type=\"roughplastic\">\n<float name=\"int_ior\" value=\"1.2\"/><float name=\"ext_ior\" value=\"1.2\"/></bsdf></shape>"), 5, vec!["int_ior", "differ"]),
         (ply_scene("<shape type=\"ply\"><string name=\"filename\" value=\"quad.ply\"/>\n<bsdf type=\"diffuse\">\n<texture name=\"reflectance\" type=\"bitmap\"/></bsdf></shape>"), 5, vec!["bitmap.filename", "missing `filename`"]),
         (ply_scene("<shape type=\"ply\"><string name=\"filename\" value=\"quad.ply\"/>\n<bsdf type=\"diffuse\">\n<texture name=\"reflectance\" type=\"bitmap\"><string name=\"filename\" value=\"missing.png\"/></texture></bsdf></shape>"), 5, vec!["missing.png", "filename"]),
+        (ply_scene("<shape type=\"ply\"><string name=\"filename\" value=\"quad.ply\"/>\n<bsdf type=\"diffuse\">\n<texture name=\"reflectance\" type=\"bitmap\"><string name=\"filename\" value=\"bright.exr\"/></texture></bsdf></shape>"), 5, vec!["reflectance must be in [0, 1]", "mean 2", "bright.exr"]),
+        (ply_scene("<shape type=\"ply\"><string name=\"filename\" value=\"quad.ply\"/>\n<bsdf type=\"roughconductor\">\n<texture name=\"specular_reflectance\" type=\"checkerboard\"><texture name=\"color0\" type=\"bitmap\"><string name=\"filename\" value=\"bright.exr\"/></texture></texture></bsdf></shape>"), 5, vec!["specular_reflectance", "mean 1.1", "bright.exr"]),
         (ply_scene("\n<emitter type=\"envmap\"/>"), 4, vec!["envmap", "not supported"]),
         (ply_scene("\n<medium type=\"homogeneous\"/>"), 4, vec!["medium"]),
         (ply_scene("\n<shape type=\"ply\"><integer name=\"x\" value=\"$nope\"/></shape>"), 4, vec!["$nope", "not defined"]),
