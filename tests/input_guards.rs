@@ -416,3 +416,30 @@ fn the_memory_estimate_honours_ulimit_v() {
     assert_eq!(code, 0, "{err}");
     assert!(d.join("small.exr").exists());
 }
+
+/// `forecast-map` checks its forecast photons against the memory estimate and bounds
+/// `--compare-paths`, before any work (both used to run until killed).
+#[test]
+fn forecast_map_is_bounded_by_the_memory_estimate() {
+    let d = tmp_dir("guards-fmap");
+    let cb = cornell_box();
+    let out = s(&d.join("fm"));
+    let t = Instant::now();
+    let (code, _, err) =
+        run(&["forecast-map", &cb, "--out", &out, "--forecast-photons", "4000000000", "--quiet", "--threads", "1"]);
+    assert!(code != 0 && err.contains("needs about") && err.contains("4000000000 forecast photons"), "{err}");
+    let (code, _, err) = run(&[
+        "forecast-map",
+        &cb,
+        "--out",
+        &out,
+        "--forecast-photons",
+        "100",
+        "--compare-paths",
+        "18446744073709551615",
+        "--quiet",
+    ]);
+    assert!(code != 0 && err.contains("--compare-paths") && err.contains("1073741824"), "{err}");
+    assert!(t.elapsed() < Duration::from_secs(20), "{:?}", t.elapsed());
+    assert!(!d.join("fm.png").exists() && !d.join("fm.json").exists());
+}

@@ -65,6 +65,30 @@ impl Plan {
     }
 }
 
+/// What `forecast-map` needs at least, and of what: the forecast product of `photons` forecast
+/// photons (≈ 128 bytes each with their clusters and maps, as [`Plan::memory_estimate`] counts
+/// them; built once, not encoded), its `w`×`h` view (3 f32 per pixel and its PNG), and the
+/// scene's decoded images. The caustic vertices of `--compare-paths` are not counted: they are
+/// capped by what is left ([`forecast_map_vertex_cap`]).
+pub fn forecast_map_estimate(scene: &Scene, photons: u64, (w, h): (u32, u32)) -> (u64, String) {
+    let product = photons.saturating_mul(128);
+    let view = (w as u64 * h as u64).saturating_mul(16);
+    let textures = scene.texture_bytes();
+    let need = product.saturating_add(view).saturating_add(textures);
+    let mut what = format!("{photons} forecast photons: {:.1} GiB; a {w}x{h} view", gib(product));
+    if textures > 0 {
+        what += &format!("; textures {:.2} GiB", gib(textures));
+    }
+    (need, what)
+}
+
+/// The most caustic vertices (of `bytes` each) that `forecast-map`'s untargeted comparison may
+/// keep beside `need` bytes: half of what [`available_memory`] leaves; unbounded where that is
+/// unknown.
+pub fn forecast_map_vertex_cap(need: u64, bytes: usize) -> u64 {
+    available_memory().map_or(u64::MAX, |(avail, _)| avail.saturating_sub(need) / 2 / bytes.max(1) as u64)
+}
+
 fn gib(bytes: u64) -> f64 {
     bytes as f64 / (1u64 << 30) as f64
 }
