@@ -394,7 +394,7 @@ pub struct ForecastMapArgs {
     /// The render options (scene, resolution, seed, CF options, `--out PREFIX`).
     #[command(flatten)]
     pub render: RenderArgs,
-    /// Light paths for the untargeted-yield comparison (0: skip it).
+    /// Light paths for the untargeted-yield comparison (0: skip it; at most 2^30).
     #[arg(long, default_value_t = 1_000_000)]
     pub compare_paths: u64,
 }

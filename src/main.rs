@@ -308,6 +308,16 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs, opts: &forecast::scene::Load
     let cf_opts = r.method_args.forecast_options();
     let seed = r.seed.unwrap_or(world.scene.render.seed);
     let target = cf_args.target_photons(&world);
+    // bounded before any work, as `render`: the photons by the memory estimate, the comparison's
+    // paths by their limit and the vertices it keeps by the memory left
+    forecast::param_limits::COMPARE_PATHS.check_flag("--compare-paths", a.compare_paths)?;
+    let (w, h) = r.resolution.unwrap_or((world.scene.camera.width, world.scene.camera.height));
+    let (need, what) = pipeline::memory::forecast_map_estimate(&world.scene, target, (w, h));
+    pipeline::memory::check(need, &what)?;
+    let vertex_cap = pipeline::memory::forecast_map_vertex_cap(
+        need,
+        std::mem::size_of::<forecast::transport::particle::CausticVertex>(),
+    );
     let pool = pipeline::thread_pool(r.threads)?;
     let phases = forecast::progress::PhaseBar::new(!r.quiet);
     let (cf, untargeted) = pool.install(|| {
@@ -317,7 +327,7 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs, opts: &forecast::scene::Load
             let (pts, paths) = forecast::transport::particle::collect_caustic_vertices(
                 &world,
                 Emission::Cosine,
-                u64::MAX,
+                vertex_cap,
                 n,
                 seed,
                 forecast::sampling::rng::stream::FORECAST,
@@ -327,7 +337,6 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs, opts: &forecast::scene::Load
         });
         (cf, untargeted)
     });
-    let (w, h) = r.resolution.unwrap_or((world.scene.camera.width, world.scene.camera.height));
     let camera = world.scene.camera.with_resolution(w, h);
     let img = forecast::cf::view::render_view(&world, &camera, &cf);
     forecast::cf::view::write_view(&r.out, &img)?;

@@ -802,6 +802,9 @@ fn malformed_inputs_are_clear_errors_with_file_and_line() {
     let mut bin = forecast::scene::ply::write_binary(&forecast::scene::ply::parse(PLY_ASCII.as_bytes()).unwrap());
     bin.truncate(bin.len() - 5);
     std::fs::write(dir.join("short.ply"), bin).unwrap();
+    // a texture of mean 2: out of a reflectance's range, named with its image (issue #63)
+    let bright = forecast::image_io::Image::from_fn(2, 2, |_, _| [2.0; 3]);
+    forecast::image_io::write_exr(&dir.join("bright.exr"), &bright).unwrap();
     let ply = |f: &str| {
         format!(
             r#"<shape type="ply">
@@ -824,6 +827,8 @@ fn malformed_inputs_are_clear_errors_with_file_and_line() {
         (ply_scene("<shape type=\"ply\"><string name=\"filename\" value=\"quad.ply\"/>\n<bsdf type=\"roughplastic\">\n<float name=\"int_ior\" value=\"1.2\"/><float name=\"ext_ior\" value=\"1.2\"/></bsdf></shape>"), 5, vec!["int_ior", "differ"]),
         (ply_scene("<shape type=\"ply\"><string name=\"filename\" value=\"quad.ply\"/>\n<bsdf type=\"diffuse\">\n<texture name=\"reflectance\" type=\"bitmap\"/></bsdf></shape>"), 5, vec!["bitmap.filename", "missing `filename`"]),
         (ply_scene("<shape type=\"ply\"><string name=\"filename\" value=\"quad.ply\"/>\n<bsdf type=\"diffuse\">\n<texture name=\"reflectance\" type=\"bitmap\"><string name=\"filename\" value=\"missing.png\"/></texture></bsdf></shape>"), 5, vec!["missing.png", "filename"]),
+        (ply_scene("<shape type=\"ply\"><string name=\"filename\" value=\"quad.ply\"/>\n<bsdf type=\"diffuse\">\n<texture name=\"reflectance\" type=\"bitmap\"><string name=\"filename\" value=\"bright.exr\"/></texture></bsdf></shape>"), 5, vec!["reflectance must be in [0, 1]", "mean 2", "bright.exr"]),
+        (ply_scene("<shape type=\"ply\"><string name=\"filename\" value=\"quad.ply\"/>\n<bsdf type=\"roughconductor\">\n<texture name=\"specular_reflectance\" type=\"checkerboard\"><texture name=\"color0\" type=\"bitmap\"><string name=\"filename\" value=\"bright.exr\"/></texture></texture></bsdf></shape>"), 5, vec!["specular_reflectance", "mean 1.1", "bright.exr"]),
         (ply_scene("\n<emitter type=\"envmap\"/>"), 4, vec!["envmap", "not supported"]),
         (ply_scene("\n<medium type=\"homogeneous\"/>"), 4, vec!["medium"]),
         (ply_scene("\n<shape type=\"ply\"><integer name=\"x\" value=\"$nope\"/></shape>"), 4, vec!["$nope", "not defined"]),
@@ -1057,9 +1062,14 @@ fn obj_uv_indices_out_of_range_are_errors_naming_the_line() {
     // a `vt` the face names before it is defined
     let m = err("later.obj", &format!("{TRI3}f 1/1 2/1 3/1\nvt 0 0\n"));
     assert!(m.contains("line 4") && m.contains("vt index 1 out of range"), "{m}");
-    // relative indices count back from the line; past the first `vt` is an error
+    // relative (negative) indices are refused as Mitsuba 3 refuses them (issue #63), in range
+    // or not, in any of the three places
     let m = err("rel.obj", &format!("{TRI3}vt 0 0\nvt 1 0\nf 1/-1 2/-2 3/-3\n"));
-    assert!(m.contains("line 6") && m.contains("vt index -3 out of range"), "{m}");
+    assert!(m.contains("line 6") && m.contains("vt index -1 is relative (negative)"), "{m}");
+    let m = err("relv.obj", &format!("{TRI3}vn 0 1 0\nf -3 -2 -1\n"));
+    assert!(m.contains("line 5") && m.contains("`f`") && m.contains("v index -3 is relative"), "{m}");
+    let m = err("relvn.obj", &format!("{TRI3}vn 0 1 0\nf 1//1 2//1 3//-1\n"));
+    assert!(m.contains("line 5") && m.contains("vn index -1 is relative"), "{m}");
     // zero, not a number, four parts, no position
     let m = err("zero.obj", &format!("{TRI3}vt 0 0\nf 1/0 2/1 3/1\n"));
     assert!(m.contains("line 5") && m.contains("vt index 0 (OBJ indices start at 1)"), "{m}");
@@ -1076,8 +1086,8 @@ fn obj_uv_indices_out_of_range_are_errors_naming_the_line() {
     assert!(m.contains("line 5") && m.contains("not finite"), "{m}");
     let m = err("vtinf.obj", &format!("{TRI3}vt 1e39 0\nf 1/1 2/1 3/1\n"));
     assert!(m.contains("line 4") && m.contains("not finite"), "{m}");
-    // in range, relative indices read the `vt` they count back to (v flipped as Mitsuba's OBJ)
-    let uvs = mesh_uvs("relok.obj", &format!("{TRI3}vt 0.1 0.2\nvt 0.3 0.4\nvt 0.5 0.6\nf 1/-3 2/-2 3/-1\n")).unwrap();
+    // absolute indices read their `vt` (v flipped as Mitsuba's OBJ)
+    let uvs = mesh_uvs("absok.obj", &format!("{TRI3}vt 0.1 0.2\nvt 0.3 0.4\nvt 0.5 0.6\nf 1/1 2/2 3/3\n")).unwrap();
     let want = [Vec2::new(0.1, 0.8), Vec2::new(0.3, 0.6), Vec2::new(0.5, 0.4)];
     assert_eq!(uvs.len(), 1);
     let got = uvs[0].expect("UVs");
@@ -1097,8 +1107,8 @@ fn obj_corners_without_vt_read_zero_uvs_as_mitsuba() {
     let got = uvs[0].expect("UVs");
     assert!(near(got, [Vec2::new(0.25, 0.5), Vec2::new(0.75, 0.75), Vec2::ZERO]), "{got:?}");
     // objects with and without `vt` in one file (and `v//vn` corners): the bare ones read (0, 0),
-    // the others keep theirs; relative indices still reach their `vt`
-    let body = "o a\nv 0 0 0\nv 1 0 0\nv 0 0 1\nvn 0 1 0\nvt 0.5 0.5\nvt 1 0.5\nvt 0.5 1\nf 1/1/1 2/-2/1 3/3/1\n\
+    // the others keep theirs
+    let body = "o a\nv 0 0 0\nv 1 0 0\nv 0 0 1\nvn 0 1 0\nvt 0.5 0.5\nvt 1 0.5\nvt 0.5 1\nf 1/1/1 2/2/1 3/3/1\n\
 o b\nv 1 0 1\nf 2//1 4//1 3//1\n";
     let uvs = mesh_uvs("objects.obj", body).unwrap();
     assert_eq!(uvs.len(), 2, "{uvs:?}");

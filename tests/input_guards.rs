@@ -358,3 +358,88 @@ fn pt_cf_forecast_photons_are_held_to_the_memory_estimate() {
     }
     let _ = std::fs::remove_dir_all(d);
 }
+
+/// `forecast ARGS` under `ulimit -v KIB` (a child shell sets the limit, then becomes the binary).
+fn run_under_ulimit_v(kib: u64, args: &[&str]) -> (i32, String, String, f64) {
+    let t = Instant::now();
+    let child = Command::new("bash")
+        .args(["-c", &format!("ulimit -v {kib} && exec \"$0\" \"$@\""), env!("CARGO_BIN_EXE_forecast")])
+        .args(args)
+        .current_dir(root())
+        .env_remove("MPI_LOCALNRANKS")
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn bash");
+    let (code, out, err) = common::cli::finish(args, child);
+    (code, out, err, t.elapsed().as_secs_f64())
+}
+
+/// The memory estimate takes the address-space limit (`ulimit -v`, RLIMIT_AS) into account: a
+/// `pt-cf` render of 2560² (about 1.6 GiB by the estimate) under a 0.95 GiB limit is refused at
+/// once, naming the limit (it used to run the preprocess, the pilot and a pass for 92 s and then
+/// abort on a failed allocation), while a small render under the same limit runs.
+#[test]
+fn the_memory_estimate_honours_ulimit_v() {
+    let d = tmp_dir("guards-rlimit");
+    let cb = cornell_box();
+    let out = s(&d.join("big"));
+    let args = [
+        "render",
+        &cb,
+        "--method",
+        "pt-cf",
+        "--forecast-photons",
+        "2000",
+        "--resolution",
+        "2560x2560",
+        "--spp",
+        "1",
+        "--threads",
+        "1",
+        "--quiet",
+        "--out",
+        &out,
+    ];
+    let (code, _, err, secs) = run_under_ulimit_v(1_000_000, &args);
+    assert!(code != 0 && err.contains("needs about") && err.contains("available"), "{code}: {err}");
+    assert!(secs < 20.0, "refused after {secs:.1} s: {err}");
+    // where the machine has the memory, it is the limit that refuses it, and the message says so
+    if forecast::param_limits::available_memory().is_some_and(|m| m > 3 << 30) {
+        assert!(err.contains("RLIMIT_AS"), "{err}");
+    }
+    assert!(!d.join("big.exr").exists());
+    let small = s(&d.join("small"));
+    let args = ["render", &cb, "--resolution", "16x16", "--spp", "1", "--threads", "1", "--quiet", "--out", &small];
+    let (code, _, err, _) = run_under_ulimit_v(1_000_000, &args);
+    assert_eq!(code, 0, "{err}");
+    assert!(d.join("small.exr").exists());
+}
+
+/// `forecast-map` checks its forecast photons against the memory estimate and bounds
+/// `--compare-paths`, before any work (both used to run until killed).
+#[test]
+fn forecast_map_is_bounded_by_the_memory_estimate() {
+    let d = tmp_dir("guards-fmap");
+    let cb = cornell_box();
+    let out = s(&d.join("fm"));
+    let t = Instant::now();
+    let (code, _, err) =
+        run(&["forecast-map", &cb, "--out", &out, "--forecast-photons", "4000000000", "--quiet", "--threads", "1"]);
+    assert!(code != 0 && err.contains("needs about") && err.contains("4000000000 forecast photons"), "{err}");
+    let (code, _, err) = run(&[
+        "forecast-map",
+        &cb,
+        "--out",
+        &out,
+        "--forecast-photons",
+        "100",
+        "--compare-paths",
+        "18446744073709551615",
+        "--quiet",
+    ]);
+    assert!(code != 0 && err.contains("--compare-paths") && err.contains("1073741824"), "{err}");
+    assert!(t.elapsed() < Duration::from_secs(20), "{:?}", t.elapsed());
+    assert!(!d.join("fm.png").exists() && !d.join("fm.json").exists());
+}

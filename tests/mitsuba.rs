@@ -325,3 +325,48 @@ fn truncated_inputs_never_panic() {
         assert!(r.is_ok(), "ASCII PLY cut at byte {cut}: panic");
     }
 }
+
+/// `<rotate>` uses its axis as written, not normalised, as Mitsuba 3's `Transform4f::rotate`
+/// (Dr.Jit's Rodrigues matrix; an axis of length 2 scales as well as turns): the unit vectors of a
+/// one-triangle PLY land where Mitsuba 3.9.1 puts them (its numbers committed below).
+#[test]
+fn rotate_uses_the_axis_as_written_as_mitsuba() {
+    /// The axis, the angle in degrees, and where e_x, e_y, e_z land.
+    type Rotation = ([f32; 3], f32, [[f32; 3]; 3]);
+    // mitsuba 3.9.1, scripts/mitsuba-rotate.py
+    const MITSUBA_ROTATE: &[Rotation] = &[
+        ([0.0, 0.0, 2.0], 30.0, [[0.8660254, 1.0, 0.0], [-1.0, 0.8660254, 0.0], [0.0, 0.0, 1.4019238]]),
+        (
+            [1.0, 2.0, 3.0],
+            70.0,
+            [[1.0, 4.1350374, 0.09455433], [-1.5031182, 2.9739397, 4.887572], [3.853325, 3.0081866, 6.263839]],
+        ),
+        (
+            [0.3, 0.0, 0.0],
+            -45.0,
+            [[0.73346716, 0.0, 0.0], [0.0, 0.70710677, -0.21213204], [0.0, 0.21213204, 0.70710677]],
+        ),
+        ([0.0, 1.0, 0.0], 90.0, [[6.123234e-17, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 6.123234e-17]]),
+        ([0.6, 0.8, 0.0], 120.0, [[0.04, 0.72, -0.6928203], [0.72, 0.46, 0.51961523], [0.6928203, -0.51961523, -0.5]]),
+    ];
+    let dir = tmp_dir("mitsuba-rotate");
+    std::fs::write(
+        dir.join("unit.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+element face 1\nproperty list uchar int vertex_indices\nend_header\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n",
+    )
+    .unwrap();
+    for &(a, angle, want) in MITSUBA_ROTATE {
+        let shape = format!(
+            "<shape type=\"ply\"><string name=\"filename\" value=\"unit.ply\"/><transform name=\"to_world\">\
+<rotate x=\"{}\" y=\"{}\" z=\"{}\" angle=\"{angle}\"/></transform></shape>",
+            a[0], a[1], a[2]
+        );
+        let s = xml(&ply_scene(&shape), &dir).unwrap();
+        assert_eq!(s.triangles.len(), 1);
+        for (p, w) in s.triangles[0].p.iter().zip(want) {
+            let w = Vec3::from_array(w);
+            assert!((*p - w).abs().max_element() <= 1e-6 * w.abs().max_element().max(1.0), "{a:?} {angle}: {p} vs {w}");
+        }
+    }
+}

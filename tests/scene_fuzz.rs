@@ -696,14 +696,14 @@ fn image_corpus() -> Vec<(String, Vec<u8>)> {
     out
 }
 
-/// Sizes a header edit writes (as the field's width allows): empty and tiny; just past the
-/// texel limit's side (16385² > 2^28); 2^16 − 1, 2^16 and past them; the integer extremes. A
-/// product of two of them, or of one and a committed image's side (at most 32), is either
-/// refused by the limit or at most about 3·10⁶ texels. Claims between (2^24 to 2^28 texels) are
-/// left out on purpose: the JPEG decoder fills what the header claims, whatever the file holds
-/// (a 718-byte JPEG claiming 16384 × 16384 decodes, filled, in 5.7 s and 0.8 GB; 4096 × 4096 in
-/// 0.27 s), so a case there measures that cost, not a hang.
-const SIZES: &[i64] = &[0, 1, 2, 3, 16385, 65535, 65536, 100_000, 2_147_483_647, 4_294_967_295, -1];
+/// Sizes a header edit writes (as the field's width allows): empty and tiny; 4096, 8192 and
+/// 16384, whose products with each other claim 2^24 to 2^28 texels (16384² is the texel limit
+/// itself); just past the limit's side (16385² > 2^28); 2^16 − 1, 2^16 and past them; the
+/// integer extremes. A claim within the limit but past what the file can hold in its format is
+/// refused from the header (`image_io::decode`'s claim bounds): before those, the JPEG decoder
+/// filled what the header claimed (a 718-byte JPEG claiming 16384² decoded in 5.7 s and
+/// 0.8 GB), so such claims had to be left out of this corpus.
+const SIZES: &[i64] = &[0, 1, 2, 3, 4096, 8192, 16384, 16385, 65535, 65536, 100_000, 2_147_483_647, 4_294_967_295, -1];
 
 fn crc32(bytes: &[u8]) -> u32 {
     let mut c = !0u32;
@@ -718,7 +718,7 @@ fn crc32(bytes: &[u8]) -> u32 {
 
 /// One header field of the image set to an extreme: PNG's IHDR width, height, bit depth, colour
 /// type or interlace method (its CRC kept valid, so the decoder reads the edit); JPEG's frame
-/// height, width or component count; Radiance's `-Y h +X w`; OpenEXR's data or display window
+/// height, width, both, or component count; Radiance's `-Y h +X w`; OpenEXR's data or display window
 /// corners or tile size.
 fn edit_header(b: &mut Vec<u8>, rng: &mut Rng) {
     let size = SIZES[pick(rng, SIZES.len())];
@@ -735,8 +735,13 @@ fn edit_header(b: &mut Vec<u8>, rng: &mut Rng) {
     } else if b.starts_with(&[0xff, 0xd8]) {
         let sof = b.windows(2).position(|w| w[0] == 0xff && (0xc0..=0xc2).contains(&w[1]));
         if let Some(i) = sof.filter(|&i| i + 10 <= b.len()) {
-            match pick(rng, 3) {
+            match pick(rng, 4) {
                 k @ (0 | 1) => b[i + 5 + 2 * k..i + 7 + 2 * k].copy_from_slice(&(size as u16).to_be_bytes()),
+                2 => {
+                    // both sides: a claim of up to 2^32 texels
+                    let other = SIZES[pick(rng, SIZES.len())] as u16;
+                    b[i + 5..i + 9].copy_from_slice(&[(size as u16).to_be_bytes(), other.to_be_bytes()].concat());
+                }
                 _ => b[i + 9] = [0, 1, 2, 3, 4, 255][pick(rng, 6)],
             }
         }
@@ -814,17 +819,33 @@ fn mutated_images_never_panic_or_hang() {
     for (name, b) in image_corpus() {
         assert_eq!(run_input(&Input::Image(name.clone(), b), &dir), Ok(true), "{name} does not load unmutated");
     }
+    // the corpus holds JPEG headers claiming 2^24 to 2^28 texels (the claims the decoder used to
+    // fill, seconds each): `fuzz` holds each case to `CASE_BOUND_S`
+    let claims = image_inputs(0x5eed, CASES_IMAGE)
+        .filter(|(_, i)| {
+            let Input::Image(_, b) = i else { return false };
+            let sof = b.windows(2).position(|w| w[0] == 0xff && (0xc0..=0xc2).contains(&w[1]));
+            let texels = sof.filter(|&i| b.starts_with(&[0xff, 0xd8]) && i + 9 <= b.len()).map(|i| {
+                let h = u16::from_be_bytes([b[i + 5], b[i + 6]]) as u64;
+                h * u16::from_be_bytes([b[i + 7], b[i + 8]]) as u64
+            });
+            texels.is_some_and(|t| (1 << 24..=1 << 28).contains(&t))
+        })
+        .count();
+    eprintln!("{claims} JPEG mutants claim 2^24 to 2^28 texels");
+    assert!(claims >= 5, "{claims} JPEG mutants claim 2^24 to 2^28 texels");
     let loaded = fuzz("image", &dir, image_inputs(0x5eed, CASES_IMAGE));
     assert!(loaded > CASES_IMAGE / 20 && loaded < CASES_IMAGE, "{loaded} of {CASES_IMAGE} mutants loaded");
 }
 
 /// OBJ meshes with UVs: the committed textured cube (per-face `vt` and `vn`) and a mesh of two
-/// objects with relative indices, corners without `vt`, `v//vn` corners, a quad, a `vt` with a
-/// third number and comments after statements.
+/// objects with corners without `vt`, `v//vn` corners, a quad, a `vt` with a third number and
+/// comments after statements (relative, negative indices, which Mitsuba refuses, come from the
+/// mutations).
 fn obj_corpus() -> Vec<(String, Vec<u8>)> {
     let cube = std::fs::read(root().join("tests/scenes/mitsuba-plugins/box.obj")).unwrap();
     let mixed = "# two objects\no a\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\nvt 0 0\nvt 1 0 0\nvt 1 1\n\
-vt 0 1 # last\nf 1/1/1 2/2/1 3/3/1 4/4/1\ng b\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf -3/-4 -2/-3 -1\nf 5//1 6//1 7//1 # bare\n";
+vt 0 1 # last\nf 1/1/1 2/2/1 3/3/1 4/4/1\ng b\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf 5/1 6/2 7\nf 5//1 6//1 7//1 # bare\n";
     vec![("box.obj".into(), cube), ("mixed.obj".into(), mixed.as_bytes().to_vec())]
 }
 

@@ -15,7 +15,22 @@
 //! * Limits, checked from the header before any texel is allocated: at most [`MAX_TEXELS`]
 //!   (2^28) texels and no empty image ([`ImageError::TooLarge`], [`ImageError::Unsupported`]);
 //!   the `image` decoders also run under `image::Limits` (`max_alloc` = 16 bytes per texel of
-//!   that bound). Float texels must be finite and non-negative ([`ImageError::BadPixels`] with
+//!   that bound). A header may also claim no more texels than a file of its size can hold in
+//!   its format ([`ImageError::Overclaimed`]), since the decoders fill what a short file lacks
+//!   (a 718-byte JPEG claiming 16384² decoded, filled, in 5.7 s and 0.8 GB). The bounds, each a
+//!   format's densest coding with room to spare: JPEG (Huffman-coded, the only kind read) spends
+//!   at least one bit on each 8×8 block of its full-resolution component, so at most 512 texels
+//!   a byte: refused past [`JPEG_TEXELS_PER_BYTE`] = 4096; PNG's deflate stores at most 1032
+//!   bytes in one (a 258-byte match in two 1-bit codes), so the filtered scanlines
+//!   (`height · (1 + ⌈width · bits per texel / 8⌉)`) may be at most [`DEFLATE_RATIO`] × the file;
+//!   OpenEXR packs no more than deflate does (RLE 64:1, PIZ about 400:1, B44A about 10:1), a
+//!   sample taking at least 2 bytes, so its samples (every layer and channel) may be at most
+//!   [`DEFLATE_RATIO`] × the file (twice the densest); a Radiance scanline opens with at least a
+//!   4-byte pixel or run header, so the height is at most a quarter of the file (its old run
+//!   codes can make a scanline arbitrarily long, so the width is bounded by [`MAX_TEXELS`]
+//!   only: a claim the file cannot fill fails at its first missing scanline). The JPEG, PNG and
+//!   EXR bounds allow [`CLAIM_SLACK`] more, so tiny files are never refused by them.
+//!   Float texels must be finite and non-negative ([`ImageError::BadPixels`] with
 //!   the first bad texel's `(x, y)`). Truncated or corrupt files are [`ImageError::Decode`].
 //!   Every error names the file; nothing here panics on bad input.
 
@@ -26,6 +41,15 @@ use std::path::Path;
 /// The most texels a texture may have (2^28 = 268 435 456, e.g. 16384 × 16384): about 3 GiB as
 /// `f32` RGB. Larger headers are refused before anything is allocated.
 pub const MAX_TEXELS: u64 = 1 << 28;
+
+/// The most texels a JPEG may claim per byte of its file (8 times the densest Huffman coding).
+pub const JPEG_TEXELS_PER_BYTE: u64 = 4096;
+
+/// The most bytes deflate can store in one (PNG scanlines, OpenEXR samples).
+pub const DEFLATE_RATIO: u64 = 1032;
+
+/// What each claim bound allows beyond its ratio (texels, bytes or samples).
+pub const CLAIM_SLACK: u64 = 4096;
 
 /// The samples of a [`DecodedImage`], in the file's own encoding.
 #[derive(Clone, Debug, PartialEq)]
@@ -137,6 +161,41 @@ fn check_size(path: &Path, width: u64, height: u64) -> Result<(), ImageError> {
     Ok(())
 }
 
+/// Refuses a `width`×`height` header (already within [`MAX_TEXELS`]) of the `image` crate's
+/// formats claiming more texels than `bytes` can hold (see the module documentation).
+fn check_claim(path: &Path, format: &'static str, bytes: &[u8], width: u64, height: u64) -> Result<(), ImageError> {
+    let n = bytes.len() as u64;
+    let (fits, bound) = match format {
+        "JPEG" => (
+            width * height <= JPEG_TEXELS_PER_BYTE * n + CLAIM_SLACK,
+            format!(
+                "a JPEG spends at least a bit on each 8x8 block, so at most 512 texels a byte; \
+                 refused past {JPEG_TEXELS_PER_BYTE}"
+            ),
+        ),
+        "PNG" => {
+            // IHDR follows the signature: length, "IHDR", width, height, bit depth, colour type
+            let depth = bytes.get(24).map_or(1, |&d| d.max(1) as u64);
+            let samples = match bytes.get(25) {
+                Some(2) => 3,
+                Some(4) => 2,
+                Some(6) => 4,
+                _ => 1,
+            };
+            let raw = height * (1 + (width * depth * samples).div_ceil(8));
+            (
+                raw <= DEFLATE_RATIO * n + CLAIM_SLACK,
+                format!("{raw} bytes of scanlines, and deflate stores at most {DEFLATE_RATIO} bytes in one"),
+            )
+        }
+        _ => (height <= n / 4, "each Radiance scanline opens with at least a 4-byte pixel or run header".to_string()),
+    };
+    if fits {
+        return Ok(());
+    }
+    Err(ImageError::Overclaimed { path: path.to_path_buf(), format, width, height, bytes: n, bound })
+}
+
 /// Refuses float samples that are NaN, infinite or negative, naming the first such texel.
 fn check_texels(path: &Path, width: usize, channels: usize, v: &[f32]) -> Result<(), ImageError> {
     let bad = |t: &[f32]| !t.iter().all(|&s| s.is_finite() && s >= 0.0);
@@ -177,6 +236,7 @@ fn decode_with_image(
     let decoder = reader.into_decoder().map_err(fail)?;
     let (w, h) = decoder.dimensions();
     check_size(path, w as u64, h as u64)?;
+    check_claim(path, name, bytes, w as u64, h as u64)?;
     let decoded = D::from_decoder(decoder).map_err(fail)?;
     let (width, height) = (w as usize, h as usize);
     let (channels, data) = match decoded {
@@ -217,6 +277,22 @@ fn decode_exr(path: &Path, bytes: &[u8]) -> Result<DecodedImage, ImageError> {
             width: w as u64,
             height: h as u64,
             limit: MAX_TEXELS,
+        });
+    }
+    // no EXR compression packs more than deflate, a sample taking at least 2 bytes
+    let n = bytes.len() as u64;
+    if total > DEFLATE_RATIO * n + CLAIM_SLACK {
+        let (w, h) = meta.headers.first().map_or((0, 0), |h| (h.layer_size.width(), h.layer_size.height()));
+        return Err(ImageError::Overclaimed {
+            path: path.to_path_buf(),
+            format: "EXR",
+            width: w as u64,
+            height: h as u64,
+            bytes: n,
+            bound: format!(
+                "{total} samples, and no EXR compression stores more than {DEFLATE_RATIO} bytes in one, \
+                 a sample taking at least 2"
+            ),
         });
     }
     let layers = &super::read_exr_layers(path, bytes)?;
@@ -397,6 +473,73 @@ mod tests {
             .copy_from_slice(&[&99_999i32.to_le_bytes()[..], &99_999i32.to_le_bytes()[..]].concat());
         let e = decode_err(&d, "huge.exr", &exr);
         assert!(matches!(e, ImageError::TooLarge { width: 100_000, height: 100_000, .. }), "{e:?}");
+        let _ = std::fs::remove_dir_all(d);
+    }
+
+    /// Headers within [`MAX_TEXELS`] but claiming more texels than their files can hold are
+    /// refused at once (the 718-byte JPEG claiming 16384² took 5.7 s and 0.8 GB filled); dense
+    /// but real files of the same formats still decode.
+    #[test]
+    fn headers_claiming_more_than_the_file_holds_are_refused_at_once() {
+        let d = tmpdir("claim");
+        let started = std::time::Instant::now();
+        let mut jpg = std::fs::read(data("rgb8.jpg")).unwrap();
+        assert_eq!(jpg.len(), 718);
+        let sof = jpg.windows(2).position(|w| w == [0xff, 0xc0]).expect("baseline JPEG");
+        for side in [16384u16, 4096, 2048] {
+            jpg[sof + 5..sof + 9].copy_from_slice(&[&side.to_be_bytes()[..], &side.to_be_bytes()[..]].concat());
+            let e = decode_err(&d, "claims.jpg", &jpg);
+            let s = side as u64;
+            assert!(
+                matches!(e, ImageError::Overclaimed { format: "JPEG", width, height, bytes: 718, .. } if (width, height) == (s, s)),
+                "{e:?}"
+            );
+            assert!(
+                e.to_string().contains(&format!("claims {side}x{side} texels")) && e.to_string().contains("718 bytes"),
+                "{e}"
+            );
+        }
+        // 718 bytes hold 718 * 4096 + 4096 texels at most: 1700 x 1700 is read (and filled)
+        jpg[sof + 5..sof + 9].copy_from_slice(&[&1700u16.to_be_bytes()[..], &1700u16.to_be_bytes()[..]].concat());
+        let p = d.join("filled.jpg");
+        std::fs::write(&p, &jpg).unwrap();
+        assert!(!matches!(decode_texture(&p), Err(ImageError::Overclaimed { .. })));
+
+        // a PNG claiming 16384 x 16384 RGB with an empty IDAT
+        let mut ihdr = Vec::new();
+        ihdr.extend_from_slice(&16384u32.to_be_bytes());
+        ihdr.extend_from_slice(&16384u32.to_be_bytes());
+        ihdr.extend_from_slice(&[8, 2, 0, 0, 0]);
+        let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+        png.extend(png_chunk(b"IHDR", &ihdr));
+        png.extend(png_chunk(b"IDAT", &[0x78, 0x9c, 0x03, 0x00, 0x00, 0x00, 0x00, 0x01]));
+        png.extend(png_chunk(b"IEND", &[]));
+        let e = decode_err(&d, "claims.png", &png);
+        assert!(matches!(e, ImageError::Overclaimed { format: "PNG", width: 16384, height: 16384, .. }), "{e:?}");
+
+        let e = decode_err(&d, "claims.hdr", b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 16384 +X 16384\n\x02\x02");
+        assert!(matches!(e, ImageError::Overclaimed { format: "HDR", height: 16384, .. }), "{e:?}");
+
+        let mut exr = std::fs::read(data("rgb.exr")).unwrap();
+        let at = exr.windows(10).position(|w| w == b"dataWindow").unwrap();
+        let body = at + b"dataWindow\0box2i\0".len() + 4;
+        exr[body + 8..body + 16].copy_from_slice(&[&4095i32.to_le_bytes()[..], &4095i32.to_le_bytes()[..]].concat());
+        let e = decode_err(&d, "claims.exr", &exr);
+        assert!(matches!(e, ImageError::Overclaimed { format: "EXR", width: 4096, height: 4096, .. }), "{e:?}");
+        let secs = started.elapsed().as_secs_f64();
+        assert!(secs < 2.0, "the refusals took {secs:.2} s");
+
+        // real files near the densest codings still decode: a uniform 2048 x 2048 PNG and EXR
+        let (w, h) = (2048, 2048);
+        let png = crate::image_io::encode_png_rgb8(w, h, &vec![7u8; w * h * 3]).unwrap();
+        let p = d.join("uniform.png");
+        std::fs::write(&p, &png).unwrap();
+        let img = decode_texture(&p).unwrap_or_else(|e| panic!("{} bytes: {e}", png.len()));
+        assert_eq!((img.width, img.height, img.texel(5, 9)), (w, h, Some([7.0 / 255.0; 3])));
+        let p = d.join("uniform.exr");
+        write_exr(&p, &Image::from_fn(w, h, |_, _| [0.25; 3])).unwrap();
+        let img = decode_texture(&p).unwrap();
+        assert_eq!((img.width, img.texel(3, 4)), (w, Some([0.25; 3])));
         let _ = std::fs::remove_dir_all(d);
     }
 

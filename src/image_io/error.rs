@@ -105,6 +105,22 @@ pub enum ImageError {
         /// The most texels allowed.
         limit: u64,
     },
+    /// A texture header claiming more texels than a file of its size can hold in its format
+    /// (decoders would fill the rest); refused before anything is allocated.
+    Overclaimed {
+        /// File concerned.
+        path: PathBuf,
+        /// `"PNG"`, `"JPEG"`, `"HDR"` or `"EXR"`.
+        format: &'static str,
+        /// Width the header claims.
+        width: u64,
+        /// Height the header claims.
+        height: u64,
+        /// The file's size in bytes.
+        bytes: u64,
+        /// The format's bound, in words.
+        bound: String,
+    },
     /// Encoding failed: the EXR encoder's message (`path` always given), or a PNG's (raw RGB
     /// bytes that do not fit the size, a size PNG cannot hold, the encoder's message), with the
     /// file when the caller named one ([`ImageError::in_file`]).
@@ -166,6 +182,11 @@ impl std::fmt::Display for ImageError {
             TooLarge { path, width, height, limit } => write!(
                 f,
                 "{}: image of {width}x{height} texels is larger than the {limit} texels a texture may have",
+                path.display()
+            ),
+            Overclaimed { path, format, width, height, bytes, bound } => write!(
+                f,
+                "{}: the {format} header claims {width}x{height} texels, more than its {bytes} bytes can hold ({bound})",
                 path.display()
             ),
             Encode { path: Some(path), format: "EXR", reason } => {

@@ -20,7 +20,8 @@ use crate::scene::Scene;
 /// reads the CF product, whose photon count under `--time` follows the measured speed, so a
 /// resume may choose another count, and a pass is an unbiased sample at any count.
 pub fn job_keys(job: &RenderJob, plan: &Plan) -> Vec<(String, String)> {
-    let mut keys: Vec<(String, String)> = job.defines.iter().map(|(k, v)| (format!("-D {k}"), v.clone())).collect();
+    let mut keys: Vec<(String, String)> =
+        defines_in_effect(&job.defines).into_iter().map(|(k, v)| (format!("-D {k}"), v)).collect();
     let mut options = Vec::new();
     flatten("", &serde_json::to_value(plan.args.options_for(plan.method)).unwrap_or_default(), &mut options);
     let piloted = job.args.ptcf.light_paths.is_none();
@@ -42,18 +43,35 @@ fn flatten(prefix: &str, value: &serde_json::Value, out: &mut Vec<(String, Strin
     }
 }
 
+/// The `-D NAME=VALUE` definitions as the scene reader applies them: each name once, with the
+/// last value given for it (a later `-D` overrides an earlier one), sorted by name, so that the
+/// order they were written in does not matter.
+pub fn defines_in_effect(defines: &[(String, String)]) -> Vec<(String, String)> {
+    let set: std::collections::BTreeMap<&str, &str> = defines.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
+    set.into_iter().map(|(k, v)| (k.to_string(), v.to_string())).collect()
+}
+
+/// The `-D` field of [`job_fields`]: a hash of [`defines_in_effect`] (names and values
+/// length-prefixed, so no two sets share a text).
+fn defines_field(defines: &[(String, String)]) -> String {
+    let mut text = String::new();
+    for (k, v) in defines_in_effect(defines) {
+        text += &format!("{}:{k}{}:{v}", k.len(), v.len());
+    }
+    format!("{:016x}", crate::checkpoint::checksum(text.as_bytes()))
+}
+
 /// The fields every MPI rank must share (`distributed::job::agree_job`): the scene's content (its
 /// hash covers the file and its meshes), the `-D` values, the method and its options, the
 /// resolution, the seed, spp or time, and the options that decide the collectives
 /// (`--checkpoint-every`, `--snapshots`). Long values are hashed.
 pub fn job_fields(job: &RenderJob, scene: &Scene, plan: &Plan) -> Vec<JobField> {
     let hash = |s: &str| format!("{:016x}", crate::checkpoint::checksum(s.as_bytes()));
-    let defines: Vec<String> = job.defines.iter().map(|(k, v)| format!("{k}={v}")).collect();
     let options = serde_json::to_string(&plan.args.options_for(plan.method)).unwrap_or_default();
     let (w, h) = plan.resolution;
     vec![
         ("the scene's content (file and meshes)", format!("{:016x}", scene.hash)),
-        ("-D", hash(&defines.join("\u{0}"))),
+        ("-D", defines_field(&job.defines)),
         ("--method", plan.checkpoint_label()),
         ("the method's options", hash(&options)),
         ("--resolution", format!("{w}x{h}")),
@@ -63,4 +81,29 @@ pub fn job_fields(job: &RenderJob, scene: &Scene, plan: &Plan) -> Vec<JobField> 
         ("--checkpoint-every", job.checkpoint_every.is_some().to_string()),
         ("--snapshots", format!("{:?}", job.snapshots)),
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn d(pairs: &[(&str, &str)]) -> Vec<(String, String)> {
+        pairs.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect()
+    }
+
+    /// The ranks compare `-D` as the set the scene reader applies: order-independent, the last
+    /// value of a repeated name winning (issue #63: a reordered list was another job).
+    #[test]
+    fn defines_are_compared_as_the_set_in_effect() {
+        let ab = defines_field(&d(&[("a", "1"), ("b", "2")]));
+        assert_eq!(ab, defines_field(&d(&[("b", "2"), ("a", "1")])));
+        assert_eq!(ab, defines_field(&d(&[("a", "0"), ("b", "2"), ("a", "1")])));
+        assert_ne!(ab, defines_field(&d(&[("a", "1"), ("b", "2"), ("a", "0")])));
+        assert_ne!(ab, defines_field(&d(&[("a", "2"), ("b", "1")])));
+        assert_ne!(ab, defines_field(&d(&[("a", "1")])));
+        // no two sets share a text: `a=1,b=2` is not `a=1b:2`
+        assert_ne!(defines_field(&d(&[("a", "1"), ("b", "2")])), defines_field(&d(&[("a", "1b:2")])));
+        assert_eq!(defines_field(&[]), defines_field(&[]));
+        assert_eq!(defines_in_effect(&d(&[("z", "1"), ("a", "2"), ("z", "3")])), d(&[("a", "2"), ("z", "3")]));
+    }
 }

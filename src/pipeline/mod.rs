@@ -39,7 +39,7 @@ use crate::scene::Scene;
 mod checkpoints;
 mod identity;
 mod light_pilot;
-mod memory;
+pub mod memory;
 mod passes;
 mod preprocess;
 mod report;
@@ -184,7 +184,7 @@ impl RenderJob {
         check_snapshots(&self.snapshots, time)?;
         let gathers = self.checkpoint_every.is_some() || self.resume.is_some() || !self.snapshots.is_empty();
         let (need, what) = plan.memory_estimate(scene, gathers);
-        params::check_memory(need, params::available_memory(), &what)?;
+        memory::check(need, &what)?;
         Ok(plan)
     }
 }

@@ -20,6 +20,7 @@
 
 use super::ply::{write_binary, IndexedMesh};
 use super::schema::Doc;
+use super::shape_uv::{ShapeKind, ShapeUv};
 use super::{Material, Scene, Surface, Triangle};
 use crate::bsdf::microfacet::{MicrofacetDistribution, MicrofacetKind};
 use crate::bsdf::Slot;
@@ -156,7 +157,15 @@ fn triangle_runs(
     let mut meshes = Vec::new();
     let mut start = 0;
     while start < tris.len() {
-        let end = (start..tris.len()).find(|&j| key(&tris[j]) != key(&tris[start])).unwrap_or(tris.len());
+        // a tessellated `disk` or `cylinder` goes back as the analytic shape, keeping its UVs
+        if let Some((_, end, uv)) = scene.shape_uvs.run(start as u32) {
+            let end = (end as usize).min(tris.len());
+            analytic_shape(x, scene, &tris[start..end], uv, names);
+            start = end;
+            continue;
+        }
+        let split = |j: usize| key(&tris[j]) != key(&tris[start]) || scene.shape_uvs.get(j as u32).is_some();
+        let end = (start..tris.len()).find(|&j| split(j)).unwrap_or(tris.len());
         let run = &tris[start..end];
         let k = meshes.len();
         meshes.push((dir.join(format!("shape_{k:03}.ply")), write_binary(&run_mesh(run))));
@@ -168,6 +177,30 @@ fn triangle_runs(
         start = end;
     }
     meshes
+}
+
+/// The triangles `run` of a tessellated `disk` or `cylinder` as Mitsuba's analytic shape: its
+/// `to_world` (the cylinder's frame, radius and length included, its `p0`, `p1` and `radius` left
+/// at their defaults), `flip_normals` where the shape had it. Loaded back, it is tessellated the
+/// same, facing the same way, and has the same UVs (`scene/shape_uv.rs`).
+fn analytic_shape(x: &mut String, scene: &Scene, run: &[Triangle], uv: &ShapeUv, names: &[String]) {
+    let ty = match uv.kind {
+        ShapeKind::Disk => "disk",
+        ShapeKind::Cylinder => "cylinder",
+    };
+    let t = &run[0];
+    // the tessellation's unflipped triangles face along Mitsuba's normal, or against it where
+    // `to_world` mirrors (their winding turns with it)
+    let mirrors = uv.to_world().determinant() < 0.0;
+    let flip = (t.ng.dot(uv.normal_at((t.p[0] + t.p[1] + t.p[2]) / 3.0)) < 0.0) != mirrors;
+    let m = uv.to_world().transpose().to_cols_array().map(|v| v.to_string()).join(" ");
+    let _ = writeln!(x, "    <shape type=\"{ty}\">");
+    let _ = writeln!(x, "        <transform name=\"to_world\"><matrix value=\"{m}\"/></transform>");
+    if flip {
+        let _ = writeln!(x, "        <boolean name=\"flip_normals\" value=\"true\"/>");
+    }
+    surface(x, t.material, radiance(scene, t), names);
+    let _ = writeln!(x, "    </shape>");
 }
 
 fn radiance(scene: &Scene, t: &Triangle) -> Option<Rgb> {
@@ -436,4 +469,70 @@ fn run_mesh(run: &[Triangle]) -> IndexedMesh {
     let faces = (0..run.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
     let uvs = run[0].uv.map(|_| run.iter().flat_map(|t| t.uv.unwrap_or([Vec2::ZERO; 3])).collect());
     IndexedMesh { positions, normals, uvs, faces, bytes_hash: 0 }
+}
+
+#[cfg(test)]
+mod analytic_uv_tests {
+    use super::*;
+
+    /// A scene's `disk`s and `cylinder`s written by the exporter's shape writer and loaded back:
+    /// the same triangles, facing the same way, with the same parametrisation (uv and ∂p/∂u at
+    /// every triangle's centroid), between and beside meshes with UVs.
+    #[test]
+    fn disks_and_cylinders_keep_their_uvs_through_the_export() {
+        let dir = std::env::temp_dir().join(format!("forecast-export-uv-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let shapes = r#"
+<shape type="disk"><transform name="to_world"><scale x="2" y="1" z="1"/><rotate x="1" angle="30"/>
+<translate y="1"/></transform><bsdf type="diffuse"/></shape>
+<shape type="rectangle"><transform name="to_world"><translate z="-2"/></transform><bsdf type="diffuse"/></shape>
+<shape type="cylinder"><point name="p0" value="0, 0, 0"/><point name="p1" value="0, 2, 0.5"/>
+<float name="radius" value="0.5"/><boolean name="flip_normals" value="true"/>
+<transform name="to_world"><translate x="1"/></transform><bsdf type="diffuse"/></shape>
+<shape type="disk"><transform name="to_world"><scale value="0.3"/><rotate x="1" angle="90"/>
+<translate y="3"/></transform><emitter type="area"><rgb name="radiance" value="5"/></emitter></shape>
+<shape type="cylinder"><transform name="to_world"><scale x="1" y="1" z="-1"/></transform><bsdf type="diffuse"/></shape>
+"#;
+        let wrap = |body: &str| {
+            format!(
+                "<scene version=\"3.0.0\"><sensor type=\"perspective\"><float name=\"fov\" value=\"40\"/><transform name=\"to_world\">\
+<lookat origin=\"0, 1, 6\" target=\"0, 1, 0\"/></transform></sensor>\n\
+<emitter type=\"point\"><point name=\"position\" value=\"0, 4, 4\"/></emitter>\n{body}</scene>"
+            )
+        };
+        let load = |src: &str| crate::scene::mitsuba::load_str(src, "t.xml", &dir, &[]).unwrap();
+        let scene = load(&wrap(shapes));
+        let names: Vec<String> = (1..scene.materials.len()).map(|i| format!("m{i}")).collect();
+        let mut x: String = names.iter().map(|n| format!("<bsdf type=\"diffuse\" id=\"{n}\"/>\n")).collect();
+        let meshes = triangle_runs(&mut x, &scene, &names, &dir.join("meshes"), "meshes");
+        std::fs::create_dir_all(dir.join("meshes")).unwrap();
+        for (p, b) in &meshes {
+            std::fs::write(p, b).unwrap();
+        }
+        assert_eq!(x.matches("<shape type=\"disk\">").count(), 2, "{x}");
+        assert_eq!(x.matches("<shape type=\"cylinder\">").count(), 2, "{x}");
+        assert_eq!(x.matches("flip_normals").count(), 1, "{x}");
+        let back = load(&wrap(&x));
+        assert_eq!(back.triangles.len(), scene.triangles.len());
+        let mut analytic = 0;
+        for (i, (a, b)) in scene.triangles.iter().zip(&back.triangles).enumerate() {
+            let tol = |u: Vec3| 2e-6 * u.abs().max_element().max(1.0);
+            // the same corners (`flip_normals` may list them in another order)
+            for p in a.p {
+                let near = b.p.iter().any(|q| (p - *q).abs().max_element() <= tol(p));
+                assert!(near, "triangle {i}: {p} not in {:?}", b.p);
+            }
+            assert!(a.ng.dot(b.ng) > 0.999, "triangle {i} turned: {} vs {}", a.ng, b.ng);
+            assert_eq!(a.uv, b.uv, "triangle {i}");
+            let (sa, sb) = (scene.shape_uvs.get(i as u32), back.shape_uvs.get(i as u32));
+            assert_eq!(sa.map(|s| s.kind), sb.map(|s| s.kind), "triangle {i}");
+            analytic += sa.is_some() as usize;
+            let c = (a.p[0] + a.p[1] + a.p[2]) / 3.0;
+            let ((ua, da), (ub, db)) = (scene.uv_at(i as u32, c), back.uv_at(i as u32, c));
+            assert!((ua - ub).abs().max_element() < 1e-5, "triangle {i}: uv {ua} vs {ub}");
+            assert!((da - db).abs().max_element() <= 1e-5 * da.abs().max_element().max(1.0), "{i}: {da} vs {db}");
+        }
+        assert!(analytic > 4 * 500, "{analytic} triangles of disks and cylinders");
+        let _ = std::fs::remove_dir_all(dir);
+    }
 }

@@ -4,10 +4,12 @@
 //!
 //! Before tobj reads a file, [`scan`] checks every statement in file order and names the first
 //! bad one by its line: a `v`, `vt` or `vn` whose numbers do not parse (a `vt` needs two, both
-//! finite), a face corner with an index that is zero, unparsable or past the statements before
-//! its line (relative, negative indices count back from its line, as the OBJ format defines
-//! them; Mitsuba 3 refuses them). A `vt` index is checked whether or not the file has any `vt`
-//! (tobj would ignore it where there is none; Mitsuba refuses it).
+//! finite), a face corner with an index that is zero, unparsable, negative or past the
+//! statements before its line. Negative (relative) indices are refused as Mitsuba 3's OBJ loader
+//! refuses them (it reads an index with `strtoul`, so `-1` becomes 2^32 − 1 and fails its
+//! range check: "reference to invalid vertex 4294967295!"), here with the index as written. A
+//! `vt` index is checked whether or not the file has any `vt` (tobj would ignore it where there
+//! is none; Mitsuba refuses it).
 //!
 //! Texture coordinates: a mesh has UVs when any face corner names a `vt` (Mitsuba 3's rule);
 //! corners without one then read (0, 0), as Mitsuba 3 since 3.9.1 defines them (3.9.1 left them
@@ -161,7 +163,12 @@ fn corner(t: &str, counts: &[usize; 3]) -> Result<bool, String> {
         if i == 0 {
             return Err(format!("face {what} index 0 (OBJ indices start at 1)"));
         }
-        if i.unsigned_abs() > n as u64 {
+        if i < 0 {
+            return Err(format!(
+                "face {what} index {i} is relative (negative): Mitsuba 3 refuses relative indices, write the absolute index"
+            ));
+        }
+        if i as u64 > n as u64 {
             return Err(format!("face {what} index {i} out of range ({n} `{what}` before this line)"));
         }
     }
@@ -170,8 +177,7 @@ fn corner(t: &str, counts: &[usize; 3]) -> Result<bool, String> {
 
 /// The text tobj reads: `text` itself, unless it has comments after statements (removed) or
 /// faces with UVs on some corners only (a first `vt 0 1`, (0, 0) once flipped, for the bare
-/// corners, every absolute `vt` index moved up by one; relative ones still count back to the
-/// same `vt`).
+/// corners, every `vt` index, all absolute after [`scan`], moved up by one).
 fn prepared<'a>(text: Cow<'a, str>, found: &Scan) -> Cow<'a, str> {
     let partial = found.uv_corners > 0 && found.bare_corners > 0;
     if !partial && !found.trailing_comments {

@@ -131,7 +131,17 @@ pub(super) fn colour(
         Some(Param::Constant(c)) => Ok(c),
         Some(Param::Texture(t)) => {
             textures.push(SlotTexture { slot, texture: t });
-            Ok(Rgb::splat(p.texture(t).mean()))
+            let (texture, mean) = (p.texture(t), p.texture(t).mean());
+            // the range the caller checks (`refl`, `alpha`), said here with the image it comes from
+            let (fits, range) = match slot.is_monochrome() {
+                true => (mean.is_finite() && mean >= 0.0, "a non-negative number"),
+                false => (mean.is_finite() && (0.0..=1.0).contains(&mean), "in [0, 1]"),
+            };
+            if !fits {
+                let from = texture.image_files().map_or(String::new(), |f| format!(" (image {f})"));
+                return Err(p.err(name, &format!("{name} must be {range}, got its texture's mean {mean}{from}")));
+            }
+            Ok(Rgb::splat(mean))
         }
     }
 }

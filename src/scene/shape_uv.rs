@@ -59,6 +59,26 @@ impl ShapeUv {
         to_local.is_finite().then_some(ShapeUv { kind, to_local, to_world })
     }
 
+    /// The shape's `to_world`: Mitsuba's `disk`, or `cylinder` with its default `p0`, `p1` and
+    /// `radius`, under this matrix is the shape this parametrisation belongs to.
+    pub fn to_world(&self) -> DMat4 {
+        DMat4::from(self.to_world)
+    }
+
+    /// The direction of Mitsuba's normal (`flip_normals` false) at the world-space point `p`: the
+    /// local (0, 0, 1) of the disk, (x, y, 0) of the cylinder, mapped as a normal (the inverse
+    /// transpose of `to_world`); not normalised.
+    pub fn normal_at(&self, p: Vec3) -> Vec3 {
+        let n = match self.kind {
+            ShapeKind::Disk => DVec3::Z,
+            ShapeKind::Cylinder => {
+                let q = self.to_local.transform_point3(p.as_dvec3());
+                DVec3::new(q.x, q.y, 0.0)
+            }
+        };
+        (self.to_local.matrix3.transpose() * n).as_vec3()
+    }
+
     /// Mitsuba's uv and ∂p/∂u at the world-space point `p` of the shape.
     pub fn at(&self, p: Vec3) -> (Vec2, Vec3) {
         let q = self.to_local.transform_point3(p.as_dvec3());
@@ -105,8 +125,14 @@ impl ShapeUvs {
     /// The parametrisation of primitive `prim`, if it has one.
     #[inline]
     pub fn get(&self, prim: u32) -> Option<&ShapeUv> {
+        self.run(prim).map(|r| r.2)
+    }
+
+    /// The shape primitive `prim` belongs to, if it has a parametrisation: its triangles
+    /// `first..end` and the parametrisation.
+    pub fn run(&self, prim: u32) -> Option<(u32, u32, &ShapeUv)> {
         let i = self.runs.partition_point(|r| r.1 <= prim);
-        self.runs.get(i).filter(|r| r.0 <= prim).map(|r| &r.2)
+        self.runs.get(i).filter(|r| r.0 <= prim).map(|r| (r.0, r.1, &r.2))
     }
 }
 

@@ -139,6 +139,25 @@ impl Texture {
     }
 }
 
+impl Texture {
+    /// The image files this texture reads, in words for an error message (`` `a.png` ``, or
+    /// `` `a.png` and `b.exr` ``); `None` for a texture without images.
+    pub fn image_files(&self) -> Option<String> {
+        let mut names: Vec<String> = Vec::new();
+        self.for_each_image(&mut |i| {
+            let n = format!("`{}`", i.path().display());
+            if !names.contains(&n) {
+                names.push(n);
+            }
+        });
+        match names.len() {
+            0 => None,
+            1 => names.pop(),
+            n => Some(format!("{} and {}", names[..n - 1].join(", "), names[n - 1])),
+        }
+    }
+}
+
 impl From<Rgb> for Texture {
     fn from(c: Rgb) -> Texture {
         Texture::Constant(c)

@@ -246,7 +246,7 @@ fn op_matrix(op: &Node, lone: bool) -> Result<(DMat4, Option<LookAt>), String> {
         "rotate" => {
             let axis = d3(xyz(op, 0.0)?);
             match op.attr("angle").and_then(|a| a.trim().parse::<f64>().ok()) {
-                Some(a) if axis.length() > 0.0 => DMat4::from_axis_angle(axis.normalize(), a.to_radians()),
+                Some(a) if axis != DVec3::ZERO => rotate(axis, a.to_radians()),
                 _ => return Err("`rotate` needs a non-zero axis and a numeric `angle`".into()),
             }
         }
@@ -265,6 +265,25 @@ fn op_matrix(op: &Node, lone: bool) -> Result<(DMat4, Option<LookAt>), String> {
         t => return Err(format!("unknown transform operation `<{t}>`")),
     };
     Ok((m, None))
+}
+
+/// Mitsuba's `Transform4f::rotate(axis, angle)` (Dr.Jit's `rotate`): Rodrigues' matrix of the axis
+/// as written, not normalised (a longer axis scales and shears, as in Mitsuba), in Dr.Jit's
+/// order of operations (`fmadd`); `angle` in radians.
+fn rotate(a: DVec3, angle: f64) -> DMat4 {
+    let (s, c) = angle.sin_cos();
+    let cm = 1.0 - c;
+    let (shuf1, shuf2) = (DVec3::new(a.y, a.z, a.x), DVec3::new(a.z, a.x, a.y));
+    let tmp0 = (a * a).mul_add(DVec3::splat(cm), DVec3::splat(c));
+    let tmp1 = (a * shuf1).mul_add(DVec3::splat(cm), shuf2 * s);
+    let tmp2 = (a * shuf2).mul_add(DVec3::splat(cm), -(shuf1 * s));
+    // rows (tmp0.x, tmp2.y, tmp1.z), (tmp1.x, tmp0.y, tmp2.z), (tmp2.x, tmp1.y, tmp0.z)
+    DMat4::from_cols(
+        DVec4::new(tmp0.x, tmp1.x, tmp2.x, 0.0),
+        DVec4::new(tmp2.y, tmp0.y, tmp1.y, 0.0),
+        DVec4::new(tmp1.z, tmp2.z, tmp0.z, 0.0),
+        DVec4::W,
+    )
 }
 
 /// Mitsuba's look-at matrix: columns left = normalize(up × dir), up' = dir × left, dir, origin.
