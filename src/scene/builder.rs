@@ -412,6 +412,14 @@ impl SceneBuilder {
         Ok(())
     }
 
+    /// A Mitsuba `max_depth` of `d` ≥ 1 path segments: the vertex cap d − 1 (0: the emitters seen
+    /// directly, 1: direct light; below `--max-depth`'s least, 2, which the command line keeps).
+    pub fn max_segments(&mut self, d: u64, at: &Origin) -> Result<(), SceneError> {
+        let cap = d.checked_sub(1).ok_or_else(|| self.err(at, "max_depth must be at least 1 segment"))?;
+        self.render.max_depth = u32::try_from(cap).map_err(|_| self.err(at, format!("max_depth {d} is too large")))?;
+        Ok(())
+    }
+
     /// Forecast photons to store (the limits of `--forecast-photons`).
     pub fn forecast_photons(&mut self, n: u64, at: &Origin) -> Result<(), SceneError> {
         params::FORECAST_PHOTONS.check(n).map_err(|m| self.err(at, m))?;

@@ -1,7 +1,8 @@
 //! Mitsuba XML scenes (Mitsuba 3, and the 0.5/0.6/2.0 spellings Mitsuba 3 upgrades) → `Scene`,
 //! for the subset documented in `scenes/README.md`: shapes (`shapes`), BSDFs (`bsdf`), `area`
 //! and `point` emitters, the `perspective` sensor (every `fov_axis`), the sampler's
-//! `sample_count` (→ default spp) and the integrator's `max_depth` (→ the vertex cap).
+//! `sample_count` (→ default spp) and the integrator's `max_depth` (path segments: the vertex cap
+//! `max_depth` − 1).
 //!
 //! `<default>` values and `-D name=value` substitute `$name` (`xml`). forecast's own render
 //! options, which Mitsuba has no place for, travel as `<default name="forecast_*">` values that
@@ -118,16 +119,23 @@ pub fn load_str(src: &str, file: &str, dir: &Path, defines: &[(String, String)])
     cx.b.build(&Origin::new(root.line, ""), "emitter")
 }
 
-/// The integrator's `max_depth` (−1: the default cap 64). Its type is not used: the method is
-/// `--method`, so another renderer's integrator (`sppm`, `bdpt`, ...) and its parameters are
-/// warnings (the unread parameters, by `Plugin::finish`), never errors.
+/// The integrator's `max_depth`: Mitsuba counts path segments, so d bounds every path at d
+/// segments (emitters reached at the d-th, next-event estimation at the first d − 1 surface
+/// vertices), which is forecast's vertex cap d − 1 (`--max-depth` N: N surface vertices, NEE at
+/// each, and the emitter the N-th one's BSDF sample reaches). 1 renders the emitters seen
+/// directly; −1 (Mitsuba's "unlimited") leaves the default cap 64. Its type is not used: the
+/// method is `--method`, so another renderer's integrator (`sppm`, `bdpt`, ...) and its
+/// parameters are warnings (the unread parameters, by `Plugin::finish`), never errors.
 fn integrator(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
     let mut p = Plugin::new(n);
     let dl = p.line_of("max_depth");
     match p.int(cx, "max_depth")?.unwrap_or(-1) {
         -1 => {}
-        d if d >= 0 => cx.b.max_depth(d as u64, &Origin::new(dl, format!("{}.max_depth", n.ty())))?,
-        d => return Err(p.err(cx, dl, "max_depth", format!("max_depth {d}: use -1 or a value >= 2"))),
+        d if d >= 1 => cx.b.max_segments(d as u64, &Origin::new(dl, format!("{}.max_depth", n.ty())))?,
+        d => {
+            let m = format!("max_depth {d}: use -1 (unlimited) or a number of path segments >= 1");
+            return Err(p.err(cx, dl, "max_depth", m));
+        }
     }
     if !matches!(n.ty(), "path" | "volpath") {
         cx.warn(n.line, format!("integrator `{}` ignored (the method is forecast's `--method`)", n.ty()));
