@@ -287,6 +287,12 @@ impl SceneBuilder {
         Ok(())
     }
 
+    /// The camera's image as the window `size` at `offset` of its film (checked by the reader:
+    /// inside the film, non-empty).
+    pub fn crop(&mut self, offset: [u32; 2], size: [u32; 2]) {
+        self.camera = self.camera.take().map(|c| c.with_crop(offset, size));
+    }
+
     /// A checked area-light radiance: `None` when black (the shape then emits nothing).
     pub fn emission(&self, radiance: Rgb, at: &Origin) -> Result<Option<Rgb>, SceneError> {
         if let Some(m) = light_value_error(&leaf(&at.key), radiance, MAX_RADIANCE) {
