@@ -110,6 +110,9 @@ pub fn export_mitsuba(scene_path: &Path, out: &Path) -> Result<ExportReport, Str
     Ok(rep)
 }
 
+/// The files of one output folder (name, bytes), and the folder.
+type FolderFiles = (Vec<(PathBuf, Vec<u8>)>, PathBuf);
+
 /// Writes the XML, its meshes and its images as one set (`atomic_io::FileSet`: a failure leaves
 /// the previous export whole), after the output guard: no file of the set may name the scene or
 /// one of its inputs (meshes, images). `groups`: the files of each folder, and the folder.
@@ -118,7 +121,7 @@ fn write_export(
     scene: &Scene,
     out: &Path,
     xml: String,
-    groups: [(Vec<(PathBuf, Vec<u8>)>, PathBuf); 2],
+    groups: [FolderFiles; 2],
 ) -> Result<(), String> {
     let mut guard = crate::atomic_io::OutputSet::new();
     guard.scene_inputs(scene_path, &scene.mesh_files);

@@ -195,11 +195,14 @@ fn sensor(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
     Ok(())
 }
 
+/// A crop window: its offset and size in the film's pixels.
+type Window = ([u32; 2], [u32; 2]);
+
 /// What the sensor's film says: the full film's size and the crop window, if any.
 struct Film {
     size: [u32; 2],
-    /// (offset, size) of the window, when it is not the whole film.
-    crop: Option<([u32; 2], [u32; 2])>,
+    /// The window, when it is not the whole film.
+    crop: Option<Window>,
 }
 
 /// The film: `width`, `height` (Mitsuba's defaults 768 × 576); the crop window
@@ -255,7 +258,7 @@ fn film(cx: &mut Cx, p: &mut Plugin) -> Result<Film, SceneError> {
 
 /// The film's crop window, `None` when it is the whole film. Mitsuba's rule: offset + size
 /// inside the film; a window of no pixels is refused too.
-fn crop_window(cx: &Cx, fp: &mut Plugin, [w, h]: [u32; 2]) -> Result<Option<([u32; 2], [u32; 2])>, SceneError> {
+fn crop_window(cx: &Cx, fp: &mut Plugin, [w, h]: [u32; 2]) -> Result<Option<Window>, SceneError> {
     let keys = ["crop_offset_x", "crop_offset_y", "crop_width", "crop_height"];
     let lines = keys.map(|k| fp.line_of(k));
     let mut v = [0u32, 0, w, h];
