@@ -174,3 +174,22 @@ fn output_format_parameters_warn_unless_they_are_the_output() {
         assert!(w.contains(k), "{k}: {w}");
     }
 }
+
+/// `sms-pool`'s form: the film and the sampler at the top level with ids, the sensor's `<ref>`s
+/// naming them; a top-level film without an id is refused at its line.
+#[test]
+fn top_level_film_and_sampler_referenced_by_the_sensor() {
+    let src = "<scene version=\"2.0.0\">\n<film type=\"hdrfilm\" id=\"film\"><integer name=\"width\" value=\"40\"/>\
+               <integer name=\"height\" value=\"30\"/><integer name=\"crop_offset_x\" value=\"4\"/>\
+               <integer name=\"crop_width\" value=\"20\"/></film>\n\
+               <sampler type=\"independent\" id=\"sampler\"><integer name=\"sample_count\" value=\"7\"/></sampler>\n\
+               <sensor type=\"perspective\"><float name=\"fov\" value=\"40\"/><ref id=\"sampler\"/><ref id=\"film\"/></sensor>\n\
+               <emitter type=\"point\"><point name=\"position\" x=\"0\" y=\"2\" z=\"0\"/></emitter>\n\
+               <shape type=\"sphere\"><point name=\"center\" x=\"0\" y=\"0\" z=\"-3\"/></shape>\n</scene>";
+    let s = common::xml(src, &root()).unwrap();
+    assert_eq!((s.camera.width, s.camera.height, s.camera.film, s.camera.offset), (20, 30, [40.0, 30.0], [4.0, 0.0]));
+    assert_eq!(s.render.spp, Some(7));
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let e = common::xml(&src.replace(" id=\"film\">", ">"), &root()).unwrap_err();
+    assert_eq!((e.line, e.key.as_str()), (2, "film"), "{e}");
+}

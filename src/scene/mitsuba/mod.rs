@@ -1,6 +1,7 @@
 //! Mitsuba XML scenes (Mitsuba 3, and the 0.5/0.6/2.0 spellings Mitsuba 3 upgrades) → `Scene`,
 //! for the subset documented in `scenes/README.md`: shapes (`shapes`), BSDFs (`bsdf`), `area`
-//! and `point` emitters, the `perspective` sensor (every `fov_axis`), the sampler's
+//! and `point` emitters, the `perspective` sensor (every `fov_axis`; its film's crop window; a
+//! film and sampler given at the top level with an `id` and named by its `<ref>`s), the sampler's
 //! `sample_count` (→ default spp) and the integrator's `max_depth` (path segments: the vertex cap
 //! `max_depth` − 1).
 //!
@@ -44,6 +45,8 @@ pub(super) struct Cx {
     texture_ids: BTreeMap<String, u32>,
     /// The images decoded so far.
     textures: TextureCache,
+    /// Top-level `<film>`s and `<sampler>`s by `id`, for a sensor's `<ref>`s.
+    sensor_parts: BTreeMap<String, Node>,
     default_diffuse: Option<u32>,
 }
 
@@ -84,6 +87,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path, defines: &[(String, String)])
         ids: BTreeMap::new(),
         texture_ids: BTreeMap::new(),
         textures: TextureCache::default(),
+        sensor_parts: BTreeMap::new(),
         default_diffuse: None,
     };
     let (root, _version, vars) = xml::parse(src, defines).map_err(|(l, m)| cx.err(l, "", m))?;
@@ -105,6 +109,15 @@ pub fn load_str(src: &str, file: &str, dir: &Path, defines: &[(String, String)])
             }
             "texture" => texture::declare(&mut cx, n)?,
             "shape" => shapes::shape(&mut cx, n)?,
+            "film" | "sampler" => match n.attr("id") {
+                Some(id) => {
+                    cx.sensor_parts.insert(id.to_string(), n.clone());
+                }
+                None => {
+                    let m = format!("a top-level `<{}>` needs an `id` for a sensor's `<ref>`", n.tag);
+                    return Err(cx.err(n.line, &n.tag, m));
+                }
+            },
             "emitter" => point(&mut cx, n)?,
             t => {
                 let what = format!("`<{t}>` is not supported (textures, media, includes, shape groups, ...)");
@@ -164,6 +177,14 @@ fn fov_y(fov: f32, axis: &str, w: u32, h: u32) -> Option<f32> {
 
 /// The perspective sensor → the builder's camera, and the sampler's `sample_count` → spp.
 fn sensor(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
+    // a `<ref>` to a top-level film or sampler stands for it (Mitsuba 2's SMS scenes)
+    let mut n = n.clone();
+    for c in &mut n.children {
+        if let Some(part) = c.attr("id").filter(|_| c.tag == "ref").and_then(|id| cx.sensor_parts.get(id)) {
+            *c = part.clone();
+        }
+    }
+    let n = &n;
     let mut p = Plugin::new(n);
     if n.ty() != "perspective" {
         return Err(cx.err(n.line, &format!("sensor.{}", n.ty()), format!("sensor `{}`: only `perspective`", n.ty())));
