@@ -173,14 +173,17 @@ impl RenderJob {
         // the scene's [render] options, which the command line's override, must fit its own method
         let own = if self.method.is_some() { crate::integrators::auto::resolve(None, scene)?.0 } else { method };
         let mut args = scene_options::apply(&self.args, scene, method, own)?;
-        args.settings.max_depth = args.settings.max_depth.or(Some(r.max_depth));
+        // the scene's cap was checked by its reader (a Mitsuba `max_depth` may give 0 or 1, below
+        // `--max-depth`'s least): the plan checks the command line's own
+        let scene_cap = args.settings.max_depth.is_none().then_some(r.max_depth);
         let time = self.time.or(if self.spp.is_some() { None } else { r.time });
         args.cf.time_budget_s = time; // the CF preprocess scales its photon count to the budget
         let spp = if time.is_some() { None } else { Some(self.spp.or(r.spp).unwrap_or(16)) };
         let resolution = self.resolution.unwrap_or((scene.camera.width, scene.camera.height));
         let seed = self.seed.unwrap_or(r.seed);
-        let plan = Plan { method, method_reason, seed, args, time, spp, resolution };
+        let mut plan = Plan { method, method_reason, seed, args, time, spp, resolution };
         plan.validate()?;
+        plan.args.settings.max_depth = plan.args.settings.max_depth.or(scene_cap);
         check_snapshots(&self.snapshots, time)?;
         let gathers = self.checkpoint_every.is_some() || self.resume.is_some() || !self.snapshots.is_empty();
         let (need, what) = plan.memory_estimate(scene, gathers);

@@ -287,6 +287,12 @@ impl SceneBuilder {
         Ok(())
     }
 
+    /// The camera's image as the window `size` at `offset` of its film (checked by the reader:
+    /// inside the film, non-empty).
+    pub fn crop(&mut self, offset: [u32; 2], size: [u32; 2]) {
+        self.camera = self.camera.take().map(|c| c.with_crop(offset, size));
+    }
+
     /// A checked area-light radiance: `None` when black (the shape then emits nothing).
     pub fn emission(&self, radiance: Rgb, at: &Origin) -> Result<Option<Rgb>, SceneError> {
         if let Some(m) = light_value_error(&leaf(&at.key), radiance, MAX_RADIANCE) {
@@ -409,6 +415,14 @@ impl SceneBuilder {
     pub fn max_depth(&mut self, d: u64, at: &Origin) -> Result<(), SceneError> {
         params::MAX_DEPTH.check(d).map_err(|m| self.err(at, m))?;
         self.render.max_depth = u32::try_from(d).map_err(|_| self.err(at, format!("max_depth {d} is too large")))?;
+        Ok(())
+    }
+
+    /// A Mitsuba `max_depth` of `d` ≥ 1 path segments: the vertex cap d − 1 (0: the emitters seen
+    /// directly, 1: direct light; below `--max-depth`'s least, 2, which the command line keeps).
+    pub fn max_segments(&mut self, d: u64, at: &Origin) -> Result<(), SceneError> {
+        let cap = d.checked_sub(1).ok_or_else(|| self.err(at, "max_depth must be at least 1 segment"))?;
+        self.render.max_depth = u32::try_from(cap).map_err(|_| self.err(at, format!("max_depth {d} is too large")))?;
         Ok(())
     }
 

@@ -4,7 +4,8 @@
 //! Exactness: triangles are written as binary PLY files (world-space f32 vertices, three per
 //! triangle, with the shading normals of smooth ones) in `SCENE_meshes/` beside the XML, grouped
 //! into runs of equal material, emission and smoothness, in scene order; spheres stay analytic;
-//! the camera is the TOML `lookat` with `fov_axis="y"`; numbers are printed in Rust's shortest
+//! the camera is the TOML `lookat` with `fov_axis="y"`; the vertex cap N is `max_depth` N + 1
+//! (Mitsuba counts path segments); numbers are printed in Rust's shortest
 //! round-trip form. forecast's own options (method, seed, time, photons, target box, ROIs) go
 //! into `<default name="forecast_*">` values that Mitsuba ignores. So the scene loaded back is
 //! the same `Scene` (apart from `path`, `hash`, `warnings`) and renders bit-identically.
@@ -234,7 +235,8 @@ fn header(x: &mut String, scene: &Scene, doc: &Doc) {
     let _ = writeln!(
         x,
         "    <integrator type=\"path\">\n        <integer name=\"max_depth\" value=\"{}\"/>\n    </integrator>",
-        r.max_depth
+        // Mitsuba counts segments: N surface vertices with NEE at each are paths of N + 1
+        u64::from(r.max_depth) + 1
     );
     let c = doc.camera.get_ref();
     let f = |a: [f32; 3]| format!("{}, {}, {}", a[0], a[1], a[2]);

@@ -5,7 +5,9 @@
 //! Russian roulette from the 5th bounce (survival min(max β·etaScale, 0.95), as Mitsuba and
 //! pbrt-v4: `transport::roulette::Throughput`).
 //! `max_depth` (default 64 vertices) is a safety cap only: with RR the truncated energy is far
-//! below the noise (results/2026-11-30-roulette.md).
+//! below the noise (results/2026-11-30-roulette.md). The cap N keeps every path of N surface
+//! vertices whole, NEE at the N-th and the emitter its BSDF sample reaches (the two halves of
+//! its MIS): paths of at most N + 1 segments, Mitsuba's `max_depth` N + 1.
 //!
 //! `--path-filter` (a biased diagnostic, off by default) keeps only some path classes
 //! (`integrators::pt::path_class`); without it the estimator is exactly the above.
@@ -132,13 +134,18 @@ impl PathTracer {
         let mut l = CameraEstimate::default();
         let mut prefix = true; // no non-Dirac vertex yet
         let mut class = PathClass::default();
-        for depth in 0..self.max_depth {
+        // `max_depth` surface vertices, then the ray the last one's BSDF drew, for the emitter it
+        // may reach (the other half of that vertex's NEE MIS): paths of max_depth + 1 segments
+        for depth in 0..=self.max_depth {
             let Some(hit) = world.intersect(w.o, w.d, f32::INFINITY) else { break };
             if s.emitter_of(hit.prim) != NO_EMITTER {
                 if let Some((le, mis)) = w.emitted(world, &hit) {
                     *if prefix { &mut l.prefix_le } else { &mut l.rest } += self.kept(class, w.t.beta * le * mis);
                 }
                 break; // emitters reflect nothing
+            }
+            if depth == self.max_depth {
+                break;
             }
             let (m, sp) = world.shade(&hit, -w.d);
             let v = SurfaceVertex::at(&m, sp, &hit, w.d, depth);

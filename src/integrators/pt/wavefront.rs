@@ -175,11 +175,18 @@ pub(crate) fn trace_batch(
 ) {
     debug_assert!(rays.len() == rngs.len());
     w.start(world, rays, Live::camera, out);
-    for depth in 0..max_depth {
+    // as `trace`: after the last vertex, its BSDF ray only for the emitter it may reach
+    for depth in 0..=max_depth {
         if w.live.is_empty() {
             break;
         }
         w.intersect(world, depth);
+        if depth == max_depth {
+            for k in 0..w.live.len() {
+                emitted(world, w, k, out);
+            }
+            break;
+        }
         for k in 0..w.live.len() {
             if shade(world, w, k, depth, rngs, out) {
                 flush(w, depth, rngs, out);
@@ -192,25 +199,37 @@ pub(crate) fn trace_batch(
     }
 }
 
+/// The emitter hit of live path `k`, if its ray reaches one (true then: the path ends there).
+#[inline]
+fn emitted(world: &World, w: &Wave, k: usize, out: &mut [CameraEstimate]) -> bool {
+    let p = w.live[k];
+    let walk = p.walk(&w.rays[k]);
+    let Some(found) = w.hits[k] else { return false };
+    let hit = world.hit_at(&w.rays[k], found);
+    if world.scene.emitter_of(hit.prim) == NO_EMITTER {
+        return false;
+    }
+    if let Some((le, mis)) = walk.emitted(world, &hit) {
+        let l = &mut out[p.i as usize];
+        *if p.prefix { &mut l.prefix_le } else { &mut l.rest } += walk.t.beta * le * mis;
+    }
+    true // emitters reflect nothing
+}
+
 /// One vertex of live path `k` (the body of `trace`'s loop): its emitter hit, or `pt`'s vertex
 /// with its NEE sample queued with its shadow ray and its continuation queued as the next ray.
 /// Where the lanes apply, a diffuse vertex draws its numbers and goes to `w.lanes` instead; true
 /// when that record is full.
 #[inline]
 fn shade(world: &World, w: &mut Wave, k: usize, depth: u32, rngs: &mut [Rng], out: &mut [CameraEstimate]) -> bool {
-    let s = &world.scene;
+    if emitted(world, w, k, out) {
+        return false;
+    }
     let mut p = w.live[k];
     let mut walk = p.walk(&w.rays[k]);
-    let (i, rng) = (p.i as usize, &mut rngs[p.i as usize]);
+    let rng = &mut rngs[p.i as usize];
     let Some(found) = w.hits[k] else { return false };
     let hit = world.hit_at(&w.rays[k], found);
-    if s.emitter_of(hit.prim) != NO_EMITTER {
-        if let Some((le, mis)) = walk.emitted(world, &hit) {
-            let l = &mut out[i];
-            *if p.prefix { &mut l.prefix_le } else { &mut l.rest } += walk.t.beta * le * mis;
-        }
-        return false; // emitters reflect nothing
-    }
     let (m, sp) = world.shade(&hit, -walk.d);
     let v = SurfaceVertex::at(&m, sp, &hit, walk.d, depth);
     // the lanes run the untilted Lambertian BSDF: a normal-mapped point takes the scalar path

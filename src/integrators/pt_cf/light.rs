@@ -75,7 +75,7 @@ pub fn pinhole_importance(camera: &Camera, d: Vec3) -> f32 {
     if c <= 0.0 {
         return 0.0;
     }
-    let side = 2.0 * camera.tan_half_fov() / camera.height as f32;
+    let side = camera.pixel_side();
     1.0 / (side * side * c * c * c)
 }
 

@@ -119,6 +119,67 @@ fn bumpmap(cx: &mut Cx, mut p: Plugin) -> Result<Parsed, SceneError> {
     Ok(Parsed { surface: Surface { bumpmap: Some(bump), map_in_twosided: false, ..inner.surface }, ..inner })
 }
 
+/// Mitsuba 2's `normalmap` as the Specular Manifold Sampling repository's fork defines it
+/// (`src/bsdfs/normalmap.cpp` there): the image a `filename` child (the texels' 2·rgb − 1, raw),
+/// `tiles` (default 1: uv·tiles, repeated), `use_slopes` (default true: the texels' slopes
+/// −n_xy/n_z interpolated bilinearly instead of the normals), `lean_fallback` (default false: a
+/// LEAN-mapped conductor on paths without ray differentials) and its `lean_fallback_alpha`,
+/// `lean_fallback_material`, `eta`, `k`. Read as Mitsuba 3's `normalmap` around a raw `bitmap`
+/// with `to_uv` scale `tiles` (what `scenes/external/*/scene.xml` write by hand). Differences,
+/// named in one warning: Mitsuba 3 (so forecast) interpolates normals, not slopes (within a
+/// texel), applies its shadowing term and flips invalid normals, which Mitsuba 2's plugin does
+/// not, and repeats the map across a tile's edge where Mitsuba 2 clamps (half a texel at the
+/// edge). `lean_fallback` true (another BSDF) is an error.
+fn mitsuba2_normalmap(cx: &mut Cx, mut p: Plugin, inner: Parsed) -> Result<Parsed, SceneError> {
+    let node = p.node;
+    let Some((file, fl)) = p.string(cx, "filename")? else { unreachable!("called with a `filename`") };
+    let tiles = p.float(cx, "tiles")?.unwrap_or(1.0);
+    if !(tiles.is_finite() && tiles > 0.0) {
+        return Err(p.err(cx, p.line_of("tiles"), "tiles", format!("tiles {tiles} must be positive")));
+    }
+    let slopes = p.boolean(cx, "use_slopes")?.unwrap_or(true);
+    if p.boolean(cx, "lean_fallback")? == Some(true) {
+        let msg = "lean_fallback true (Mitsuba 2's LEAN-mapped conductor on secondary paths) is not supported";
+        return Err(p.err(cx, p.line_of("lean_fallback"), "lean_fallback", msg));
+    }
+    for k in ["lean_fallback_alpha", "lean_fallback_material", "eta", "k"] {
+        p.find(k); // only read with lean_fallback
+    }
+    if p.node.children.iter().any(|c| c.name() == "normalmap") {
+        let msg = "both a `filename` (Mitsuba 2) and a `normalmap` texture (Mitsuba 3): give one";
+        return Err(p.err(cx, p.line_of("normalmap"), "normalmap", msg));
+    }
+    let at = |tag: &str, attrs: &[(&str, &str)], children: Vec<Node>| Node {
+        tag: tag.into(),
+        attrs: attrs.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
+        line: fl,
+        children,
+    };
+    let t = tiles.to_string();
+    let bitmap = at(
+        "texture",
+        &[("name", "normalmap"), ("type", "bitmap")],
+        vec![
+            at("string", &[("name", "filename"), ("value", &file)], vec![]),
+            at("boolean", &[("name", "raw"), ("value", "true")], vec![]),
+            at("transform", &[("name", "to_uv")], vec![at("scale", &[("x", &t), ("y", &t)], vec![])]),
+        ],
+    );
+    let holder = Node { tag: node.tag.clone(), attrs: node.attrs.clone(), line: node.line, children: vec![bitmap] };
+    let Some(Param::Texture(tex)) = super::texture::param(cx, &mut Plugin::new(&holder), "normalmap")? else {
+        unreachable!("a bitmap is a texture")
+    };
+    let slope_note = if slopes { "interpolates the normals, not the slopes (use_slopes), " } else { "" };
+    let m = format!(
+        "bsdf `normalmap`: Mitsuba 2's form (`filename`) read as Mitsuba 3's normalmap around a raw bitmap; \
+         forecast {slope_note}applies Mitsuba 3's shadowing term and flip of invalid normals, and repeats the map \
+         across a tile's edge (Mitsuba 2's plugin clamps)"
+    );
+    cx.warn(node.line, m);
+    p.finish(cx);
+    Ok(Parsed { surface: Surface { normalmap: Some(tex), ..inner.surface }, ..inner })
+}
+
 /// Parses one `<bsdf>` into a material and its surface (not registered).
 pub(super) fn material(cx: &mut Cx, n: &Node) -> Result<Parsed, SceneError> {
     if n.tag == "ref" {
@@ -145,6 +206,9 @@ pub(super) fn material(cx: &mut Cx, n: &Node) -> Result<Parsed, SceneError> {
             if inner.surface.has_map() {
                 let msg = "a `normalmap` around a `normalmap` or `bumpmap` is not supported";
                 return Err(p.err(cx, p.line_of("bsdf"), "bsdf", msg));
+            }
+            if p.node.children.iter().any(|c| c.name() == "filename") {
+                return mitsuba2_normalmap(cx, p, inner);
             }
             let line = p.line_of("normalmap");
             let Some(Param::Texture(t)) = super::texture::param(cx, &mut p, "normalmap")? else {

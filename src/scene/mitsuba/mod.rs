@@ -1,7 +1,9 @@
 //! Mitsuba XML scenes (Mitsuba 3, and the 0.5/0.6/2.0 spellings Mitsuba 3 upgrades) → `Scene`,
 //! for the subset documented in `scenes/README.md`: shapes (`shapes`), BSDFs (`bsdf`), `area`
-//! and `point` emitters, the `perspective` sensor (every `fov_axis`), the sampler's
-//! `sample_count` (→ default spp) and the integrator's `max_depth` (→ the vertex cap).
+//! and `point` emitters, the `perspective` sensor (every `fov_axis`; its film's crop window; a
+//! film and sampler given at the top level with an `id` and named by its `<ref>`s), the sampler's
+//! `sample_count` (→ default spp) and the integrator's `max_depth` (path segments: the vertex cap
+//! `max_depth` − 1).
 //!
 //! `<default>` values and `-D name=value` substitute `$name` (`xml`). forecast's own render
 //! options, which Mitsuba has no place for, travel as `<default name="forecast_*">` values that
@@ -43,6 +45,8 @@ pub(super) struct Cx {
     texture_ids: BTreeMap<String, u32>,
     /// The images decoded so far.
     textures: TextureCache,
+    /// Top-level `<film>`s and `<sampler>`s by `id`, for a sensor's `<ref>`s.
+    sensor_parts: BTreeMap<String, Node>,
     default_diffuse: Option<u32>,
 }
 
@@ -83,6 +87,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path, defines: &[(String, String)])
         ids: BTreeMap::new(),
         texture_ids: BTreeMap::new(),
         textures: TextureCache::default(),
+        sensor_parts: BTreeMap::new(),
         default_diffuse: None,
     };
     let (root, _version, vars) = xml::parse(src, defines).map_err(|(l, m)| cx.err(l, "", m))?;
@@ -104,6 +109,15 @@ pub fn load_str(src: &str, file: &str, dir: &Path, defines: &[(String, String)])
             }
             "texture" => texture::declare(&mut cx, n)?,
             "shape" => shapes::shape(&mut cx, n)?,
+            "film" | "sampler" => match n.attr("id") {
+                Some(id) => {
+                    cx.sensor_parts.insert(id.to_string(), n.clone());
+                }
+                None => {
+                    let m = format!("a top-level `<{}>` needs an `id` for a sensor's `<ref>`", n.tag);
+                    return Err(cx.err(n.line, &n.tag, m));
+                }
+            },
             "emitter" => point(&mut cx, n)?,
             t => {
                 let what = format!("`<{t}>` is not supported (textures, media, includes, shape groups, ...)");
@@ -118,16 +132,23 @@ pub fn load_str(src: &str, file: &str, dir: &Path, defines: &[(String, String)])
     cx.b.build(&Origin::new(root.line, ""), "emitter")
 }
 
-/// The integrator's `max_depth` (−1: the default cap 64). Its type is not used: the method is
-/// `--method`, so another renderer's integrator (`sppm`, `bdpt`, ...) and its parameters are
-/// warnings (the unread parameters, by `Plugin::finish`), never errors.
+/// The integrator's `max_depth`: Mitsuba counts path segments, so d bounds every path at d
+/// segments (emitters reached at the d-th, next-event estimation at the first d − 1 surface
+/// vertices), which is forecast's vertex cap d − 1 (`--max-depth` N: N surface vertices, NEE at
+/// each, and the emitter the N-th one's BSDF sample reaches). 1 renders the emitters seen
+/// directly; −1 (Mitsuba's "unlimited") leaves the default cap 64. Its type is not used: the
+/// method is `--method`, so another renderer's integrator (`sppm`, `bdpt`, ...) and its
+/// parameters are warnings (the unread parameters, by `Plugin::finish`), never errors.
 fn integrator(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
     let mut p = Plugin::new(n);
     let dl = p.line_of("max_depth");
     match p.int(cx, "max_depth")?.unwrap_or(-1) {
         -1 => {}
-        d if d >= 0 => cx.b.max_depth(d as u64, &Origin::new(dl, format!("{}.max_depth", n.ty())))?,
-        d => return Err(p.err(cx, dl, "max_depth", format!("max_depth {d}: use -1 or a value >= 2"))),
+        d if d >= 1 => cx.b.max_segments(d as u64, &Origin::new(dl, format!("{}.max_depth", n.ty())))?,
+        d => {
+            let m = format!("max_depth {d}: use -1 (unlimited) or a number of path segments >= 1");
+            return Err(p.err(cx, dl, "max_depth", m));
+        }
     }
     if !matches!(n.ty(), "path" | "volpath") {
         cx.warn(n.line, format!("integrator `{}` ignored (the method is forecast's `--method`)", n.ty()));
@@ -156,6 +177,14 @@ fn fov_y(fov: f32, axis: &str, w: u32, h: u32) -> Option<f32> {
 
 /// The perspective sensor → the builder's camera, and the sampler's `sample_count` → spp.
 fn sensor(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
+    // a `<ref>` to a top-level film or sampler stands for it (Mitsuba 2's SMS scenes)
+    let mut n = n.clone();
+    for c in &mut n.children {
+        if let Some(part) = c.attr("id").filter(|_| c.tag == "ref").and_then(|id| cx.sensor_parts.get(id)) {
+            *c = part.clone();
+        }
+    }
+    let n = &n;
     let mut p = Plugin::new(n);
     if n.ty() != "perspective" {
         return Err(cx.err(n.line, &format!("sensor.{}", n.ty()), format!("sensor `{}`: only `perspective`", n.ty())));
@@ -166,7 +195,7 @@ fn sensor(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
     let (axis, al) = p.string(cx, "fov_axis")?.unwrap_or(("x".into(), n.line));
     let xl = p.line_of("to_world");
     let xf = p.transform(cx, "to_world")?;
-    let (w, h) = film(cx, &mut p)?;
+    let Film { size: [w, h], crop } = film(cx, &mut p)?;
     sampler(cx, &mut p)?;
     let fovy = fov_y(fov, &axis, w, h).ok_or_else(|| {
         p.err(cx, al, "fov_axis", format!("unknown fov_axis `{axis}` (x, y, smaller, larger, diagonal)"))
@@ -180,33 +209,100 @@ fn sensor(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
         fov: (fovy, at(fl, "fov")),
         resolution: ([w, h], at(n.line, "film")),
     })?;
+    if let Some((offset, size)) = crop {
+        cx.b.crop(offset, size);
+    }
     p.finish(cx);
     Ok(())
 }
 
-/// The film's `width`, `height` (Mitsuba's defaults 768 × 576).
-fn film(cx: &mut Cx, p: &mut Plugin) -> Result<(u32, u32), SceneError> {
+/// A crop window: its offset and size in the film's pixels.
+type Window = ([u32; 2], [u32; 2]);
+
+/// What the sensor's film says: the full film's size and the crop window, if any.
+struct Film {
+    size: [u32; 2],
+    /// The window, when it is not the whole film.
+    crop: Option<Window>,
+}
+
+/// The film: `width`, `height` (Mitsuba's defaults 768 × 576); the crop window
+/// (`crop_offset_x/y`, default 0; `crop_width/height`, default the film's), which must lie inside
+/// the film, as Mitsuba requires; `rfilter` (a box is forecast's pixel; another filter warns);
+/// the output's format (`file_format`, `pixel_format`, `component_format`: the output is an RGB
+/// float EXR whatever they say, so they warn unless they already say that); `sample_border`
+/// (with a box filter no sample crosses a pixel: read, warned when true); Mitsuba 0.6's `banner`,
+/// `high_quality_edges` and 2's `compensate` (no effect on the image: read, ignored).
+fn film(cx: &mut Cx, p: &mut Plugin) -> Result<Film, SceneError> {
     let (mut w, mut h) = (768u32, 576u32);
+    let mut crop = None;
     let films = p.objects(&["film"]);
     only_one(cx, p, &films, "film")?;
     for f in films {
         film_type(cx, f)?;
         let mut fp = Plugin::new(f);
-        fp.reject(cx, &["crop_offset_x", "crop_offset_y", "crop_width", "crop_height"], "crop the output instead")?;
         let dim = |v: Option<i64>, d: u32| v.map_or(Ok(d), |v| u32::try_from(v).map_err(|_| ()));
         let (fw, fh) = (dim(fp.int(cx, "width")?, w), dim(fp.int(cx, "height")?, h));
         match (fw, fh) {
             (Ok(a), Ok(b)) if (1..=65536).contains(&a) && (1..=65536).contains(&b) => (w, h) = (a, b),
             _ => return Err(fp.err(cx, f.line, "width", "width and height must be in 1..=65536")),
         }
+        crop = crop_window(cx, &mut fp, [w, h])?;
         for r in fp.objects(&["rfilter"]) {
             if r.ty() != "box" {
                 cx.warn(r.line, format!("film: rfilter `{}` ignored (pixels are box-filtered)", r.ty()));
             }
         }
+        for (k, fine) in [("file_format", &["openexr", "exr"][..]), ("pixel_format", &["rgb", "rgba"][..])] {
+            if let Some((v, l)) = fp.string(cx, k)? {
+                if !fine.contains(&v.to_ascii_lowercase().as_str()) {
+                    cx.warn(l, format!("film: {k} `{v}` ignored (the output is an RGB OpenEXR image)"));
+                }
+            }
+        }
+        if let Some((v, l)) = fp.string(cx, "component_format")? {
+            if v != "float32" {
+                cx.warn(l, format!("film: component_format `{v}` ignored (the output is 32-bit float)"));
+            }
+        }
+        if fp.boolean(cx, "sample_border")? == Some(true) {
+            let m = "film: sample_border ignored (pixels are box-filtered: no sample reaches another pixel)";
+            cx.warn(fp.line_of("sample_border"), m.into());
+        }
+        for k in ["banner", "high_quality_edges", "compensate"] {
+            fp.find(k);
+        }
         fp.finish(cx);
     }
-    Ok((w, h))
+    Ok(Film { size: [w, h], crop })
+}
+
+/// The film's crop window, `None` when it is the whole film. Mitsuba's rule: offset + size
+/// inside the film; a window of no pixels is refused too.
+fn crop_window(cx: &Cx, fp: &mut Plugin, [w, h]: [u32; 2]) -> Result<Option<Window>, SceneError> {
+    let keys = ["crop_offset_x", "crop_offset_y", "crop_width", "crop_height"];
+    let lines = keys.map(|k| fp.line_of(k));
+    let mut v = [0u32, 0, w, h];
+    for (i, k) in keys.iter().enumerate() {
+        if let Some(x) = fp.int(cx, k)? {
+            v[i] = u32::try_from(x).map_err(|_| fp.err(cx, lines[i], k, format!("{k} {x} must be >= 0")))?;
+        }
+    }
+    let [ox, oy, cw, ch] = v;
+    for (i, (o, s, full, axis)) in [(ox, cw, w, "width"), (oy, ch, h, "height")].into_iter().enumerate() {
+        let (ko, ks) = (keys[i], keys[2 + i]);
+        if s == 0 {
+            return Err(fp.err(cx, lines[2 + i], ks, format!("{ks} 0: the crop window has no pixels")));
+        }
+        if u64::from(o) + u64::from(s) > u64::from(full) {
+            // the key given last of the two is the one to blame, the size when both are given
+            let given = |k: &str| fp.node.children.iter().any(|c| c.name() == k);
+            let (k, l) = if given(ks) || !given(ko) { (ks, lines[2 + i]) } else { (ko, lines[i]) };
+            let m = format!("the crop window lies outside the film: {ko} {o} + {ks} {s} > {axis} {full}");
+            return Err(fp.err(cx, l, k, m));
+        }
+    }
+    Ok((v != [0, 0, w, h]).then_some(([ox, oy], [cw, ch])))
 }
 
 /// A second `<film>` or `<sampler>` in the sensor is an error naming both lines (as a second

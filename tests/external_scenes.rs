@@ -1,0 +1,141 @@
+//! The scenes of the caustics literature in `scenes/external/` (issue #62): the SMS repository's
+//! `sms-sphere-smooth`, `sms-sphere`, `sms-plane` load from `scene.xml` (Mitsuba 3) and from
+//! `original.xml` (Mitsuba 2, as published: its absent `Tiles71` texture supplied by a copy of
+//! `Tiles27` in a temporary folder), and both forms are the same scene; `sms-ring`'s `ring.xml`
+//! (verbatim) loads; `sms-pool` needs the `envmap` emitter: its load error names the emitter, the
+//! file and the line. Each scene that loads renders with `pt` at 32 pixels across, 4 spp: finite
+//! and not black.
+
+mod common;
+use common::{render_passes, root, tmp_dir};
+use forecast::accel::World;
+use forecast::integrators::{Method, MethodArgs};
+use forecast::scene::Scene;
+use std::path::{Path, PathBuf};
+
+const LOADING: [&str; 3] = ["sms-sphere-smooth", "sms-sphere", "sms-plane"];
+
+fn dir(name: &str) -> PathBuf {
+    root().join("scenes/external").join(name)
+}
+
+/// The folder copied to a temporary one with `Tiles27` at `original.xml`'s absent `Tiles71` path.
+fn with_tiles71(name: &str) -> PathBuf {
+    let to = tmp_dir(&format!("external-{name}"));
+    copy_dir(&dir(name), &to);
+    let t71 = to.join("textures/[2K]Tiles71");
+    std::fs::create_dir_all(&t71).unwrap();
+    std::fs::copy(to.join("textures/[2K]Tiles27/Tiles27_col.jpg"), t71.join("Tiles71_col.jpg")).unwrap();
+    to
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let t = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&e.path(), &t);
+        } else {
+            std::fs::copy(e.path(), &t).unwrap();
+        }
+    }
+}
+
+/// What the image depends on, as comparable text (not the file, hash, texture paths, warnings).
+fn fingerprint(s: &Scene) -> String {
+    format!(
+        "{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
+        s.camera, s.render, s.materials, s.surfaces, s.triangles, s.spheres, s.emitters, s.point_lights, s.lights
+    )
+}
+
+/// `pt` at 32 pixels across (the film's aspect), 4 spp: every pixel finite, the image not black.
+fn renders(label: &str, scene: Scene) {
+    let (w, h) = (32, (32 * scene.camera.height).div_ceil(scene.camera.width).max(1));
+    let world = World::build(scene).unwrap();
+    let o = MethodArgs::default();
+    let bytes = Method::Pt.preprocess(&world, &o, 1).unwrap();
+    let mut pt = Method::Pt.build(&world, &o, &bytes).unwrap();
+    let film = render_passes(&world, pt.as_mut(), w, h, 4, 1);
+    let m = film.mean();
+    assert!(m.iter().flatten().all(|x| x.is_finite()), "{label}: a pixel is not finite");
+    let mean: f64 = m.iter().flatten().map(|&x| x as f64).sum::<f64>() / (3 * m.len()) as f64;
+    eprintln!("{label}: {w}x{h}, 4 spp, mean {mean:.4}");
+    assert!(mean > 0.0, "{label}: black");
+}
+
+#[test]
+fn sms_scenes_load_from_scene_and_original_xml_and_agree() {
+    for name in LOADING {
+        let a = forecast::scene::load(&dir(name).join("scene.xml")).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let t = with_tiles71(name);
+        let b = forecast::scene::load(&t.join("original.xml")).unwrap_or_else(|e| panic!("{name} original: {e}"));
+        // absent from the snapshot, so the published file is refused at the texture's line
+        let e = forecast::scene::load(&dir(name).join("original.xml")).unwrap_err();
+        assert!(e.key.ends_with("filename") && e.message.contains("Tiles71"), "{name}: {e}");
+        assert_eq!(fingerprint(&a), fingerprint(&b), "{name}: scene.xml and original.xml differ");
+        assert_eq!(b.render.max_depth, 5, "{name}: max_depth 6 is 6 segments");
+        let w = b.warnings.join("\n");
+        eprintln!("{name} original.xml:\n{w}");
+        assert!(w.contains("ignored (the method is forecast's `--method`)"), "{name}: {w}");
+        assert!(w.contains("caustic_"), "{name}: the caustic_* flags are named: {w}");
+        if name != "sms-sphere-smooth" {
+            assert!(w.contains("Mitsuba 2's form (`filename`)"), "{name}: {w}");
+        }
+        renders(name, a);
+        renders(&format!("{name} original"), b);
+    }
+}
+
+#[test]
+fn sms_ring_loads_as_published() {
+    let s = forecast::scene::load(&dir("sms-ring/ring.xml")).unwrap();
+    let w = s.warnings.join("\n");
+    assert!(w.contains("integrator `path_sms_ss` ignored"), "{w}");
+    renders("sms-ring", s);
+}
+
+/// Until forecast has the `envmap` emitter: the error names it, the file and its line.
+#[test]
+fn sms_pool_needs_the_envmap_emitter() {
+    for file in ["scene.xml", "original.xml"] {
+        let p = dir("sms-pool").join(file);
+        let text = std::fs::read_to_string(&p).unwrap();
+        let line = text.lines().position(|l| l.contains("<emitter type=\"envmap\"")).unwrap() + 1;
+        let e = forecast::scene::load(&p).unwrap_err();
+        assert_eq!((e.file.as_str(), e.line, e.key.as_str()), (p.to_str().unwrap(), line, "emitter.envmap"), "{e}");
+        assert!(e.message.contains("`envmap`"), "{e}");
+    }
+}
+
+/// Everything of `sms-pool` but its `envmap` loads: both files in a temporary copy, the envmap
+/// replaced by a point light and the textures this repository leaves out stood in for by others
+/// of the folder (`scenes/external/README.md`); each renders finite and not black.
+#[test]
+fn sms_pool_loads_but_for_the_envmap() {
+    let t = tmp_dir("external-sms-pool");
+    copy_dir(&dir("sms-pool"), &t);
+    let tex = t.join("textures");
+    for (missing, stand_in) in [
+        ("[2K]Tiles06/Tiles06_col.png", "siggraph_logo.png"),
+        ("[2K]Tiles50/Tiles50_col.jpg", "[2K]Tiles27/Tiles27_col.jpg"),
+        ("[2K]Tiles54/Tiles54_col.jpg", "[2K]Tiles27/Tiles27_col.jpg"),
+        ("Striped_cotton_01_2K_Normal.jpg", "[2K]Tiles27/Tiles27_col.jpg"),
+        ("[2K]Fabric33/Fabric33_nrm.png", "siggraph_logo.png"),
+    ] {
+        std::fs::create_dir_all(tex.join(missing).parent().unwrap()).unwrap();
+        std::fs::copy(tex.join(stand_in), tex.join(missing)).unwrap();
+    }
+    for file in ["scene.xml", "original.xml"] {
+        let text = std::fs::read_to_string(t.join(file)).unwrap();
+        let (a, b) = (text.find("<emitter type=\"envmap\"").unwrap(), text.find("</emitter>").unwrap());
+        let sun = "<emitter type=\"point\"><point name=\"position\" x=\"20\" y=\"40\" z=\"10\"/>\
+                   <rgb name=\"intensity\" value=\"3000\"/></emitter>";
+        let edited = t.join(format!("point-{file}"));
+        std::fs::write(&edited, format!("{}{sun}{}", &text[..a], &text[b + "</emitter>".len()..])).unwrap();
+        let s = forecast::scene::load(&edited).unwrap_or_else(|e| panic!("sms-pool {file}: {e}"));
+        assert!(s.ntri() > 40_000, "{file}: {} triangles", s.ntri());
+        renders(&format!("sms-pool {file} (a point light for the envmap)"), s);
+    }
+}
