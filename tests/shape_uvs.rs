@@ -207,3 +207,35 @@ fn singular_frame_of_a_textured_disk_is_an_error() {
     assert_eq!((e.line, e.key.as_str()), (4, "disk.to_world"), "{e}");
     assert!(e.to_string().contains("invertible"), "{e}");
 }
+
+/// A mirroring `to_world` does not turn Mitsuba's analytic `disk` and `cylinder`: they face along
+/// their normal transformed as a normal. Mitsuba 3.9.1 (scalar_rgb, rays from both sides):
+/// `disk` under scale (1, 1, −1) has `si.n` = (0, 0, −1); `cylinder` under scale (−1, 1, 1) has
+/// `si.n` = (0.994987, 0.1, 0) at (0.994987, 0.1, 0.5), outward. The tessellations face the same
+/// way (their winding reversed where `to_world` mirrors), and a `flip_normals` turns them.
+#[test]
+fn mirrored_disks_and_cylinders_face_as_mitsubas() {
+    let scene = |shape: &str, xf: &str, flip: bool| {
+        let xml = format!(
+            "<scene version=\"3.0.0\"><sensor type=\"perspective\"><float name=\"fov\" value=\"40\"/></sensor><shape type=\"sphere\"><point name=\"center\" x=\"0\" y=\"0\" z=\"9\"/><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter></shape><shape type=\"{shape}\"><transform name=\"to_world\"><scale {xf}/></transform>\
+             <boolean name=\"flip_normals\" value=\"{flip}\"/></shape></scene>"
+        );
+        forecast::scene::mitsuba::load_str(&xml, "mirrored.xml", Path::new("."), &[]).expect("loads")
+    };
+    for flip in [false, true] {
+        let sign = if flip { -1.0 } else { 1.0 };
+        let disk = scene("disk", "x=\"1\" y=\"1\" z=\"-1\"", flip);
+        assert!(
+            disk.triangles.iter().all(|t| (t.ng - Vec3::new(0.0, 0.0, -sign)).length() < 1e-5),
+            "disk, flip {flip}"
+        );
+        let cyl = scene("cylinder", "x=\"-1\" y=\"1\" z=\"1\"", flip);
+        assert!(
+            cyl.triangles.iter().all(|t| {
+                let c = (t.p[0] + t.p[1] + t.p[2]) / 3.0;
+                t.ng.dot(Vec3::new(c.x, c.y, 0.0)) * sign > 0.0
+            }),
+            "cylinder, flip {flip}"
+        );
+    }
+}

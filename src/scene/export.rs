@@ -190,10 +190,8 @@ fn analytic_shape(x: &mut String, scene: &Scene, run: &[Triangle], uv: &ShapeUv,
         ShapeKind::Cylinder => "cylinder",
     };
     let t = &run[0];
-    // the tessellation's unflipped triangles face along Mitsuba's normal, or against it where
-    // `to_world` mirrors (their winding turns with it)
-    let mirrors = uv.to_world().determinant() < 0.0;
-    let flip = (t.ng.dot(uv.normal_at((t.p[0] + t.p[1] + t.p[2]) / 3.0)) < 0.0) != mirrors;
+    // the tessellation's unflipped triangles face along Mitsuba's normal, mirrored or not
+    let flip = t.ng.dot(uv.normal_at((t.p[0] + t.p[1] + t.p[2]) / 3.0)) < 0.0;
     let m = uv.to_world().transpose().to_cols_array().map(|v| v.to_string()).join(" ");
     let _ = writeln!(x, "    <shape type=\"{ty}\">");
     let _ = writeln!(x, "        <transform name=\"to_world\"><matrix value=\"{m}\"/></transform>");

@@ -82,8 +82,13 @@ pub(super) fn shape(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
             None => {}
         }
     }
+    // Mitsuba's analytic disk and cylinder face along their normal transformed as a normal
+    // (outward, +z), which a mirroring `to_world` does not turn; their tessellation's winding
+    // turns with it, so it is reversed there (meshes, `rectangle` and `cube` face by their winding,
+    // as Mitsuba's)
+    let mirrored = local.is_some() && xf.as_ref().is_some_and(|x| DMat3::from_mat4(x.m).determinant() < 0.0);
     match mesh {
-        Some(m) => triangles(cx, id, &m, xf.as_ref(), flip, (&raw_at, &xf_at))?,
+        Some(m) => triangles(cx, id, &m, xf.as_ref(), (flip, mirrored), (&raw_at, &xf_at))?,
         None => sphere(cx, &mut p, id, xf, flip, &xf_at)?,
     }
     p.finish(cx);
@@ -303,13 +308,14 @@ fn sphere(
 
 /// A mesh's world-space triangles → the builder (which skips degenerate ones with a warning and
 /// refuses vertices outside the extent: at `raw_at` when the mesh itself is outside, else at
-/// `xf_at`, the transform).
+/// `xf_at`, the transform). `flip` (`flip_normals`) reverses the winding and the normals,
+/// `reverse` the winding alone.
 fn triangles(
     cx: &mut Cx,
     id: usize,
     m: &IndexedMesh,
     xf: Option<&Xform>,
-    flip: bool,
+    (flip, reverse): (bool, bool),
     (raw_at, xf_at): (&Origin, &Origin),
 ) -> Result<(), SceneError> {
     let nm = xf.map(|x| DMat3::from_mat4(x.m).inverse().transpose());
@@ -318,7 +324,7 @@ fn triangles(
     let normals = m.normals.as_ref().filter(|ns| ns.len() == m.positions.len());
     let uvs = m.uvs.as_ref().filter(|t| t.len() == m.positions.len());
     for (k, f) in m.faces.iter().enumerate() {
-        let f = if flip { [f[0], f[2], f[1]] } else { *f };
+        let f = if flip != reverse { [f[0], f[2], f[1]] } else { *f };
         let raw = f.map(|i| m.positions[i as usize]);
         let n = normals.map(|ns| f.map(|i| if flip { -xn(ns[i as usize]) } else { xn(ns[i as usize]) }));
         let uv = uvs.map(|t| f.map(|i| t[i as usize]));
