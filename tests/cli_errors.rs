@@ -485,3 +485,48 @@ fn resume_of_a_checkpoint_past_the_requested_spp_warns() {
     assert_eq!(spp(&more), 10);
     let _ = std::fs::remove_dir_all(d);
 }
+
+/// A render whose every sample is 0 while the scene has a light (here a quad light facing away
+/// from the only other surface, issue #63: exit 0 and no word) warns on stderr and in the JSON's
+/// `warnings`; the same scene with the light turned to face the floor does not.
+#[test]
+fn a_black_image_with_lights_warns() {
+    let d = tmp_dir("cli-black");
+    let scene = |u: &str, v: &str| {
+        format!(
+            "[camera]\nposition = [0.0, 1.0, 3.88]\nlook_at = [0.0, 0.5, 0.0]\nup = [0.0, 1.0, 0.0]\nfov = 39.3\n\
+             resolution = [16, 16]\n\n[materials.white]\ntype = \"diffuse\"\nalbedo = [0.7, 0.7, 0.7]\n\n\
+             [[shape]]\ntype = \"quad\"\ncorner = [-1.0, 0.0, -1.0]\nu = [0.0, 0.0, 2.0]\nv = [2.0, 0.0, 0.0]\n\
+             material = \"white\"\n\n[[shape]]\ntype = \"quad\"\ncorner = [-0.24, 1.98, -0.19]\nu = {u}\nv = {v}\n\
+             emission = [17.0, 12.0, 4.0]\n"
+        )
+    };
+    for (name, u, v, black) in
+        [("away", "[0.0, 0.0, 0.38]", "[0.48, 0.0, 0.0]", true), ("down", "[0.48, 0.0, 0.0]", "[0.0, 0.0, 0.38]", false)]
+    {
+        let path = d.join(format!("{name}.toml"));
+        std::fs::write(&path, scene(u, v)).unwrap();
+        let out = d.join(name);
+        let (code, _, err) = run(&[
+            "render",
+            &path.display().to_string(),
+            "--spp",
+            "4",
+            "--threads",
+            "2",
+            "--quiet",
+            "--out",
+            &out.display().to_string(),
+        ]);
+        assert_eq!(code, 0, "{name}: {err}");
+        let json: serde_json::Value = serde_json::from_slice(&std::fs::read(out.with_extension("json")).unwrap()).unwrap();
+        let warned = json["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains("image is black"));
+        assert_eq!(warned, black, "{name}: {json}");
+        assert_eq!(err.contains("warning: the image is black"), black, "{name}: {err}");
+        if black {
+            assert!(err.contains("the scene has lights") && err.contains("face the scene"), "{err}");
+            assert_eq!(json["image_mean"], serde_json::json!([0.0, 0.0, 0.0]));
+        }
+    }
+    let _ = std::fs::remove_dir_all(d);
+}

@@ -289,6 +289,10 @@ fn finish(
             passes.warn(format!("final checkpoint not written ({e}); the previous one is kept"), None);
         }
     }
+    let scene = &run.world.scene;
+    if let Some(w) = report::black_image_warning(&reduced.film, scene.emitters.len() + scene.point_lights.len()) {
+        passes.warn(w, None);
+    }
     let mut outputs = FileSet::new();
     let image = image_files(&run.job.out, &reduced.film, &mut outputs)?;
     timings.write_s = secs(t_write);

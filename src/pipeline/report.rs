@@ -126,6 +126,29 @@ pub struct RenderReport {
     pub image_mean: [f64; 3],
 }
 
+/// The warning of a render whose every sample is exactly 0 (the film's radiance sums are all
+/// zero; radiance is never negative, so none cancels): no light reached anything the camera saw,
+/// e.g. a light facing away from the scene, or one enclosed by geometry. `lights` counts the
+/// scene's emitting primitives and point lights. A render that found light in a single sample anywhere gets
+/// none: the check is exact, not a threshold, so it never fires on a dark but lit image.
+pub fn black_image_warning(film: &Film, lights: usize) -> Option<String> {
+    let black = film.data.chunks_exact(crate::render::film::STRIDE).all(|d| d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0);
+    let samples = film.total_samples();
+    if !black || samples == 0.0 {
+        return None;
+    }
+    let spp = samples / (film.width * film.height).max(1) as f64;
+    Some(if lights == 0 {
+        format!("the image is black ({spp:.0} spp, every sample 0): the scene has no light")
+    } else {
+        format!(
+            "the image is black ({spp:.0} spp, every sample 0): the scene has lights, but no light reached \
+             anything the camera sees; check that the lights face the scene and are not enclosed or hidden from \
+             it (a light facing away renders black)"
+        )
+    })
+}
+
 /// The outcome on rank 0.
 pub struct RenderResult {
     /// The accumulated film (rank 0).
