@@ -109,8 +109,10 @@ pub struct RenderJob {
 pub struct Plan {
     /// Method.
     pub method: Method,
-    /// Why this method: named by `--method` or the scene, or `auto`'s rule.
+    /// Why this method, one line: named by `--method` or the scene, or `auto`'s rule.
     pub method_reason: String,
+    /// What `auto`'s pick rests on (its figures and notes); `None` for a named method.
+    pub method_evidence: Option<String>,
     /// Seed.
     pub seed: u64,
     /// Method parameters (`max_depth` resolved).
@@ -179,7 +181,8 @@ impl RenderJob {
         let spp = if time.is_some() { None } else { Some(self.spp.or(r.spp).unwrap_or(16)) };
         let resolution = self.resolution.unwrap_or((scene.camera.width, scene.camera.height));
         let seed = self.seed.unwrap_or(r.seed);
-        let plan = Plan { method, method_reason, seed, args, time, spp, resolution };
+        let method_evidence = crate::integrators::auto::resolve_evidence(self.method, scene);
+        let plan = Plan { method, method_reason, method_evidence, seed, args, time, spp, resolution };
         plan.validate()?;
         check_snapshots(&self.snapshots, time)?;
         let gathers = self.checkpoint_every.is_some() || self.resume.is_some() || !self.snapshots.is_empty();
@@ -472,6 +475,7 @@ impl Run<'_> {
         RenderReport {
             method: self.plan.method,
             method_reason: self.plan.method_reason.clone(),
+            method_evidence: self.plan.method_evidence.clone(),
             scene: self.world.scene.path.clone(),
             resolution: [w, h],
             spp: (t.film_samples / ((w as f64) * (h as f64))).round() as u64,

@@ -68,8 +68,11 @@ pub struct RankStats {
 pub struct RenderReport {
     /// Method.
     pub method: Method,
-    /// Why this method: named by `--method` or the scene, or `auto`'s rule and its evidence.
+    /// Why this method, in one line: named by `--method` or the scene, or `auto`'s rule.
     pub method_reason: String,
+    /// `auto`'s evidence for its pick (the equal-time figures of `docs/auto.md` and the notes on
+    /// the scene's point lights and glossy receivers); `null` for a named method.
+    pub method_evidence: Option<String>,
     /// Scene file.
     pub scene: String,
     /// Image size.
