@@ -194,3 +194,23 @@ fn a_resumed_render_may_replace_the_checkpoint_it_resumed() {
     assert_eq!(ck.passes_done, 4);
     let _ = std::fs::remove_dir_all(d);
 }
+
+/// `forecast render SCENE` with no `--out` writes `out/render.{exr,png,json}` under the working
+/// directory, creating `out/` (ignored by git), and nothing beside it.
+#[test]
+fn the_default_outputs_go_to_out() {
+    let d = tmp_dir("outputs-default-out");
+    std::fs::copy(root().join("scenes/stability/no-dirac.toml"), d.join("s.toml")).unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_forecast"))
+        .current_dir(&d)
+        .args(["render", "s.toml", "--spp", "1", "--resolution", "8x8", "--threads", "1", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut top: Vec<String> =
+        std::fs::read_dir(&d).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    top.sort();
+    assert_eq!(top, ["out", "s.toml"]);
+    assert_eq!(snapshot(&d.join("out")).keys().collect::<Vec<_>>(), ["render.exr", "render.json", "render.png"]);
+    let _ = std::fs::remove_dir_all(d);
+}
