@@ -301,7 +301,8 @@ fn finish(
     timings.write_s = secs(t_write);
     timings.total_s = secs(run.started);
     let stats = integrator.stats(&passes.counters.profile);
-    let report = run.report(passes, reduced.parts, timings, stats, &image, true);
+    // a signal's render is not complete; a time box reached is
+    let report = run.report(passes, reduced.parts, timings, stats, &image, !passes.interrupted);
     let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
     outputs.add(with_ext(&run.job.out, "json"), text.into_bytes());
     outputs.write()?;

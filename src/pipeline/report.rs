@@ -120,7 +120,9 @@ pub struct RenderReport {
     /// `pt-cf` without `--light-paths`: the pilot's figures and the light paths it chose
     /// (`pipeline::light_pilot`); `null` otherwise.
     pub light_path_rule: Option<super::LightPathRule>,
-    /// `false` in the JSON written with a checkpoint (a render still running), `true` at the end.
+    /// `false` in the JSON written with a checkpoint (a render still running) and in that of a
+    /// render Ctrl-C or SIGTERM ended (`interrupted`); `true` when the spp or the time box was
+    /// reached (a time box is a complete render).
     pub complete: bool,
     /// Whether Ctrl-C or SIGTERM ended the render before its spp or time box (`interrupt`): the
     /// image holds the passes done.
