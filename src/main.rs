@@ -75,6 +75,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
         Command::Diff(a) => Ok(diff(&a)?),
         Command::Bench(a) => Ok(bench_cmd(&a, &opts)?),
         Command::ExportMitsuba { scene, out } => {
+            forecast::atomic_io::check_input("scene file", &scene).map_err(String::from)?;
             let rep = forecast::scene::export::export_mitsuba(&scene, &out)?;
             rep.warnings.iter().for_each(|w| errln!("warning: {w}"));
             outln!("wrote {} and {} PLY mesh(es)", rep.xml.display(), rep.meshes.len())?;
@@ -235,6 +236,7 @@ fn diff(a: &forecast::cli::DiffArgs) -> Result<(), String> {
 fn bench_cmd(a: &forecast::cli::BenchArgs, opts: &forecast::scene::LoadOptions) -> Result<(), String> {
     forecast::param_limits::SPP.check_flag("--spp", a.spp)?;
     a.accel.check()?;
+    forecast::atomic_io::check_input("scene file", &a.scene)?;
     let scene = forecast::scene::load_with(&a.scene, opts).map_err(|e| e.to_string())?;
     let t = Instant::now();
     let ntri = scene.triangles.len();
@@ -299,6 +301,7 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs, opts: &forecast::scene::Load
     forecast::atomic_io::check_output_prefix(&r.out)?;
     let accel = r.method_args.settings.accel;
     accel.check()?; // before any work, as `bench` and `render`
+    forecast::atomic_io::check_input("scene file", &r.scene)?;
     let scene = forecast::scene::load_with(&r.scene, opts).map_err(|e| e.to_string())?;
     let mut guard = forecast::atomic_io::OutputSet::new();
     guard.scene_inputs(&r.scene, &scene.mesh_files).output("--out", &image_io::with_ext(&r.out, "png"));

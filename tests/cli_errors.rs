@@ -530,3 +530,25 @@ fn a_black_image_with_lights_warns() {
     }
     let _ = std::fs::remove_dir_all(d);
 }
+
+/// A scene file that cannot be read is named with no line (it has none; issue #63 showed
+/// `missing.toml:0:`), by every command that loads one, TOML or Mitsuba XML.
+#[test]
+fn a_missing_scene_is_named_without_a_line() {
+    let d = tmp_dir("cli-missing-scene");
+    let out = d.join("x").display().to_string();
+    for args in [
+        vec!["render", "missing.toml", "--out", &out],
+        vec!["render", "missing.xml", "--out", &out],
+        vec!["bench", "missing.toml"],
+        vec!["forecast-map", "missing.toml", "--out", &out],
+        vec!["export-mitsuba", "missing.toml", "--out", &out],
+    ] {
+        let (code, _, err) = run(&args);
+        assert_eq!(code, 1, "{args:?}: {err}");
+        let file = args[1];
+        assert!(err.contains(&format!("cannot read scene file `{file}`")), "{args:?}: {err}");
+        assert!(!err.contains(&format!("{file}:")), "{args:?}: a line number: {err}");
+    }
+    let _ = std::fs::remove_dir_all(d);
+}

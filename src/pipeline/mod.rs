@@ -332,6 +332,7 @@ fn preprocess_over_budget(plan: &Plan, timings: &Timings, started: Instant, rank
 /// memory estimate), build the BVH.
 fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), RenderError> {
     let t_load = Instant::now();
+    crate::atomic_io::check_input("scene file", &job.scene)?; // named without a line: it has none
     let mut scene = crate::scene::load_with(&job.scene, &job.load_options())?;
     job.output_set(&scene).check()?; // before anything is written
     let load_s = secs(t_load);
