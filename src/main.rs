@@ -219,16 +219,51 @@ fn diff(a: &forecast::cli::DiffArgs) -> Result<(), String> {
         let scale = metrics::write_diff_png(p, &crop_a, &crop_b)?;
         outln!("diff PNG  {} (saturates at |diff| = {scale:.4e})", p.display())?;
     }
-    if let (Some(p0), Some(p1)) = (&a.half0, &a.half1) {
-        let (h0, h1) = (image_io::read_exr(p0)?, image_io::read_exr(p1)?);
-        image_io::check_same_size(&[(&a.b, &ib), (p0, &h0), (p1, &h1)])?;
-        let var = image_io::read_exr_variance(&a.a)?;
-        let rep = metrics::mitsuba_agreement(&ia, var.as_ref(), &ib, &h0, &h1)?;
-        outln!("{rep}")?;
-        if !rep.passed {
-            return Err(format!("agreement check FAILED: {}", rep.failures.join("; ")));
+    let (Some(p0), Some(p1)) = (&a.half0, &a.half1) else {
+        outln!(
+            "verdict   none: whether A and B agree within their noise needs B's two independent halves \
+             (--half0 B0.exr --half1 B1.exr, as `forecast reference` writes them)"
+        )?;
+        return Ok(());
+    };
+    let (h0, h1) = (image_io::read_exr(p0)?, image_io::read_exr(p1)?);
+    image_io::check_same_size(&[(&a.b, &ib), (p0, &h0), (p1, &h1)])?;
+    let var = image_io::read_exr_variance(&a.a)?;
+    independent_images(&[("A", &a.a, &ia), ("B", &a.b, &ib), ("--half0", p0, &h0), ("--half1", p1, &h1)])?;
+    let rep = metrics::mitsuba_agreement(&ia, var.as_ref(), &ib, &h0, &h1)?;
+    outln!("{rep}")?;
+    let worst = rep.mean_rel_diff.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+    let stats = format!(
+        "largest mean difference {:.3}% (limit {:.1}%), noise ratio {:.3} (1 ± {:.3})",
+        100.0 * worst,
+        100.0 * metrics::MEAN_REL_TOLERANCE,
+        rep.ratio,
+        rep.noise.ratio_tolerance
+    );
+    if !rep.passed {
+        outln!("verdict   differ: {stats}")?;
+        return Err(format!("agreement check FAILED: {}", rep.failures.join("; ")));
+    }
+    outln!("verdict   agree: {stats}")?;
+    outln!("agreement check PASSED")?;
+    Ok(())
+}
+
+/// Refuses a `diff --half0/--half1` check whose images are not independent: two of A, B and the
+/// halves with the same pixels (the same file given twice, or a copy) make the noise check pass
+/// or fail vacuously (identical halves estimate no noise; A equal to the reference has none).
+fn independent_images(images: &[(&str, &std::path::Path, &image_io::Image)]) -> Result<(), String> {
+    for (i, (n0, p0, im0)) in images.iter().enumerate() {
+        for (n1, p1, im1) in &images[i + 1..] {
+            if im0.pixels == im1.pixels {
+                return Err(format!(
+                    "diff: {n0} `{}` and {n1} `{}` are the same image: the agreement check needs a test image and \
+                     two reference halves rendered independently (different seeds) of each other",
+                    p0.display(),
+                    p1.display()
+                ));
+            }
         }
-        outln!("agreement check PASSED")?;
     }
     Ok(())
 }

@@ -552,3 +552,48 @@ fn a_missing_scene_is_named_without_a_line() {
     }
     let _ = std::fs::remove_dir_all(d);
 }
+
+/// `diff` gives a verdict: without the reference's halves it says that a verdict needs them; with
+/// them, `agree` for an independent `pt` render of the same scene (exit 0) and `differ` for a
+/// biased one (`--max-depth 2` drops the indirect light; exit 1), each with its statistic. Images
+/// that are not independent are refused: the same file as both halves, A, and B
+/// (`diff_identical_halves_pass.sh` passed), or a test image equal to the reference.
+#[test]
+fn diff_gives_a_verdict_or_says_it_needs_the_halves() {
+    let d = tmp_dir("cli-diff-verdict");
+    let p = |n: &str| d.join(n).display().to_string();
+    let scene = "scenes/stability/no-dirac.toml";
+    let small = ["--resolution", "16x16", "--threads", "2", "--quiet"];
+    // the counts hold the image mean's relative standard deviation to about 0.1%, a fifth of the
+    // 0.5% limit on the means (the var.* layer at 1024 spp: 2.6e-5 per pixel, mean 0.14 in G)
+    let (code, _, err) =
+        run(&[&["reference", scene, "--spp", "16384", "--seed", "1", "--out", &p("ref")], &small[..]].concat());
+    assert_eq!(code, 0, "{err}");
+    for (name, spp, extra) in [("a", "8192", vec![]), ("biased", "64", vec!["--max-depth", "2"])] {
+        let args =
+            [&["render", scene, "--method", "pt", "--spp", spp, "--seed", "7", "--out", &p(name)], &small[..], &extra[..]];
+        let (code, _, err) = run(&args.concat());
+        assert_eq!(code, 0, "{err}");
+    }
+    let (a, r, h0, h1) = (p("a.exr"), p("ref.exr"), p("ref.half0.exr"), p("ref.half1.exr"));
+    let (code, out, err) = run(&["diff", &a, &r]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("verdict   none") && out.contains("--half0") && out.contains("--half1"), "{out}");
+    let (code, out, err) = run(&["diff", &a, &r, "--half0", &h0, "--half1", &h1]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("verdict   agree: largest mean difference") && out.contains("noise ratio"), "{out}");
+    let (code, out, err) = run(&["diff", &p("biased.exr"), &r, "--half0", &h0, "--half1", &h1]);
+    assert_eq!(code, 1, "{out}{err}");
+    assert!(out.contains("verdict   differ: largest mean difference"), "{out}");
+    assert!(err.contains("agreement check FAILED"), "{err}");
+    // not independent: refused, whatever the statistics would say
+    for args in [["diff", &a, &a, "--half0", &a, "--half1", &a], ["diff", &r, &r, "--half0", &h0, "--half1", &h1]] {
+        let (code, out, err) = run(&args);
+        assert_eq!(code, 1, "{args:?}: {out}{err}");
+        assert!(err.contains("are the same image") && !out.contains("PASSED"), "{args:?}: {out}{err}");
+    }
+    let (code, _, err) = run(&["diff", &a, &r, "--half0", &h0, "--half1", &h0]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("--half0") && err.contains("--half1") && err.contains("same image"), "{err}");
+    let _ = std::fs::remove_dir_all(d);
+}
