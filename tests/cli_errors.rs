@@ -501,9 +501,10 @@ fn a_black_image_with_lights_warns() {
              emission = [17.0, 12.0, 4.0]\n"
         )
     };
-    for (name, u, v, black) in
-        [("away", "[0.0, 0.0, 0.38]", "[0.48, 0.0, 0.0]", true), ("down", "[0.48, 0.0, 0.0]", "[0.0, 0.0, 0.38]", false)]
-    {
+    for (name, u, v, black) in [
+        ("away", "[0.0, 0.0, 0.38]", "[0.48, 0.0, 0.0]", true),
+        ("down", "[0.48, 0.0, 0.0]", "[0.0, 0.0, 0.38]", false),
+    ] {
         let path = d.join(format!("{name}.toml"));
         std::fs::write(&path, scene(u, v)).unwrap();
         let out = d.join(name);
@@ -519,8 +520,10 @@ fn a_black_image_with_lights_warns() {
             &out.display().to_string(),
         ]);
         assert_eq!(code, 0, "{name}: {err}");
-        let json: serde_json::Value = serde_json::from_slice(&std::fs::read(out.with_extension("json")).unwrap()).unwrap();
-        let warned = json["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains("image is black"));
+        let json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.with_extension("json")).unwrap()).unwrap();
+        let warned =
+            json["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains("image is black"));
         assert_eq!(warned, black, "{name}: {json}");
         assert_eq!(err.contains("warning: the image is black"), black, "{name}: {err}");
         if black {
@@ -570,8 +573,11 @@ fn diff_gives_a_verdict_or_says_it_needs_the_halves() {
         run(&[&["reference", scene, "--spp", "16384", "--seed", "1", "--out", &p("ref")], &small[..]].concat());
     assert_eq!(code, 0, "{err}");
     for (name, spp, extra) in [("a", "8192", vec![]), ("biased", "64", vec!["--max-depth", "2"])] {
-        let args =
-            [&["render", scene, "--method", "pt", "--spp", spp, "--seed", "7", "--out", &p(name)], &small[..], &extra[..]];
+        let args = [
+            &["render", scene, "--method", "pt", "--spp", spp, "--seed", "7", "--out", &p(name)],
+            &small[..],
+            &extra[..],
+        ];
         let (code, _, err) = run(&args.concat());
         assert_eq!(code, 0, "{err}");
     }

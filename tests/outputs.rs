@@ -299,7 +299,8 @@ fn an_unwritable_output_directory_is_refused_before_any_work() {
     std::fs::create_dir(d.join("ro")).unwrap();
     std::fs::set_permissions(&d.join("ro"), std::fs::Permissions::from_mode(0o555)).unwrap();
     let bin = env!("CARGO_BIN_EXE_forecast");
-    let root_user = std::fs::metadata("/proc/self").map(|m| std::os::unix::fs::MetadataExt::uid(&m) == 0).unwrap_or(false);
+    let root_user =
+        std::fs::metadata("/proc/self").map(|m| std::os::unix::fs::MetadataExt::uid(&m) == 0).unwrap_or(false);
     let mut c = if root_user {
         let mut c = std::process::Command::new("setpriv");
         c.args(["--reuid", "65534", "--regid", "65534", "--clear-groups", bin]);

@@ -32,9 +32,9 @@ pub fn require_regular(path: &Path) -> io::Result<()> {
 /// An input the command line names (a scene file), checked before anything reads it: a regular
 /// file ([`require_regular`]) this process can open. The error names the file and no line.
 pub fn check_input(what: &str, path: &Path) -> Result<(), AtomicIoError> {
-    require_regular(path).and_then(|()| std::fs::File::open(path).map(drop)).map_err(|source| {
-        AtomicIoError::Unreadable { what: what.to_string(), path: path.to_path_buf(), source }
-    })
+    require_regular(path)
+        .and_then(|()| std::fs::File::open(path).map(drop))
+        .map_err(|source| AtomicIoError::Unreadable { what: what.to_string(), path: path.to_path_buf(), source })
 }
 
 /// `std::fs::read` of a regular file only ([`require_regular`]).

@@ -36,7 +36,8 @@ mod error;
 mod guard;
 pub use error::{AtomicIoError, Sibling, SiblingClash};
 pub use guard::{
-    check_input, check_output_prefix, read_regular, remove_stale_temporary, require_regular, resolve, same_file, OutputSet,
+    check_input, check_output_prefix, read_regular, remove_stale_temporary, require_regular, resolve, same_file,
+    OutputSet,
 };
 
 use std::io::{self, Write};

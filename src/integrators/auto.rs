@@ -125,7 +125,10 @@ pub fn choose(scene: &Scene) -> (Method, String) {
         return (Method::Pt, "no mirror or glass objects: pt, the cheapest unbiased method".into());
     }
     if scene.emitters.is_empty() {
-        return (Method::PtCf, "mirror/glass lit by point lights only: pt-cf, whose light paths render their caustics (L S+ D)".into());
+        return (
+            Method::PtCf,
+            "mirror/glass lit by point lights only: pt-cf, whose light paths render their caustics (L S+ D)".into(),
+        );
     }
     (Method::PtCf, "caustics from area lights: pt-cf, the best unbiased whole image at equal time".into())
 }
