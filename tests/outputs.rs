@@ -297,7 +297,7 @@ fn an_unwritable_output_directory_is_refused_before_any_work() {
     std::fs::set_permissions(&d, std::fs::Permissions::from_mode(0o777)).unwrap();
     std::fs::copy(root().join("scenes/stability/no-dirac.toml"), d.join("s.toml")).unwrap();
     std::fs::create_dir(d.join("ro")).unwrap();
-    std::fs::set_permissions(&d.join("ro"), std::fs::Permissions::from_mode(0o555)).unwrap();
+    std::fs::set_permissions(d.join("ro"), std::fs::Permissions::from_mode(0o555)).unwrap();
     let bin = env!("CARGO_BIN_EXE_forecast");
     let root_user =
         std::fs::metadata("/proc/self").map(|m| std::os::unix::fs::MetadataExt::uid(&m) == 0).unwrap_or(false);

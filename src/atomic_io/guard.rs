@@ -93,9 +93,10 @@ pub fn resolve(p: &Path) -> PathBuf {
 }
 
 /// Refuses, before any work, an output that cannot be written: a file output that is a
-/// directory, a directory output that is a file, or one whose nearest existing ancestor is not a
-/// directory.
-fn writable(flag: &str, out: &Path, want_dir: bool) -> Result<(), AtomicIoError> {
+/// directory, a directory output that is a file, one whose nearest existing ancestor is not a
+/// directory, or (where `probe`: the process that writes) one whose nearest existing ancestor
+/// takes no new file ([`probe_write`]).
+fn writable(flag: &str, out: &Path, want_dir: bool, probe: bool) -> Result<(), AtomicIoError> {
     if out.is_dir() != want_dir && out.exists() {
         return Err(AtomicIoError::WrongKind { flag: flag.to_string(), output: out.to_path_buf(), want_dir });
     }
@@ -106,13 +107,13 @@ fn writable(flag: &str, out: &Path, want_dir: bool) -> Result<(), AtomicIoError>
             output: out.to_path_buf(),
             blocker: a.to_path_buf(),
         }),
-        Some(a) => probe_write(a).map_err(|source| AtomicIoError::NotWritable {
+        Some(a) if probe => probe_write(a).map_err(|source| AtomicIoError::NotWritable {
             flag: flag.to_string(),
             output: out.to_path_buf(),
             dir: a.to_path_buf(),
             source,
         }),
-        None => Ok(()),
+        _ => Ok(()),
     }
 }
 
@@ -140,7 +141,7 @@ fn format_magic(ext: &str) -> Option<&'static [u8]> {
     match ext {
         "exr" => Some(&[0x76, 0x2f, 0x31, 0x01]),
         "png" => Some(b"\x89PNG\r\n\x1a\n"),
-        "json" => Some(b"{"),
+        "json" => Some(b"{\n  \""), // serde_json's pretty form, as every report is written
         "ckpt" => Some(&crate::checkpoint::MAGIC),
         _ => None,
     }
@@ -207,6 +208,9 @@ pub struct OutputSet {
     dirs: Vec<(String, PathBuf)>,
     /// Outputs whose failed write is only a warning (checkpoints): not checked for writability.
     best_effort: Vec<PathBuf>,
+    /// This process does not write the outputs (an MPI rank other than 0): see
+    /// [`OutputSet::not_writer`].
+    not_writer: bool,
 }
 
 impl OutputSet {
@@ -256,6 +260,16 @@ impl OutputSet {
         self
     }
 
+    /// This process only checks the outputs that another writes (an MPI rank other than 0, whose
+    /// directory may be another node's or shared with rank 0): [`OutputSet::check`] then keeps
+    /// the checks of names (inputs, outputs named twice, kinds) and leaves to the writer what
+    /// touches its file system: the write probe, and temporaries that exist (a stale one rank 0
+    /// removes, which a second rank must not race for).
+    pub fn not_writer(&mut self, not_writer: bool) -> &mut Self {
+        self.not_writer = not_writer;
+        self
+    }
+
     /// The outputs, in the order they were added.
     pub fn outputs(&self) -> impl Iterator<Item = &Path> {
         self.outputs.iter().map(|(_, p, _)| p.as_path())
@@ -277,6 +291,8 @@ impl OutputSet {
                     SiblingClash::Input { what: what.clone(), path: path.clone() }
                 } else if outs.contains(&r) {
                     SiblingClash::Output
+                } else if self.not_writer {
+                    continue;
                 } else if sibling == Sibling::Temporary && remove_stale_temporary(out) {
                     // a killed write's leftover: removed, the output is free again
                     continue;
@@ -321,12 +337,12 @@ impl OutputSet {
             }
             seen.push((id, r));
             if !self.best_effort.contains(out) {
-                writable(flag, out, false)?;
+                writable(flag, out, false, !self.not_writer)?;
             }
         }
         self.check_siblings(&inputs)?;
         for (flag, dir) in &self.dirs {
-            writable(flag, dir, true)?;
+            writable(flag, dir, true, !self.not_writer)?;
             let d = resolve(dir);
             if let Some(((what, input), _)) = self.inputs.iter().zip(&inputs).find(|(_, (_, ir))| ir.starts_with(&d)) {
                 return Err(AtomicIoError::InputInOutputDir {

@@ -334,7 +334,7 @@ fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), RenderEr
     let t_load = Instant::now();
     crate::atomic_io::check_input("scene file", &job.scene)?; // named without a line: it has none
     let mut scene = crate::scene::load_with(&job.scene, &job.load_options())?;
-    job.output_set(&scene).check()?; // before anything is written
+    job.output_set(&scene).not_writer(rank != 0).check()?; // before anything is written
     let load_s = secs(t_load);
     if rank == 0 {
         for w in &scene.warnings {
