@@ -360,8 +360,27 @@ mod tests {
             ),
             (
                 sibling(SiblingClash::Exists),
-                "--out `r.json` is written through its temporary `r.json.tmp`, which exists (left by an interrupted \
-                 write?): it would be replaced and then deleted; move it away, or name another output",
+                "--out `r.json` is written through its temporary `r.json.tmp`, which exists and is no stale \
+                 temporary of a killed forecast write (another program's file, or a run writing this output now): it \
+                 would be replaced and then deleted; move it away, or name another output",
+            ),
+            (
+                AtomicIoError::NotWritable {
+                    flag: "--out".into(),
+                    output: p("ro/x.exr"),
+                    dir: p("ro"),
+                    source: io::Error::from(io::ErrorKind::PermissionDenied),
+                },
+                "--out `ro/x.exr` cannot be written: no file can be created in `ro` (permission denied); name a \
+                 writable directory (checked before any work)",
+            ),
+            (
+                AtomicIoError::Unreadable {
+                    what: "scene file".into(),
+                    path: p("s.toml"),
+                    source: io::Error::from(io::ErrorKind::NotFound),
+                },
+                "cannot read scene file `s.toml`: entity not found",
             ),
             (
                 AtomicIoError::WrongKind { flag: "--out".into(), output: p("d"), want_dir: false },
