@@ -75,6 +75,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
         Command::Diff(a) => Ok(diff(&a)?),
         Command::Bench(a) => Ok(bench_cmd(&a, &opts)?),
         Command::ExportMitsuba { scene, out } => {
+            forecast::atomic_io::check_input("scene file", &scene).map_err(String::from)?;
             let rep = forecast::scene::export::export_mitsuba(&scene, &out)?;
             rep.warnings.iter().for_each(|w| errln!("warning: {w}"));
             outln!("wrote {} and {} PLY mesh(es)", rep.xml.display(), rep.meshes.len())?;
@@ -218,16 +219,51 @@ fn diff(a: &forecast::cli::DiffArgs) -> Result<(), String> {
         let scale = metrics::write_diff_png(p, &crop_a, &crop_b)?;
         outln!("diff PNG  {} (saturates at |diff| = {scale:.4e})", p.display())?;
     }
-    if let (Some(p0), Some(p1)) = (&a.half0, &a.half1) {
-        let (h0, h1) = (image_io::read_exr(p0)?, image_io::read_exr(p1)?);
-        image_io::check_same_size(&[(&a.b, &ib), (p0, &h0), (p1, &h1)])?;
-        let var = image_io::read_exr_variance(&a.a)?;
-        let rep = metrics::mitsuba_agreement(&ia, var.as_ref(), &ib, &h0, &h1)?;
-        outln!("{rep}")?;
-        if !rep.passed {
-            return Err(format!("agreement check FAILED: {}", rep.failures.join("; ")));
+    let (Some(p0), Some(p1)) = (&a.half0, &a.half1) else {
+        outln!(
+            "verdict   none: whether A and B agree within their noise needs B's two independent halves \
+             (--half0 B0.exr --half1 B1.exr, as `forecast reference` writes them)"
+        )?;
+        return Ok(());
+    };
+    let (h0, h1) = (image_io::read_exr(p0)?, image_io::read_exr(p1)?);
+    image_io::check_same_size(&[(&a.b, &ib), (p0, &h0), (p1, &h1)])?;
+    let var = image_io::read_exr_variance(&a.a)?;
+    independent_images(&[("A", &a.a, &ia), ("B", &a.b, &ib), ("--half0", p0, &h0), ("--half1", p1, &h1)])?;
+    let rep = metrics::mitsuba_agreement(&ia, var.as_ref(), &ib, &h0, &h1)?;
+    outln!("{rep}")?;
+    let worst = rep.mean_rel_diff.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+    let stats = format!(
+        "largest mean difference {:.3}% (limit {:.1}%), noise ratio {:.3} (1 ± {:.3})",
+        100.0 * worst,
+        100.0 * metrics::MEAN_REL_TOLERANCE,
+        rep.ratio,
+        rep.noise.ratio_tolerance
+    );
+    if !rep.passed {
+        outln!("verdict   differ: {stats}")?;
+        return Err(format!("agreement check FAILED: {}", rep.failures.join("; ")));
+    }
+    outln!("verdict   agree: {stats}")?;
+    outln!("agreement check PASSED")?;
+    Ok(())
+}
+
+/// Refuses a `diff --half0/--half1` check whose images are not independent: two of A, B and the
+/// halves with the same pixels (the same file given twice, or a copy) make the noise check pass
+/// or fail vacuously (identical halves estimate no noise; A equal to the reference has none).
+fn independent_images(images: &[(&str, &std::path::Path, &image_io::Image)]) -> Result<(), String> {
+    for (i, (n0, p0, im0)) in images.iter().enumerate() {
+        for (n1, p1, im1) in &images[i + 1..] {
+            if im0.pixels == im1.pixels {
+                return Err(format!(
+                    "diff: {n0} `{}` and {n1} `{}` are the same image: the agreement check needs a test image and \
+                     two reference halves rendered independently (different seeds) of each other",
+                    p0.display(),
+                    p1.display()
+                ));
+            }
         }
-        outln!("agreement check PASSED")?;
     }
     Ok(())
 }
@@ -235,6 +271,7 @@ fn diff(a: &forecast::cli::DiffArgs) -> Result<(), String> {
 fn bench_cmd(a: &forecast::cli::BenchArgs, opts: &forecast::scene::LoadOptions) -> Result<(), String> {
     forecast::param_limits::SPP.check_flag("--spp", a.spp)?;
     a.accel.check()?;
+    forecast::atomic_io::check_input("scene file", &a.scene)?;
     let scene = forecast::scene::load_with(&a.scene, opts).map_err(|e| e.to_string())?;
     let t = Instant::now();
     let ntri = scene.triangles.len();
@@ -299,6 +336,7 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs, opts: &forecast::scene::Load
     forecast::atomic_io::check_output_prefix(&r.out)?;
     let accel = r.method_args.settings.accel;
     accel.check()?; // before any work, as `bench` and `render`
+    forecast::atomic_io::check_input("scene file", &r.scene)?;
     let scene = forecast::scene::load_with(&r.scene, opts).map_err(|e| e.to_string())?;
     let mut guard = forecast::atomic_io::OutputSet::new();
     guard.scene_inputs(&r.scene, &scene.mesh_files).output("--out", &image_io::with_ext(&r.out, "png"));

@@ -2,10 +2,33 @@
 //! name, elapsed time, and counts where known) and then the render passes ([`Progress`]: passes,
 //! spp, elapsed and remaining time, and Mrays/s). Hidden with `--quiet`, on non-zero ranks and
 //! when stderr is not a terminal. Reporting never touches an image or a random stream.
+//!
+//! Under `--time` the bar's clock is the time box's own ([`time_box_clock`]): the time since the
+//! render started (loading and preprocess included) and the budget left, never a rate estimate
+//! (a rate measured from the first round's jump reads seconds where minutes remain).
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressState, ProgressStyle};
 use std::sync::Mutex;
-use std::time::Duration;
+use std::time::{Duration, Instant};
+
+/// The time-mode bar's clock: `MM:SS` (or `H:MM:SS`) since the time box began, and what is left
+/// of a `budget_secs` box, `elapsed_secs` into it (0 once the budget is spent; the last round then
+/// finishes).
+pub fn time_box_clock(elapsed_secs: f64, budget_secs: f64) -> String {
+    let left = (budget_secs - elapsed_secs).max(0.0);
+    format!("{} / {} left", clock(elapsed_secs.max(0.0)), clock(left))
+}
+
+/// Whole seconds as `MM:SS`, or `H:MM:SS` from an hour on.
+fn clock(secs: f64) -> String {
+    let s = secs.round() as u64;
+    let (h, m, s) = (s / 3600, s / 60 % 60, s % 60);
+    if h > 0 {
+        format!("{h}:{m:02}:{s:02}")
+    } else {
+        format!("{m:02}:{s:02}")
+    }
+}
 
 /// A progress bar over passes (spp mode) or milliseconds of budget (time mode).
 pub struct Progress {
@@ -14,8 +37,9 @@ pub struct Progress {
 }
 
 impl Progress {
-    /// `total_passes` for spp mode, or `budget_secs` for time mode.
-    pub fn new(visible: bool, total_passes: Option<u64>, budget_secs: Option<f64>) -> Progress {
+    /// `total_passes` for spp mode, or `budget_secs` for time mode, whose box began at `started`
+    /// (the render's start: the clock the time box and [`time_box_clock`] count from).
+    pub fn new(visible: bool, total_passes: Option<u64>, budget_secs: Option<f64>, started: Instant) -> Progress {
         if !visible {
             return Progress { bar: None, time_mode: false };
         }
@@ -26,12 +50,20 @@ impl Progress {
         };
         let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
         let tpl = if time_mode {
-            "{spinner} [{elapsed_precise} / eta {eta}] {wide_bar} {msg}"
+            "{spinner} [{time_box}] {wide_bar} {msg}"
         } else {
             "{spinner} [{elapsed_precise} / eta {eta}] {wide_bar} pass {pos}/{len} {msg}"
         };
         if let Ok(style) = ProgressStyle::with_template(tpl) {
+            let budget = budget_secs.unwrap_or(0.0);
+            let style = style.with_key("time_box", move |_: &ProgressState, w: &mut dyn std::fmt::Write| {
+                let _ = w.write_str(&time_box_clock(started.elapsed().as_secs_f64(), budget));
+            });
             bar.set_style(style);
+        }
+        if time_mode {
+            // the clock moves between rounds too
+            bar.enable_steady_tick(Duration::from_millis(500));
         }
         Progress { bar: Some(bar), time_mode }
     }

@@ -8,7 +8,7 @@ mod common;
 use clap::Parser;
 use common::{root, tmp_dir};
 use forecast::cli::{Cli, Command};
-use forecast::integrators::auto::{choose, resolve};
+use forecast::integrators::auto::{choose, evidence, resolve, resolve_evidence, REASON_MAX_CHARS};
 use forecast::integrators::{Method, MethodChoice};
 use forecast::scene::Scene;
 
@@ -30,6 +30,30 @@ fn auto_picks_the_documented_method_for_each_scene() {
         let (m, reason) = choose(&load(scene));
         assert_eq!(m, want, "{scene}: {reason}");
         assert!(reason.contains(why) && reason.contains(m.name()), "{scene}: {reason}");
+        // the reason is one short line; what it rests on is the evidence, which starts with it
+        assert!(reason.chars().count() <= REASON_MAX_CHARS && !reason.contains('\n'), "{scene}: {reason}");
+        assert!(evidence(&load(scene)).contains(why), "{scene}");
+    }
+}
+
+/// The evidence holds the figures and notes the one-line reason leaves out (issue #63: they were
+/// about 330 characters on every run): `cornell-box`'s equal-time RMSE ratios and docs/auto.md,
+/// `figurines`' glossy-receiver note, a scene with area and point lights its L S+ D note.
+#[test]
+fn the_figures_are_in_the_evidence_not_the_reason() {
+    let cornell = load("scenes/cornell-box.toml");
+    let (_, reason) = choose(&cornell);
+    let ev = evidence(&cornell);
+    for figure in ["0.49x", "0.64x", "docs/auto.md"] {
+        assert!(ev.contains(figure) && !reason.contains(figure), "{figure}: reason {reason}; evidence {ev}");
+    }
+    let figurines = load("scenes/figurines.toml");
+    let ev = evidence(&figurines);
+    assert!(ev.contains("glossy") && !choose(&figurines).1.contains("glossy"), "{ev}");
+    // every committed scene with Dirac objects: a line short enough for a terminal
+    for s in ["scenes/ring.toml", "scenes/stability/point-glass.toml", "scenes/external/sms-ring/ring.xml"] {
+        let (_, reason) = choose(&load(s));
+        assert!(reason.chars().count() <= REASON_MAX_CHARS, "{s}: {reason}");
     }
 }
 
@@ -60,6 +84,11 @@ fn the_command_line_then_the_scene_then_auto() {
     let (m, why) = resolve(Some(MethodChoice::Auto), &glass).unwrap();
     assert_eq!(m, choose(&glass).0);
     assert!(why.starts_with("auto (--method auto)"), "{why}");
+    // the evidence comes with `auto` only, from the command line or the scene
+    assert_eq!(resolve_evidence(Some(MethodChoice::Auto), &glass), Some(evidence(&glass)));
+    assert_eq!(resolve_evidence(None, &glass), None);
+    assert_eq!(resolve_evidence(Some(Method::Pt.into()), &cornell), None);
+    assert_eq!(resolve_evidence(None, &cornell), Some(evidence(&cornell)));
 }
 
 /// `--method` takes `auto` and every method's name, and nothing else.
@@ -117,5 +146,10 @@ fn terminal_and_json_give_the_method_and_its_reason() {
     assert_eq!(json["method"], "pt");
     let reason = json["method_reason"].as_str().expect("method_reason is a string");
     assert!(reason.starts_with("auto (--method auto): no mirror or glass objects"), "{reason}");
+    // one line on the terminal; the evidence in the JSON only
+    let line = err.lines().find(|l| l.starts_with("method: ")).expect("a method line");
+    assert!(line.chars().count() <= "method: pt-cf (auto (--method auto): )".len() + REASON_MAX_CHARS, "{line}");
+    let ev = json["method_evidence"].as_str().expect("method_evidence is a string under auto");
+    assert!(ev.contains("docs/auto.md") && !err.contains(ev), "{ev}");
     let _ = std::fs::remove_dir_all(d);
 }

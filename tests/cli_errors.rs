@@ -485,3 +485,121 @@ fn resume_of_a_checkpoint_past_the_requested_spp_warns() {
     assert_eq!(spp(&more), 10);
     let _ = std::fs::remove_dir_all(d);
 }
+
+/// A render whose every sample is 0 while the scene has a light (here a quad light facing away
+/// from the only other surface, issue #63: exit 0 and no word) warns on stderr and in the JSON's
+/// `warnings`; the same scene with the light turned to face the floor does not.
+#[test]
+fn a_black_image_with_lights_warns() {
+    let d = tmp_dir("cli-black");
+    let scene = |u: &str, v: &str| {
+        format!(
+            "[camera]\nposition = [0.0, 1.0, 3.88]\nlook_at = [0.0, 0.5, 0.0]\nup = [0.0, 1.0, 0.0]\nfov = 39.3\n\
+             resolution = [16, 16]\n\n[materials.white]\ntype = \"diffuse\"\nalbedo = [0.7, 0.7, 0.7]\n\n\
+             [[shape]]\ntype = \"quad\"\ncorner = [-1.0, 0.0, -1.0]\nu = [0.0, 0.0, 2.0]\nv = [2.0, 0.0, 0.0]\n\
+             material = \"white\"\n\n[[shape]]\ntype = \"quad\"\ncorner = [-0.24, 1.98, -0.19]\nu = {u}\nv = {v}\n\
+             emission = [17.0, 12.0, 4.0]\n"
+        )
+    };
+    for (name, u, v, black) in [
+        ("away", "[0.0, 0.0, 0.38]", "[0.48, 0.0, 0.0]", true),
+        ("down", "[0.48, 0.0, 0.0]", "[0.0, 0.0, 0.38]", false),
+    ] {
+        let path = d.join(format!("{name}.toml"));
+        std::fs::write(&path, scene(u, v)).unwrap();
+        let out = d.join(name);
+        let (code, _, err) = run(&[
+            "render",
+            &path.display().to_string(),
+            "--spp",
+            "4",
+            "--threads",
+            "2",
+            "--quiet",
+            "--out",
+            &out.display().to_string(),
+        ]);
+        assert_eq!(code, 0, "{name}: {err}");
+        let json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.with_extension("json")).unwrap()).unwrap();
+        let warned =
+            json["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains("image is black"));
+        assert_eq!(warned, black, "{name}: {json}");
+        assert_eq!(err.contains("warning: the image is black"), black, "{name}: {err}");
+        if black {
+            assert!(err.contains("the scene has lights") && err.contains("face the scene"), "{err}");
+            assert_eq!(json["image_mean"], serde_json::json!([0.0, 0.0, 0.0]));
+        }
+    }
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// A scene file that cannot be read is named with no line (it has none; issue #63 showed
+/// `missing.toml:0:`), by every command that loads one, TOML or Mitsuba XML.
+#[test]
+fn a_missing_scene_is_named_without_a_line() {
+    let d = tmp_dir("cli-missing-scene");
+    let out = d.join("x").display().to_string();
+    for args in [
+        vec!["render", "missing.toml", "--out", &out],
+        vec!["render", "missing.xml", "--out", &out],
+        vec!["bench", "missing.toml"],
+        vec!["forecast-map", "missing.toml", "--out", &out],
+        vec!["export-mitsuba", "missing.toml", "--out", &out],
+    ] {
+        let (code, _, err) = run(&args);
+        assert_eq!(code, 1, "{args:?}: {err}");
+        let file = args[1];
+        assert!(err.contains(&format!("cannot read scene file `{file}`")), "{args:?}: {err}");
+        assert!(!err.contains(&format!("{file}:")), "{args:?}: a line number: {err}");
+    }
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// `diff` gives a verdict: without the reference's halves it says that a verdict needs them; with
+/// them, `agree` for an independent `pt` render of the same scene (exit 0) and `differ` for a
+/// biased one (`--max-depth 2` drops the indirect light; exit 1), each with its statistic. Images
+/// that are not independent are refused: the same file as both halves, A, and B
+/// (`diff_identical_halves_pass.sh` passed), or a test image equal to the reference.
+#[test]
+fn diff_gives_a_verdict_or_says_it_needs_the_halves() {
+    let d = tmp_dir("cli-diff-verdict");
+    let p = |n: &str| d.join(n).display().to_string();
+    let scene = "scenes/stability/no-dirac.toml";
+    let small = ["--resolution", "16x16", "--threads", "2", "--quiet"];
+    // the counts hold the image mean's relative standard deviation to about 0.1%, a fifth of the
+    // 0.5% limit on the means (the var.* layer at 1024 spp: 2.6e-5 per pixel, mean 0.14 in G)
+    let (code, _, err) =
+        run(&[&["reference", scene, "--spp", "16384", "--seed", "1", "--out", &p("ref")], &small[..]].concat());
+    assert_eq!(code, 0, "{err}");
+    for (name, spp, extra) in [("a", "8192", vec![]), ("biased", "64", vec!["--max-depth", "2"])] {
+        let args = [
+            &["render", scene, "--method", "pt", "--spp", spp, "--seed", "7", "--out", &p(name)],
+            &small[..],
+            &extra[..],
+        ];
+        let (code, _, err) = run(&args.concat());
+        assert_eq!(code, 0, "{err}");
+    }
+    let (a, r, h0, h1) = (p("a.exr"), p("ref.exr"), p("ref.half0.exr"), p("ref.half1.exr"));
+    let (code, out, err) = run(&["diff", &a, &r]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("verdict   none") && out.contains("--half0") && out.contains("--half1"), "{out}");
+    let (code, out, err) = run(&["diff", &a, &r, "--half0", &h0, "--half1", &h1]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("verdict   agree: largest mean difference") && out.contains("noise ratio"), "{out}");
+    let (code, out, err) = run(&["diff", &p("biased.exr"), &r, "--half0", &h0, "--half1", &h1]);
+    assert_eq!(code, 1, "{out}{err}");
+    assert!(out.contains("verdict   differ: largest mean difference"), "{out}");
+    assert!(err.contains("agreement check FAILED"), "{err}");
+    // not independent: refused, whatever the statistics would say
+    for args in [["diff", &a, &a, "--half0", &a, "--half1", &a], ["diff", &r, &r, "--half0", &h0, "--half1", &h1]] {
+        let (code, out, err) = run(&args);
+        assert_eq!(code, 1, "{args:?}: {out}{err}");
+        assert!(err.contains("are the same image") && !out.contains("PASSED"), "{args:?}: {out}{err}");
+    }
+    let (code, _, err) = run(&["diff", &a, &r, "--half0", &h0, "--half1", &h0]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("--half0") && err.contains("--half1") && err.contains("same image"), "{err}");
+    let _ = std::fs::remove_dir_all(d);
+}

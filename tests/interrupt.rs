@@ -52,6 +52,8 @@ fn a_signal_writes_the_passes_done_and_exits_130() {
         let json: serde_json::Value =
             serde_json::from_slice(&std::fs::read(out.with_extension("json")).unwrap()).unwrap();
         assert_eq!(json["interrupted"], true, "{json}");
+        // a signal's render is not the one asked for (issue #63: it said `complete: true`)
+        assert_eq!(json["complete"], false, "{json}");
         let passes = json["passes"].as_u64().unwrap();
         assert!(passes > 0, "{json}");
         assert!(out.with_extension("ckpt").exists(), "{signal}: no checkpoint");
@@ -59,6 +61,9 @@ fn a_signal_writes_the_passes_done_and_exits_130() {
         let by_count = d.join(format!("{name}-spp"));
         let st = render(&by_count, &["--spp", &passes.to_string()]).status().unwrap();
         assert!(st.success());
+        let spp_json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(by_count.with_extension("json")).unwrap()).unwrap();
+        assert_eq!((spp_json["complete"].clone(), spp_json["interrupted"].clone()), (true.into(), false.into()));
         let (a, b) =
             (std::fs::read(out.with_extension("exr")).unwrap(), std::fs::read(by_count.with_extension("exr")).unwrap());
         assert!(a == b, "{signal}: the interrupted image is not the --spp {passes} image");

@@ -194,3 +194,134 @@ fn a_resumed_render_may_replace_the_checkpoint_it_resumed() {
     assert_eq!(ck.passes_done, 4);
     let _ = std::fs::remove_dir_all(d);
 }
+
+/// `forecast render SCENE` with no `--out` writes `out/render.{exr,png,json}` under the working
+/// directory, creating `out/` (ignored by git), and nothing beside it.
+#[test]
+fn the_default_outputs_go_to_out() {
+    let d = tmp_dir("outputs-default-out");
+    std::fs::copy(root().join("scenes/stability/no-dirac.toml"), d.join("s.toml")).unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_forecast"))
+        .current_dir(&d)
+        .args(["render", "s.toml", "--spp", "1", "--resolution", "8x8", "--threads", "1", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut top: Vec<String> =
+        std::fs::read_dir(&d).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    top.sort();
+    assert_eq!(top, ["out", "s.toml"]);
+    assert_eq!(snapshot(&d.join("out")).keys().collect::<Vec<_>>(), ["render.exr", "render.json", "render.png"]);
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// The temporaries a killed write leaves (`kill -9` during a checkpoint set's write,
+/// `killwrite4.py`) no longer block the same command: a run removes a `PREFIX.EXT.tmp` that is a
+/// regular file, locked by no writer, beginning as forecast's EXT does (empty, or cut short, too).
+/// It leaves alone a temporary that another program wrote (other bytes), one a live writer holds
+/// (its lock), and one that is an input of the run (`--resume` given as the checkpoint's
+/// temporary), and refuses to start instead.
+#[test]
+fn a_killed_writes_temporaries_are_removed_and_nothing_else() {
+    use forecast::atomic_io::remove_stale_temporary;
+    let d = tmp_dir("outputs-stale-tmp");
+    let prefix = d.join("r");
+    let render = |extra: &[&str]| {
+        let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_forecast"));
+        c.args(["render", root().join("scenes/stability/no-dirac.toml").to_str().unwrap()]);
+        c.args(["--resolution", "8x8", "--threads", "1", "--quiet", "--checkpoint-every", "1h", "--out"]).arg(&prefix);
+        c.args(extra).output().unwrap()
+    };
+    assert!(render(&["--spp", "2"]).status.success());
+    let ext = |e: &str| prefix.with_extension(e);
+    let exr = std::fs::read(ext("exr")).unwrap();
+    let ckpt = std::fs::read(ext("ckpt")).unwrap();
+    // a killed set write: a cut EXR, an empty JSON, a whole checkpoint
+    std::fs::write(ext("exr.tmp"), &exr[..exr.len() / 2]).unwrap();
+    std::fs::write(ext("json.tmp"), b"").unwrap();
+    std::fs::write(ext("ckpt.tmp"), &ckpt).unwrap();
+    let o = render(&["--resume", ext("ckpt").to_str().unwrap(), "--spp", "3"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for e in ["exr.tmp", "json.tmp", "ckpt.tmp", "png.tmp"] {
+        assert!(!ext(e).exists(), "{e} left");
+    }
+    // another program's file under a temporary's name: refused, kept byte for byte
+    std::fs::write(ext("png.tmp"), b"notes, not a PNG").unwrap();
+    let o = render(&["--spp", "2"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("r.png.tmp") && err.contains("no stale temporary"), "{err}");
+    assert_eq!(std::fs::read(ext("png.tmp")).unwrap(), b"notes, not a PNG");
+    std::fs::remove_file(ext("png.tmp")).unwrap();
+    // a live writer's temporary (it holds the lock): refused, kept
+    std::fs::write(ext("exr.tmp"), &exr[..8]).unwrap();
+    let held = std::fs::File::open(ext("exr.tmp")).unwrap();
+    held.lock().unwrap();
+    assert!(!remove_stale_temporary(&ext("exr")));
+    let o = render(&["--spp", "2"]);
+    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(ext("exr.tmp").exists());
+    drop(held);
+    assert!(remove_stale_temporary(&ext("exr")) && !ext("exr.tmp").exists());
+    // an input is never a temporary to remove: the checkpoint resumed from, named as the
+    // checkpoint's temporary, is refused as an input and kept
+    std::fs::write(ext("ckpt.tmp"), &ckpt).unwrap();
+    let o = render(&["--resume", ext("ckpt.tmp").to_str().unwrap(), "--spp", "3"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("--resume") && err.contains("r.ckpt.tmp"), "{err}");
+    assert_eq!(std::fs::read(ext("ckpt.tmp")).unwrap(), ckpt);
+    // a directory, a link, an extension forecast does not write: never removed
+    std::fs::remove_file(ext("ckpt.tmp")).unwrap();
+    std::fs::create_dir(ext("exr.tmp")).unwrap();
+    assert!(!remove_stale_temporary(&ext("exr")) && ext("exr.tmp").is_dir());
+    std::fs::write(d.join("notes.txt.tmp"), b"").unwrap();
+    assert!(!remove_stale_temporary(&d.join("notes.txt")) && d.join("notes.txt.tmp").exists());
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink(ext("exr"), ext("png.tmp")).unwrap();
+        assert!(!remove_stale_temporary(&ext("png")) && ext("png.tmp").symlink_metadata().is_ok());
+    }
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// An `--out` in a directory where no file can be created is refused before any work
+/// (`out_readonly_dir_work_lost.sh`: the whole render ran, then the write failed). The directory
+/// is read-only to the user running the render: as root (who may write anywhere), the render runs
+/// as `nobody` through `setpriv`; without `setpriv` the test says so and checks nothing.
+#[cfg(unix)]
+#[test]
+fn an_unwritable_output_directory_is_refused_before_any_work() {
+    use std::os::unix::fs::PermissionsExt;
+    let d = tmp_dir("outputs-readonly");
+    std::fs::set_permissions(&d, std::fs::Permissions::from_mode(0o777)).unwrap();
+    std::fs::copy(root().join("scenes/stability/no-dirac.toml"), d.join("s.toml")).unwrap();
+    std::fs::create_dir(d.join("ro")).unwrap();
+    std::fs::set_permissions(d.join("ro"), std::fs::Permissions::from_mode(0o555)).unwrap();
+    let bin = env!("CARGO_BIN_EXE_forecast");
+    let root_user =
+        std::fs::metadata("/proc/self").map(|m| std::os::unix::fs::MetadataExt::uid(&m) == 0).unwrap_or(false);
+    let mut c = if root_user {
+        let mut c = std::process::Command::new("setpriv");
+        c.args(["--reuid", "65534", "--regid", "65534", "--clear-groups", bin]);
+        c
+    } else {
+        std::process::Command::new(bin)
+    };
+    // a render of minutes, were it started
+    c.current_dir(&d).args(["render", "s.toml", "--spp", "1000000", "--resolution", "64x64", "--threads", "1"]);
+    let t = std::time::Instant::now();
+    let o = match c.args(["--quiet", "--out", "ro/x"]).output() {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("skipped: cannot run setpriv ({e}); the check needs a user who cannot write ro/");
+            return;
+        }
+    };
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("ro/x") && err.contains("no file can be created in"), "{err}");
+    assert!(t.elapsed() < std::time::Duration::from_secs(20), "refused only after {:?}", t.elapsed());
+    assert_eq!(std::fs::read_dir(d.join("ro")).unwrap().count(), 0);
+    let _ = std::fs::remove_dir_all(d);
+}

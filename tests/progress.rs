@@ -115,3 +115,14 @@ fn iws_pm_reports_its_photon_map_and_pt_reports_nothing() {
     Method::Pt.preprocess_reporting(&w, &o, 3, &rec).unwrap();
     assert!(rec.0.into_inner().unwrap().is_empty());
 }
+
+/// The time-mode bar reads the time box's own clock: 5 s into a 120 s box, 1:55 is left (the
+/// rate estimate it replaces read 18 s there, issue #63); an hour shows as H:MM:SS; a spent box
+/// reads 0 left, never negative.
+#[test]
+fn time_box_bar_counts_down_the_budget() {
+    use forecast::progress::time_box_clock;
+    assert_eq!(time_box_clock(5.0, 120.0), "00:05 / 01:55 left");
+    assert_eq!(time_box_clock(0.0, 3600.0 + 61.0), "00:00 / 1:01:01 left");
+    assert_eq!(time_box_clock(121.4, 120.0), "02:01 / 00:00 left");
+}

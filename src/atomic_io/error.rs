@@ -66,6 +66,28 @@ pub enum AtomicIoError {
         /// Its nearest existing ancestor, which is not a directory.
         blocker: PathBuf,
     },
+    /// An output in a directory where no file can be created (no write permission, a read-only
+    /// file system).
+    NotWritable {
+        /// Where the output comes from.
+        flag: String,
+        /// The output.
+        output: PathBuf,
+        /// The directory (the output's nearest existing ancestor).
+        dir: PathBuf,
+        /// The I/O error of the probe.
+        source: io::Error,
+    },
+    /// An input of the command line (the scene file) that cannot be read: missing, not a regular
+    /// file, no permission. It has no line: the message names the file alone.
+    Unreadable {
+        /// What the input is (`scene file`).
+        what: String,
+        /// The input, as given.
+        path: PathBuf,
+        /// The I/O error.
+        source: io::Error,
+    },
     /// An input inside a directory the run writes.
     InputInOutputDir {
         /// What the input is.
@@ -172,8 +194,10 @@ impl AtomicIoError {
             | OutputTwice { output, .. }
             | Sibling { output, .. }
             | WrongKind { output, .. }
-            | NotCreatable { output, .. } => output,
+            | NotCreatable { output, .. }
+            | NotWritable { output, .. } => output,
             InputInOutputDir { input, .. } => input,
+            Unreadable { path, .. } => path,
             IsDirectory { path } | NamedTwice { path } | Write { path, .. } | Backup { path, .. } => path,
             Rename { to, .. } => to,
         }
@@ -215,8 +239,9 @@ impl std::fmt::Display for AtomicIoError {
                     SiblingClash::Output => write!(f, "is also an output of this run (name another output)"),
                     SiblingClash::Exists => write!(
                         f,
-                        "exists (left by an interrupted write?): it would be replaced and then deleted; move it \
-                         away, or name another output"
+                        "exists and is no stale temporary of a killed forecast write (another program's file, \
+                         or a run writing this output now): it would be replaced and then deleted; move it away, \
+                         or name another output"
                     ),
                 }
             }
@@ -227,6 +252,14 @@ impl std::fmt::Display for AtomicIoError {
             NotCreatable { flag, output, blocker } => {
                 write!(f, "{flag} `{}` cannot be created: `{}` is not a directory", output.display(), blocker.display())
             }
+            NotWritable { flag, output, dir, source } => write!(
+                f,
+                "{flag} `{}` cannot be written: no file can be created in `{}` ({source}); name a writable \
+                 directory (checked before any work)",
+                output.display(),
+                dir.display()
+            ),
+            Unreadable { what, path, source } => write!(f, "cannot read {what} `{}`: {source}", path.display()),
             InputInOutputDir { what, input, flag, dir } => write!(
                 f,
                 "{what} `{}` lies in `{}`, which {flag} writes: it could be overwritten (move it or name another \
@@ -260,6 +293,8 @@ impl std::error::Error for AtomicIoError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
             AtomicIoError::Write { source, .. }
+            | AtomicIoError::NotWritable { source, .. }
+            | AtomicIoError::Unreadable { source, .. }
             | AtomicIoError::Backup { source, .. }
             | AtomicIoError::Rename { source, .. } => Some(source),
             _ => None,
@@ -325,8 +360,27 @@ mod tests {
             ),
             (
                 sibling(SiblingClash::Exists),
-                "--out `r.json` is written through its temporary `r.json.tmp`, which exists (left by an interrupted \
-                 write?): it would be replaced and then deleted; move it away, or name another output",
+                "--out `r.json` is written through its temporary `r.json.tmp`, which exists and is no stale \
+                 temporary of a killed forecast write (another program's file, or a run writing this output now): it \
+                 would be replaced and then deleted; move it away, or name another output",
+            ),
+            (
+                AtomicIoError::NotWritable {
+                    flag: "--out".into(),
+                    output: p("ro/x.exr"),
+                    dir: p("ro"),
+                    source: io::Error::from(io::ErrorKind::PermissionDenied),
+                },
+                "--out `ro/x.exr` cannot be written: no file can be created in `ro` (permission denied); name a \
+                 writable directory (checked before any work)",
+            ),
+            (
+                AtomicIoError::Unreadable {
+                    what: "scene file".into(),
+                    path: p("s.toml"),
+                    source: io::Error::from(io::ErrorKind::NotFound),
+                },
+                "cannot read scene file `s.toml`: entity not found",
             ),
             (
                 AtomicIoError::WrongKind { flag: "--out".into(), output: p("d"), want_dir: false },

@@ -29,6 +29,14 @@ pub fn require_regular(path: &Path) -> io::Result<()> {
     Err(io::Error::new(io::ErrorKind::InvalidInput, format!("it is {kind}")))
 }
 
+/// An input the command line names (a scene file), checked before anything reads it: a regular
+/// file ([`require_regular`]) this process can open. The error names the file and no line.
+pub fn check_input(what: &str, path: &Path) -> Result<(), AtomicIoError> {
+    require_regular(path)
+        .and_then(|()| std::fs::File::open(path).map(drop))
+        .map_err(|source| AtomicIoError::Unreadable { what: what.to_string(), path: path.to_path_buf(), source })
+}
+
 /// `std::fs::read` of a regular file only ([`require_regular`]).
 pub fn read_regular(path: &Path) -> io::Result<Vec<u8>> {
     require_regular(path)?;
@@ -85,9 +93,10 @@ pub fn resolve(p: &Path) -> PathBuf {
 }
 
 /// Refuses, before any work, an output that cannot be written: a file output that is a
-/// directory, a directory output that is a file, or one whose nearest existing ancestor is not a
-/// directory.
-fn writable(flag: &str, out: &Path, want_dir: bool) -> Result<(), AtomicIoError> {
+/// directory, a directory output that is a file, one whose nearest existing ancestor is not a
+/// directory, or (where `probe`: the process that writes) one whose nearest existing ancestor
+/// takes no new file ([`probe_write`]).
+fn writable(flag: &str, out: &Path, want_dir: bool, probe: bool) -> Result<(), AtomicIoError> {
     if out.is_dir() != want_dir && out.exists() {
         return Err(AtomicIoError::WrongKind { flag: flag.to_string(), output: out.to_path_buf(), want_dir });
     }
@@ -98,8 +107,73 @@ fn writable(flag: &str, out: &Path, want_dir: bool) -> Result<(), AtomicIoError>
             output: out.to_path_buf(),
             blocker: a.to_path_buf(),
         }),
+        Some(a) if probe => probe_write(a).map_err(|source| AtomicIoError::NotWritable {
+            flag: flag.to_string(),
+            output: out.to_path_buf(),
+            dir: a.to_path_buf(),
+            source,
+        }),
         _ => Ok(()),
     }
+}
+
+/// Whether files can be created in the directory `dir` (permissions, a read-only mount, an ACL:
+/// whatever the write at the end would meet): creates a new empty file there, under a name no
+/// other file has, and removes it.
+fn probe_write(dir: &Path) -> io::Result<()> {
+    for n in 0..16 {
+        let probe = dir.join(format!(".forecast-write-probe-{}-{n}", std::process::id()));
+        match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+            Ok(f) => {
+                drop(f);
+                return std::fs::remove_file(&probe);
+            }
+            Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(()) // sixteen probes of this process already there: the directory takes files
+}
+
+/// The first bytes of every file forecast writes with extension `ext` (the formats a stale
+/// temporary may be recognised by): EXR, PNG, the JSON reports, checkpoints.
+fn format_magic(ext: &str) -> Option<&'static [u8]> {
+    match ext {
+        "exr" => Some(&[0x76, 0x2f, 0x31, 0x01]),
+        "png" => Some(b"\x89PNG\r\n\x1a\n"),
+        "json" => Some(b"{\n  \""), // serde_json's pretty form, as every report is written
+        "ckpt" => Some(&crate::checkpoint::MAGIC),
+        _ => None,
+    }
+}
+
+/// Removes `PATH.tmp`, the temporary of the output `out` ([`super::atomic_path`]), when it is
+/// a write of ours that a killed process left, and says whether it did. It is one when
+/// * it is a regular file (not a link, a directory or a device);
+/// * no process holds its lock: every writer locks its temporary from creation until the
+///   rename, and the kernel drops the lock of a killed process, so a locked one is being
+///   written (`false`: the caller refuses, as two runs then write one output);
+/// * its first bytes are those of the format forecast writes to `out` (EXR, PNG, JSON,
+///   checkpoint; an empty or shorter file, a write killed early, matches their beginning).
+///
+/// Anything else (another program's file of that name, an extension forecast does not write) is
+/// left alone. The caller checks first that the temporary is no input of the run.
+pub fn remove_stale_temporary(out: &Path) -> bool {
+    use std::io::Read;
+    let tmp = super::atomic_path(out);
+    let Some(magic) = out.extension().and_then(|e| e.to_str()).and_then(format_magic) else { return false };
+    if !tmp.symlink_metadata().is_ok_and(|m| m.file_type().is_file()) {
+        return false;
+    }
+    let Ok(mut f) = std::fs::File::open(&tmp) else { return false };
+    if f.try_lock().is_err() {
+        return false;
+    }
+    let mut head = Vec::with_capacity(magic.len());
+    if (&mut f).take(magic.len() as u64).read_to_end(&mut head).is_err() || !magic.starts_with(&head) {
+        return false;
+    }
+    std::fs::remove_file(&tmp).is_ok()
 }
 
 /// True when `a` and `b` name the same file (see [`OutputSet`] for what "same" means).
@@ -114,9 +188,13 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
 /// * an output named twice (two outputs of the same run would overwrite each other);
 /// * an input inside an output directory (compare's `DIR/charts/`, …);
 /// * an output written through a temporary (`PATH.tmp`) or backup (`PATH.old`) that is an input,
-///   another output or an existing file (the write would replace it and then delete it);
-/// * an output that cannot be created: a directory, or under a path that is not a directory
-///   (except [`OutputSet::best_effort`] ones, whose failure is only a warning).
+///   another output or an existing file (the write would replace it and then delete it); a
+///   stale temporary that a killed write of ours left is removed instead
+///   ([`remove_stale_temporary`]);
+/// * an output that cannot be created: a directory, under a path that is not a directory, or in
+///   a directory where no file can be created (probed by creating one: permissions, read-only
+///   mounts), so that no render runs to the end only to fail there (except
+///   [`OutputSet::best_effort`] ones, whose failure is only a warning).
 ///
 /// Two paths are the same file when they are the same existing file (device and inode: hard
 /// links, symbolic links and `..` spellings included) or resolve to the same absolute path
@@ -130,6 +208,9 @@ pub struct OutputSet {
     dirs: Vec<(String, PathBuf)>,
     /// Outputs whose failed write is only a warning (checkpoints): not checked for writability.
     best_effort: Vec<PathBuf>,
+    /// This process does not write the outputs (an MPI rank other than 0): see
+    /// [`OutputSet::not_writer`].
+    not_writer: bool,
 }
 
 impl OutputSet {
@@ -179,6 +260,16 @@ impl OutputSet {
         self
     }
 
+    /// This process only checks the outputs that another writes (an MPI rank other than 0, whose
+    /// directory may be another node's or shared with rank 0): [`OutputSet::check`] then keeps
+    /// the checks of names (inputs, outputs named twice, kinds) and leaves to the writer what
+    /// touches its file system: the write probe, and temporaries that exist (a stale one rank 0
+    /// removes, which a second rank must not race for).
+    pub fn not_writer(&mut self, not_writer: bool) -> &mut Self {
+        self.not_writer = not_writer;
+        self
+    }
+
     /// The outputs, in the order they were added.
     pub fn outputs(&self) -> impl Iterator<Item = &Path> {
         self.outputs.iter().map(|(_, p, _)| p.as_path())
@@ -200,6 +291,11 @@ impl OutputSet {
                     SiblingClash::Input { what: what.clone(), path: path.clone() }
                 } else if outs.contains(&r) {
                     SiblingClash::Output
+                } else if self.not_writer {
+                    continue;
+                } else if sibling == Sibling::Temporary && remove_stale_temporary(out) {
+                    // a killed write's leftover: removed, the output is free again
+                    continue;
                 } else if sib.symlink_metadata().is_ok() {
                     SiblingClash::Exists
                 } else {
@@ -241,12 +337,12 @@ impl OutputSet {
             }
             seen.push((id, r));
             if !self.best_effort.contains(out) {
-                writable(flag, out, false)?;
+                writable(flag, out, false, !self.not_writer)?;
             }
         }
         self.check_siblings(&inputs)?;
         for (flag, dir) in &self.dirs {
-            writable(flag, dir, true)?;
+            writable(flag, dir, true, !self.not_writer)?;
             let d = resolve(dir);
             if let Some(((what, input), _)) = self.inputs.iter().zip(&inputs).find(|(_, (_, ir))| ir.starts_with(&d)) {
                 return Err(AtomicIoError::InputInOutputDir {

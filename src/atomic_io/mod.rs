@@ -23,6 +23,11 @@
 //! ([`RealFs`] is the real thing). Nothing here panics; errors are [`AtomicIoError`]s naming the
 //! file (`error`).
 //!
+//! Every temporary is created new (never over an existing file) and held under an exclusive lock
+//! (`flock`) from its creation until the set is renamed; a process killed meanwhile leaves it
+//! unlocked, and the next run's guard removes it if it is a stale temporary of ours
+//! ([`remove_stale_temporary`]) instead of refusing to start.
+//!
 //! Also the guards around them (`guard`): [`read_regular`] (every whole-file read of an input: a
 //! FIFO would block forever, `/dev/zero` would fill the memory) and [`OutputSet`], the one output
 //! guard of every command that writes (no output names an input or another output of the run).
@@ -30,7 +35,10 @@
 mod error;
 mod guard;
 pub use error::{AtomicIoError, Sibling, SiblingClash};
-pub use guard::{check_output_prefix, read_regular, require_regular, resolve, same_file, OutputSet};
+pub use guard::{
+    check_input, check_output_prefix, read_regular, remove_stale_temporary, require_regular, resolve, same_file,
+    OutputSet,
+};
 
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
@@ -49,6 +57,12 @@ pub trait FileOps {
     fn exists(&mut self, path: &Path) -> bool;
     /// `true` if `path` is a directory.
     fn is_dir(&mut self, path: &Path) -> bool;
+    /// [`FileOps::write`] of a temporary, returning what marks it as being written until it is
+    /// dropped (after its rename): the real file system's open file, holding an exclusive lock
+    /// that a stale temporary of a killed process no longer has ([`remove_stale_temporary`]).
+    fn write_held(&mut self, path: &Path, bytes: &[u8]) -> io::Result<Option<std::fs::File>> {
+        self.write(path, bytes).map(|()| None)
+    }
 }
 
 /// The real file system.
@@ -56,10 +70,16 @@ pub struct RealFs;
 
 impl FileOps for RealFs {
     fn write(&mut self, path: &Path, bytes: &[u8]) -> io::Result<()> {
+        self.write_held(path, bytes).map(drop)
+    }
+    fn write_held(&mut self, path: &Path, bytes: &[u8]) -> io::Result<Option<std::fs::File>> {
         // never truncates a file that is not ours (`OutputSet::check` refused it up front)
         let mut f = std::fs::OpenOptions::new().write(true).create_new(true).open(path)?;
+        // live until dropped: a second run's guard leaves a locked temporary alone
+        f.lock()?;
         f.write_all(bytes)?;
-        f.sync_all()
+        f.sync_all()?;
+        Ok(Some(f))
     }
     fn rename(&mut self, from: &Path, to: &Path) -> io::Result<()> {
         std::fs::rename(from, to)
@@ -163,8 +183,10 @@ pub fn write_set_with(fs: &mut dyn FileOps, files: &[(PathBuf, Vec<u8>)]) -> Res
         }
     }
     let tmps: Vec<PathBuf> = files.iter().map(|(p, _)| atomic_path(p)).collect();
+    // each temporary stays locked until the set is renamed (or rolled back): released on return
+    let mut held: Vec<std::fs::File> = Vec::with_capacity(files.len());
     for (i, (_, bytes)) in files.iter().enumerate() {
-        if let Err(e) = fs.write(&tmps[i], bytes) {
+        if let Err(e) = fs.write_held(&tmps[i], bytes).map(|h| held.extend(h)) {
             // a temporary that was already there is not ours to remove
             let ours = if e.kind() == io::ErrorKind::AlreadyExists { i } else { i + 1 };
             remove_all(fs, &tmps[..ours]);

@@ -433,9 +433,10 @@ pub fn run_compare(cfg: &CompareConfig, cluster: &dyn Cluster) -> Result<Option<
     if let Some((flag, _)) = unused.iter().find(|(_, set)| *set) {
         return Err(format!("compare: {flag} is a `render` option; compare's runs are time-boxed by --budgets"));
     }
+    crate::atomic_io::check_input("scene file", &cfg.base.scene)?;
     let scene = crate::scene::load_with(&cfg.base.scene, &cfg.base.load_options()).map_err(|e| e.to_string())?;
     let runs_dir = cfg.out.join("runs");
-    output_guard(cfg, &scene, &runs_dir).check()?;
+    output_guard(cfg, &scene, &runs_dir).not_writer(cluster.rank() != 0).check()?;
     let (reference, res) = agree_resolution(cfg, cluster)?;
     let regions = regions(&scene, res);
     if cluster.rank() == 0 {

@@ -115,8 +115,9 @@ pub fn run_reference(
         return Err("reference: --snapshots is a `render` option (the reference is two half renders)".into());
     }
     crate::atomic_io::check_output_prefix(&base.out)?;
+    crate::atomic_io::check_input("scene file", &base.scene)?;
     let scene = crate::scene::load_with(&base.scene, &base.load_options()).map_err(|e| e.to_string())?;
-    reference_guard(base, &scene).check()?; // each half's render checks its own resume too
+    reference_guard(base, &scene).not_writer(cluster.rank() != 0).check()?; // each half's render checks its own resume too
     let plan = pipeline::RenderJob { method: Some(Method::Pt.into()), ..base.clone() }.resolve(&scene)?;
     let prefix = base.out.clone();
     let resume = base.resume.as_deref().map(resume_prefix);

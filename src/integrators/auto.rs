@@ -12,7 +12,9 @@
 //!    nothing; the reason says so (docs/auto.md).
 //!
 //! Invariants: a pure function of the scene (never of time, seed or machine); every choice is
-//! unbiased for what it renders; the reason names the rule and the figures it rests on.
+//! unbiased for what it renders; the reason is one short line naming the rule
+//! ([`REASON_MAX_CHARS`], printed on every run), and [`evidence`] the figures it rests on (the
+//! report's `method_evidence`).
 
 use super::Method;
 use crate::scene::Scene;
@@ -100,25 +102,52 @@ fn glossy_note(scene: &Scene) -> &'static str {
     }
 }
 
-/// The method `auto` picks for `scene`, and why (the rule of the module docs).
+/// The longest [`choose`] reason: one line of the terminal's `method:` line. The figures it rests
+/// on are [`evidence`]'s (the report's `method_evidence`, and `docs/auto.md`).
+pub const REASON_MAX_CHARS: usize = 110;
+
+/// The method `auto` picks for `scene`, and why in one short line (the rule of the module docs;
+/// the figures and the notes are [`evidence`]'s).
 pub fn choose(scene: &Scene) -> (Method, String) {
-    let note = point_light_note(scene);
     if !has_dirac(scene) {
         return (Method::Pt, "no mirror or glass objects: pt, the cheapest unbiased method".into());
     }
     if scene.emitters.is_empty() {
-        let why = "mirror/glass objects lit by point lights only: pt-cf, whose light paths render their caustics \
-                   (L S+ D; pt and iws-cf cannot sample them)"
-            .to_string();
-        return (Method::PtCf, why);
+        return (
+            Method::PtCf,
+            "mirror/glass lit by point lights only: pt-cf, whose light paths render their caustics (L S+ D)".into(),
+        );
     }
-    let why = format!(
+    (Method::PtCf, "caustics from area lights: pt-cf, the best unbiased whole image at equal time".into())
+}
+
+/// What [`choose`]'s pick for `scene` rests on: the equal-time figures of `docs/auto.md` and the
+/// notes on the scene's point lights and glossy receivers (the report's `method_evidence`).
+pub fn evidence(scene: &Scene) -> String {
+    let note = point_light_note(scene);
+    if !has_dirac(scene) {
+        return "no mirror or glass objects: pt, the cheapest unbiased method (every other method adds work that \
+                only caustics repay; docs/auto.md)"
+            .into();
+    }
+    if scene.emitters.is_empty() {
+        return "mirror/glass objects lit by point lights only: pt-cf, whose light paths render their caustics \
+                (L S+ D; pt and iws-cf cannot sample them; docs/auto.md)"
+            .to_string();
+    }
+    format!(
         "caustics from area lights: pt-cf, the best whole image of the unbiased methods at equal time \
          (cornell-box 1 min: 0.49x pt's whole-image RMSE, iws-cf 0.64x; ring, before the light paths: 0.38-0.50x, \
          iws-cf 0.44-0.53x; docs/auto.md){note}{}",
         glossy_note(scene)
-    );
-    (Method::PtCf, why)
+    )
+}
+
+/// [`evidence`] where `requested` (else the scene's `[render] method`) is `auto`; `None` where a
+/// method is named (the reason then says by whom).
+pub fn resolve_evidence(requested: Option<MethodChoice>, scene: &Scene) -> Option<String> {
+    let choice = requested.or_else(|| MethodChoice::from_name(&scene.render.method))?;
+    (choice == MethodChoice::Auto).then(|| evidence(scene))
 }
 
 /// The method of a render: `requested` (the command line's `--method`) first, else the scene's
@@ -136,11 +165,7 @@ pub fn resolve(requested: Option<MethodChoice>, scene: &Scene) -> Result<(Method
         MethodChoice::Named(m) => (m, format!("{} named by {source}", m.name())),
         MethodChoice::Auto => {
             let (m, why) = choose(scene);
-            let by = if requested.is_some() {
-                "--method auto"
-            } else {
-                "no --method; the scene's method is auto, its default"
-            };
+            let by = if requested.is_some() { "--method auto" } else { "the default" };
             (m, format!("auto ({by}): {why}"))
         }
     })

@@ -109,8 +109,10 @@ pub struct RenderJob {
 pub struct Plan {
     /// Method.
     pub method: Method,
-    /// Why this method: named by `--method` or the scene, or `auto`'s rule.
+    /// Why this method, one line: named by `--method` or the scene, or `auto`'s rule.
     pub method_reason: String,
+    /// What `auto`'s pick rests on (its figures and notes); `None` for a named method.
+    pub method_evidence: Option<String>,
     /// Seed.
     pub seed: u64,
     /// Method parameters (`max_depth` resolved).
@@ -181,7 +183,8 @@ impl RenderJob {
         let spp = if time.is_some() { None } else { Some(self.spp.or(r.spp).unwrap_or(16)) };
         let resolution = self.resolution.unwrap_or((scene.camera.width, scene.camera.height));
         let seed = self.seed.unwrap_or(r.seed);
-        let mut plan = Plan { method, method_reason, seed, args, time, spp, resolution };
+        let method_evidence = crate::integrators::auto::resolve_evidence(self.method, scene);
+        let mut plan = Plan { method, method_reason, method_evidence, seed, args, time, spp, resolution };
         plan.validate()?;
         plan.args.settings.max_depth = plan.args.settings.max_depth.or(scene_cap);
         check_snapshots(&self.snapshots, time)?;
@@ -292,12 +295,17 @@ fn finish(
             passes.warn(format!("final checkpoint not written ({e}); the previous one is kept"), None);
         }
     }
+    let scene = &run.world.scene;
+    if let Some(w) = report::black_image_warning(&reduced.film, scene.emitters.len() + scene.point_lights.len()) {
+        passes.warn(w, None);
+    }
     let mut outputs = FileSet::new();
     let image = image_files(&run.job.out, &reduced.film, &mut outputs)?;
     timings.write_s = secs(t_write);
     timings.total_s = secs(run.started);
     let stats = integrator.stats(&passes.counters.profile);
-    let report = run.report(passes, reduced.parts, timings, stats, &image, true);
+    // a signal's render is not complete; a time box reached is
+    let report = run.report(passes, reduced.parts, timings, stats, &image, !passes.interrupted);
     let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
     outputs.add(with_ext(&run.job.out, "json"), text.into_bytes());
     outputs.write()?;
@@ -327,8 +335,9 @@ fn preprocess_over_budget(plan: &Plan, timings: &Timings, started: Instant, rank
 /// memory estimate), build the BVH.
 fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), RenderError> {
     let t_load = Instant::now();
+    crate::atomic_io::check_input("scene file", &job.scene)?; // named without a line: it has none
     let mut scene = crate::scene::load_with(&job.scene, &job.load_options())?;
-    job.output_set(&scene).check()?; // before anything is written
+    job.output_set(&scene).not_writer(rank != 0).check()?; // before anything is written
     let load_s = secs(t_load);
     if rank == 0 {
         for w in &scene.warnings {
@@ -471,6 +480,7 @@ impl Run<'_> {
         RenderReport {
             method: self.plan.method,
             method_reason: self.plan.method_reason.clone(),
+            method_evidence: self.plan.method_evidence.clone(),
             scene: self.world.scene.path.clone(),
             resolution: [w, h],
             spp: (t.film_samples / ((w as f64) * (h as f64))).round() as u64,

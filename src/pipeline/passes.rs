@@ -60,7 +60,8 @@ pub(super) fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: D
     let (k, cap) = (run.plan.args.emission_split(), integrator.prefix_cap());
     let pixels =
         run.pool.install(|| PixelSampler::new(run.world, &camera, k, cap).with_sampler(run.plan.args.settings.sampler));
-    let progress = Progress::new(run.job.progress && rank == 0, total.map(|t| t - first_pass), run.plan.time);
+    let progress =
+        Progress::new(run.job.progress && rank == 0, total.map(|t| t - first_pass), run.plan.time, run.started);
     let mut p = Passes::new(run, first_pass, pixels.stats());
     let (t_render, mut last_ckpt, mut timer) = (Instant::now(), Instant::now(), PassTimer::new());
     let mut failure: Option<String> = None;

@@ -68,8 +68,11 @@ pub struct RankStats {
 pub struct RenderReport {
     /// Method.
     pub method: Method,
-    /// Why this method: named by `--method` or the scene, or `auto`'s rule and its evidence.
+    /// Why this method, in one line: named by `--method` or the scene, or `auto`'s rule.
     pub method_reason: String,
+    /// `auto`'s evidence for its pick (the equal-time figures of `docs/auto.md` and the notes on
+    /// the scene's point lights and glossy receivers); `null` for a named method.
+    pub method_evidence: Option<String>,
     /// Scene file.
     pub scene: String,
     /// Image size.
@@ -117,13 +120,38 @@ pub struct RenderReport {
     /// `pt-cf` without `--light-paths`: the pilot's figures and the light paths it chose
     /// (`pipeline::light_pilot`); `null` otherwise.
     pub light_path_rule: Option<super::LightPathRule>,
-    /// `false` in the JSON written with a checkpoint (a render still running), `true` at the end.
+    /// `false` in the JSON written with a checkpoint (a render still running) and in that of a
+    /// render Ctrl-C or SIGTERM ended (`interrupted`); `true` when the spp or the time box was
+    /// reached (a time box is a complete render).
     pub complete: bool,
     /// Whether Ctrl-C or SIGTERM ended the render before its spp or time box (`interrupt`): the
     /// image holds the passes done.
     pub interrupted: bool,
     /// Mean of the image, per channel.
     pub image_mean: [f64; 3],
+}
+
+/// The warning of a render whose every sample is exactly 0 (the film's radiance sums are all
+/// zero; radiance is never negative, so none cancels): no light reached anything the camera saw,
+/// e.g. a light facing away from the scene, or one enclosed by geometry. `lights` counts the
+/// scene's emitting primitives and point lights. A render that found light in a single sample anywhere gets
+/// none: the check is exact, not a threshold, so it never fires on a dark but lit image.
+pub fn black_image_warning(film: &Film, lights: usize) -> Option<String> {
+    let black = film.data.chunks_exact(crate::render::film::STRIDE).all(|d| d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0);
+    let samples = film.total_samples();
+    if !black || samples == 0.0 {
+        return None;
+    }
+    let spp = samples / (film.width * film.height).max(1) as f64;
+    Some(if lights == 0 {
+        format!("the image is black ({spp:.0} spp, every sample 0): the scene has no light")
+    } else {
+        format!(
+            "the image is black ({spp:.0} spp, every sample 0): the scene has lights, but no light reached \
+             anything the camera sees; check that the lights face the scene and are not enclosed or hidden from \
+             it (a light facing away renders black)"
+        )
+    })
 }
 
 /// The outcome on rank 0.
