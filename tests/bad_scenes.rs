@@ -1371,3 +1371,11 @@ fn a_missing_image_is_named_with_its_key() {
     let e = expect_err("not an image", &src, &dir, marked_line(&src), "materials.wood.albedo.filename");
     assert!(e.message.contains("every-material.toml"), "{e}");
 }
+
+/// An error whose line is unknown (0) names its file without a line, never `file:0:`.
+#[test]
+fn an_unknown_line_is_left_out() {
+    let e = |line| SceneError { file: "s.xml".into(), line, key: "k".into(), message: "m".into() }.to_string();
+    assert_eq!(e(0), "s.xml: key `k`: m");
+    assert_eq!(e(7), "s.xml:7: key `k`: m");
+}
