@@ -91,6 +91,24 @@ pub fn mixed_lobes(scene: &Scene, m: Method) -> Option<String> {
     })
 }
 
+/// Why `m` refuses the lights of `scene`: `pt-cf` and an environment (`constant`, `envmap`),
+/// whose camera paths that escape after a Dirac chain would need the light side's density of
+/// the environment's disk to be weighted against its light paths (not written yet:
+/// docs/limitations.md). Every method renders spot and directional lights, and the others
+/// environments.
+pub fn unsupported_lights(scene: &Scene, m: Method) -> Option<String> {
+    (m == Method::PtCf && scene.environment.is_some()).then(|| {
+        "the scene has an environment emitter (`constant` or `envmap`), which pt-cf does not yet weight against \
+         its light paths (docs/limitations.md)"
+            .to_string()
+    })
+}
+
+/// Why `m` refuses `scene` ([`mixed_lobes`], [`unsupported_lights`]), if it does.
+pub fn refusal(scene: &Scene, m: Method) -> Option<String> {
+    mixed_lobes(scene, m).or_else(|| unsupported_lights(scene, m))
+}
+
 /// The note on glossy receivers, where the scene has a glossy material (docs/auto.md).
 fn glossy_note(scene: &Scene) -> &'static str {
     use crate::bsdf::Material;
@@ -117,7 +135,12 @@ pub fn choose(scene: &Scene) -> (Method, String) {
     if !has_dirac(scene) {
         return (Method::Pt, "no mirror or glass objects: pt, the cheapest unbiased method".into());
     }
-    if scene.emitters.is_empty() {
+    if unsupported_lights(scene, Method::PtCf).is_some() {
+        let why = "mirror/glass objects under an environment emitter, which pt-cf does not yet render \
+                   (docs/limitations.md): pt, the unbiased reference";
+        return (Method::Pt, why.into());
+    }
+    if scene.emitters.is_empty() && !scene.has_infinite_lights() {
         let why = "mirror/glass objects lit by point lights only: pt-cf, whose light paths render their caustics \
                    (L S+ D; pt and iws-cf cannot sample them)"
             .to_string();
@@ -144,12 +167,15 @@ pub fn resolve(requested: Option<MethodChoice>, scene: &Scene) -> Result<(Method
         None => (from_scene()?, "the scene's [render] method"),
     };
     Ok(match choice {
-        MethodChoice::Named(m) if mixed_lobes(scene, m).is_some() => {
-            let why = mixed_lobes(scene, m).unwrap_or_default();
+        MethodChoice::Named(m) if refusal(scene, m).is_some() => {
+            let why = refusal(scene, m).unwrap_or_default();
+            let others: Vec<&str> =
+                Method::ALL.iter().filter(|&&o| refusal(scene, o).is_none()).map(|o| o.name()).collect();
             return Err(format!(
-                "{}: --method {} ({source}): {why}; render it with --method pt-cf or pt",
+                "{}: --method {} ({source}): {why}; render it with --method {}",
                 scene.path,
-                m.name()
+                m.name(),
+                others.join(" or ")
             ));
         }
         MethodChoice::Named(m) => (m, format!("{} named by {source}", m.name())),

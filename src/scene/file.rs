@@ -122,7 +122,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
         let def = l.get_ref().resolve().map_err(|(k, m)| cx.err(ls.clone(), &key(&k), m))?;
         let LightDef::Point { position, intensity } = &def;
         let (pat, iat) = (cx.at(ls.clone(), &key("position")), cx.at(ls, &key("intensity")));
-        b.point_light((v3(*position), &pat), (v3(*intensity), &iat))?;
+        b.point_light((v3(*position), &pat), (v3(*intensity), &iat), None)?;
     }
     extras(&cx, &mut b, &doc)?;
     b.build(&Origin::new(1, ""), "shape.emission")

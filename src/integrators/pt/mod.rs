@@ -133,7 +133,12 @@ impl PathTracer {
         let mut prefix = true; // no non-Dirac vertex yet
         let mut class = PathClass::default();
         for depth in 0..self.max_depth {
-            let Some(hit) = world.intersect(w.o, w.d, f32::INFINITY) else { break };
+            let Some(hit) = world.intersect(w.o, w.d, f32::INFINITY) else {
+                if let Some((le, mis)) = w.escaped(world) {
+                    *if prefix { &mut l.prefix_le } else { &mut l.rest } += self.kept(class, w.t.beta * le * mis);
+                }
+                break;
+            };
             if s.emitter_of(hit.prim) != NO_EMITTER {
                 if let Some((le, mis)) = w.emitted(world, &hit) {
                     *if prefix { &mut l.prefix_le } else { &mut l.rest } += self.kept(class, w.t.beta * le * mis);

@@ -202,7 +202,13 @@ fn shade(world: &World, w: &mut Wave, k: usize, depth: u32, rngs: &mut [Rng], ou
     let mut p = w.live[k];
     let mut walk = p.walk(&w.rays[k]);
     let (i, rng) = (p.i as usize, &mut rngs[p.i as usize]);
-    let Some(found) = w.hits[k] else { return false };
+    let Some(found) = w.hits[k] else {
+        if let Some((le, mis)) = walk.escaped(world) {
+            let l = &mut out[i];
+            *if p.prefix { &mut l.prefix_le } else { &mut l.rest } += walk.t.beta * le * mis;
+        }
+        return false;
+    };
     let hit = world.hit_at(&w.rays[k], found);
     if s.emitter_of(hit.prim) != NO_EMITTER {
         if let Some((le, mis)) = walk.emitted(world, &hit) {
