@@ -88,6 +88,9 @@ impl MethodSpec for PtCf {
         <IwsCf as MethodSpec>::preprocess(world, args, seed, phases)
     }
     fn build(world: &World, args: &MethodArgs, g: CausticForecast) -> Result<Box<dyn Integrator>, MethodError> {
+        if let Some(why) = super::auto::unsupported_lights(&world.scene, super::Method::PtCf) {
+            return Err(MethodError::option("--method", format!("pt-cf refuses the scene: {why}")));
+        }
         let p = &args.ptcf;
         let c = p.guide_fraction;
         let weights = MixtureWeights::guide_fraction(c).map_err(|e| MethodError::option("--guide-fraction", e))?;
