@@ -73,8 +73,8 @@ fn has_dirac(scene: &Scene) -> bool {
 /// The note on caustics lit by point lights, when the scene has both point lights and Dirac
 /// objects.
 fn point_light_note(scene: &Scene) -> &'static str {
-    if has_dirac(scene) && !scene.point_lights.is_empty() {
-        "; caustics lit by point lights (L S+ D) are rendered only by pt-cf's light paths (issue #34)"
+    if has_dirac(scene) && !(scene.point_lights.is_empty() && scene.directional_lights.is_empty()) {
+        "; caustics lit by point, spot or directional lights (L S+ D) are rendered only by pt-cf's light paths (issue #34)"
     } else {
         ""
     }
@@ -140,9 +140,9 @@ pub fn choose(scene: &Scene) -> (Method, String) {
                    (docs/limitations.md): pt, the unbiased reference";
         return (Method::Pt, why.into());
     }
-    if scene.emitters.is_empty() && !scene.has_infinite_lights() {
-        let why = "mirror/glass objects lit by point lights only: pt-cf, whose light paths render their caustics \
-                   (L S+ D; pt and iws-cf cannot sample them)"
+    if scene.emitters.is_empty() && scene.environment.is_none() {
+        let why = "mirror/glass objects lit by point lights only (point, spot or directional): pt-cf, whose light paths render \
+                   their caustics (L S+ D; pt and iws-cf cannot sample them)"
             .to_string();
         return (Method::PtCf, why);
     }

@@ -516,15 +516,16 @@ impl Scene {
 pub const POINT_LIGHT_WARNING: &str = "cannot be sampled by `pt` and `iws-cf`";
 
 /// Warnings about scene-level limitations of the methods; empty when there are none. Every
-/// render prints them (rank 0) and stores them in the JSON `warnings`. Today: point lights
-/// together with Dirac objects, whose caustics `pt` and `iws-cf` cannot sample (BAJ08).
+/// render prints them (rank 0) and stores them in the JSON `warnings`. Today: point, spot or
+/// directional lights (Dirac in position or direction) together with Dirac objects, whose
+/// caustics `pt` and `iws-cf` cannot sample (BAJ08).
 pub fn scene_warnings(scene: &Scene) -> Vec<String> {
     let mut w = Vec::new();
-    let n = scene.point_lights.len();
+    let n = scene.point_lights.len() + scene.directional_lights.len();
     if n > 0 && scene.dirac_bounds().is_some() {
         w.push(format!(
-            "{}: {n} point light(s) and Dirac (mirror/glass) objects: caustics lit by point lights (paths L S+ D) \
-             {POINT_LIGHT_WARNING} (BAJ08 limitation: a point light is never hit, and a Dirac chain cannot be \
+            "{}: {n} point, spot or directional light(s) and Dirac (mirror/glass) objects: caustics lit by them (paths L S+ D) \
+             {POINT_LIGHT_WARNING} (BAJ08 limitation: such a light is never hit, and a Dirac chain cannot be \
              connected to it); those methods leave them out, `iws-pm` includes them (biased) and `pt-cf` renders them \
              with its light paths (`--light-paths`)",
             scene.path
