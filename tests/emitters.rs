@@ -294,7 +294,7 @@ fn bad_spots_are_clear_errors() {
         let src = furnace_scene(&format!(
             "<emitter type=\"spot\">\n    <float name=\"cutoff_angle\" value=\"{cutoff}\"/>\n    {beam}</emitter>"
         ));
-        let e = load(&src, Path::new(".")).err().expect("refused").to_string();
+        let e = load(&src, Path::new(".")).expect_err("refused").to_string();
         eprintln!("{e}");
         let key =
             if beam.is_empty() { "test.xml:9: key `spot.cutoff_angle`" } else { "test.xml:10: key `spot.beam_width`" };
@@ -304,7 +304,7 @@ fn bad_spots_are_clear_errors() {
         r#"<emitter type="constant"/>
   <emitter type="constant"/>"#,
     );
-    let e = load(&two, Path::new(".")).err().expect("refused").to_string();
+    let e = load(&two, Path::new(".")).expect_err("refused").to_string();
     assert!(e.contains("only one environment"), "{e}");
 }
 
@@ -326,6 +326,6 @@ fn toml_lights_export_to_mitsuba_and_back() {
     assert_eq!(render(&toml), render(&xml));
     // a TOML spot's bad cutoff names its key
     let src = std::fs::read_to_string(&toml).unwrap().replace("cutoff_angle = 30.0", "cutoff_angle = 95.0");
-    let e = forecast::scene::load_str(&src, "t.toml", &d).err().expect("refused").to_string();
+    let e = forecast::scene::load_str(&src, "t.toml", &d).expect_err("refused").to_string();
     assert!(e.contains("light[0].cutoff_angle") && e.contains("95"), "{e}");
 }
