@@ -7,8 +7,10 @@
 //!   (`tests/reference/emitters/`, `scripts/mitsuba-emitter-references.py`): a Šidák-corrected
 //!   per-pixel z-test and a whole-image z-test at family-wise α = 1e-3 per scene, the variance
 //!   of both sides from their passes;
-//! - every method that renders a light agrees with `pt` on a scene with it (`common::assert_agrees`),
-//!   and the methods that do not refuse the scene with a clear error;
+//! - `iws`, `iws-cf` and `pt-cf` agree with `pt` on a scene with each light
+//!   (`common::assert_agrees`; under the environments with a mirror sphere, whose caustic on the
+//!   floor `pt-cf`'s light paths and camera paths share by MIS), and `--direct vpl`, which
+//!   renders none of them, refuses them with a clear error;
 //! - bad input: an envmap whose file is missing, truncated, 1×1, or holds NaN, negative or 1e30
 //!   texels, a spot with cutoff 0 or above 90°: errors naming the file, the line and the key.
 
@@ -202,7 +204,20 @@ fn every_method_agrees(name: &str, no_mirror: bool, methods: &[Method]) {
     let o = cf_test_opts();
     let reference = render_passes(&w, build(&w, Method::Pt, &o).unwrap().as_mut(), 16, 16, 16384, 11);
     for &m in methods {
-        let img = render_passes(&w, build(&w, m, &o).unwrap().as_mut(), 16, 16, 4096, 3);
+        let mut integ = build(&w, m, &o).unwrap();
+        if m == Method::PtCf && !no_mirror {
+            // the light side is on and reaches the camera (the mirror's caustic)
+            let cam = w.scene.camera.with_resolution(16, 16);
+            let tracer = integ.light_tracer().expect("pt-cf traces light paths");
+            let sum: f64 = (0..32)
+                .map(|pass| {
+                    tracer.light_splats(&w, &cam, 3, pass).image.iter().map(|c| (c.x + c.y + c.z) as f64).sum::<f64>()
+                })
+                .sum();
+            eprintln!("{name}: pt-cf's light splats of passes 0..32 sum to {sum:.4}");
+            assert!(sum > 0.0, "{name}: pt-cf's light paths splat nothing");
+        }
+        let img = render_passes(&w, integ.as_mut(), 16, 16, 4096, 3);
         assert_agrees(&img, &reference, &format!("{name}: {}", m.name()));
     }
 }
@@ -219,33 +234,25 @@ fn every_method_agrees_with_pt_under_a_directional_light() {
 
 #[test]
 fn every_method_agrees_with_pt_under_a_constant_environment() {
-    every_method_agrees("constant", false, &[Method::IwsCf]);
+    every_method_agrees("constant", false, &[Method::IwsCf, Method::PtCf]);
 }
 
 #[test]
 fn every_method_agrees_with_pt_under_an_envmap() {
-    every_method_agrees("envmap", false, &[Method::IwsCf]);
+    every_method_agrees("envmap", false, &[Method::IwsCf, Method::PtCf]);
 }
 
-/// `pt-cf` refuses an environment (its build and `--method`), `auto` picks `pt` there, and
-/// `--direct vpl` refuses every new light.
+/// `--direct vpl` (the emitter point lights of the IWS methods) refuses every new light.
 #[test]
 fn methods_that_cannot_render_a_light_refuse_it() {
-    use forecast::integrators::auto;
-    for name in ["constant", "envmap"] {
-        let w = small_world(name, false);
-        let e = build(&w, Method::PtCf, &cf_test_opts()).err().expect("pt-cf refuses an environment");
-        assert!(e.contains("environment"), "{e}");
-        let e = auto::resolve(Some(Method::PtCf.into()), &w.scene).unwrap_err();
-        assert!(e.contains("environment") && e.contains("--method pt or iws"), "{e}");
-        assert_eq!(auto::choose(&w.scene).0, Method::Pt);
-    }
-    for name in ["spot", "directional", "constant"] {
+    for name in ["spot", "directional", "constant", "envmap"] {
         let w = small_world(name, false);
         let mut o = cf_test_opts();
         o.iws.direct = forecast::integrators::iws::DirectLight::Vpl;
-        let e = build(&w, Method::Iws, &o).err().expect("--direct vpl refuses");
-        assert!(e.contains("--direct"), "{e}");
+        for m in [Method::Iws, Method::IwsPm] {
+            let e = build(&w, m, &o).err().expect("--direct vpl refuses");
+            assert!(e.contains("--direct"), "{e}");
+        }
     }
 }
 

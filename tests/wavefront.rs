@@ -198,9 +198,7 @@ fn wavefronts_are_bit_identical_under_the_new_emitters() {
         for name in ["spot", "directional", "constant", "envmap"] {
             let w = world(&format!("tests/scenes/emitters/{name}.xml"), kind);
             wavefront_equals_scalar(&w, name, 32, 0.1);
-            if w.scene.environment.is_none() {
-                method_wavefront_equals_scalar(&w, Method::PtCf, name, 32, 0.1);
-            }
+            method_wavefront_equals_scalar(&w, Method::PtCf, name, 32, 0.1);
         }
     }
 }

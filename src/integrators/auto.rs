@@ -91,22 +91,9 @@ pub fn mixed_lobes(scene: &Scene, m: Method) -> Option<String> {
     })
 }
 
-/// Why `m` refuses the lights of `scene`: `pt-cf` and an environment (`constant`, `envmap`),
-/// whose camera paths that escape after a Dirac chain would need the light side's density of
-/// the environment's disk to be weighted against its light paths (not written yet:
-/// docs/limitations.md). Every method renders spot and directional lights, and the others
-/// environments.
-pub fn unsupported_lights(scene: &Scene, m: Method) -> Option<String> {
-    (m == Method::PtCf && scene.environment.is_some()).then(|| {
-        "the scene has an environment emitter (`constant` or `envmap`), which pt-cf does not yet weight against \
-         its light paths (docs/limitations.md)"
-            .to_string()
-    })
-}
-
-/// Why `m` refuses `scene` ([`mixed_lobes`], [`unsupported_lights`]), if it does.
+/// Why `m` refuses `scene` ([`mixed_lobes`]), if it does.
 pub fn refusal(scene: &Scene, m: Method) -> Option<String> {
-    mixed_lobes(scene, m).or_else(|| unsupported_lights(scene, m))
+    mixed_lobes(scene, m)
 }
 
 /// The note on glossy receivers, where the scene has a glossy material (docs/auto.md).
@@ -134,11 +121,6 @@ pub fn choose(scene: &Scene) -> (Method, String) {
     let note = point_light_note(scene);
     if !has_dirac(scene) {
         return (Method::Pt, "no mirror or glass objects: pt, the cheapest unbiased method".into());
-    }
-    if unsupported_lights(scene, Method::PtCf).is_some() {
-        let why = "mirror/glass objects under an environment emitter, which pt-cf does not yet render \
-                   (docs/limitations.md): pt, the unbiased reference";
-        return (Method::Pt, why.into());
     }
     if scene.emitters.is_empty() && scene.environment.is_none() {
         let why = "mirror/glass objects lit by point lights only (point, spot or directional): pt-cf, whose light paths render \

@@ -98,8 +98,8 @@ pub struct Emitted {
     pub vertex: Option<(EmitterVertex, f32)>,
     /// The first ray and `β1` (`None`: the direction sample failed or carries nothing).
     pub ray: Option<(Vec3, Vec3, Rgb)>,
-    /// For an area light, `P_ℓ·p_A·p_σ/cos θ0` of the ray (`pt-cf`'s MIS); `None` for lights the
-    /// camera side never hits.
+    /// For an area light, `P_ℓ·p_A·p_σ/cos θ0` of the ray, for the environment `P_ℓ·p_disk·p_σ`
+    /// (`pt-cf`'s MIS); `None` for lights the camera side never hits (point, spot, directional).
     pub density: Option<f32>,
 }
 
@@ -151,7 +151,8 @@ pub fn emit(s: &Scene, emission: Emission, li: usize, pmf: f32, u_pos: [f32; 2],
             let Some(env) = &s.environment else { return none };
             let Some((w, pdf_w)) = env.sample(u_dir) else { return none };
             let (o, pdf_a) = s.bsphere.disk_origin(-w, u_pos);
-            Emitted { ray: Some((o, -w, env.radiance(w) / (pmf * pdf_a * pdf_w))), ..none }
+            let p = pmf * pdf_a * pdf_w;
+            Emitted { ray: Some((o, -w, env.radiance(w) / p)), density: Some(p), ..none }
         }
     }
 }
