@@ -336,3 +336,20 @@ fn toml_lights_export_to_mitsuba_and_back() {
     let e = forecast::scene::load_str(&src, "t.toml", &d).expect_err("refused").to_string();
     assert!(e.contains("light[0].cutoff_angle") && e.contains("95"), "{e}");
 }
+
+/// The emission split (`--emission-split`, `render::pixel`) sees the environment along its extra
+/// camera rays as the methods' own `prefix_le` does (directly and through the mirror): `pt` and
+/// `pt-cf` with 4 rays per pixel everywhere agree with `pt` unsplit under the envmap.
+#[test]
+fn the_emission_split_sees_the_environment() {
+    let w = small_world("envmap", false);
+    let o = cf_test_opts();
+    let reference = render_passes(&w, build(&w, Method::Pt, &o).unwrap().as_mut(), 16, 16, 16384, 11);
+    let cam = w.scene.camera.with_resolution(16, 16);
+    for m in [Method::Pt, Method::PtCf] {
+        let mut integ = build(&w, m, &o).unwrap();
+        let pixels = forecast::render::PixelSampler::everywhere(&cam, 4, integ.prefix_cap());
+        let (img, _) = common::render_sampled(&w, integ.as_mut(), &pixels, 4096, 3);
+        assert_agrees(&img, &reference, &format!("envmap, {} with the emission split", m.name()));
+    }
+}
