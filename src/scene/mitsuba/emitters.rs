@@ -8,8 +8,8 @@
 //! Invariants: the transforms of `spot` and `envmap` must be rotations (and a translation; a
 //! uniform scale for `spot`), as their directions are read through them; an envmap's image is
 //! at least 2×3 texels, every texel finite, non-negative and at most `MAX_RADIANCE` after
-//! `scale`; `constant`'s radiance is a uniform `<spectrum>` by Mitsuba's RGB rule like every
-//! emitter's (`Plugin::emission`).
+//! `scale`, and its texels enter the scene's hash; `constant`'s radiance is a uniform
+//! `<spectrum>` by Mitsuba's RGB rule like every emitter's (`Plugin::emission`).
 
 use super::params::{Plugin, Xform};
 use super::xml::Node;
@@ -164,7 +164,9 @@ fn envmap(cx: &mut Cx, p: &mut Plugin) -> Result<Environment, SceneError> {
             texels.push(t);
         }
     }
+    // the texels enter the scene's hash (a changed map is another scene for `--resume`)
+    let bytes: Vec<u8> = texels.iter().flat_map(|t| t.to_array()).flat_map(f32::to_le_bytes).collect();
     let map = LatLong::new(img.width, img.height, texels).map_err(bad)?;
-    cx.b.image_file(&path);
+    cx.b.mesh_file(&path, crate::math::fnv1a(0xcbf2_9ce4_8422_2325, &bytes));
     Ok(Environment::lat_long(map, r))
 }
