@@ -42,7 +42,7 @@ pub enum Emission {
     Cosine,
     /// Uniform over the cones subtended by a few spheres around the Dirac objects
     /// (`transport::target`): targeted shooting for caustic forecasters only, never for VPLs
-    /// [BAJ08 §3.2]. Falls back to `Cosine` when the light point is inside a sphere. The pdf is
+    /// [BAJ08 §3.2]; a light at infinity starts its paths in the spheres' shadows instead. Falls back to `Cosine` when the light point is inside a sphere. The pdf is
     /// the true one, so forecaster powers stay physically weighted (spec §3).
     Targeted(Targets),
 }
@@ -76,6 +76,27 @@ impl Emission {
             pl.pdf_dir(w)
         } else {
             cosine_hemisphere_pdf(n.dot(w)).max(0.0)
+        }
+    }
+
+    /// Where a light path from a light at infinity along `d` starts, and its area pdf: the
+    /// bounding sphere's disk (`Cosine`), or the spheres' shadows on its plane (`Targeted`,
+    /// `Targets::sample_beam`).
+    #[inline]
+    pub fn beam_origin(&self, s: &Scene, d: Vec3, u: [f32; 2]) -> (Vec3, f32) {
+        match self {
+            Emission::Cosine => s.bsphere.disk_origin(d, u),
+            Emission::Targeted(t) => t.sample_beam(s.bsphere.center - d * s.bsphere.radius, d, u),
+        }
+    }
+
+    /// The area pdf with which [`Emission::beam_origin`] starts a path along `d` on the line
+    /// through `p`.
+    #[inline]
+    pub fn beam_pdf(&self, s: &Scene, d: Vec3, p: Vec3) -> f32 {
+        match self {
+            Emission::Cosine => 1.0 / s.bsphere.disk_area(),
+            Emission::Targeted(t) => t.beam_pdf(s.bsphere.center - d * s.bsphere.radius, d, p),
         }
     }
 
@@ -144,13 +165,19 @@ pub fn emit(s: &Scene, emission: Emission, li: usize, pmf: f32, u_pos: [f32; 2],
         }
         LightRef::Directional(i) => {
             let dl = &s.directional_lights[i as usize];
-            let (o, pdf_a) = s.bsphere.disk_origin(dl.d, u_pos);
+            let (o, pdf_a) = emission.beam_origin(s, dl.d, u_pos);
+            if pdf_a <= 0.0 {
+                return none;
+            }
             Emitted { ray: Some((o, dl.d, dl.irradiance / (pmf * pdf_a))), ..none }
         }
         LightRef::Environment => {
             let Some(env) = &s.environment else { return none };
             let Some((w, pdf_w)) = env.sample(u_dir) else { return none };
-            let (o, pdf_a) = s.bsphere.disk_origin(-w, u_pos);
+            let (o, pdf_a) = emission.beam_origin(s, -w, u_pos);
+            if pdf_a <= 0.0 {
+                return none;
+            }
             let p = pmf * pdf_a * pdf_w;
             Emitted { ray: Some((o, -w, env.radiance(w) / p)), density: Some(p), ..none }
         }

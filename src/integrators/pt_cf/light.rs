@@ -100,21 +100,22 @@ pub fn camera_weight(world: &World, light: &LightSide, camera: &Camera, hit: &Hi
     weight_e(ratio, light_start_density(world, light, light.n_paths(camera), hit, d))
 }
 
-/// `N_L · P_ℓ p_σ(ω) p_disk` for a camera path that escapes along `d` to the environment: the
-/// light side's density of its start (a direction of the environment's sampler, a point of the
-/// bounding sphere's disk, `particle::emit`), which takes the place of `p_A p_e/|cos θ_y0|`
+/// `N_L · P_ℓ p_σ(ω) p_disk` for a camera path whose last ray `(o, d)` escapes to the
+/// environment: the light side's density of its start (a direction of the environment's
+/// sampler, the point of the bounding sphere's disk, or of the targeted shadows, on the ray's
+/// line: `particle::emit`, `Emission::beam_pdf`), which takes the place of `p_A p_e/|cos θ_y0|`
 /// (the beam's étendue `dA⊥ dω` is what a Dirac chain conserves); 0 without an environment.
-fn environment_start_density(world: &World, n_l: u64, d: Vec3) -> f32 {
+fn environment_start_density(world: &World, light: &LightSide, n_l: u64, (o, d): (Vec3, Vec3)) -> f32 {
     let s = &world.scene;
     match (s.environment_light(), &s.environment) {
-        (Some(li), Some(env)) => n_l as f32 * s.light_pick.pmf(li) * env.pdf_w(d) / s.bsphere.disk_area(),
+        (Some(li), Some(env)) => n_l as f32 * s.light_pick.pmf(li) * env.pdf_w(d) * light.emission.beam_pdf(s, -d, o),
         _ => 0.0,
     }
 }
 
-/// [`camera_weight`] for a path of C that escapes along `d` to the environment.
-pub fn camera_weight_escaped(world: &World, light: &LightSide, camera: &Camera, d: Vec3, ratio: f32) -> f32 {
-    weight_e(ratio, environment_start_density(world, light.n_paths(camera), d))
+/// [`camera_weight`] for a path of C whose last ray `(o, d)` escapes to the environment.
+pub fn camera_weight_escaped(world: &World, light: &LightSide, camera: &Camera, ray: (Vec3, Vec3), ratio: f32) -> f32 {
+    weight_e(ratio, environment_start_density(world, light, light.n_paths(camera), ray))
 }
 
 /// `w_E = 1/(1 + ratio·density)`; 1 where the light side cannot draw the path (`density` 0).

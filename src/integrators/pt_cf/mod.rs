@@ -277,7 +277,7 @@ impl GuidedPathTracer {
     fn escape_weight(&self, world: &World, st: &PathState, ctx: &Context) -> f32 {
         match (&self.light, &ctx.camera, st.mis) {
             (Some(light), Some(cam), Some(ratio)) if st.walk.prev_delta && st.vertex < MAX_VERTICES => {
-                light::camera_weight_escaped(world, light, cam, st.walk.d, ratio)
+                light::camera_weight_escaped(world, light, cam, (st.walk.o, st.walk.d), ratio)
             }
             _ => 1.0,
         }
