@@ -388,7 +388,8 @@ mod tests {
         let m = LatLong::new(4, 3, (0..12).map(|k| Rgb::splat(k as f32)).collect()).unwrap();
         assert_eq!(m.lookup(2.5 / 4.0, 0.0), Rgb::splat(2.0));
         assert_eq!(m.lookup(2.5 / 4.0, 0.5), Rgb::splat(6.0));
-        assert_eq!(m.lookup(0.0, 1.0), Rgb::splat(9.0 * 0.5 + 11.0 * 0.5));
+        // u = 0 lies between the last column and the first (periodic): texels 11 and 8 of row 2
+        assert_eq!(m.lookup(0.0, 1.0), Rgb::splat(11.0 * 0.5 + 8.0 * 0.5));
     }
 
     /// The sampler's pdf integrates to 1 and agrees with `pdf_w` at its samples; the radiance is
