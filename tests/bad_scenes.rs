@@ -829,7 +829,8 @@ fn malformed_inputs_are_clear_errors_with_file_and_line() {
         (ply_scene("<shape type=\"ply\"><string name=\"filename\" value=\"quad.ply\"/>\n<bsdf type=\"diffuse\">\n<texture name=\"reflectance\" type=\"bitmap\"><string name=\"filename\" value=\"missing.png\"/></texture></bsdf></shape>"), 5, vec!["missing.png", "filename"]),
         (ply_scene("<shape type=\"ply\"><string name=\"filename\" value=\"quad.ply\"/>\n<bsdf type=\"diffuse\">\n<texture name=\"reflectance\" type=\"bitmap\"><string name=\"filename\" value=\"bright.exr\"/></texture></bsdf></shape>"), 5, vec!["reflectance must be in [0, 1]", "mean 2", "bright.exr"]),
         (ply_scene("<shape type=\"ply\"><string name=\"filename\" value=\"quad.ply\"/>\n<bsdf type=\"roughconductor\">\n<texture name=\"specular_reflectance\" type=\"checkerboard\"><texture name=\"color0\" type=\"bitmap\"><string name=\"filename\" value=\"bright.exr\"/></texture></texture></bsdf></shape>"), 5, vec!["specular_reflectance", "mean 1.1", "bright.exr"]),
-        (ply_scene("\n<emitter type=\"envmap\"/>"), 4, vec!["envmap", "not supported"]),
+        (ply_scene("\n<emitter type=\"projector\"/>"), 4, vec!["projector", "not supported"]),
+        (ply_scene("\n<emitter type=\"envmap\"/>"), 4, vec!["envmap", "missing `filename`"]),
         (ply_scene("\n<medium type=\"homogeneous\"/>"), 4, vec!["medium"]),
         (ply_scene("\n<shape type=\"ply\"><integer name=\"x\" value=\"$nope\"/></shape>"), 4, vec!["$nope", "not defined"]),
         // 0 photons is an error, as `[forecast] photons = 0` (it used to fall back to the default)

@@ -189,3 +189,16 @@ fn pt_cf_wavefront_is_bit_identical_to_the_scalar_loop() {
         }
     }
 }
+
+/// The wavefront `pt` and `pt-cf` under Mitsuba's `spot`, `directional`, `constant` and
+/// `envmap` (issue #62): rays that escape to an environment, infinite shadow rays, no lanes.
+#[test]
+fn wavefronts_are_bit_identical_under_the_new_emitters() {
+    for kind in backends() {
+        for name in ["spot", "directional", "constant", "envmap"] {
+            let w = world(&format!("tests/scenes/emitters/{name}.xml"), kind);
+            wavefront_equals_scalar(&w, name, 32, 0.1);
+            method_wavefront_equals_scalar(&w, Method::PtCf, name, 32, 0.1);
+        }
+    }
+}

@@ -75,8 +75,8 @@ fn has_dirac(scene: &Scene) -> bool {
 /// The note on caustics lit by point lights, when the scene has both point lights and Dirac
 /// objects.
 fn point_light_note(scene: &Scene) -> &'static str {
-    if has_dirac(scene) && !scene.point_lights.is_empty() {
-        "; caustics lit by point lights (L S+ D) are rendered only by pt-cf's light paths (issue #34)"
+    if has_dirac(scene) && !(scene.point_lights.is_empty() && scene.directional_lights.is_empty()) {
+        "; caustics lit by point, spot or directional lights (L S+ D) are rendered only by pt-cf's light paths (issue #34)"
     } else {
         ""
     }
@@ -112,10 +112,11 @@ pub fn choose(scene: &Scene) -> (Method, String) {
     if !has_dirac(scene) {
         return (Method::Pt, "no mirror or glass objects: pt, the cheapest unbiased method".into());
     }
-    if scene.emitters.is_empty() {
+    if scene.emitters.is_empty() && scene.environment.is_none() {
         return (
             Method::PtCf,
-            "mirror/glass lit by point lights only: pt-cf, whose light paths render their caustics (L S+ D)".into(),
+            "mirror/glass lit by point, spot or directional lights only: pt-cf, whose light paths render their caustics"
+                .into(),
         );
     }
     (Method::PtCf, "caustics from area lights: pt-cf, the best unbiased whole image at equal time".into())
@@ -130,9 +131,9 @@ pub fn evidence(scene: &Scene) -> String {
                 only caustics repay; docs/auto.md)"
             .into();
     }
-    if scene.emitters.is_empty() {
-        return "mirror/glass objects lit by point lights only: pt-cf, whose light paths render their caustics \
-                (L S+ D; pt and iws-cf cannot sample them; docs/auto.md)"
+    if scene.emitters.is_empty() && scene.environment.is_none() {
+        return "mirror/glass objects lit by point lights only (point, spot or directional): pt-cf, whose light paths \
+                render their caustics (L S+ D; pt and iws-cf cannot sample them; docs/auto.md)"
             .to_string();
     }
     format!(

@@ -21,8 +21,8 @@
 use super::limits::{extent_message, light_value_error, within_extent, MAX_INTENSITY, MAX_RADIANCE};
 use super::shape_uv::{ShapeUv, ShapeUvs};
 use super::{
-    light_power, Camera, Emitter, LightRef, Material, PointLight, RenderDefaults, Roi, Scene, Sphere, Surface,
-    Triangle, NO_EMITTER,
+    light_power, BoundingSphere, Camera, DirectionalLight, Emitter, Environment, LightRef, Lights, Material,
+    PointLight, RenderDefaults, Roi, Scene, Sphere, Surface, Triangle, NO_EMITTER,
 };
 use crate::math::{Rgb, Vec2, Vec3, PI};
 use crate::param_limits as params;
@@ -147,6 +147,8 @@ pub(super) struct SceneBuilder {
     /// The shapes with an analytic parametrisation (shape id, its record).
     shape_uvs: Vec<(u32, ShapeUv)>,
     point_lights: Vec<(PointLight, Origin)>,
+    directional: Vec<(DirectionalLight, Origin)>,
+    environment: Option<(Environment, Origin)>,
     /// Each ROI with where its name was given.
     rois: Vec<(Roi, Origin)>,
     forecast_target: Option<(Vec3, Vec3)>,
@@ -180,6 +182,8 @@ impl SceneBuilder {
             shapes: Vec::new(),
             shape_uvs: Vec::new(),
             point_lights: Vec::new(),
+            directional: Vec::new(),
+            environment: None,
             rois: Vec::new(),
             forecast_target: None,
             forecast_photons: None,
@@ -375,11 +379,13 @@ impl SceneBuilder {
         Ok(())
     }
 
-    /// Adds a point light: its position in the extent, its intensity checked.
+    /// Adds a point light, or a spot light with `spot`: its position in the extent, its
+    /// intensity checked.
     pub fn point_light(
         &mut self,
         (position, pat): (Vec3, &Origin),
         (intensity, iat): (Rgb, &Origin),
+        spot: Option<super::Spot>,
     ) -> Result<(), SceneError> {
         if !within_extent(position) {
             return Err(self.err(pat, extent_message("point light position", position)));
@@ -387,7 +393,39 @@ impl SceneBuilder {
         if let Some(m) = light_value_error(&leaf(&iat.key), intensity, MAX_INTENSITY) {
             return Err(self.err(iat, m));
         }
-        self.point_lights.push((PointLight { position, intensity }, iat.clone()));
+        self.point_lights.push((PointLight { position, intensity, spot }, iat.clone()));
+        Ok(())
+    }
+
+    /// Adds a directional light along `d` (any non-zero length), its irradiance checked as a
+    /// radiance.
+    pub fn directional_light(
+        &mut self,
+        (d, dat): (Vec3, &Origin),
+        (irradiance, iat): (Rgb, &Origin),
+    ) -> Result<(), SceneError> {
+        let d = d.normalize();
+        if !d.is_finite() {
+            return Err(self.err(dat, "the direction must be a finite, non-zero vector"));
+        }
+        if let Some(m) = light_value_error(&leaf(&iat.key), irradiance, MAX_RADIANCE) {
+            return Err(self.err(iat, m));
+        }
+        self.directional.push((DirectionalLight { d, irradiance }, iat.clone()));
+        Ok(())
+    }
+
+    /// Sets the environment (`constant` or `envmap`, whose values the reader checked against
+    /// `MAX_RADIANCE`); a second one is an error, as in Mitsuba.
+    pub fn environment(&mut self, env: Environment, at: &Origin) -> Result<(), SceneError> {
+        if let Some((_, first)) = &self.environment {
+            let m = format!(
+                "only one environment emitter (`constant`, `envmap`) per scene; the first is on line {}",
+                first.line
+            );
+            return Err(self.err(at, m));
+        }
+        self.environment = Some((env, at.clone()));
         Ok(())
     }
 
@@ -525,20 +563,38 @@ impl SceneBuilder {
         self.check_not_empty(root)?;
         let (emitters, emitter_at) = self.emitters();
         let (point_lights, light_at): (Vec<PointLight>, Vec<Origin>) = self.point_lights.drain(..).unzip();
+        let (directional_lights, dir_at): (Vec<DirectionalLight>, Vec<Origin>) = self.directional.drain(..).unzip();
+        let (environment, env_at) = self.environment.take().unzip();
         let mut lights: Vec<LightRef> = (0..emitters.len() as u32).map(LightRef::Area).collect();
         lights.extend((0..point_lights.len() as u32).map(LightRef::Point));
-        let powers: Vec<f32> = lights.iter().map(|&l| light_power(&emitters, &point_lights, l)).collect();
+        lights.extend((0..directional_lights.len() as u32).map(LightRef::Directional));
+        lights.extend(environment.iter().map(|_| LightRef::Environment));
+        let (lo, hi) = bounds(&self.triangles, &self.spheres);
+        let bsphere = BoundingSphere::of_box(lo, hi);
+        let ls = Lights {
+            emitters: &emitters,
+            point_lights: &point_lights,
+            directional: &directional_lights,
+            environment: environment.as_ref(),
+            bsphere,
+        };
+        let powers: Vec<f32> = lights.iter().map(|&l| light_power(&ls, l)).collect();
         if let Some(i) = powers.iter().position(|p| !p.is_finite()) {
             let at = match lights[i] {
                 LightRef::Area(e) => &emitter_at[e as usize],
                 LightRef::Point(p) => &light_at[p as usize],
+                LightRef::Directional(d) => &dir_at[d as usize],
+                LightRef::Environment => env_at.as_ref().expect("an environment light has its origin"),
             };
-            return Err(self.err(at, "the light's power (radiance × area × π, or 4π × intensity) overflows f32"));
+            return Err(self.err(
+                at,
+                "the light's power (radiance × area × π, 4π × intensity, or irradiance × the scene's cross-section) overflows f32",
+            ));
         }
         let light_pick = Distribution1D::new(&powers).ok_or_else(|| {
             self.err(
                 &Origin::new(root.line, light_key),
-                "the scene has no light with positive power (an emitting shape or a point light)",
+                "the scene has no light with positive power (an emitting shape, a point, spot or directional light, or an environment)",
             )
         })?;
         let bounds = bounds(&self.triangles, &self.spheres);
@@ -556,6 +612,9 @@ impl SceneBuilder {
             shape_uvs: ShapeUvs::new(&self.tri_shape, &self.shape_uvs),
             emitters,
             point_lights,
+            directional_lights,
+            environment,
+            bsphere,
             lights,
             light_pick,
             rois: self.rois.into_iter().map(|(r, _)| r).collect(),

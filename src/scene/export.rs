@@ -97,12 +97,45 @@ pub fn export_mitsuba(scene_path: &Path, out: &Path) -> Result<ExportReport, Str
         let _ = writeln!(x, "    </shape>");
     }
     for l in &scene.point_lights {
+        let Some(spot) = &l.spot else {
+            let _ = writeln!(
+                x,
+                "    <emitter type=\"point\">\n        <point name=\"position\" value=\"{}\"/>\n        \
+                 <rgb name=\"intensity\" value=\"{}\"/>\n    </emitter>",
+                v3(l.position),
+                v3(l.intensity)
+            );
+            continue;
+        };
+        // the beam along the lookat's z; the falloff has no azimuth, so any up will do
+        let f = spot.frame;
         let _ = writeln!(
             x,
-            "    <emitter type=\"point\">\n        <point name=\"position\" value=\"{}\"/>\n        \
-             <rgb name=\"intensity\" value=\"{}\"/>\n    </emitter>",
+            "    <emitter type=\"spot\">\n        <transform name=\"to_world\"><lookat origin=\"{}\" target=\"{}\" \
+             up=\"{}\"/></transform>\n        <rgb name=\"intensity\" value=\"{}\"/>\n        \
+             <float name=\"cutoff_angle\" value=\"{}\"/>\n        <float name=\"beam_width\" value=\"{}\"/>\n    </emitter>",
             v3(l.position),
-            v3(l.intensity)
+            v3(l.position + f.n),
+            v3(f.t),
+            v3(l.intensity),
+            spot.cutoff.to_degrees(),
+            (spot.cutoff - spot.inv_transition.recip()).to_degrees()
+        );
+    }
+    for l in &scene.directional_lights {
+        let _ = writeln!(
+            x,
+            "    <emitter type=\"directional\">\n        <vector name=\"direction\" value=\"{}\"/>\n        \
+             <rgb name=\"irradiance\" value=\"{}\"/>\n    </emitter>",
+            v3(l.d),
+            v3(l.irradiance)
+        );
+    }
+    if let Some(super::Environment { map: super::EnvMap::Constant(l), .. }) = &scene.environment {
+        let _ = writeln!(
+            x,
+            "    <emitter type=\"constant\">\n        <rgb name=\"radiance\" value=\"{}\"/>\n    </emitter>",
+            v3(*l)
         );
     }
     let _ = writeln!(x, "</scene>");

@@ -120,9 +120,35 @@ pub fn load_str(src: &str, file: &str, dir: &Path) -> Result<Scene, SceneError> 
         let ls = l.span();
         let key = |k: &str| format!("light[{idx}].{k}");
         let def = l.get_ref().resolve().map_err(|(k, m)| cx.err(ls.clone(), &key(&k), m))?;
-        let LightDef::Point { position, intensity } = &def;
-        let (pat, iat) = (cx.at(ls.clone(), &key("position")), cx.at(ls, &key("intensity")));
-        b.point_light((v3(*position), &pat), (v3(*intensity), &iat))?;
+        let at = |k: &str| cx.at(ls.clone(), &key(k));
+        match def {
+            LightDef::Point { position, intensity } => {
+                b.point_light((v3(position), &at("position")), (v3(intensity), &at("intensity")), None)?;
+            }
+            LightDef::Spot { position, intensity, direction, cutoff, beam } => {
+                let d = v3(direction).normalize();
+                if !d.is_finite() {
+                    return Err(cx.err(
+                        ls.clone(),
+                        &key("direction"),
+                        "the direction must be a finite, non-zero vector",
+                    ));
+                }
+                let spot =
+                    super::Spot::new(d, Vec3::X, cutoff, beam).map_err(|(k, m)| cx.err(ls.clone(), &key(k), m))?;
+                b.point_light((v3(position), &at("position")), (v3(intensity), &at("intensity")), Some(spot))?;
+            }
+            LightDef::Directional { direction, irradiance } => {
+                b.directional_light((v3(direction), &at("direction")), (v3(irradiance), &at("irradiance")))?;
+            }
+            LightDef::Constant { radiance } => {
+                let l = v3(radiance);
+                if let Some(m) = limits::light_value_error("radiance", l, super::limits::MAX_RADIANCE) {
+                    return Err(cx.err(ls.clone(), &key("radiance"), m));
+                }
+                b.environment(super::Environment::constant(l), &at("radiance"))?;
+            }
+        }
     }
     extras(&cx, &mut b, &doc)?;
     b.build(&Origin::new(1, ""), "shape.emission")

@@ -12,6 +12,7 @@
 mod builder;
 mod camera;
 mod dirac_target;
+mod emitters;
 pub mod export;
 mod file;
 mod limits;
@@ -28,6 +29,7 @@ mod surface;
 pub use builder::{parse_duration, SceneError};
 pub use camera::Camera;
 pub use dirac_target::{MAX_OBJECTS, MAX_TARGETS, SPHERE_PAD};
+pub use emitters::{BoundingSphere, DirectionalLight, EnvMap, Environment, LatLong, Spot};
 pub use file::load_str;
 pub use limits::{within_extent, MAX_EXTENT};
 pub use shape_uv::ShapeUvs;
@@ -166,13 +168,52 @@ pub struct Emitter {
     pub area: f32,
 }
 
-/// An isotropic point light.
+/// A point light: isotropic (`point`), or a `spot` with its angular profile.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PointLight {
     /// Position.
     pub position: Vec3,
-    /// Radiant intensity (W/sr).
+    /// Radiant intensity (W/sr), along the beam for a spot.
     pub intensity: Rgb,
+    /// A spot light's cone and falloff (`None`: isotropic).
+    pub spot: Option<Spot>,
+}
+
+impl PointLight {
+    /// The intensity toward the unit direction `w` (away from the light): `I`, or `I·falloff(w)`
+    /// for a spot.
+    #[inline]
+    pub fn intensity_toward(&self, w: Vec3) -> Rgb {
+        match &self.spot {
+            None => self.intensity,
+            Some(s) => self.intensity * s.falloff(w),
+        }
+    }
+
+    /// The light's own emission directions: uniform over the sphere, or over a spot's cone;
+    /// `(ω, pdf_w)`.
+    #[inline]
+    pub fn sample_dir(&self, u: [f32; 2]) -> (Vec3, f32) {
+        match &self.spot {
+            None => (warp::sample_uniform_sphere(u), warp::uniform_sphere_pdf()),
+            Some(s) => s.sample_dir(u),
+        }
+    }
+
+    /// The pdf of [`PointLight::sample_dir`] at `w`.
+    #[inline]
+    pub fn pdf_dir(&self, w: Vec3) -> f32 {
+        match &self.spot {
+            None => warp::uniform_sphere_pdf(),
+            Some(s) => s.pdf_dir(w),
+        }
+    }
+
+    /// Power (luminance, W): `4π·I`, or `I·∫falloff dω`.
+    pub fn power(&self) -> f32 {
+        let omega = self.spot.as_ref().map_or(4.0 * PI, |s| s.falloff_solid_angle());
+        omega * luminance(self.intensity)
+    }
 }
 
 /// A region of interest in pixels at the camera's resolution.
@@ -215,14 +256,32 @@ pub struct RenderOption {
     pub line: usize,
 }
 
-/// Power (luminance, W) of a light, the weight of light selection.
-pub fn light_power(emitters: &[Emitter], point_lights: &[PointLight], l: LightRef) -> f32 {
+/// The scene's lights, as `light_power` reads them.
+pub struct Lights<'a> {
+    /// Area emitters.
+    pub emitters: &'a [Emitter],
+    /// Point and spot lights.
+    pub point_lights: &'a [PointLight],
+    /// Directional lights.
+    pub directional: &'a [DirectionalLight],
+    /// The environment.
+    pub environment: Option<&'a Environment>,
+    /// The sphere bounding the shapes.
+    pub bsphere: BoundingSphere,
+}
+
+/// Power (luminance, W) of a light, the weight of light selection: `π·A·Le` (area), the
+/// intensity over the directions it emits into (point, spot), the flux through the disk of the
+/// bounding sphere `π r²·E` (directional) or `π r²·∫L dω` (environment).
+pub fn light_power(ls: &Lights, l: LightRef) -> f32 {
     match l {
         LightRef::Area(i) => {
-            let e = &emitters[i as usize];
+            let e = &ls.emitters[i as usize];
             luminance(e.radiance) * e.area * PI
         }
-        LightRef::Point(i) => 4.0 * PI * luminance(point_lights[i as usize].intensity),
+        LightRef::Point(i) => ls.point_lights[i as usize].power(),
+        LightRef::Directional(i) => ls.bsphere.disk_area() * luminance(ls.directional[i as usize].irradiance),
+        LightRef::Environment => ls.bsphere.disk_area() * ls.environment.map_or(0.0, |e| e.power_per_area()),
     }
 }
 
@@ -231,8 +290,21 @@ pub fn light_power(emitters: &[Emitter], point_lights: &[PointLight], l: LightRe
 pub enum LightRef {
     /// Index into `Scene::emitters`.
     Area(u32),
-    /// Index into `Scene::point_lights`.
+    /// Index into `Scene::point_lights` (point and spot lights).
     Point(u32),
+    /// Index into `Scene::directional_lights`.
+    Directional(u32),
+    /// `Scene::environment`.
+    Environment,
+}
+
+impl LightRef {
+    /// True for the lights at infinity (directional, environment), whose light paths start on
+    /// the bounding sphere's disk.
+    #[inline]
+    pub fn is_infinite(self) -> bool {
+        matches!(self, LightRef::Directional(_) | LightRef::Environment)
+    }
 }
 
 /// The loaded scene.
@@ -264,10 +336,16 @@ pub struct Scene {
     pub shape_uvs: ShapeUvs,
     /// Area emitters.
     pub emitters: Vec<Emitter>,
-    /// Point lights.
+    /// Point and spot lights.
     pub point_lights: Vec<PointLight>,
+    /// Directional lights.
+    pub directional_lights: Vec<DirectionalLight>,
+    /// The environment (`constant` or `envmap`; at most one, as in Mitsuba).
+    pub environment: Option<Environment>,
+    /// The sphere bounding the shapes, where light paths from infinitely distant lights start.
+    pub bsphere: BoundingSphere,
     /// All lights, in `light_pick` order: the area emitters first (emitter `e` is light `e`),
-    /// then the point lights.
+    /// then the point and spot lights, the directional lights, the environment.
     pub lights: Vec<LightRef>,
     /// Light selection ∝ power (`light_power`).
     pub light_pick: Distribution1D,
@@ -392,6 +470,23 @@ impl Scene {
         tri + sph
     }
 
+    /// The light-pick index of the environment (`None` without one).
+    #[inline]
+    pub fn environment_light(&self) -> Option<usize> {
+        self.environment.as_ref()?;
+        Some(self.lights.len() - 1)
+    }
+
+    /// True when the scene has a light at infinity (directional or environment).
+    pub fn has_infinite_lights(&self) -> bool {
+        self.environment.is_some() || !self.directional_lights.is_empty()
+    }
+
+    /// True when the scene has a spot light.
+    pub fn has_spot_lights(&self) -> bool {
+        self.point_lights.iter().any(|p| p.spot.is_some())
+    }
+
     /// Bounding box of all Dirac primitives, if any.
     pub fn dirac_bounds(&self) -> Option<(Vec3, Vec3)> {
         let mut lo = Vec3::splat(f32::INFINITY);
@@ -421,15 +516,16 @@ impl Scene {
 pub const POINT_LIGHT_WARNING: &str = "cannot be sampled by `pt` and `iws-cf`";
 
 /// Warnings about scene-level limitations of the methods; empty when there are none. Every
-/// render prints them (rank 0) and stores them in the JSON `warnings`. Today: point lights
-/// together with Dirac objects, whose caustics `pt` and `iws-cf` cannot sample (BAJ08).
+/// render prints them (rank 0) and stores them in the JSON `warnings`. Today: point, spot or
+/// directional lights (Dirac in position or direction) together with Dirac objects, whose
+/// caustics `pt` and `iws-cf` cannot sample (BAJ08).
 pub fn scene_warnings(scene: &Scene) -> Vec<String> {
     let mut w = Vec::new();
-    let n = scene.point_lights.len();
+    let n = scene.point_lights.len() + scene.directional_lights.len();
     if n > 0 && scene.dirac_bounds().is_some() {
         w.push(format!(
-            "{}: {n} point light(s) and Dirac (mirror/glass) objects: caustics lit by point lights (paths L S+ D) \
-             {POINT_LIGHT_WARNING} (BAJ08 limitation: a point light is never hit, and a Dirac chain cannot be \
+            "{}: {n} point, spot or directional light(s) and Dirac (mirror/glass) objects: caustics lit by them (paths L S+ D) \
+             {POINT_LIGHT_WARNING} (BAJ08 limitation: such a light is never hit, and a Dirac chain cannot be \
              connected to it); those methods leave them out, `iws-pm` includes them (biased) and `pt-cf` renders them \
              with its light paths (`--light-paths`)",
             scene.path

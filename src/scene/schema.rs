@@ -579,22 +579,73 @@ pub(super) struct LightRaw {
     position: Option<[f32; 3]>,
     #[serde(default, deserialize_with = "exact_opt")]
     intensity: Option<[f32; 3]>,
+    #[serde(default, deserialize_with = "exact_opt")]
+    direction: Option<[f32; 3]>,
+    cutoff_angle: Option<f32>,
+    beam_width: Option<f32>,
+    #[serde(default, deserialize_with = "exact_opt")]
+    irradiance: Option<[f32; 3]>,
+    #[serde(default, deserialize_with = "exact_opt")]
+    radiance: Option<[f32; 3]>,
 }
 
-/// A light by type (after `LightRaw::resolve`).
+/// A light by type (after `LightRaw::resolve`): Mitsuba's `point`, `spot` (its beam along
+/// `direction`, angles in degrees, `beam_width` default ¾ of `cutoff_angle`, default 20),
+/// `directional` (light travelling along `direction`) and `constant`.
 pub(super) enum LightDef {
     Point { position: [f32; 3], intensity: [f32; 3] },
+    Spot { position: [f32; 3], intensity: [f32; 3], direction: [f32; 3], cutoff: f32, beam: f32 },
+    Directional { direction: [f32; 3], irradiance: [f32; 3] },
+    Constant { radiance: [f32; 3] },
 }
 
 impl LightRaw {
     pub(super) fn resolve(&self) -> Result<LightDef, Bad> {
         let k = self.kind.as_str();
+        let only = |keys: &[(&str, bool)]| -> Result<(), Bad> {
+            match keys.iter().find(|(_, present)| *present) {
+                Some((key, _)) => Err(((*key).to_string(), format!("`{key}` is not a parameter of a {k} light"))),
+                None => Ok(()),
+            }
+        };
+        let spot_keys = [("cutoff_angle", self.cutoff_angle.is_some()), ("beam_width", self.beam_width.is_some())];
         match k {
-            "point" => Ok(LightDef::Point {
-                position: need(&self.position, "position", k)?,
-                intensity: need(&self.intensity, "intensity", k)?,
-            }),
-            _ => Err(unknown_type("light", k, "point")),
+            "point" => {
+                only(&spot_keys)?;
+                only(&[("direction", self.direction.is_some())])?;
+                only(&[("irradiance", self.irradiance.is_some()), ("radiance", self.radiance.is_some())])?;
+                Ok(LightDef::Point {
+                    position: need(&self.position, "position", k)?,
+                    intensity: need(&self.intensity, "intensity", k)?,
+                })
+            }
+            "spot" => {
+                only(&[("irradiance", self.irradiance.is_some()), ("radiance", self.radiance.is_some())])?;
+                let cutoff = self.cutoff_angle.unwrap_or(20.0);
+                Ok(LightDef::Spot {
+                    position: need(&self.position, "position", k)?,
+                    intensity: need(&self.intensity, "intensity", k)?,
+                    direction: need(&self.direction, "direction", k)?,
+                    cutoff,
+                    beam: self.beam_width.unwrap_or(cutoff * 0.75),
+                })
+            }
+            "directional" => {
+                only(&spot_keys)?;
+                only(&[("position", self.position.is_some()), ("intensity", self.intensity.is_some())])?;
+                only(&[("radiance", self.radiance.is_some())])?;
+                Ok(LightDef::Directional {
+                    direction: need(&self.direction, "direction", k)?,
+                    irradiance: need(&self.irradiance, "irradiance", k)?,
+                })
+            }
+            "constant" => {
+                only(&spot_keys)?;
+                only(&[("position", self.position.is_some()), ("intensity", self.intensity.is_some())])?;
+                only(&[("direction", self.direction.is_some()), ("irradiance", self.irradiance.is_some())])?;
+                Ok(LightDef::Constant { radiance: need(&self.radiance, "radiance", k)? })
+            }
+            _ => Err(unknown_type("light", k, "point, spot, directional, constant")),
         }
     }
 }

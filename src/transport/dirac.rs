@@ -21,8 +21,9 @@ use crate::scene::NO_EMITTER;
 
 /// Follows a Dirac chain from `hit` (reached along `d`) with throughput `beta`: Fresnel-weighted
 /// choice at glass, roulette as `pt`'s ([`Throughput::scatter`], from vertex [`RR_FROM_VERTEX`](super::roulette::RR_FROM_VERTEX)).
-/// Returns the first non-Dirac hit (possibly an emitter), the direction that reached it and the throughput; `None` on escape,
-/// absorption or the vertex cap `cap` (at most [`MAX_VERTICES`]).
+/// Returns the first non-Dirac hit (possibly an emitter; `None` where the chain escapes to the
+/// environment), the direction that reached it and the throughput; `None` on absorption or the
+/// vertex cap `cap` (at most [`MAX_VERTICES`]).
 pub fn follow_dirac_chain(
     world: &World,
     hit: Hit,
@@ -30,7 +31,7 @@ pub fn follow_dirac_chain(
     beta: Rgb,
     cap: u32,
     rng: &mut Rng,
-) -> Option<(Hit, Vec3, Rgb)> {
+) -> Option<(Option<Hit>, Vec3, Rgb)> {
     follow_chain(world, hit, d, beta, cap.min(MAX_VERTICES), rng)
 }
 
@@ -42,13 +43,13 @@ fn follow_chain(
     beta: Rgb,
     cap: u32,
     rng: &mut Rng,
-) -> Option<(Hit, Vec3, Rgb)> {
+) -> Option<(Option<Hit>, Vec3, Rgb)> {
     let s = &world.scene;
     let mut t = Throughput::new(beta);
     for v in 0..cap {
         let (m, sp) = world.shade(&hit, -d);
         if s.emitter_of(hit.prim) != NO_EMITTER || !m.is_dirac() {
-            return Some((hit, d, t.beta));
+            return Some((Some(hit), d, t.beta));
         }
         let u = rng.next_3d();
         let bs = bsdf::sample(&m, &sp, -d, u, Mode::Radiance)?;
@@ -56,7 +57,11 @@ fn follow_chain(
             return None;
         }
         d = bs.wi;
-        hit = world.intersect(offset_origin(hit.p, hit.ng, d), d, f32::INFINITY)?;
+        match world.intersect(offset_origin(hit.p, hit.ng, d), d, f32::INFINITY) {
+            Some(next) => hit = next,
+            // as `pt`'s loop, which sees a miss only while it has vertices left
+            None => return (v + 1 < cap).then_some((None, d, t.beta)),
+        }
     }
     None
 }
@@ -64,15 +69,25 @@ fn follow_chain(
 /// `E`, the emission a camera ray sees along its Dirac prefix: the first hit if it is an
 /// emitter's front, or the emitter at the end of a mirror/glass chain from it, times the chain's
 /// throughput (one unbiased estimate, the chain followed as [`follow_dirac_chain`] but up to
-/// `cap` vertices as given, the integrator's `prefix_cap`); zero when the prefix ends on a
-/// non-specular surface, escapes, is absorbed or reaches the cap. The pixel sampler averages it
-/// over extra camera rays (`render::pixel`, `--emission-split`).
+/// `cap` vertices as given, the integrator's `prefix_cap`), or the environment where it escapes;
+/// zero when the prefix ends on a non-specular surface, is absorbed or reaches the cap. The
+/// pixel sampler averages it over extra camera rays (`render::pixel`, `--emission-split`).
 pub fn prefix_emission(world: &World, origin: Vec3, dir: Vec3, cap: u32, rng: &mut Rng) -> Rgb {
-    let Some(hit) = world.intersect(origin, dir, f32::INFINITY) else { return Rgb::ZERO };
+    let Some(hit) = world.intersect(origin, dir, f32::INFINITY) else {
+        return if cap > 0 { environment(world, dir) } else { Rgb::ZERO };
+    };
     let Some((z, d, beta)) = follow_chain(world, hit, dir, Rgb::ONE, cap, rng) else { return Rgb::ZERO };
+    let Some(z) = z else { return beta * environment(world, d) };
     let e = world.scene.emitter_of(z.prim);
     if e == NO_EMITTER || z.ng.dot(-d) <= 0.0 {
         return Rgb::ZERO; // one-sided emission
     }
     beta * world.scene.emitters[e as usize].radiance
+}
+
+/// The environment's radiance along `d` (0 without one): what a ray that escapes sees, unweighted
+/// (the Dirac prefixes and the IWS family, where no other strategy reaches it).
+#[inline]
+pub fn environment(world: &World, d: Vec3) -> Rgb {
+    world.scene.environment.as_ref().map_or(Rgb::ZERO, |e| e.radiance(d))
 }

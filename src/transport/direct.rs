@@ -1,8 +1,11 @@
 //! Next-event estimation: one light sample (picked ∝ power) with a shadow ray, MIS-weighted
-//! against BSDF sampling by the power heuristic for area lights; point lights by NEE only.
+//! against BSDF sampling by the power heuristic for area lights and the environment; point,
+//! spot and directional lights (Dirac in position or direction) by NEE only.
 //!
-//! `emitter_pdf_w` gives the light-sampling pdf of a BSDF-sampled hit on an emitter, so the
-//! path tracer can weight that hit with the same heuristic (Veach 1997 §9.2).
+//! `emitter_pdf_w` gives the light-sampling pdf of a BSDF-sampled hit on an emitter, and
+//! `environment_pdf_w` that of a ray that escapes to the environment, so the path tracer can
+//! weight those hits with the same heuristic (Veach 1997 §9.2); `escaped` is that weighted
+//! environment radiance. A shadow ray toward a light at infinity is unbounded (`tmax = ∞`).
 
 use crate::accel::{offset_origin, Hit, Ray, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
@@ -23,6 +26,33 @@ pub fn emitter_pdf_w(world: &World, emitter: u32, dist2: f32, cos_l: f32) -> f32
     }
     let li = emitter as usize; // area emitters come first in `Scene::lights`
     light_pdf_w(s.light_pick.pmf(li), 1.0 / s.emitters[emitter as usize].area, dist2, cos_l)
+}
+
+/// Solid-angle pdf that `sample_light` picks the environment direction `d` (the pick's pmf
+/// times `Environment::pdf_w`); 0 without an environment.
+#[inline]
+pub fn environment_pdf_w(world: &World, d: Vec3) -> f32 {
+    let s = &world.scene;
+    match (s.environment_light(), &s.environment) {
+        (Some(li), Some(env)) => s.light_pick.pmf(li) * env.pdf_w(d),
+        _ => 0.0,
+    }
+}
+
+/// A ray along `d` that hit nothing: `(Le, MIS weight)` of the environment, weighted as
+/// [`emitter_hit`] (the direction sampler against NEE); `None` without an environment.
+#[inline]
+pub fn escaped(world: &World, d: Vec3, prev_delta: bool, prev_pdf_w: f32) -> Option<(Rgb, f32)> {
+    let env = world.scene.environment.as_ref()?;
+    let le = env.radiance(d);
+    let w = if prev_delta { 1.0 } else { power_heuristic(prev_pdf_w, environment_pdf_w(world, d)) };
+    Some((le, w))
+}
+
+/// The unbounded shadow ray from the surface point `sp` toward a light at infinity along `wi`.
+#[inline]
+pub fn ray_to_infinity(sp: &ShadingPoint, wi: Vec3) -> Ray {
+    Ray { o: offset_origin(sp.p, sp.ng, wi), d: wi, tmax: f32::INFINITY }
 }
 
 /// The direction from `p` toward the light point `y` (normal `ny`): `(wi, distance², cos θ_l)`,
@@ -151,10 +181,35 @@ pub fn light_sample_mis(
             if f == Rgb::ZERO {
                 return None;
             }
+            let i = pl.intensity_toward(-wi);
+            if i == Rgb::ZERO {
+                return None;
+            }
             let o = offset_origin(sp.p, sp.ng, wi);
             let len = (pl.position - o).length();
-            let value = pl.intensity * f * (wi.dot(sp.ns).abs() / (dist2 * pmf));
+            let value = i * f * (wi.dot(sp.ns).abs() / (dist2 * pmf));
             Some(LightSample { value, shadow: Ray { o, d: (pl.position - o) / len, tmax: len } })
+        }
+        LightRef::Directional(i) => {
+            let dl = &s.directional_lights[i as usize];
+            let wi = -dl.d;
+            let f = bsdf::eval(m, sp, wo, wi, Mode::Radiance);
+            if f == Rgb::ZERO {
+                return None;
+            }
+            let value = dl.irradiance * f * (wi.dot(sp.ns).abs() / pmf);
+            Some(LightSample { value, shadow: ray_to_infinity(sp, wi) })
+        }
+        LightRef::Environment => {
+            let env = s.environment.as_ref()?;
+            let (wi, pdf_w) = env.sample(u)?;
+            let f = bsdf::eval(m, sp, wo, wi, Mode::Radiance);
+            if f == Rgb::ZERO {
+                return None;
+            }
+            let le = env.radiance(wi);
+            let value = area_light_value(le, f, wi.dot(sp.ns), pmf * pdf_w, pdf_other(wi));
+            Some(LightSample { value, shadow: ray_to_infinity(sp, wi) })
         }
     }
 }

@@ -4,7 +4,9 @@
 //!
 //! A path is launched from a light picked with probability `P_ℓ ∝ power`, at a point `y0` with
 //! area pdf `p_A` (`Scene::sample_emitter_point`), in a direction drawn by an [`Emission`]
-//! sampler (cosine for area lights, uniform sphere for point lights). It then bounces by BSDF
+//! sampler (cosine for area lights, uniform sphere for point lights, the cone for spot lights);
+//! a light at infinity (directional, environment) starts it on the disk of the scene's bounding
+//! sphere perpendicular to its direction ([`emit`], `scene::BoundingSphere::disk_origin`). It then bounces by BSDF
 //! sampling in `Mode::Importance` (no η² scaling, adjoint shading-normal correction) and reports
 //! events to a [`ParticleVisitor`] (spec §2 "VPL generation", §6 "Caustic map"):
 //! - [`EmitterVertex`]: the direct point light at `y0`, weight `W0 = 1/(N·P_ℓ·p_A)` (spec §2;
@@ -24,10 +26,8 @@ use crate::accel::{offset_origin, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::math::{Frame, Rgb, Vec3};
 use crate::sampling::rng::Rng;
-use crate::sampling::warp::{
-    cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_sphere, uniform_sphere_pdf,
-};
-use crate::scene::{LightRef, Material, Scene, NO_EMITTER};
+use crate::sampling::warp::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
+use crate::scene::{LightRef, Material, PointLight, Scene, NO_EMITTER};
 
 /// Safety cap on vertices per light path (documented truncation; RR does the real work).
 pub const MAX_VERTICES: u32 = 64;
@@ -35,27 +35,29 @@ pub const MAX_VERTICES: u32 = 64;
 /// How the first direction of a light path is drawn.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Emission {
-    /// Cosine-weighted hemisphere around the emitter normal (area lights), uniform sphere
-    /// (point lights).
+    /// The light's own: cosine-weighted hemisphere around the emitter normal (area lights),
+    /// uniform sphere (point lights) or cone (spot lights); lights at infinity always draw their
+    /// own direction ([`emit`]).
     #[default]
     Cosine,
     /// Uniform over the cones subtended by a few spheres around the Dirac objects
     /// (`transport::target`): targeted shooting for caustic forecasters only, never for VPLs
-    /// [BAJ08 §3.2]. Falls back to `Cosine` when the light point is inside a sphere. The pdf is
+    /// [BAJ08 §3.2]; a light at infinity starts its paths in the spheres' shadows instead. Falls back to `Cosine` when the light point is inside a sphere. The pdf is
     /// the true one, so forecaster powers stay physically weighted (spec §3).
     Targeted(Targets),
 }
 
 impl Emission {
-    /// Samples a launch direction from `y` with normal `n` (ignored for point lights);
-    /// returns `(ω, pdf_w)`, or `None` when the sampler produced no usable direction.
+    /// Samples a launch direction from `y`, with normal `n` on an area light (`point: None`) or
+    /// from the point or spot light `point`; returns `(ω, pdf_w)`, or `None` when the sampler
+    /// produced no usable direction.
     #[inline]
-    pub fn sample_dir(&self, y: Vec3, n: Vec3, point_light: bool, u: [f32; 2]) -> Option<(Vec3, f32)> {
+    pub fn sample_dir(&self, y: Vec3, n: Vec3, point: Option<&PointLight>, u: [f32; 2]) -> Option<(Vec3, f32)> {
         if let Some(cones) = self.cones(y) {
             return cones.sample(u);
         }
-        if point_light {
-            Some((sample_uniform_sphere(u), uniform_sphere_pdf()))
+        if let Some(pl) = point {
+            Some(pl.sample_dir(u))
         } else {
             let l = sample_cosine_hemisphere(u);
             let pdf_w = cosine_hemisphere_pdf(l.z);
@@ -63,17 +65,38 @@ impl Emission {
         }
     }
 
-    /// The solid-angle pdf with which [`Emission::sample_dir`] draws `w` from `y` (normal `n`,
-    /// ignored for point lights): the cones' pdf (0 outside them), or the fallback's (`pt-cf`'s
-    /// camera-side MIS weight against its light paths).
-    pub fn pdf_dir(&self, y: Vec3, n: Vec3, point_light: bool, w: Vec3) -> f32 {
+    /// The solid-angle pdf with which [`Emission::sample_dir`] draws `w` (arguments as there):
+    /// the cones' pdf (0 outside them), or the fallback's (`pt-cf`'s camera-side MIS weight
+    /// against its light paths).
+    pub fn pdf_dir(&self, y: Vec3, n: Vec3, point: Option<&PointLight>, w: Vec3) -> f32 {
         if let Some(cones) = self.cones(y) {
             return cones.pdf(w);
         }
-        if point_light {
-            uniform_sphere_pdf()
+        if let Some(pl) = point {
+            pl.pdf_dir(w)
         } else {
             cosine_hemisphere_pdf(n.dot(w)).max(0.0)
+        }
+    }
+
+    /// Where a light path from a light at infinity along `d` starts, and its area pdf: the
+    /// bounding sphere's disk (`Cosine`), or the spheres' shadows on its plane (`Targeted`,
+    /// `Targets::sample_beam`).
+    #[inline]
+    pub fn beam_origin(&self, s: &Scene, d: Vec3, u: [f32; 2]) -> (Vec3, f32) {
+        match self {
+            Emission::Cosine => s.bsphere.disk_origin(d, u),
+            Emission::Targeted(t) => t.sample_beam(s.bsphere.center - d * s.bsphere.radius, d, u),
+        }
+    }
+
+    /// The area pdf with which [`Emission::beam_origin`] starts a path along `d` on the line
+    /// through `p`.
+    #[inline]
+    pub fn beam_pdf(&self, s: &Scene, d: Vec3, p: Vec3) -> f32 {
+        match self {
+            Emission::Cosine => 1.0 / s.bsphere.disk_area(),
+            Emission::Targeted(t) => t.beam_pdf(s.bsphere.center - d * s.bsphere.radius, d, p),
         }
     }
 
@@ -83,6 +106,80 @@ impl Emission {
         match self {
             Emission::Targeted(t) => t.cones(y),
             Emission::Cosine => None,
+        }
+    }
+}
+
+/// A light's emission for one light path, the one formula of every light path's start
+/// (`launch` here, `pt-cf`'s light side): the light vertex, and the first ray with its β.
+#[derive(Clone, Copy, Debug)]
+pub struct Emitted {
+    /// The light vertex at a point (area, point and spot lights; `None` at infinity) and its
+    /// `P_ℓ·p_A` (`p_A = 1` for a point light).
+    pub vertex: Option<(EmitterVertex, f32)>,
+    /// The first ray and `β1` (`None`: the direction sample failed or carries nothing).
+    pub ray: Option<(Vec3, Vec3, Rgb)>,
+    /// For an area light, `P_ℓ·p_A·p_σ/cos θ0` of the ray, for the environment `P_ℓ·p_disk·p_σ`
+    /// (`pt-cf`'s MIS); `None` for lights the camera side never hits (point, spot, directional).
+    pub density: Option<f32>,
+}
+
+/// The emission of light `li` (picked with probability `pmf`) from the uniforms `u_pos` (the
+/// point, or the disk point of a light at infinity) and `u_dir` (the direction). Spec §2:
+/// `β1 = Le·cosθ0/(P_ℓ·p_A·p_σ)` (area), `I(ω)/(P_ℓ·p_σ)` (point, spot), `E·πr²/P_ℓ`
+/// (directional), `L(−ω)·πr²/(P_ℓ·p_σ)` (environment, `ω` drawn by its sampler toward the
+/// environment, the ray along `−ω` from the bounding sphere's disk). The vertex's `weight` is
+/// left 1 (the caller normalises).
+pub fn emit(s: &Scene, emission: Emission, li: usize, pmf: f32, u_pos: [f32; 2], u_dir: [f32; 2]) -> Emitted {
+    let none = Emitted { vertex: None, ray: None, density: None };
+    match s.lights[li] {
+        LightRef::Area(e) => {
+            let (y, n, pdf_a) = s.sample_emitter_point(e, u_pos);
+            if pdf_a <= 0.0 {
+                return none;
+            }
+            let le = s.emitters[e as usize].radiance;
+            let v = EmitterVertex { p: y, n, weight: 1.0, emission: le, point: false };
+            let mut out = Emitted { vertex: Some((v, pmf * pdf_a)), ..none };
+            let Some((w, pdf_w)) = emission.sample_dir(y, n, None, u_dir) else { return out };
+            let cos0 = n.dot(w);
+            if cos0 <= 0.0 {
+                return out;
+            }
+            let p = pmf * pdf_a * pdf_w;
+            out.ray = Some((offset_origin(y, n, w), w, le * (cos0 / p)));
+            out.density = Some(p / cos0);
+            out
+        }
+        LightRef::Point(i) => {
+            let pl = &s.point_lights[i as usize];
+            let p = pl.position;
+            let v = EmitterVertex { p, n: Vec3::ZERO, weight: 1.0, emission: pl.intensity, point: true };
+            let mut out = Emitted { vertex: Some((v, pmf)), ..none };
+            let Some((w, pdf_w)) = emission.sample_dir(p, Vec3::Z, Some(pl), u_dir) else { return out };
+            let i = pl.intensity_toward(w);
+            if pdf_w > 0.0 && i != Rgb::ZERO {
+                out.ray = Some((p, w, i / (pmf * pdf_w)));
+            }
+            out
+        }
+        LightRef::Directional(i) => {
+            let dl = &s.directional_lights[i as usize];
+            let (o, pdf_a) = emission.beam_origin(s, dl.d, u_pos);
+            if pdf_a <= 0.0 {
+                return none;
+            }
+            Emitted { ray: Some((o, dl.d, dl.irradiance / (pmf * pdf_a))), ..none }
+        }
+        LightRef::Environment => {
+            let Some(env) = &s.environment else { return none };
+            let Some((w, pdf_w)) = env.sample(u_dir) else { return none };
+            let (o, pdf_a) = emission.beam_origin(s, -w, u_pos);
+            if pdf_a <= 0.0 {
+                return none;
+            }
+            let p = pmf * pdf_a * pdf_w;
+            Emitted { ray: Some((o, -w, env.radiance(w) / p)), density: Some(p), ..none }
         }
     }
 }
@@ -195,9 +292,9 @@ struct Launch {
     beta: Rgb,
 }
 
-/// Picks a light (`P_ℓ ∝ power`), reports its vertex, and samples the first direction; `None`
-/// when the path carries nothing. Spec §2: `W0 = 1/(N·P_ℓ·p_A)`; `β1 = Le·cosθ0/(P_ℓ·p_A·p_σ)`
-/// (area), `I/(P_ℓ·p_σ)` (point).
+/// Picks a light (`P_ℓ ∝ power`), reports its vertex (`W0 = 1/(N·P_ℓ·p_A)`, spec §2; none for
+/// a light at infinity), and draws the first ray ([`emit`]); `None` when the path carries
+/// nothing.
 fn launch(
     s: &Scene,
     emission: Emission,
@@ -212,31 +309,14 @@ fn launch(
     }
     let u_pos = rng.next_2d();
     let u_dir = rng.next_2d();
-    match s.lights[li] {
-        LightRef::Area(e) => {
-            let (y, n, pdf_a) = s.sample_emitter_point(e, u_pos);
-            if pdf_a <= 0.0 {
-                return None;
-            }
-            let le = s.emitters[e as usize].radiance;
-            visitor.emitter(&EmitterVertex { p: y, n, weight: inv_n / (pmf * pdf_a), emission: le, point: false });
-            counts.emitter_vertices += 1;
-            let (w, pdf_w) = emission.sample_dir(y, n, false, u_dir)?;
-            let cos0 = n.dot(w);
-            if cos0 <= 0.0 {
-                return None;
-            }
-            Some(Launch { origin: offset_origin(y, n, w), dir: w, beta: le * (cos0 / (pmf * pdf_a * pdf_w)) })
-        }
-        LightRef::Point(i) => {
-            let pl = &s.point_lights[i as usize];
-            let (p, intensity) = (pl.position, pl.intensity);
-            visitor.emitter(&EmitterVertex { p, n: Vec3::ZERO, weight: inv_n / pmf, emission: intensity, point: true });
-            counts.emitter_vertices += 1;
-            let (w, pdf_w) = emission.sample_dir(p, Vec3::Z, true, u_dir)?;
-            Some(Launch { origin: p, dir: w, beta: intensity / (pmf * pdf_w) })
-        }
+    let e = emit(s, emission, li, pmf, u_pos, u_dir);
+    if let Some((mut v, p)) = e.vertex {
+        v.weight = inv_n / p;
+        visitor.emitter(&v);
+        counts.emitter_vertices += 1;
     }
+    let (origin, dir, beta) = e.ray?;
+    Some(Launch { origin, dir, beta })
 }
 
 /// Follows a launched path through the scene: reports every non-specular hit, bounces by BSDF

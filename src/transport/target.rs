@@ -12,6 +12,12 @@
 //! for bit. When `y` lies inside any sphere, [`Targets::cones`] answers `None` and the emission
 //! falls back to the light's own (`Emission::sample_dir`).
 //!
+//! For a light at infinity (directional, environment: light along `d`, from the disk of the
+//! scene's bounding sphere perpendicular to `d`) the spheres are aimed at in position instead:
+//! their shadows on that plane are discs of radius `r_k`, disc `k` is picked with probability
+//! `r_k²/Σ r_j²` and a point drawn uniformly in it, so `pdf_a(x) = #{k : x ∈ disc_k}/(π Σ r_j²)`
+//! ([`Targets::sample_beam`], [`Targets::beam_pdf`]).
+//!
 //! Invariants: `1 ≤ n ≤ MAX_TARGETS` spheres with radius > 0; the pdf of a sampled direction
 //! counts its own cone even where rounding puts it on that cone's boundary.
 
@@ -77,6 +83,48 @@ impl Targets {
             c.total += c.omega[k];
         }
         Some(c)
+    }
+}
+
+impl Targets {
+    /// A point of the plane through `o` perpendicular to the unit `d` inside the shadow of a
+    /// sphere along `d`, and its area pdf (module docs).
+    #[inline]
+    pub fn sample_beam(&self, o: Vec3, d: Vec3, u: [f32; 2]) -> (Vec3, f32) {
+        let total: f32 = self.spheres().iter().map(|s| s.1 * s.1).sum();
+        let mut x = u[0] * total;
+        let mut k = self.n - 1;
+        for (j, s) in self.spheres().iter().enumerate() {
+            if x < s.1 * s.1 || j == self.n - 1 {
+                k = j;
+                break;
+            }
+            x -= s.1 * s.1;
+        }
+        let (c, r) = self.spheres[k];
+        let u0 = (x / (r * r)).clamp(0.0, 1.0);
+        let disk = crate::sampling::warp::sample_concentric_disk([u0, u[1]]);
+        let f = Frame::from_normal(d);
+        let centre = c - d * d.dot(c - o);
+        let p = centre + (f.s * disk.x + f.t * disk.y) * r;
+        (p, self.beam_pdf(o, d, p))
+    }
+
+    /// The area pdf with which [`Targets::sample_beam`] draws the point where the line through
+    /// `p` along `d` meets the plane through `o` perpendicular to `d` (0 outside every shadow).
+    #[inline]
+    pub fn beam_pdf(&self, o: Vec3, d: Vec3, p: Vec3) -> f32 {
+        let total: f32 = self.spheres().iter().map(|s| s.1 * s.1).sum();
+        let q = p - d * d.dot(p - o);
+        let count = self
+            .spheres()
+            .iter()
+            .filter(|&&(c, r)| {
+                let centre = c - d * d.dot(c - o);
+                (q - centre).length_squared() <= r * r * 1.0001
+            })
+            .count();
+        count as f32 / (PI * total)
     }
 }
 
@@ -174,6 +222,34 @@ mod tests {
         assert!((first - omega0).abs() < 0.01 * omega0, "first cone {first} against {omega0}");
         assert!(differ < n / 10_000, "{differ} sampled pdfs differ from pdf()");
         assert!(union < c.total as f64 && union > c.omega[0] as f64 + c.omega[2] as f64, "union {union}");
+    }
+
+    /// The shadows' sampler: its pdf integrates to 1 over the plane and matches the samples'
+    /// (`E[1/pdf]` is the union's area, `E[1/pdf · 1[disc 0]]` disc 0's).
+    #[test]
+    fn the_beam_samples_its_pdf() {
+        let t = Targets::new(&[(Vec3::new(0.0, 0.0, 0.0), 1.0), (Vec3::new(0.8, 0.3, 2.0), 0.7)]).unwrap();
+        let d = Vec3::new(0.2, -1.0, 0.1).normalize();
+        let o = -d * 5.0;
+        let f = Frame::from_normal(d);
+        let mut rng = Rng::keyed(2, crate::sampling::rng::stream::MISC, 0, 0);
+        let n = 1_000_000;
+        let mut integral = 0.0f64;
+        for _ in 0..n {
+            let [a, b] = rng.next_2d();
+            let p = o + (f.s * (a * 6.0 - 3.0) + f.t * (b * 6.0 - 3.0));
+            integral += t.beam_pdf(o, d, p) as f64 * 36.0 / n as f64;
+        }
+        assert!((integral - 1.0).abs() < 0.01, "∫ pdf = {integral}");
+        let (mut union, mut first) = (0.0f64, 0.0f64);
+        for _ in 0..n {
+            let (p, pdf) = t.sample_beam(o, d, rng.next_2d());
+            assert!(pdf > 0.0 && (d.dot(p - o)).abs() < 1e-4);
+            union += 1.0 / pdf as f64 / n as f64;
+            first += if (p - (o + d * 0.0)).cross(d).length() <= 1.0 { 1.0 / pdf as f64 } else { 0.0 } / n as f64;
+        }
+        assert!((first - PI as f64).abs() < 0.01 * PI as f64, "disc 0: {first}");
+        assert!(union > PI as f64 && union < PI as f64 * (1.0 + 0.49), "union {union}");
     }
 
     /// One sphere is the single cone of BAJ08 (solid angle 2π(1 − cos θ), pdf its inverse).

@@ -12,7 +12,7 @@ use crate::profile::{Phase, Profile};
 use crate::sampling::rng::Rng;
 use crate::scene::NO_EMITTER;
 pub use crate::transport::context::{Context, ShadingQuery};
-use crate::transport::dirac::follow_dirac_chain;
+use crate::transport::dirac::{environment, follow_dirac_chain};
 use crate::transport::particle::MAX_VERTICES;
 use crate::transport::roulette::{q_recursion, roulette};
 
@@ -101,10 +101,15 @@ pub fn caustic_chain(
     };
     let t0 = ctx.profile.start(Phase::CfChain);
     ctx.profile.cf_chains += 1;
-    let start = if m.has_mixed_lobes() { dirac_lobe(world, &hit, wi, w, &mut ctx.rng) } else { Some((hit, wi, w)) };
-    let chain = start.and_then(|(hit, wi, w)| follow_dirac_chain(world, hit, wi, w, MAX_VERTICES, &mut ctx.rng));
+    let start =
+        if m.has_mixed_lobes() { dirac_lobe(world, &hit, wi, w, &mut ctx.rng) } else { Some((Some(hit), wi, w)) };
+    let chain = match start {
+        Some((Some(hit), wi, w)) => follow_dirac_chain(world, hit, wi, w, MAX_VERTICES, &mut ctx.rng),
+        escaped => escaped,
+    };
     let l = match chain {
-        Some((z, d, beta)) => beta * full.l_hat(world, &z, -d, q.depth + 1, ctx),
+        Some((Some(z), d, beta)) => beta * full.l_hat(world, &z, -d, q.depth + 1, ctx),
+        Some((None, d, beta)) => beta * environment(world, d),
         None => Rgb::ZERO,
     };
     ctx.profile.record(Phase::CfChain, t0);
@@ -114,10 +119,11 @@ pub fn caustic_chain(
 /// The Dirac-lobe part of a mixed material at `hit` (reached along `d` with throughput `beta`):
 /// one BSDF sample, which counts only where it picked a Dirac lobe (its weight already divides
 /// by that lobe's probability, so the expectation is the Dirac lobes' light alone, spec §1
-/// "Mixed materials"); returns the next hit, the direction to it and the throughput.
-pub fn dirac_lobe(world: &World, hit: &Hit, d: Vec3, beta: Rgb, rng: &mut Rng) -> Option<(Hit, Vec3, Rgb)> {
+/// "Mixed materials"); returns the next hit (`None`: it escapes), the direction to it and the
+/// throughput.
+pub fn dirac_lobe(world: &World, hit: &Hit, d: Vec3, beta: Rgb, rng: &mut Rng) -> Option<(Option<Hit>, Vec3, Rgb)> {
     let (m, sp) = world.shade(hit, -d);
     let bs = bsdf::sample(&m, &sp, -d, rng.next_3d(), Mode::Radiance).filter(|bs| bs.is_delta)?;
-    let next = world.intersect(offset_origin(hit.p, hit.ng, bs.wi), bs.wi, f32::INFINITY)?;
+    let next = world.intersect(offset_origin(hit.p, hit.ng, bs.wi), bs.wi, f32::INFINITY);
     Some((next, bs.wi, beta * bs.weight))
 }

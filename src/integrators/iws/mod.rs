@@ -36,7 +36,7 @@ use crate::math::{Rgb, Vec3, PI};
 use crate::profile::{Phase, Profile};
 use crate::progress::Phases;
 use crate::scene::{Material, NO_EMITTER};
-use crate::transport::dirac::follow_dirac_chain;
+use crate::transport::dirac::{environment, follow_dirac_chain};
 use crate::transport::direct;
 use crate::transport::light_select::{LightSelector, RisParams, MAX_CANDIDATES, MAX_SURVIVORS};
 use crate::transport::particle::MAX_VERTICES;
@@ -104,6 +104,21 @@ impl IwsArgs {
     }
 }
 
+/// Refuses `--direct vpl` (also `iws-cf --variant baj08`) in a scene with a spot, directional
+/// or environment light: the emitter point lights have no direction profile nor a point at
+/// infinity yet, so their direct light would be wrong or missing (docs/limitations.md).
+pub fn check_direct(world: &World, args: &MethodArgs) -> Result<(), MethodError> {
+    let s = &world.scene;
+    if args.iws.direct == DirectLight::Vpl && (s.has_infinite_lights() || s.has_spot_lights()) {
+        return Err(MethodError::option(
+            "--direct",
+            "`vpl` does not yet render spot, directional or environment lights (their emitter point lights are \
+             not modelled); use --direct nee",
+        ));
+    }
+    Ok(())
+}
+
 impl IwsArgs {
     /// The limits of `crate::param_limits`.
     pub fn validate(&self) -> Result<(), MethodError> {
@@ -131,6 +146,7 @@ impl MethodSpec for Iws {
     }
     fn build(world: &World, args: &MethodArgs, _: ()) -> Result<Box<dyn Integrator>, MethodError> {
         args.iws.ris()?;
+        check_direct(world, args)?;
         Ok(Box::new(Iws::new(world, args, Box::new(NoCaustics))))
     }
 }
@@ -381,7 +397,8 @@ impl Iws {
             return Rgb::ZERO;
         };
         match follow_dirac_chain(world, hit, wi, w, MAX_VERTICES, &mut ctx.rng) {
-            Some((z, d, beta)) => beta * self.l_hat(world, &z, -d, q.depth + 1, ctx),
+            Some((Some(z), d, beta)) => beta * self.l_hat(world, &z, -d, q.depth + 1, ctx),
+            Some((None, d, beta)) => beta * environment(world, d),
             None => Rgb::ZERO,
         }
     }
@@ -442,10 +459,16 @@ impl Integrator for Iws {
         let mut l = CameraEstimate::default();
         if let Some(hit) = world.intersect(origin, dir, f32::INFINITY) {
             // the camera ray follows Dirac chains to the first non-specular vertex (spec §1)
-            if let Some((z, d, beta)) = follow_dirac_chain(world, hit, dir, Rgb::ONE, self.max_depth, &mut ctx.rng) {
-                let v = beta * self.l_hat(world, &z, -d, 0, ctx);
-                *if world.scene.emitter_of(z.prim) != NO_EMITTER { &mut l.prefix_le } else { &mut l.rest } = v;
+            match follow_dirac_chain(world, hit, dir, Rgb::ONE, self.max_depth, &mut ctx.rng) {
+                Some((Some(z), d, beta)) => {
+                    let v = beta * self.l_hat(world, &z, -d, 0, ctx);
+                    *if world.scene.emitter_of(z.prim) != NO_EMITTER { &mut l.prefix_le } else { &mut l.rest } = v;
+                }
+                Some((None, d, beta)) => l.prefix_le = beta * environment(world, d),
+                None => {}
             }
+        } else if self.max_depth > 0 {
+            l.prefix_le = environment(world, dir);
         }
         ctx.profile.samples += 1;
         ctx.profile.record(Phase::Radiance, t0);

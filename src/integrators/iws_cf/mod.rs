@@ -174,6 +174,7 @@ impl MethodSpec for IwsCf {
         Ok(preprocess_forecast(world, args, seed, phases))
     }
     fn build(world: &World, args: &MethodArgs, cf: CausticForecast) -> Result<Box<dyn Integrator>, MethodError> {
+        crate::integrators::iws::check_direct(world, &args.with_variant())?;
         Ok(Box::new(Iws::new(world, &args.with_variant(), Box::new(ForecastCaustics::new(cf)))))
     }
 }

@@ -80,6 +80,7 @@ impl MethodSpec for IwsPm {
     }
     fn build(world: &World, args: &MethodArgs, pm: PhotonMap) -> Result<Box<dyn Integrator>, MethodError> {
         pm.validate().map_err(MethodError::BadProduct)?;
+        crate::integrators::iws::check_direct(world, args)?;
         Ok(Box::new(Iws::new(world, args, Box::new(pm))))
     }
 }

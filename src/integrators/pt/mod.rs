@@ -137,7 +137,12 @@ impl PathTracer {
         // `max_depth` surface vertices, then the ray the last one's BSDF drew, for the emitter it
         // may reach (the other half of that vertex's NEE MIS): paths of max_depth + 1 segments
         for depth in 0..=self.max_depth {
-            let Some(hit) = world.intersect(w.o, w.d, f32::INFINITY) else { break };
+            let Some(hit) = world.intersect(w.o, w.d, f32::INFINITY) else {
+                if let Some((le, mis)) = w.escaped(world) {
+                    *if prefix { &mut l.prefix_le } else { &mut l.rest } += self.kept(class, w.t.beta * le * mis);
+                }
+                break;
+            };
             if s.emitter_of(hit.prim) != NO_EMITTER {
                 if let Some((le, mis)) = w.emitted(world, &hit) {
                     *if prefix { &mut l.prefix_le } else { &mut l.rest } += self.kept(class, w.t.beta * le * mis);

@@ -75,6 +75,12 @@ impl Walk {
         direct::emitter_hit(world, hit, self.d, self.prev_delta, self.prev_pdf_w)
     }
 
+    /// `(Le, MIS weight)` of the environment where the ray escapes (`direct::escaped`).
+    #[inline]
+    pub fn escaped(&self, world: &World) -> Option<(Rgb, f32)> {
+        direct::escaped(world, self.d, self.prev_delta, self.prev_pdf_w)
+    }
+
     /// Vertex `index` at `sp` scatters into `bs`: β·weight and roulette
     /// ([`Throughput::scatter`]), then the next ray. False when the path ends.
     #[inline]

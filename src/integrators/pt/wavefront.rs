@@ -199,12 +199,19 @@ pub(crate) fn trace_batch(
     }
 }
 
-/// The emitter hit of live path `k`, if its ray reaches one (true then: the path ends there).
+/// The emitter hit of live path `k`, or the environment where its ray escapes (true then: the
+/// path ends there).
 #[inline]
 fn emitted(world: &World, w: &Wave, k: usize, out: &mut [CameraEstimate]) -> bool {
     let p = w.live[k];
     let walk = p.walk(&w.rays[k]);
-    let Some(found) = w.hits[k] else { return false };
+    let Some(found) = w.hits[k] else {
+        if let Some((le, mis)) = walk.escaped(world) {
+            let l = &mut out[p.i as usize];
+            *if p.prefix { &mut l.prefix_le } else { &mut l.rest } += walk.t.beta * le * mis;
+        }
+        return true;
+    };
     let hit = world.hit_at(&w.rays[k], found);
     if world.scene.emitter_of(hit.prim) == NO_EMITTER {
         return false;

@@ -25,8 +25,8 @@ use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::integrators::{Context, LightSplats};
 use crate::math::{Rgb, Vec3};
 use crate::sampling::rng::{stream, Rng};
-use crate::scene::{Camera, LightRef, Material, NO_EMITTER};
-use crate::transport::particle::{Emission, MAX_VERTICES};
+use crate::scene::{Camera, Material, NO_EMITTER};
+use crate::transport::particle::{emit, Emission, MAX_VERTICES};
 use crate::transport::roulette::{q_particle, roulette};
 use rayon::prelude::*;
 
@@ -89,7 +89,7 @@ fn light_start_density(world: &World, light: &LightSide, n_l: u64, hit: &Hit, d:
         return 0.0;
     }
     let p_a = 1.0 / s.emitters[em as usize].area;
-    let p_e = light.emission.pdf_dir(hit.p, hit.ng, false, -d);
+    let p_e = light.emission.pdf_dir(hit.p, hit.ng, None, -d);
     n_l as f32 * s.light_pick.pmf(em as usize) * p_a * p_e / cos_y0
 }
 
@@ -97,7 +97,29 @@ fn light_start_density(world: &World, light: &LightSide, n_l: u64, hit: &Hit, d:
 /// along `d` after a Dirac vertex, `ratio` the running product of the camera path
 /// ([`first_ratio`], [`next_ratio`]).
 pub fn camera_weight(world: &World, light: &LightSide, camera: &Camera, hit: &Hit, d: Vec3, ratio: f32) -> f32 {
-    let density = light_start_density(world, light, light.n_paths(camera), hit, d);
+    weight_e(ratio, light_start_density(world, light, light.n_paths(camera), hit, d))
+}
+
+/// `N_L · P_ℓ p_σ(ω) p_disk` for a camera path whose last ray `(o, d)` escapes to the
+/// environment: the light side's density of its start (a direction of the environment's
+/// sampler, the point of the bounding sphere's disk, or of the targeted shadows, on the ray's
+/// line: `particle::emit`, `Emission::beam_pdf`), which takes the place of `p_A p_e/|cos θ_y0|`
+/// (the beam's étendue `dA⊥ dω` is what a Dirac chain conserves); 0 without an environment.
+fn environment_start_density(world: &World, light: &LightSide, n_l: u64, (o, d): (Vec3, Vec3)) -> f32 {
+    let s = &world.scene;
+    match (s.environment_light(), &s.environment) {
+        (Some(li), Some(env)) => n_l as f32 * s.light_pick.pmf(li) * env.pdf_w(d) * light.emission.beam_pdf(s, -d, o),
+        _ => 0.0,
+    }
+}
+
+/// [`camera_weight`] for a path of C whose last ray `(o, d)` escapes to the environment.
+pub fn camera_weight_escaped(world: &World, light: &LightSide, camera: &Camera, ray: (Vec3, Vec3), ratio: f32) -> f32 {
+    weight_e(ratio, environment_start_density(world, light, light.n_paths(camera), ray))
+}
+
+/// `w_E = 1/(1 + ratio·density)`; 1 where the light side cannot draw the path (`density` 0).
+fn weight_e(ratio: f32, density: f32) -> f32 {
     if density <= 0.0 {
         return 1.0; // the light side cannot draw this path
     }
@@ -155,7 +177,8 @@ struct Start {
     density: Option<f32>,
 }
 
-/// The launch of `transport::particle` (same random numbers: light, point, direction).
+/// The launch of `transport::particle` (same random numbers: light, point, direction; the
+/// same emission, `particle::emit`).
 fn launch(world: &World, emission: Emission, rng: &mut Rng) -> Option<Start> {
     let s = &world.scene;
     let (li, pmf, _) = s.light_pick.sample(rng.next_f32());
@@ -163,24 +186,9 @@ fn launch(world: &World, emission: Emission, rng: &mut Rng) -> Option<Start> {
         return None;
     }
     let (u_pos, u_dir) = (rng.next_2d(), rng.next_2d());
-    match s.lights[li] {
-        LightRef::Area(e) => {
-            let (y, n, pdf_a) = s.sample_emitter_point(e, u_pos);
-            let (w, pdf_w) = emission.sample_dir(y, n, false, u_dir)?;
-            let cos0 = n.dot(w);
-            if pdf_a <= 0.0 || cos0 <= 0.0 {
-                return None;
-            }
-            let p = pmf * pdf_a * pdf_w;
-            let beta = s.emitters[e as usize].radiance * (cos0 / p);
-            Some(Start { o: offset_origin(y, n, w), d: w, beta, density: Some(p / cos0) })
-        }
-        LightRef::Point(i) => {
-            let pl = &s.point_lights[i as usize];
-            let (w, pdf_w) = emission.sample_dir(pl.position, Vec3::Z, true, u_dir)?;
-            Some(Start { o: pl.position, d: w, beta: pl.intensity / (pmf * pdf_w), density: None })
-        }
-    }
+    let e = emit(s, emission, li, pmf, u_pos, u_dir);
+    let (o, d, beta) = e.ray?;
+    Some(Start { o, d, beta, density: e.density })
 }
 
 /// The camera side's pdf of drawing `wi` at a non-Dirac vertex of diffuse depth `depth` seen

@@ -271,6 +271,29 @@ impl GuidedPathTracer {
         }
     }
 
+    /// The camera side's MIS weight of a ray that escapes to the environment against the light
+    /// paths (as [`Self::camera_weight`]).
+    #[inline]
+    fn escape_weight(&self, world: &World, st: &PathState, ctx: &Context) -> f32 {
+        match (&self.light, &ctx.camera, st.mis) {
+            (Some(light), Some(cam), Some(ratio)) if st.walk.prev_delta && st.vertex < MAX_VERTICES => {
+                light::camera_weight_escaped(world, light, cam, (st.walk.o, st.walk.d), ratio)
+            }
+            _ => 1.0,
+        }
+    }
+
+    /// Adds to `l` the environment's radiance where `st`'s ray escapes, weighted as
+    /// [`Self::add_emitted`].
+    #[inline]
+    fn add_escaped(&self, world: &World, st: &PathState, ctx: &Context, l: &mut CameraEstimate) {
+        if let Some((le, w)) = st.walk.escaped(world) {
+            let w = w * self.escape_weight(world, st, ctx);
+            let v = self.kept(st.class, st.walk.t.beta * le * w);
+            *if st.diffuse == 0 { &mut l.prefix_le } else { &mut l.rest } += v;
+        }
+    }
+
     /// A contribution `v` reaching the light from `class`, or 0 if `--path-filter` drops it.
     #[inline]
     fn kept(&self, class: PathClass, v: Rgb) -> Rgb {
@@ -312,7 +335,10 @@ impl GuidedPathTracer {
         let s = &world.scene;
         let mut l = CameraEstimate::default();
         while st.vertex < self.max_depth {
-            let Some(hit) = world.intersect(st.walk.o, st.walk.d, f32::INFINITY) else { break };
+            let Some(hit) = world.intersect(st.walk.o, st.walk.d, f32::INFINITY) else {
+                self.add_escaped(world, &st, ctx, &mut l);
+                break;
+            };
             if s.emitter_of(hit.prim) != NO_EMITTER {
                 self.add_emitted(world, &st, &hit, ctx, &mut l);
                 break; // emitters reflect nothing

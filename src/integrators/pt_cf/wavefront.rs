@@ -87,9 +87,12 @@ impl GuidedPathTracer {
     /// unguided diffuse vertex draws its numbers and goes to the lanes; true when they are full.
     fn shade(&self, world: &World, cw: &mut CfWave, k: usize, ctx: &mut Context, out: &mut [CameraEstimate]) -> bool {
         let (s, w) = (&world.scene, &mut cw.wave);
-        let Some(found) = w.hits[k] else { return false };
-        let hit = world.hit_at(&w.rays[k], found);
         let i = w.live[k].i;
+        let Some(found) = w.hits[k] else {
+            self.add_escaped(world, &w.live[k].st, ctx, &mut out[i as usize]);
+            return false;
+        };
+        let hit = world.hit_at(&w.rays[k], found);
         if s.emitter_of(hit.prim) != NO_EMITTER {
             self.add_emitted(world, &w.live[k].st, &hit, ctx, &mut out[i as usize]);
             return false; // emitters reflect nothing

@@ -1,9 +1,9 @@
 //! Mitsuba XML scenes (Mitsuba 3, and the 0.5/0.6/2.0 spellings Mitsuba 3 upgrades) → `Scene`,
 //! for the subset documented in `scenes/README.md`: shapes (`shapes`), BSDFs (`bsdf`), `area`
-//! and `point` emitters, the `perspective` sensor (every `fov_axis`; its film's crop window; a
-//! film and sampler given at the top level with an `id` and named by its `<ref>`s), the sampler's
-//! `sample_count` (→ default spp) and the integrator's `max_depth` (path segments: the vertex cap
-//! `max_depth` − 1).
+//! and top-level emitters: `point`, `spot`, `directional`, `constant` and `envmap` (`emitters`),
+//! the `perspective` sensor (every `fov_axis`; its film's crop window; a film and sampler given at
+//! the top level with an `id` and named by its `<ref>`s), the sampler's `sample_count` (→ default
+//! spp) and the integrator's `max_depth` (path segments: the vertex cap `max_depth` − 1).
 //!
 //! `<default>` values and `-D name=value` substitute `$name` (`xml`). forecast's own render
 //! options, which Mitsuba has no place for, travel as `<default name="forecast_*">` values that
@@ -18,6 +18,7 @@
 //! the JSON report).
 
 mod bsdf;
+mod emitters;
 mod params;
 pub(super) mod presets;
 mod shapes;
@@ -118,7 +119,7 @@ pub fn load_str(src: &str, file: &str, dir: &Path, defines: &[(String, String)])
                     return Err(cx.err(n.line, &n.tag, m));
                 }
             },
-            "emitter" => point(&mut cx, n)?,
+            "emitter" => emitters::emitter(&mut cx, n)?,
             t => {
                 let what = format!("`<{t}>` is not supported (textures, media, includes, shape groups, ...)");
                 return Err(cx.err(n.line, t, what));
@@ -363,27 +364,6 @@ fn camera_view(xf: Option<params::Xform>) -> (Vec3, View) {
     let (f, u, l) = (m.z_axis.truncate(), m.y_axis.truncate(), m.x_axis.truncate());
     let (forward, up, right) = (f.normalize().as_vec3(), u.normalize().as_vec3(), (-l.normalize()).as_vec3());
     (m.w_axis.truncate().as_vec3(), View::Frame { forward, up, right })
-}
-
-/// A top-level `point` emitter.
-fn point(cx: &mut Cx, n: &Node) -> Result<(), SceneError> {
-    if n.ty() != "point" {
-        let msg = format!("emitter `{}` is not supported (`point` at the top level, `area` inside shapes)", n.ty());
-        return Err(cx.err(n.line, &format!("emitter.{}", n.ty()), msg));
-    }
-    let mut p = Plugin::new(n);
-    let (pl, xl, il) = (p.line_of("position"), p.line_of("to_world"), p.line_of("intensity"));
-    let pos = p.point(cx, "position")?.map(Vec3::from_array);
-    let xf = p.transform(cx, "to_world")?;
-    let (position, pat) = match (pos, xf) {
-        (Some(q), _) => (q, Origin::new(pl, "point.position")),
-        (None, Some(x)) => (x.m.w_axis.truncate().as_vec3(), Origin::new(xl, "point.to_world")),
-        (None, None) => (Vec3::ZERO, Origin::new(n.line, "point.position")),
-    };
-    let intensity = p.emission(cx, "intensity")?.unwrap_or(Vec3::ONE);
-    cx.b.point_light((position, &pat), (intensity, &Origin::new(il, "point.intensity")))?;
-    p.finish(cx);
-    Ok(())
 }
 
 mod options;
