@@ -115,7 +115,7 @@ pub fn choose(scene: &Scene) -> (Method, String) {
     if scene.emitters.is_empty() && scene.environment.is_none() {
         return (
             Method::PtCf,
-            "mirror/glass lit by point, spot or directional lights only: pt-cf, whose light paths render their caustics"
+            "mirror/glass lit by point lights only (point, spot, directional): pt-cf, its light paths render L S+ D"
                 .into(),
         );
     }
