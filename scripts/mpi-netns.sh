@@ -6,7 +6,8 @@
 # (`mpiexec -f hosts -launcher ssh -launcher-exec launch`) starts one hydra_pmi_proxy per host
 # through `launch`, an ssh stand-in that runs the command inside the host's namespace
 # (`ip netns exec`); the proxies start 2 ranks each. Ranks on different hosts can only reach each
-# other by TCP over the veths (UCX_TLS=tcp,self: no shared memory between "hosts").
+# other by TCP over the veths (the tests set UCX_TLS=tcp,self: UCX's shared memory would join
+# ranks across namespaces, which share one kernel).
 #
 # The tests (cargo test --release --features mpi --test mpi -- --ignored netns_) check that 6
 # ranks on 3 hosts give one process's image, and that a link taken down, a host whose processes
@@ -17,7 +18,7 @@
 # the namespaces cannot be made; FORECAST_NO_MPI=1 skips it. Where the kernel has no sch_netem
 # (tc says "Specified qdisc kind is unknown") the latency test says so and is not run; set
 # FORECAST_NETNS_REQUIRE_NETEM=1 to make that a failure.
-# Usage: bash scripts/mpi-netns.sh     (uses and fills CARGO_TARGET_DIR=target/mpi)
+# Usage: bash scripts/mpi-netns.sh [TEST-NAME-FILTER]    (uses and fills CARGO_TARGET_DIR=target/mpi)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -102,7 +103,7 @@ fi
 
 echo "== mpi-netns: 3 hosts ($net.10-12, namespaces $pre-0..2), 2 ranks each, over veths"
 FORECAST_NETNS_DIR="$dir" FORECAST_NETNS_NETEM="$netem" CARGO_TARGET_DIR=target/mpi \
-    cargo test --release --features mpi --test mpi -- --ignored --test-threads=1 netns_ \
+    cargo test --release --features mpi --test mpi -- --ignored --test-threads=1 "${1:-netns_}" </dev/null \
     || fail "the tests above failed"
 [ "$netem" = "1" ] || echo "mpi-netns: WARNING: the latency test was NOT RUN (no tc netem in this kernel)" >&2
 echo "mpi-netns: passed"

@@ -490,7 +490,8 @@ impl Hosts {
             .args(["-n", "6", "-launcher", "ssh", "-launcher-exec"])
             .arg(self.dir.join("launch"))
             .args(["-iface", iface.trim()])
-            // TCP over eth0 between every pair of ranks (no shared memory across "hosts")
+            // UCX's TCP on eth0 between every pair of ranks: UCX's shared memory would join
+            // ranks across namespaces (they share the kernel), bypassing the veths
             .env("UCX_TLS", "tcp,self")
             .env("UCX_NET_DEVICES", "eth0")
             .env("RAYON_NUM_THREADS", "1")
@@ -500,6 +501,7 @@ impl Hosts {
             .args(args)
             .arg("--out")
             .arg(out)
+            .stdin(std::process::Stdio::null())
             .stdout(std::process::Stdio::null())
             .stderr(std::process::Stdio::piped());
         c
@@ -561,7 +563,7 @@ fn one_process(args: &[&str], out: &Path) {
 /// whose preprocess rank 0 broadcasts over the network).
 #[test]
 #[ignore = "run by scripts/mpi-netns.sh (root: network namespaces)"]
-fn netns_six_ranks_on_three_hosts_equal_one_process() {
+fn netns_1_six_ranks_on_three_hosts_equal_one_process() {
     let h = hosts();
     let d = tmp_dir("netns-equal");
     for m in ["pt", "iws-cf"] {
@@ -585,7 +587,7 @@ fn netns_six_ranks_on_three_hosts_equal_one_process() {
 /// ranks left waiting ends the job with its message.
 #[test]
 #[ignore = "run by scripts/mpi-netns.sh (root: network namespaces)"]
-fn netns_a_link_down_ends_the_job() {
+fn netns_2_a_link_down_ends_the_job() {
     let h = hosts();
     let out = tmp_dir("netns-link").join("link");
     let link = h.nodes[2].1.clone();
@@ -603,7 +605,7 @@ fn netns_a_link_down_ends_the_job() {
 /// the job ends with hydra's report of the lost processes.
 #[test]
 #[ignore = "run by scripts/mpi-netns.sh (root: network namespaces)"]
-fn netns_a_killed_host_ends_the_job() {
+fn netns_3_a_killed_host_ends_the_job() {
     let h = hosts();
     let out = tmp_dir("netns-kill").join("kill");
     let args = ["--spp", "100000000", "--resolution", "32x32", "--method", "pt"];
@@ -620,7 +622,7 @@ fn netns_a_killed_host_ends_the_job() {
 /// one process's image.
 #[test]
 #[ignore = "run by scripts/mpi-netns.sh (root: network namespaces)"]
-fn netns_100ms_latency_leaves_the_image_unchanged() {
+fn netns_4_100ms_latency_leaves_the_image_unchanged() {
     let h = hosts();
     if !h.netem {
         eprintln!("NOT RUN: tc netem does not work in this kernel (scripts/mpi-netns.sh said why)");
@@ -628,7 +630,7 @@ fn netns_100ms_latency_leaves_the_image_unchanged() {
     }
     let d = tmp_dir("netns-latency");
     let ns = h.nodes[2].0.clone();
-    let args = ["--spp", "600", "--resolution", "32x32", "--seed", "9", "--method", "pt"];
+    let args = ["--spp", "1000", "--resolution", "64x64", "--seed", "9", "--method", "pt"];
     let (one, six) = (d.join("one"), d.join("six"));
     one_process(&args, &one);
     let delay = || sh(&["tc", "-n", &ns, "qdisc", "add", "dev", "eth0", "root", "netem", "delay", "100ms"]);
