@@ -103,7 +103,7 @@ fi
 
 echo "== mpi-netns: 3 hosts ($net.10-12, namespaces $pre-0..2), 2 ranks each, over veths"
 FORECAST_NETNS_DIR="$dir" FORECAST_NETNS_NETEM="$netem" CARGO_TARGET_DIR=target/mpi \
-    cargo test --release --features mpi --test mpi -- --ignored --test-threads=1 "${1:-netns_}" </dev/null \
+    cargo test --release --features mpi --test mpi -- --ignored --nocapture --test-threads=1 "${1:-netns_}" </dev/null \
     || fail "the tests above failed"
 [ "$netem" = "1" ] || echo "mpi-netns: WARNING: the latency test was NOT RUN (no tc netem in this kernel)" >&2
 echo "mpi-netns: passed"

@@ -549,13 +549,8 @@ fn sh(cmd: &[&str]) {
 
 /// One process's image of `args` (the reference of the 6 ranks).
 fn one_process(args: &[&str], out: &Path) {
-    let st = Command::new(bin())
-        .args(["render", &scene(), "--quiet"])
-        .args(args)
-        .arg("--out")
-        .arg(out)
-        .status()
-        .unwrap();
+    let st =
+        Command::new(bin()).args(["render", &scene(), "--quiet"]).args(args).arg("--out").arg(out).status().unwrap();
     assert!(st.success());
 }
 

@@ -258,15 +258,6 @@ impl MpiCluster {
     }
 }
 
-/// Every rank reaches a barrier before `MPI_Finalize` (the universe's drop): with UCX's TCP
-/// transport alone between hosts, a rank that finalised while another still sent hung in
-/// `MPI_Finalize` about one run in three (scripts/mpi-netns.sh).
-impl Drop for MpiCluster {
-    fn drop(&mut self) {
-        self.world.barrier();
-    }
-}
-
 impl Cluster for MpiCluster {
     fn rank(&self) -> usize {
         self.rank
