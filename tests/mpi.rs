@@ -566,9 +566,12 @@ fn netns_1_six_ranks_on_three_hosts_equal_one_process() {
         let (one, six) = (d.join(format!("{m}-1")), d.join(format!("{m}-6")));
         one_process(&args, &one);
         let t = Instant::now();
-        let o = h.render(&args, "60", &six).output().unwrap();
+        let child = h.render(&args, "60", &six).spawn().expect("mpiexec not found (.ci/install-mpi.sh)");
+        let (status, err) = wait_for(child, std::time::Duration::from_secs(90));
         eprintln!("netns {m}: 6 ranks in {:.1} s", t.elapsed().as_secs_f64());
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        // (docs/mpi.md, open problem: a rank may hang in MPI_Finalize with UCX's TCP alone)
+        let status = status.unwrap_or_else(|| panic!("6 ranks did not end within 90 s; stderr: {err}"));
+        assert!(status.success(), "{err}");
         assert_same_image(&one.with_extension("exr"), &six.with_extension("exr"));
         let j = json(&six);
         assert_eq!(j["ranks"], 6);
