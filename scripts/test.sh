@@ -2,7 +2,9 @@
 # The whole test suite, as CI runs it (.ci/run calls this script).
 #   1. installs MPICH (+ libclang for bindgen) if missing — needs root; FORECAST_NO_MPI=1 skips MPI
 #   2. cargo test --release                    (unit + integration tests, single process)
-#   3. cargo test --release --features mpi --test mpi   (2-rank tests under mpirun; target/mpi)
+#   3. cargo test --release --features mpi --test mpi   (2-rank tests under mpirun; target/mpi), then
+#      with FORECAST_NETNS=1 scripts/mpi-netns.sh: 3 hosts in network namespaces, 2 ranks each,
+#      with faults (needs root; fails loudly when it cannot make the namespaces)
 #   4. installs libembree-dev if missing (root/sudo); FORECAST_NO_EMBREE=1 skips Embree, then
 #      cargo test --release --features embree --test accel_embree --test wavefront --test pass_groups
 #      --test bvh (target/embree; Embree against obvhs, pt image z-tests, the packet queries, the
@@ -30,6 +32,14 @@ if [ "${FORECAST_NO_MPI:-0}" != "1" ] && command -v mpirun >/dev/null 2>&1; then
     echo "== cargo test --release --features mpi --test mpi (2 ranks)"
     # a separate target dir keeps the MPI binary from replacing the default one
     CARGO_TARGET_DIR=target/mpi cargo test --release --features mpi --test mpi -- --test-threads=1 2>&1 | tee -a "$log"
+    if [ "${FORECAST_NETNS:-0}" = "1" ]; then
+        echo "== scripts/mpi-netns.sh (3 hosts in network namespaces, 2 ranks each)"
+        bash scripts/mpi-netns.sh 2>&1 | tee -a "$log"
+    else
+        # not yet by default: with UCX's TCP alone, MPI_Finalize hangs in about half the runs here
+        # (docs/mpi.md), which would make the suite flaky
+        echo "warning: scripts/mpi-netns.sh NOT RUN (multi-host tests); FORECAST_NETNS=1 runs it" >&2
+    fi
 else
     echo "warning: MPI tests skipped (mpirun not found)" >&2
 fi

@@ -58,6 +58,12 @@ pub enum ClusterError {
         /// The number of ranks.
         ranks: usize,
     },
+    /// `FORECAST_MPI_HEARTBEAT` holds neither a number of seconds in `(0, 10^6]` nor `off`
+    /// ([`super::job::heartbeat_floor`]).
+    BadHeartbeat {
+        /// The variable's value as set.
+        value: String,
+    },
     /// The stand-in error of the ranks other than 0 when the job failed ([`super::agree`]); rank
     /// 0 reports the real one.
     FailedElsewhere,
@@ -100,6 +106,12 @@ impl std::fmt::Display for ClusterError {
                     Ok(())
                 }
             },
+            BadHeartbeat { value } => write!(
+                f,
+                "{}=`{value}`: expected the MPI heartbeat's floor in seconds (a number in (0, 1000000], e.g. 60) \
+                 or `off`",
+                super::job::HEARTBEAT_ENV
+            ),
             FailedElsewhere => write!(f, "the job failed on another rank (rank 0 reports it)"),
         }
     }
@@ -138,6 +150,11 @@ mod tests {
             ),
             (ClusterError::BadBroadcast { what: "resume".into(), len: 3 }, "bad resume broadcast"),
             (ClusterError::BadTopology { rank: 2, size: 1 }, "bad topology: rank 2, size 1"),
+            (
+                ClusterError::BadHeartbeat { value: "soon".into() },
+                "FORECAST_MPI_HEARTBEAT=`soon`: expected the MPI heartbeat's floor in seconds (a number in \
+                 (0, 1000000], e.g. 60) or `off`",
+            ),
             (ClusterError::SelfTest { failures: 2, report: None }, "2 check(s) failed (details on rank 0)"),
             (ClusterError::SelfTest { failures: 1, report: Some("rank 1: x".into()) }, "rank 1: x"),
         ];

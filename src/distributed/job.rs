@@ -9,8 +9,15 @@
 //! * [`watchdog_limit`]: how long past the time budget a rank may wait inside one collective
 //!   before its [`Cluster::watch`] watchdog ends the job (`MPI_Abort`, with a message): a rank that
 //!   was stopped (SIGSTOP), hangs or died without MPI noticing would hold the others forever.
-//!   The watchdog only reads clocks and never touches the render's state, so it cannot change an
-//!   image; it is armed for time-boxed renders only (an spp render has no bound to hold it to).
+//!   Armed for time-boxed renders only (an spp render has no budget to hold it to).
+//! * [`heartbeat_limit`]: the heartbeat, for every render, `--spp` ones included. Each round of
+//!   the pass loop is a beat ([`Cluster::beat`], called by `agree_round`); once a rank has seen one
+//!   whole round, a collective it waits in longer than `max(floor, HEARTBEAT_FACTOR × the slowest
+//!   round it has seen)` ends the job the same way. The floor is 60 s, or
+//!   `FORECAST_MPI_HEARTBEAT` seconds (`off` turns the heartbeat off: [`heartbeat_floor`]). Before
+//!   the first whole round (setup, the preprocess) only the time budget holds.
+//!
+//! Neither rule touches the render's state (they only read clocks), so they cannot change an image.
 
 use super::{Cluster, ClusterError};
 use std::time::{Duration, Instant};
@@ -87,6 +94,38 @@ pub fn watchdog_limit(deadline: Instant, budget_secs: Option<f64>) -> Option<(In
     budget_secs.filter(|b| b.is_finite()).map(|b| (deadline, watchdog_grace(b)))
 }
 
+/// The environment variable that sets the heartbeat's floor (seconds, or `off`).
+pub const HEARTBEAT_ENV: &str = "FORECAST_MPI_HEARTBEAT";
+
+/// The heartbeat's floor without [`HEARTBEAT_ENV`]: rank 0's writes at the end of the render (and
+/// its checkpoints) happen while the others wait in a collective, and take well under this.
+pub const DEFAULT_HEARTBEAT_FLOOR: Duration = Duration::from_secs(60);
+
+/// How many times the slowest round seen a wait in a collective may last.
+pub const HEARTBEAT_FACTOR: u32 = 10;
+
+/// The heartbeat's floor from the value of [`HEARTBEAT_ENV`] (`None`: unset): `Ok(None)` for
+/// `off`, the default when unset or empty, else seconds in `(0, 10^6]`.
+pub fn heartbeat_floor(value: Option<&str>) -> Result<Option<Duration>, ClusterError> {
+    let v = value.map(str::trim).unwrap_or("");
+    if v.is_empty() {
+        return Ok(Some(DEFAULT_HEARTBEAT_FLOOR));
+    }
+    if v.eq_ignore_ascii_case("off") {
+        return Ok(None);
+    }
+    match v.parse::<f64>() {
+        Ok(s) if s > 0.0 && s <= 1e6 => Ok(Some(Duration::from_secs_f64(s))),
+        _ => Err(ClusterError::BadHeartbeat { value: v.to_string() }),
+    }
+}
+
+/// The heartbeat's limit on one wait in a collective: `max(floor, HEARTBEAT_FACTOR × slowest)`
+/// once a whole round has been seen (`slowest`), `None` before (or without a `floor`: off).
+pub fn heartbeat_limit(floor: Option<Duration>, slowest: Option<Duration>) -> Option<Duration> {
+    Some(floor?.max(slowest? * HEARTBEAT_FACTOR))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -121,5 +160,22 @@ mod tests {
         assert!(watchdog_fires(t0 + Duration::from_secs(32), late, deadline, g));
         assert!(watchdog_limit(deadline, None).is_none());
         assert!(watchdog_limit(deadline, Some(f64::INFINITY)).is_none());
+    }
+
+    #[test]
+    fn the_heartbeat_is_the_floor_or_ten_slowest_rounds() {
+        let s = Duration::from_secs;
+        assert_eq!(heartbeat_floor(None), Ok(Some(s(60))));
+        assert_eq!(heartbeat_floor(Some(" ")), Ok(Some(s(60))));
+        assert_eq!(heartbeat_floor(Some("OFF")), Ok(None));
+        assert_eq!(heartbeat_floor(Some("2.5")), Ok(Some(Duration::from_millis(2500))));
+        for bad in ["0", "-1", "nan", "inf", "1e7", "5s"] {
+            assert_eq!(heartbeat_floor(Some(bad)), Err(ClusterError::BadHeartbeat { value: bad.into() }));
+        }
+        // no whole round seen yet, or off: no limit
+        assert_eq!(heartbeat_limit(Some(s(60)), None), None);
+        assert_eq!(heartbeat_limit(None, Some(s(1))), None);
+        assert_eq!(heartbeat_limit(Some(s(60)), Some(s(1))), Some(s(60)));
+        assert_eq!(heartbeat_limit(Some(s(60)), Some(s(7))), Some(s(70)));
     }
 }

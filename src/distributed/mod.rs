@@ -8,7 +8,8 @@
 //!   communicator. It also works as a singleton (size 1) when started without `mpirun`.
 //! * [`schedule`] holds the pure pass-ownership and time-box arithmetic.
 //! * [`job`]: the ranks' agreement on the job before any work ([`job::agree_job`]) and the
-//!   watchdog's limit ([`Cluster::watch`], armed by [`shared_deadline`] for a time box).
+//!   watchdog's limits ([`Cluster::watch`], armed by [`shared_deadline`] for a time box; the
+//!   heartbeat of [`Cluster::beat`], once per round of [`agree_round`], for every render).
 //! * `error`: [`ClusterError`], the errors of this module's functions.
 //!
 //! Invariants every implementation keeps:
@@ -61,7 +62,13 @@ pub trait Cluster {
     /// still waiting at `max(deadline, entry) + grace` ends the whole job with a message (MPI:
     /// `MPI_Abort`). Not collective. The default, for a single process, does nothing (nobody
     /// else can be waited for).
+    /// Also starts a new heartbeat: the rounds seen so far are forgotten.
     fn watch(&self, _limit: Option<(Instant, std::time::Duration)>) {}
+    /// One beat of the heartbeat (not collective): a round of the pass loop starts. Once a rank
+    /// has seen a whole round, a collective waiting longer than [`job::heartbeat_limit`] ends the
+    /// whole job with a message (MPI: `MPI_Abort`). The default, for a single process, does
+    /// nothing.
+    fn beat(&self) {}
 }
 
 /// Starts the cluster: the MPI world when built with feature `mpi` (also works as a
@@ -170,12 +177,14 @@ fn combine_errors(blobs: &[Vec<u8>]) -> ClusterError {
 
 /// The once-per-round agreement of the pass loop (collective): `Ok(true)` when every rank wants
 /// another round, `Ok(false)` when one wants to stop (time box), and the [`agree`]d error on every
-/// rank when one has a `failure` (a failed write inside the loop, say).
+/// rank when one has a `failure` (a failed write inside the loop, say). Each call is a beat of the
+/// heartbeat ([`Cluster::beat`]).
 pub fn agree_round<E: std::fmt::Display + From<ClusterError>>(
     c: &dyn Cluster,
     go: bool,
     failure: Option<E>,
 ) -> Result<bool, E> {
+    c.beat();
     let status = if failure.is_some() {
         2.0
     } else if go {

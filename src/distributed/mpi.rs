@@ -15,8 +15,10 @@
 //!   (The pipeline's `job::agree_job` refuses mismatched jobs before any of these.)
 //! * The watchdog: every collective marks this rank as waiting while it runs; a thread (started
 //!   by `init`, it calls nothing of MPI but `MPI_Abort`) checks the mark five times a second
-//!   against the limit armed by [`Cluster::watch`] (`job::watchdog_fires`), and past it prints
-//!   which rank gave up after how long and ends the whole job with `MPI_Abort` (exit 1).
+//!   against the limit armed by [`Cluster::watch`] (`job::watchdog_fires`) and against the
+//!   heartbeat (`job::heartbeat_limit`: the slowest interval between two [`Cluster::beat`]s,
+//!   floor from `FORECAST_MPI_HEARTBEAT`, read once by `init`), and past either prints which rank
+//!   gave up after how long and why, and ends the whole job with `MPI_Abort` (exit 1).
 
 use ::mpi::collective::SystemOperation;
 use ::mpi::datatype::PartitionMut;
@@ -31,11 +33,24 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// The watchdog's state, shared with its thread: since when this rank waits in a collective
-/// (milliseconds since `epoch`, plus 1; 0 = not waiting) and the armed limit.
+/// (milliseconds since `epoch`, plus 1; 0 = not waiting), the armed limit, and the heartbeat:
+/// its floor (`None`: off), the last beat (as `waiting_since_ms`) and the slowest interval
+/// between two beats (ms; 0 = no whole round seen yet).
 struct Watch {
     epoch: Instant,
     waiting_since_ms: AtomicU64,
     limit: Mutex<Option<(Instant, Duration)>>,
+    heartbeat_floor: Option<Duration>,
+    last_beat_ms: AtomicU64,
+    slowest_round_ms: AtomicU64,
+}
+
+/// Why the watchdog gives up on a wait.
+enum Overdue {
+    /// Past the time budget's deadline plus the grace: (waited, past the deadline).
+    Budget(Duration, Duration),
+    /// Past the heartbeat's limit: (waited, the slowest round, the limit).
+    Heartbeat(Duration, Duration, Duration),
 }
 
 /// Marks the rank as waiting in a collective while it lives.
@@ -48,35 +63,82 @@ impl Drop for InCollective<'_> {
 }
 
 impl Watch {
+    /// Now, in milliseconds since `epoch`, plus 1 (never 0).
+    fn now_ms(&self) -> u64 {
+        u64::try_from(self.epoch.elapsed().as_millis()).unwrap_or(u64::MAX - 1) + 1
+    }
+
     fn enter(&self) -> InCollective<'_> {
-        let ms = u64::try_from(self.epoch.elapsed().as_millis()).unwrap_or(u64::MAX - 1) + 1;
-        self.waiting_since_ms.store(ms, Ordering::Relaxed);
+        self.waiting_since_ms.store(self.now_ms(), Ordering::Relaxed);
         InCollective(self)
     }
 
-    /// The check of one tick: `Some((waited, past the deadline))` when the limit is passed.
-    fn overdue(&self, now: Instant) -> Option<(Duration, Duration)> {
+    /// A beat: the interval since the last one is a whole round.
+    fn beat(&self) {
+        let now = self.now_ms();
+        let last = self.last_beat_ms.swap(now, Ordering::Relaxed);
+        if last > 0 {
+            self.slowest_round_ms.fetch_max(now.saturating_sub(last), Ordering::Relaxed);
+        }
+    }
+
+    /// The check of one tick: why and after how long, when a limit is passed.
+    fn overdue(&self, now: Instant) -> Option<Overdue> {
         let since = self.waiting_since_ms.load(Ordering::Relaxed);
-        let limit = *self.limit.lock().unwrap_or_else(|e| e.into_inner());
-        let (deadline, grace) = limit.filter(|_| since > 0)?;
+        if since == 0 {
+            return None;
+        }
         let entered = self.epoch + Duration::from_millis(since - 1);
-        job::watchdog_fires(now, entered, deadline, grace)
-            .then(|| (now.saturating_duration_since(entered), now.saturating_duration_since(deadline)))
+        let waited = now.saturating_duration_since(entered);
+        let limit = *self.limit.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((deadline, grace)) = limit {
+            if job::watchdog_fires(now, entered, deadline, grace) {
+                return Some(Overdue::Budget(waited, now.saturating_duration_since(deadline)));
+            }
+        }
+        let slowest = match self.slowest_round_ms.load(Ordering::Relaxed) {
+            0 => None,
+            ms => Some(Duration::from_millis(ms)),
+        };
+        let beat = job::heartbeat_limit(self.heartbeat_floor, slowest)?;
+        (waited > beat).then(|| Overdue::Heartbeat(waited, slowest.unwrap_or_default(), beat))
     }
 }
 
-/// Starts the watchdog thread of rank `rank` (a warning, and no watchdog, if it cannot start).
-fn start_watchdog(rank: usize) -> Arc<Watch> {
-    let watch = Arc::new(Watch { epoch: Instant::now(), waiting_since_ms: AtomicU64::new(0), limit: Mutex::new(None) });
+/// Starts the watchdog thread of rank `rank` with the heartbeat's floor `heartbeat_floor` (a
+/// warning, and no watchdog, if it cannot start).
+fn start_watchdog(rank: usize, heartbeat_floor: Option<Duration>) -> Arc<Watch> {
+    let watch = Arc::new(Watch {
+        epoch: Instant::now(),
+        waiting_since_ms: AtomicU64::new(0),
+        limit: Mutex::new(None),
+        heartbeat_floor,
+        last_beat_ms: AtomicU64::new(0),
+        slowest_round_ms: AtomicU64::new(0),
+    });
     let w = Arc::clone(&watch);
     let spawned = std::thread::Builder::new().name("mpi-watchdog".into()).spawn(move || loop {
         std::thread::sleep(Duration::from_millis(200));
-        if let Some((waited, past)) = w.overdue(Instant::now()) {
+        if let Some(why) = w.overdue(Instant::now()) {
+            let why = match why {
+                Overdue::Budget(waited, past) => format!(
+                    "waited {:.1} s in a collective, {:.1} s past the time budget",
+                    waited.as_secs_f64(),
+                    past.as_secs_f64()
+                ),
+                Overdue::Heartbeat(waited, slowest, limit) => format!(
+                    "waited {:.1} s in a collective, past the heartbeat's {:.1} s (the larger of its floor, {}, \
+                     and {} x the slowest round so far, {:.2} s)",
+                    waited.as_secs_f64(),
+                    limit.as_secs_f64(),
+                    heartbeat_floor.map_or_else(String::new, |f| format!("{} s", f.as_secs_f64())),
+                    job::HEARTBEAT_FACTOR,
+                    slowest.as_secs_f64()
+                ),
+            };
             crate::errln!(
-                "error: rank {rank} waited {:.1} s in a collective, {:.1} s past the time budget: another rank \
-                 stopped responding (stopped, hung or lost); ending the job (MPI_Abort)",
-                waited.as_secs_f64(),
-                past.as_secs_f64()
+                "error: rank {rank} {why}: another rank stopped responding (stopped, hung or lost, or its network \
+                 link is down); ending the job (MPI_Abort)"
             );
             // SAFETY: MPI_Abort on the world communicator, which outlives every rank's threads;
             // MPICH accepts it from any thread and ends every process of the job.
@@ -126,7 +188,8 @@ impl MpiCluster {
         if size == 0 || rank >= size {
             return Err(bad_world());
         }
-        let watch = start_watchdog(rank);
+        let floor = std::env::var(job::HEARTBEAT_ENV).ok();
+        let watch = start_watchdog(rank, job::heartbeat_floor(floor.as_deref())?);
         Ok(MpiCluster {
             world,
             rank,
@@ -304,5 +367,11 @@ impl Cluster for MpiCluster {
 
     fn watch(&self, limit: Option<(Instant, Duration)>) {
         *self.watch.limit.lock().unwrap_or_else(|e| e.into_inner()) = limit;
+        self.watch.last_beat_ms.store(0, Ordering::Relaxed);
+        self.watch.slowest_round_ms.store(0, Ordering::Relaxed);
+    }
+
+    fn beat(&self) {
+        self.watch.beat();
     }
 }

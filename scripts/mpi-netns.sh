@@ -1,0 +1,109 @@
+#!/usr/bin/env bash
+# A cluster of three hosts on one machine, with faults: the `netns_` tests of tests/mpi.rs.
+#
+# Each host is a network namespace (fcnet-N-0..2, its own IP 10.N.0.10..12 on `eth0`), joined by
+# veth pairs to a bridge in the root namespace (10.N.0.1, where mpiexec listens). MPICH's hydra
+# (`mpiexec -f hosts -launcher ssh -launcher-exec launch`) starts one hydra_pmi_proxy per host
+# through `launch`, an ssh stand-in that runs the command inside the host's namespace
+# (`ip netns exec`); the proxies start 2 ranks each. Ranks on different hosts can only reach each
+# other by TCP over the veths (the tests set UCX_TLS=tcp,self: UCX's shared memory would join
+# ranks across namespaces, which share one kernel).
+#
+# The tests (cargo test --release --features mpi --test mpi -- --ignored netns_) check that 6
+# ranks on 3 hosts give one process's image, and that a link taken down, a host whose processes
+# are all killed, and 100 ms of added latency (tc netem) in the middle of a render end in a
+# bounded time with a clear error (latency: the same image).
+#
+# Needs root (namespaces, veths, tc), iproute2 and MPICH (.ci/install-mpi.sh). Fails loudly when
+# the namespaces cannot be made; FORECAST_NO_MPI=1 skips it. Where the kernel has no sch_netem
+# (tc says "Specified qdisc kind is unknown") the latency test says so and is not run; set
+# FORECAST_NETNS_REQUIRE_NETEM=1 to make that a failure.
+# Usage: bash scripts/mpi-netns.sh [TEST-NAME-FILTER]    (uses and fills CARGO_TARGET_DIR=target/mpi)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+if [ "${FORECAST_NO_MPI:-0}" = "1" ]; then
+    echo "mpi-netns: SKIPPED (FORECAST_NO_MPI=1): the cluster of network namespaces was not tested" >&2
+    exit 0
+fi
+fail() {
+    echo "" >&2
+    echo "mpi-netns: FAILED: $*" >&2
+    echo "mpi-netns: (the multi-host MPI tests did not run; FORECAST_NO_MPI=1 skips all MPI tests)" >&2
+    exit 1
+}
+[ "$(id -u)" = "0" ] || fail "needs root to create network namespaces"
+command -v mpiexec >/dev/null 2>&1 || fail "mpiexec not found (bash .ci/install-mpi.sh)"
+if ! command -v ip >/dev/null 2>&1 || ! command -v tc >/dev/null 2>&1; then
+    bash .ci/apt-install.sh mpi-netns iproute2 || fail "cannot install iproute2 (ip, tc)"
+fi
+
+n=$(($$ % 200 + 20)) # a subnet and names of our own
+net="10.$n.0"
+pre="fcnet-$n"
+br="fcbr$n"
+dir="$(mktemp -d "${TMPDIR:-/tmp}/mpi-netns.XXXXXX")"
+cleanup() {
+    for i in 0 1 2; do
+        # whatever a test left running in a host
+        for p in $(ip netns pids "$pre-$i" 2>/dev/null); do kill -9 "$p" 2>/dev/null || true; done
+        ip netns del "$pre-$i" 2>/dev/null || true
+    done
+    ip link del "$br" 2>/dev/null || true
+    rm -rf "$dir"
+}
+trap cleanup EXIT
+
+ip link add "$br" type bridge || fail "cannot create a bridge ($br): no network namespaces here"
+ip addr add "$net.1/24" dev "$br"
+echo "$br" > "$dir/iface"
+ip link set "$br" up
+: > "$dir/hosts"
+: > "$dir/nodes"
+for i in 0 1 2; do
+    ns="$pre-$i"
+    ip netns add "$ns" || fail "ip netns add $ns failed: network namespaces cannot be created here"
+    ip link add "fcv$n-$i" type veth peer name eth0 netns "$ns" || fail "cannot create a veth pair for $ns"
+    ip link set "fcv$n-$i" master "$br" up
+    ip -n "$ns" addr add "$net.1$i/24" dev eth0
+    ip -n "$ns" link set eth0 up
+    ip -n "$ns" link set lo up
+    echo "$net.1$i:2" >> "$dir/hosts"
+    # namespace, the veth's end on the bridge (the host's link), the host's address
+    echo "$ns fcv$n-$i $net.1$i" >> "$dir/nodes"
+done
+# each host reaches the others over the bridge
+for i in 1 2; do
+    said="$(ip netns exec "$pre-0" timeout 3 bash -c ": </dev/tcp/$net.1$i/9" 2>&1 || true)"
+    case "$said" in
+        *refused*) ;; # reached: nothing listens on port 9
+        *) fail "host 0 cannot reach host $i ($net.1$i) over the veths: $said" ;;
+    esac
+done
+
+# the ssh stand-in: `launch [ssh options] HOST COMMAND...` runs COMMAND in HOST's namespace
+cat > "$dir/launch" <<EOF
+#!/bin/bash
+while [ "\${1#-}" != "\$1" ]; do shift; done
+host="\$1"; shift
+ns=\$(awk -v h="\$host" '\$3 == h { print \$1 }' "$dir/nodes")
+[ -n "\$ns" ] || { echo "launch: unknown host \$host" >&2; exit 255; }
+exec ip netns exec "\$ns" sh -c "\$*"
+EOF
+chmod +x "$dir/launch"
+
+netem=1
+if ! tc -n "$pre-2" qdisc add dev eth0 root netem delay 1ms 2>"$dir/netem.err"; then
+    netem=0
+    echo "mpi-netns: WARNING: tc netem does not work here ($(cat "$dir/netem.err")): the 100 ms latency test is NOT RUN" >&2
+    [ "${FORECAST_NETNS_REQUIRE_NETEM:-0}" = "1" ] && fail "tc netem is required (FORECAST_NETNS_REQUIRE_NETEM=1)"
+else
+    tc -n "$pre-2" qdisc del dev eth0 root
+fi
+
+echo "== mpi-netns: 3 hosts ($net.10-12, namespaces $pre-0..2), 2 ranks each, over veths"
+FORECAST_NETNS_DIR="$dir" FORECAST_NETNS_NETEM="$netem" CARGO_TARGET_DIR=target/mpi \
+    cargo test --release --features mpi --test mpi -- --ignored --nocapture --test-threads=1 "${1:-netns_}" </dev/null \
+    || fail "the tests above failed"
+[ "$netem" = "1" ] || echo "mpi-netns: WARNING: the latency test was NOT RUN (no tc netem in this kernel)" >&2
+echo "mpi-netns: passed"
