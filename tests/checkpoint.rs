@@ -217,3 +217,20 @@ fn resume_with_another_max_depth_is_refused() {
     let (ok, err) = resume_with("resume-depth-same", &scene(), &["--max-depth", "8"], &["--max-depth", "8"]);
     assert!(ok, "{err}");
 }
+
+/// A texture image enters the scene hash that a checkpoint and MPI's ranks compare: the same
+/// scene beside another image of the same name is another scene; beside the same image, the same.
+#[test]
+fn a_changed_texture_image_is_another_scene() {
+    let src = common::root().join("tests/scenes/mitsuba-plugins");
+    let d = tmp_dir("ckpt-texture-hash");
+    std::fs::copy(src.join("bitmap-png.xml"), d.join("bitmap-png.xml")).unwrap();
+    let hash = |image: &str| {
+        std::fs::copy(src.join(image), d.join("tex16.png")).unwrap();
+        forecast::scene::load(&d.join("bitmap-png.xml")).expect("loads").hash
+    };
+    let (a, again, other) = (hash("tex16.png"), hash("tex16.png"), hash("height32.png"));
+    assert_eq!(a, again, "the same image");
+    assert_ne!(a, other, "another image under the same name");
+    let _ = std::fs::remove_dir_all(d);
+}

@@ -70,7 +70,7 @@ pub fn job_fields(job: &RenderJob, scene: &Scene, plan: &Plan) -> Vec<JobField> 
     let options = serde_json::to_string(&plan.args.options_for(plan.method)).unwrap_or_default();
     let (w, h) = plan.resolution;
     vec![
-        ("the scene's content (file and meshes)", format!("{:016x}", scene.hash)),
+        ("the scene's content (file, meshes and images)", format!("{:016x}", scene.hash)),
         ("-D", defines_field(&job.defines)),
         ("--method", plan.checkpoint_label()),
         ("the method's options", hash(&options)),

@@ -235,8 +235,11 @@ impl SceneBuilder {
         self.mesh_files.push(path.to_path_buf());
     }
 
-    /// Adds a texture; returns its index.
+    /// Adds a texture; returns its index. Its images' texels enter the scene hash.
     pub fn texture(&mut self, t: Texture) -> u32 {
+        let mut hash = self.hash;
+        t.for_each_image(&mut |i| hash = crate::math::fnv1a(hash, &i.content_hash().to_le_bytes()));
+        self.hash = hash;
         self.textures.push(t);
         self.textures.len() as u32 - 1
     }

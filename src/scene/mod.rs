@@ -312,7 +312,7 @@ impl LightRef {
 pub struct Scene {
     /// Source file (for messages and hashing).
     pub path: String,
-    /// FNV-1a hash of the scene file text and its meshes (checkpoint validation).
+    /// FNV-1a hash of the scene file text, its meshes and its images' texels (checkpoint and MPI job identity).
     pub hash: u64,
     /// The mesh files read (OBJ, PLY), in scene order: inputs no output may name
     /// (`atomic_io::OutputSet`).

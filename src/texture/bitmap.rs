@@ -222,6 +222,20 @@ impl TexelImage {
         &self.path
     }
 
+    /// A hash of what it holds (size, channels, decoding and every texel): a changed image is
+    /// another scene for `--resume` and MPI's job identity (`Scene::hash`).
+    pub fn content_hash(&self) -> u64 {
+        let dims = [self.width as u64, self.height as u64, self.channels as u64, self.srgb as u64];
+        let mut h = crate::math::fnv1a(0xcbf2_9ce4_8422_2325, &dims.map(u64::to_le_bytes).concat());
+        match &self.store {
+            Store::Codes { codes, table } => {
+                h = crate::math::fnv1a(h, codes);
+                table.iter().fold(h, |h, v| crate::math::fnv1a(h, &v.to_le_bytes()))
+            }
+            Store::Linear(v) => v.iter().fold(h, |h, x| crate::math::fnv1a(h, &x.to_le_bytes())),
+        }
+    }
+
     /// The `raw` flag it was decoded with.
     pub fn raw(&self) -> bool {
         self.raw
