@@ -45,8 +45,18 @@ fn copy_dir(from: &Path, to: &Path) {
 /// What the image depends on, as comparable text (not the file, hash, texture paths, warnings).
 fn fingerprint(s: &Scene) -> String {
     format!(
-        "{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
-        s.camera, s.render, s.materials, s.surfaces, s.triangles, s.spheres, s.emitters, s.point_lights, s.lights
+        "{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
+        s.camera,
+        s.render,
+        s.materials,
+        s.surfaces,
+        s.triangles,
+        s.spheres,
+        s.emitters,
+        s.point_lights,
+        s.directional_lights,
+        s.environment,
+        s.lights
     )
 }
 

@@ -37,7 +37,7 @@ fn integrator(m: Method, w: &World, o: &MethodArgs, seed: u64) -> Box<dyn Integr
 /// The scene minus `path`, `hash` and `warnings`, as comparable text (f32 printed exactly).
 fn fingerprint(s: &Scene) -> String {
     format!(
-        "{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
+        "{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
         s.camera,
         s.render,
         s.materials,
@@ -45,6 +45,7 @@ fn fingerprint(s: &Scene) -> String {
         s.spheres,
         s.emitters,
         s.point_lights,
+        s.directional_lights,
         s.lights,
         s.light_pick,
         s.rois,

@@ -69,7 +69,7 @@ fn texture_print(t: &Texture) -> String {
 fn fingerprint(s: &Scene) -> String {
     let textures: Vec<String> = s.textures.iter().map(texture_print).collect();
     format!(
-        "{:?}|{:?}|{:?}|{:?}|{textures:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
+        "{:?}|{:?}|{:?}|{:?}|{textures:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
         s.camera,
         s.render,
         s.materials,
@@ -78,6 +78,7 @@ fn fingerprint(s: &Scene) -> String {
         s.spheres,
         s.emitters,
         s.point_lights,
+        s.directional_lights,
         s.lights,
         s.light_pick,
         s.bounds
