@@ -7,7 +7,7 @@
 //! Each scene that loads renders with `pt` at 32 pixels across, 4 spp: finite and not black.
 
 mod common;
-use common::{render_passes, root, tmp_dir};
+use common::{render_passes, root, scene_fingerprint as fingerprint, tmp_dir};
 use forecast::accel::World;
 use forecast::integrators::{Method, MethodArgs};
 use forecast::scene::Scene;
@@ -40,24 +40,6 @@ fn copy_dir(from: &Path, to: &Path) {
             std::fs::copy(e.path(), &t).unwrap();
         }
     }
-}
-
-/// What the image depends on, as comparable text (not the file, hash, texture paths, warnings).
-fn fingerprint(s: &Scene) -> String {
-    format!(
-        "{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
-        s.camera,
-        s.render,
-        s.materials,
-        s.surfaces,
-        s.triangles,
-        s.spheres,
-        s.emitters,
-        s.point_lights,
-        s.directional_lights,
-        s.environment,
-        s.lights
-    )
 }
 
 /// `pt` at 32 pixels across (the film's aspect), 4 spp: every pixel finite, the image not black.

@@ -6,7 +6,10 @@
 //! malformed inputs' errors (file and line, words) are tests/bad_scenes.rs's.
 
 mod common;
-use common::{assert_detects, global_z, max_z, ply_scene, render_passes, root, tmp_dir, xml, PLY_ASCII};
+use common::{
+    assert_detects, global_z, max_z, ply_scene, render_passes, root, scene_fingerprint as fingerprint, tmp_dir, xml,
+    PLY_ASCII,
+};
 use forecast::accel::World;
 use forecast::integrators::{Integrator, Method, MethodArgs};
 use forecast::math::Vec3;
@@ -33,27 +36,6 @@ fn integrator(m: Method, w: &World, o: &MethodArgs, seed: u64) -> Box<dyn Integr
     m.build(w, o, &bytes).unwrap()
 }
 // ----
-
-/// The scene minus `path`, `hash` and `warnings`, as comparable text (f32 printed exactly).
-fn fingerprint(s: &Scene) -> String {
-    format!(
-        "{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
-        s.camera,
-        s.render,
-        s.materials,
-        s.triangles,
-        s.spheres,
-        s.emitters,
-        s.point_lights,
-        s.directional_lights,
-        s.lights,
-        s.light_pick,
-        s.rois,
-        s.forecast_target,
-        s.forecast_photons,
-        s.bounds
-    )
-}
 
 #[test]
 fn exported_toml_scenes_load_back_identical_and_render_bit_identically() {

@@ -8,7 +8,7 @@
 //! key) are tests/bad_scenes.rs's.
 
 mod common;
-use common::{render_passes, root, tmp_dir};
+use common::{render_passes, root, scene_fingerprint as fingerprint, texture_print, tmp_dir};
 use forecast::accel::World;
 use forecast::bsdf::Slot;
 use forecast::integrators::{Integrator, Method, MethodArgs};
@@ -35,54 +35,6 @@ fn by_name<'s>(s: &'s Scene, src: &str, name: &str) -> (usize, &'s Material) {
     let names: Vec<&String> = doc["materials"].as_table().unwrap().keys().collect();
     let i = 1 + names.iter().position(|n| *n == name).unwrap_or_else(|| panic!("no material {name}"));
     (i, &s.materials[i])
-}
-
-/// A texture as comparable text: its kind, parameters and every texel, not its file's path.
-fn texture_print(t: &Texture) -> String {
-    match t {
-        Texture::Constant(c) => format!("constant {c:?}"),
-        Texture::Checkerboard(c) => {
-            format!("checkerboard({}, {}, {:?})", texture_print(&c.color0), texture_print(&c.color1), c.to_uv.rows)
-        }
-        Texture::Bitmap(b) => {
-            let i = &b.image;
-            let texels: Vec<[u32; 3]> = (0..i.height())
-                .flat_map(|y| (0..i.width()).map(move |x| i.texel(x, y).to_array().map(f32::to_bits)))
-                .collect();
-            format!(
-                "bitmap {}x{}x{} raw {} srgb {} {:?} {:?} {:?} mean {} texels {texels:?}",
-                i.width(),
-                i.height(),
-                i.channels(),
-                i.raw(),
-                i.is_srgb(),
-                b.filter_type,
-                b.wrap_mode,
-                b.to_uv.rows,
-                i.mean().to_bits()
-            )
-        }
-    }
-}
-
-/// The scene minus `path`, `hash`, `warnings` and the image paths, as comparable text.
-fn fingerprint(s: &Scene) -> String {
-    let textures: Vec<String> = s.textures.iter().map(texture_print).collect();
-    format!(
-        "{:?}|{:?}|{:?}|{:?}|{textures:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
-        s.camera,
-        s.render,
-        s.materials,
-        s.surfaces,
-        s.triangles,
-        s.spheres,
-        s.emitters,
-        s.point_lights,
-        s.directional_lights,
-        s.lights,
-        s.light_pick,
-        s.bounds
-    )
 }
 
 #[test]

@@ -11,6 +11,7 @@ use forecast::math::Vec3;
 use forecast::pipeline::{render, RenderJob};
 use forecast::render::film::Film;
 use forecast::scene::Scene;
+use forecast::texture::Texture;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -392,4 +393,59 @@ pub fn ply_scene(shape: &str) -> String {
     {shape}
     <emitter type="point"><point name="position" value="0, 2, 0"/><rgb name="intensity" value="1"/></emitter></scene>"#
     )
+}
+
+/// A scene as comparable text, what its image depends on: every field but `path`, `hash`,
+/// `mesh_files` and `warnings` (f32 printed exactly), a texture by its kind, parameters and
+/// contents ([`texture_print`]), not its file's path.
+pub fn scene_fingerprint(s: &Scene) -> String {
+    let textures: Vec<String> = s.textures.iter().map(texture_print).collect();
+    format!(
+        "{:?}|{:?}|{:?}|{:?}|{textures:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
+        s.camera,
+        s.render,
+        s.materials,
+        s.surfaces,
+        s.triangles,
+        s.spheres,
+        s.shape_uvs,
+        s.emitters,
+        s.point_lights,
+        s.directional_lights,
+        s.environment,
+        s.bsphere,
+        s.lights,
+        s.light_pick,
+        s.rois,
+        s.forecast_target,
+        s.forecast_photons,
+        s.bounds
+    )
+}
+
+/// A texture as comparable text: its kind, parameters and contents (a bitmap by its size,
+/// decoding, content hash and mean), not its file's path.
+pub fn texture_print(t: &Texture) -> String {
+    match t {
+        Texture::Constant(c) => format!("constant {c:?}"),
+        Texture::Checkerboard(c) => {
+            format!("checkerboard({}, {}, {:?})", texture_print(&c.color0), texture_print(&c.color1), c.to_uv.rows)
+        }
+        Texture::Bitmap(b) => {
+            let i = &b.image;
+            format!(
+                "bitmap {}x{}x{} raw {} srgb {} {:?} {:?} {:?} mean {} content {:016x}",
+                i.width(),
+                i.height(),
+                i.channels(),
+                i.raw(),
+                i.is_srgb(),
+                b.filter_type,
+                b.wrap_mode,
+                b.to_uv.rows,
+                i.mean().to_bits(),
+                i.content_hash()
+            )
+        }
+    }
 }
