@@ -99,10 +99,10 @@ fc_depth=$((seg - 1))
 # the named crops of the SMS scenes (fractions of the frame; see the header)
 if [ -z "${CROPS+x}" ]; then
     case "$(basename "$(dirname "$(readlink -f "$scene")")")" in
-        sms-sphere-smooth) CROPS="shadow_caustic=0.125,0.309,0.171,0.279" ;;
-        sms-sphere) CROPS="shadow_caustic=0.125,0.309,0.171,0.279" ;;
-        sms-plane) CROPS="plate_caustic=0.150,0.529,0.275,0.279" ;;
-        sms-pool) CROPS="pool_floor=0.383,0.559,0.300,0.250" ;;
+        sms-sphere-smooth) CROPS="shadow_caustic=0.150,0.230,0.140,0.330" ;;
+        sms-sphere) CROPS="shadow_caustic=0.150,0.230,0.140,0.330" ;;
+        sms-plane) CROPS="plate_caustic=0.150,0.450,0.400,0.500" ;;
+        sms-pool) CROPS="pool_floor=0.300,0.500,0.350,0.300" ;;
         *) CROPS="" ;;
     esac
 fi

@@ -7,12 +7,14 @@ wall-clock budget: a peer of the equal-time comparison (issue 62; docs/peers.md)
 Cycles on the CPU, path tracing with path guiding (Open PGL: surface guiding; training samples
 Cycles' default), light tree on (the default), no adaptive sampling, no denoising, no clamping
 (direct and indirect), Filter Glossy 0, reflective and refractive caustics on, the pixel filter a
-Gaussian of width 6 px (Cycles' exp(−2·(6v/w)²): σ = ½ px, Mitsuba's; Mitsuba cuts it at 2 px),
+Gaussian of width 2 px (Cycles tabulates exp(−2·(6v/3w)²) over ±1.5w: σ = w/4 = ½ px, Mitsuba's
+σ; Mitsuba cuts it at 2 px, Cycles at 3),
 SEED as `cycles.seed`, THREADS fixed. Prints `spp seconds cpu_seconds` (as mitsuba_timed.py): the
-clock starts after `import bpy`; the scene build (textures, meshes) is inside the budget and
-Cycles' `time_limit` gets what is left. Cycles' time limit leaves out its scene synchronisation
-(BVH build, image upload), so a render may overrun the budget by that: the seconds printed are
-the real wall time, for the log. OUT.exr: linear RGB (Blender's EXR of the render result).
+clock starts after `import bpy`; the scene build (textures, meshes) is inside the budget. Cycles'
+`time_limit` leaves out its scene synchronisation (BVH build, image upload), so the script first
+renders one sample with persistent data (the sync happens there, inside the budget; that sample
+is discarded) and then gives the timed render, which reuses the synced scene, what is left. The
+seconds printed are the real wall time. OUT.exr: linear RGB (Blender's EXR of the render result).
 
 What maps (scripts/peer_scene.py reads the file):
 - camera: Mitsuba's sensor frame with x and z negated (Blender's camera looks down −z), horizontal
@@ -287,7 +289,7 @@ def build(bpy, s, w, h, seed, threads):
     cy.sample_clamp_direct = 0.0
     cy.sample_clamp_indirect = 0.0
     cy.pixel_filter_type = "GAUSSIAN"
-    cy.filter_width = 6.0
+    cy.filter_width = 2.0
     cy.use_light_tree = True
     return sc
 
@@ -319,15 +321,22 @@ def main(argv):
     cy.use_guiding = guiding
     cy.use_surface_guiding = guiding
     cy.use_volume_guiding = False
+    stats = []
+    bpy.app.handlers.render_stats.append(lambda txt: stats.append(txt))
+    sc.render.filepath = os.path.abspath(out) if out != "-" else os.path.join("/tmp", f"cycles-{os.getpid()}.exr")
     if spp:
         cy.samples = spp
         cy.time_limit = 0.0
     else:
+        # Cycles' time_limit leaves out its scene synchronisation (BVH, images): a first render of
+        # one sample with persistent data syncs the scene inside the budget, and the timed render
+        # reuses it, so that the whole render stays within the budget
+        sc.render.use_persistent_data = True
+        cy.samples, cy.time_limit = 1, 0.0
+        bpy.ops.render.render(write_still=False)
+        stats.clear()
         cy.samples = 1 << 24
-        cy.time_limit = max(0.1, budget - (time.perf_counter() - t0))
-    stats = []
-    bpy.app.handlers.render_stats.append(lambda txt: stats.append(txt))
-    sc.render.filepath = os.path.abspath(out) if out != "-" else os.path.join("/tmp", f"cycles-{os.getpid()}.exr")
+        cy.time_limit = max(0.05, budget - (time.perf_counter() - t0))
     bpy.ops.render.render(write_still=True)
     elapsed, cpu = time.perf_counter() - t0, cpu_s() - c0
     done = 0

@@ -22,7 +22,10 @@ What maps (scripts/peer_scene.py reads the file):
   repeat, bilinear) with the mesh's Mitsuba uv and `to_uv` as uvmapping2d scale/delta;
 - dielectric → glass (kr = kt = 1, interior ior = Mitsuba's int/ext ratio, exterior 1);
 - conductor → metal2 with Mitsuba's RGB eta/k: LuxCore's metal is always glossy, so a smooth
-  conductor is metal2 with α = SMOOTH_ALPHA (1e-3), not a Dirac lobe;
+  conductor is metal2 with α = SMOOTH_ALPHA (1e-3), not a Dirac lobe. KNOWN FAILURE: under a
+  normalmap (sms-plane's gold plate) LuxCore renders it black — also with a flat map (0.5, 0.5,
+  1), with α 0.02, with `mirror` instead of metal2, and without vertex normals; diffuse and glass
+  under the same normal map render. LuxCore's sms-plane is therefore not comparable;
 - roughconductor → metal2, uroughness = vroughness = α (LuxCore's roughness u·v is α²: its
   Schlick distribution D(r) is GGX with r = α²) — but LuxCore's masking is Schlick's G, not
   Smith's GGX G1·G1 (an approximation: a few % on grazing lobes);
@@ -39,6 +42,10 @@ What maps (scripts/peer_scene.py reads the file):
   depth 1 is direct light only); BIDIRCPU: path.maxdepth = light.maxdepth = d − 1, but BIDIRCPU
   has no cap on the total (eye + light) length, so it adds paths longer than Mitsuba renders.
 - spheres are tessellated (peer_scene.SPHERE_RES rings, smooth vertex normals).
+Meshes go to LuxCore as Python lists (Scene.DefineMesh; it takes no numpy arrays): about 1 s for
+the 131k-vertex sphere on an idle core, inside the budget. (A binary PLY through
+scene.shapes.*.ply was faster but its render differed from Mitsuba's in the lit floor's colour by
+up to 10%, unexplained: not used.)
 """
 import os
 import resource
@@ -102,9 +109,9 @@ class Builder:
     def material(self, name, b, radiance):
         p = f"scene.materials.{name}"
         if b["type"] == "normalmap":
-            nm = f"nmap_{name}"
+            nm, tex = f"nmap_{name}", self.texture(b["normalmap"])  # defined first: LuxCore parses in order
             self.set(f"scene.textures.{nm}.type", "normalmap")
-            self.set(f"scene.textures.{nm}.texture", self.texture(b["normalmap"]))
+            self.set(f"scene.textures.{nm}.texture", tex)
             self.set(f"scene.textures.{nm}.scale", 1.0)
             self.material(name, b["nested"], radiance)
             self.set(p + ".normaltex", nm)
