@@ -153,10 +153,15 @@ for p in $peers; do renderers+=("mitsuba-$p"); done
 for e in $LUXCORE; do renderers+=("luxcore-$e"); done
 for c in $CYCLES; do renderers+=("$c"); done
 for ((s = 1; s <= seeds; s++)); do
-    for m in $methods; do echo "equal-time-vs-mitsuba: $m seed $s" >&2; render_forecast "$m" "$s"; done
-    for p in $peers; do echo "equal-time-vs-mitsuba: Mitsuba $p seed $s" >&2; render_mitsuba "$p" "$s"; done
-    for e in $LUXCORE; do echo "equal-time-vs-mitsuba: LuxCore $e seed $s" >&2; render_luxcore "$e" "$s"; done
-    for c in $CYCLES; do echo "equal-time-vs-mitsuba: Cycles ($c) seed $s" >&2; render_cycles "$c" "$s"; done
+    # a renderer that fails (a scene it cannot read) is reported and left out of the table
+    for m in $methods; do echo "equal-time-vs-mitsuba: $m seed $s" >&2
+        render_forecast "$m" "$s" || echo "equal-time-vs-mitsuba: $m seed $s failed (see $out/$m-$s.log)" >&2; done
+    for p in $peers; do echo "equal-time-vs-mitsuba: Mitsuba $p seed $s" >&2
+        render_mitsuba "$p" "$s" || echo "equal-time-vs-mitsuba: Mitsuba $p seed $s failed" >&2; done
+    for e in $LUXCORE; do echo "equal-time-vs-mitsuba: LuxCore $e seed $s" >&2
+        render_luxcore "$e" "$s" || echo "equal-time-vs-mitsuba: LuxCore $e seed $s failed" >&2; done
+    for c in $CYCLES; do echo "equal-time-vs-mitsuba: Cycles ($c) seed $s" >&2
+        render_cycles "$c" "$s" || echo "equal-time-vs-mitsuba: Cycles $c seed $s failed" >&2; done
 done
 
 printf '# %s %s, %s s, seeds 1..%s, %s threads, %s segments (commit %s); crops: whole %s\n' "$scene" "$res" "$budget" "$seeds" \

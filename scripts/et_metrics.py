@@ -17,9 +17,12 @@ Columns (each a mean over seeds where it is per render):
   mean    the crop's mean (pixels and channels): a renderer that cannot see part of a crop shows
           a low noise there but a lower mean
   spp, wall_s, cpu_s  from OUT/renders.tsv
+  mean/ref  the crop mean over the reference's (with a reference)
 Then, per crop, each renderer's relmse (relvar without a reference) over the best of the others
-(`vs best other`): the first renderer (forecast's) below 1 is ahead. Writes OUT/table.txt and
-OUT/table.json.
+(`vs best other`): below 1 is ahead. With a reference, a renderer whose crop mean is more than
+BLIND (3%) away from the reference's is marked `blind` and is not a "best other" (Mitsuba's
+ptracer on glass seen directly, a peer that cannot render part of a crop, a render with no
+sample). Writes OUT/table.txt and OUT/table.json.
 """
 import json
 import os
@@ -29,6 +32,7 @@ import numpy as np
 import mitsuba as mi
 
 mi.set_variant("scalar_rgb")
+BLIND = 0.03
 
 
 def read(path):
@@ -83,26 +87,28 @@ def main(argv):
                 rc = ref[y:y + ch, x:x + cw]
                 mse = float(np.mean([np.mean((c - rc) ** 2) for c in cs]))
                 e["ref"], e["relmse"], e["ref_mean"] = float(np.sqrt(mse)), mse / float(rc.mean()) ** 2, float(rc.mean())
+                e["mean_ratio"] = mean / float(rc.mean())
+                e["blind"] = bool(abs(e["mean_ratio"] - 1) > BLIND)
             if r in log:
                 e["spp"], e["wall_s"], e["cpu_s"] = [float(np.mean([t[k] for t in log[r]])) for k in range(3)]
             rows.append(e)
             table.setdefault(name, {})[r] = e
     key = "relmse" if ref is not None else "relvar"
-    lines = [f"{'renderer':<22} {'crop':<10} {'noise':>10} {'ref':>10} {'relmse':>10} {'relvar':>10} {'mean':>10} {'spp':>8} {'wall_s':>7} {'cpu_s':>7}"]
+    lines = [f"{'renderer':<22} {'crop':<14} {'noise':>10} {'ref':>10} {'relmse':>10} {'relvar':>10} {'mean':>10} {'mean/ref':>8} {'spp':>8} {'wall_s':>7} {'cpu_s':>7}"]
     for e in rows:
         f = lambda k, p=".3e": format(e[k], p) if k in e else "-"
-        lines.append(f"{e['renderer']:<22} {e['crop']:<10} {f('noise'):>10} {f('ref'):>10} {f('relmse'):>10} {f('relvar'):>10} "
-                     f"{f('mean'):>10} {f('spp', '.0f'):>8} {f('wall_s', '.1f'):>7} {f('cpu_s', '.1f'):>7}")
+        lines.append(f"{e['renderer']:<22} {e['crop']:<14} {f('noise'):>10} {f('ref'):>10} {f('relmse'):>10} {f('relvar'):>10} "
+                     f"{f('mean'):>10} {f('mean_ratio', '.3f'):>8} {f('spp', '.0f'):>8} {f('wall_s', '.1f'):>7} {f('cpu_s', '.1f'):>7}")
     lines.append("")
     lines.append(f"{key} over the best other renderer's (below 1: ahead of every other):")
     for name, per in table.items():
         parts = []
         for r, e in per.items():
-            others = [o[key] for q, o in per.items() if q != r and np.isfinite(o[key])]
+            others = [o[key] for q, o in per.items() if q != r and np.isfinite(o[key]) and not o.get("blind")]
             if others and np.isfinite(e[key]) and min(others) > 0:
                 best = min(others)
-                parts.append(f"{r} {e[key] / best:.2f}x")
-        lines.append(f"  {name:<10} " + ", ".join(parts))
+                parts.append(f"{r} {e[key] / best:.2f}x" + (" (blind)" if e.get("blind") else ""))
+        lines.append(f"  {name:<14} " + ", ".join(parts))
     text = "\n".join(lines)
     print(text)
     open(os.path.join(out, "table.txt"), "a").write(text + "\n")
