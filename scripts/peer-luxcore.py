@@ -22,17 +22,16 @@ What maps (scripts/peer_scene.py reads the file):
   repeat, bilinear) with the mesh's Mitsuba uv and `to_uv` as uvmapping2d scale/delta;
 - dielectric → glass (kr = kt = 1, interior ior = Mitsuba's int/ext ratio, exterior 1);
 - conductor → metal2 with Mitsuba's RGB eta/k: LuxCore's metal is always glossy, so a smooth
-  conductor is metal2 with α = SMOOTH_ALPHA (1e-3), not a Dirac lobe. KNOWN FAILURE: under a
-  normalmap (sms-plane's gold plate) LuxCore renders it black — also with a flat map (0.5, 0.5,
-  1), with α 0.02, with `mirror` instead of metal2, and without vertex normals; diffuse and glass
-  under the same normal map render. LuxCore's sms-plane is therefore not comparable;
+  conductor is metal2 with α = SMOOTH_ALPHA (1e-3), not a Dirac lobe;
 - roughconductor → metal2, uroughness = vroughness = α (LuxCore's roughness u·v is α²: its
   Schlick distribution D(r) is GGX with r = α²) — but LuxCore's masking is Schlick's G, not
   Smith's GGX G1·G1 (an approximation: a few % on grazing lobes);
 - roughplastic → glossy2 (NOT the same BSDF: glossy2 is LuxCore's coated diffuse with a Schlick
   Fresnel, ks = F0 of Mitsuba's η, kd the diffuse reflectance; Mitsuba's roughplastic has the
   exact dielectric Fresnel and internal scattering). Only the pool's dark ladder steps use it;
-- normalmap → a normalmap texture (2c − 1 in the frame (dp/du, cross(n, dp/du), n), as Mitsuba's);
+- normalmap → a normalmap texture as the material's `bumptex` (2c − 1 in the frame (dp/du,
+  cross(n, dp/du), n), as Mitsuba's). Not `normaltex`: pyluxcore 2.11.2 accepts that property but
+  renders a glossy or specular reflection under it black (even a flat map);
 - area emitter → the material's emission (gain 1, power 0: radiance as given; one-sided);
 - envmap → infinite light from memory, gain = scale; its transformation maps LuxCore's lat-long
   (z up, φ = atan2(y, x)) onto Mitsuba's (y up, u = atan2(x, −z)/2π): local = (−v.z, v.x, v.y);
@@ -114,7 +113,7 @@ class Builder:
             self.set(f"scene.textures.{nm}.texture", tex)
             self.set(f"scene.textures.{nm}.scale", 1.0)
             self.material(name, b["nested"], radiance)
-            self.set(p + ".normaltex", nm)
+            self.set(p + ".bumptex", nm)  # LuxCore applies a normalmap texture as the bump texture
             return
         t = b["type"]
         if t == "diffuse":
