@@ -99,8 +99,8 @@ fc_depth=$((seg - 1))
 # the named crops of the SMS scenes (fractions of the frame; see the header)
 if [ -z "${CROPS+x}" ]; then
     case "$(basename "$(dirname "$(readlink -f "$scene")")")" in
-        sms-sphere-smooth) CROPS="shadow_caustic=0.150,0.230,0.140,0.330" ;;
-        sms-sphere) CROPS="shadow_caustic=0.150,0.230,0.140,0.330" ;;
+        sms-sphere-smooth) CROPS="shadow_caustic=0.150,0.230,0.120,0.330" ;;
+        sms-sphere) CROPS="shadow_caustic=0.150,0.230,0.120,0.330" ;;
         sms-plane) CROPS="plate_caustic=0.100,0.600,0.400,0.350" ;;
         sms-pool) CROPS="pool_floor=0.300,0.500,0.350,0.300" ;;
         *) CROPS="" ;;
