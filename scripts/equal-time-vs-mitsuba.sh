@@ -41,7 +41,9 @@
 #              render arguments
 #   PEERS      Mitsuba integrators (default "path ptracer"; empty for none)
 #   LUXCORE    LuxCore engines of peer-luxcore.py (default "path bidir" when LUXCORE_VENV has
-#              pyluxcore, else none); LUXCORE_VENV (default out/luxcore-venv)
+#              pyluxcore, else none; add path-nohybrid on sms-pool, where hybrid PATHCPU renders the
+#              floor seen through the water too dark: docs/peers.md); LUXCORE_VENV (default
+#              out/luxcore-venv)
 #   CYCLES     "cycles" (path guiding) and/or "cycles-noguide" (default "cycles" when BLENDER_VENV
 #              has bpy, else none); BLENDER_VENV (default out/blender-venv)
 #   THREADS    threads of every renderer (default nproc); MAX_DEPTH (see above)
