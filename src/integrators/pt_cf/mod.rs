@@ -38,7 +38,6 @@ use crate::sampling::rng::Rng;
 use crate::scene::{Camera, Material, NO_EMITTER};
 use crate::transport::context::ShadingQuery;
 use crate::transport::direct;
-use crate::transport::particle::MAX_VERTICES;
 use light::{CameraPdf, LightSide};
 use std::sync::Arc;
 
@@ -264,7 +263,7 @@ impl GuidedPathTracer {
     #[inline]
     fn camera_weight(&self, world: &World, st: &PathState, hit: &Hit, ctx: &Context) -> f32 {
         match (&self.light, &ctx.camera, st.mis) {
-            (Some(light), Some(cam), Some(ratio)) if st.walk.prev_delta && st.vertex < MAX_VERTICES => {
+            (Some(light), Some(cam), Some(ratio)) if st.walk.prev_delta && st.vertex <= light.max_depth => {
                 light::camera_weight(world, light, cam, hit, st.walk.d, ratio)
             }
             _ => 1.0,
@@ -276,7 +275,7 @@ impl GuidedPathTracer {
     #[inline]
     fn escape_weight(&self, world: &World, st: &PathState, ctx: &Context) -> f32 {
         match (&self.light, &ctx.camera, st.mis) {
-            (Some(light), Some(cam), Some(ratio)) if st.walk.prev_delta && st.vertex < MAX_VERTICES => {
+            (Some(light), Some(cam), Some(ratio)) if st.walk.prev_delta && st.vertex <= light.max_depth => {
                 light::camera_weight_escaped(world, light, cam, (st.walk.o, st.walk.d), ratio)
             }
             _ => 1.0,
@@ -334,7 +333,9 @@ impl GuidedPathTracer {
     fn trace(&self, world: &World, mut st: PathState, ctx: &mut Context) -> CameraEstimate {
         let s = &world.scene;
         let mut l = CameraEstimate::default();
-        while st.vertex < self.max_depth {
+        // as `pt`: `max_depth` surface vertices, then the ray the last one drew, for the emitter
+        // it may reach (the other half of that vertex's NEE MIS)
+        loop {
             let Some(hit) = world.intersect(st.walk.o, st.walk.d, f32::INFINITY) else {
                 self.add_escaped(world, &st, ctx, &mut l);
                 break;
@@ -342,6 +343,9 @@ impl GuidedPathTracer {
             if s.emitter_of(hit.prim) != NO_EMITTER {
                 self.add_emitted(world, &st, &hit, ctx, &mut l);
                 break; // emitters reflect nothing
+            }
+            if st.vertex >= self.max_depth {
+                break;
             }
             let (m, sp) = world.shade(&hit, -st.walk.d);
             let v = self.enter(&mut st, &m, sp, &hit);
@@ -458,8 +462,10 @@ impl Integrator for GuidedPathTracer {
         });
     }
 
+    /// `max_depth` + 1: the estimate reaches the emitter through up to `max_depth` Dirac vertices
+    /// (its last vertex's BSDF ray), and `prefix_emission` counts the emitter as a vertex.
     fn prefix_cap(&self) -> u32 {
-        self.max_depth
+        self.max_depth.saturating_add(1)
     }
 
     fn light_tracer(&self) -> Option<&dyn LightTracer> {
