@@ -287,7 +287,7 @@ fn extra_rays_follow_the_integrators_prefix_cap() {
     o.settings.max_depth = Some(100);
     let pt = Method::Pt.build(&w, &o, &[]).unwrap();
     let iws = Method::Iws.build(&w, &o, &[]).unwrap();
-    assert_eq!((pt.prefix_cap(), iws.prefix_cap()), (100, 64));
+    assert_eq!((pt.prefix_cap(), iws.prefix_cap()), (101, 64));
     let (origin, dir) =
         (forecast::math::Vec3::new(0.0, 0.0, 0.5), forecast::math::Vec3::new(1.0, 0.0, 8.0).normalize());
     let sample = |cap: u32, n: u64| -> (f64, f64) {

@@ -155,6 +155,18 @@ impl Material {
     pub fn has_mixed_lobes(&self) -> bool {
         matches!(self, Material::Plastic(_))
     }
+    /// The larger roughness α of a BSDF that is one microfacet lobe alone (`roughconductor`,
+    /// `roughdielectric`); `None` for every other BSDF (diffuse, Phong, the plastics' diffuse base,
+    /// Dirac). `pt-cf`'s rule of which glossy vertices its tables guide (`--guide-min-alpha`).
+    #[inline]
+    pub fn lobe_alpha(&self) -> Option<f32> {
+        let d = match self {
+            Material::RoughConductor(b) => &b.distribution,
+            Material::RoughDielectric(b) => &b.distribution,
+            _ => return None,
+        };
+        Some(d.alpha_u.max(d.alpha_v))
+    }
     /// True when the BSDF is identically zero.
     #[inline]
     pub fn is_black(&self) -> bool {

@@ -183,7 +183,21 @@ pub fn eval(m: &Material, sp: &ShadingPoint, wo: Vec3, wi: Vec3, mode: Mode) -> 
     if sp.n0 == sp.ns {
         f
     } else {
-        f * shadow_terminator(sp, wi)
+        f * shadow_terminator(sp, toward_light(mode, wo, wi))
+    }
+}
+
+/// The direction toward the light side: `wi` in radiance mode, `wo` in importance mode (a light
+/// path's `wo` is where its light came from). The normal map's shadowing term is the radiance
+/// estimator's, on the direction toward the light, so a light path (`Mode::Importance`) applies
+/// it to its incoming direction, not to the direction it samples: the light side of `pt-cf`,
+/// IWS's point lights and photons then carry the transport `pt` measures (Mitsuba's `normalmap`
+/// applies it to the sampled direction in both modes, which is not reciprocal).
+#[inline]
+fn toward_light(mode: Mode, wo: Vec3, wi: Vec3) -> Vec3 {
+    match mode {
+        Mode::Radiance => wi,
+        Mode::Importance => wo,
     }
 }
 
@@ -304,7 +318,7 @@ pub fn sample(m: &Material, sp: &ShadingPoint, wo: Vec3, u: [f32; 3], mode: Mode
     if sp.n0 == sp.ns {
         return Some(s);
     }
-    let g = shadow_terminator(sp, s.wi);
+    let g = shadow_terminator(sp, toward_light(mode, wo, s.wi));
     (g > 0.0).then_some(BsdfSample { weight: s.weight * g, ..s })
 }
 
@@ -356,4 +370,42 @@ fn sample_untilted(m: &Material, sp: &ShadingPoint, wo: Vec3, u: [f32; 3], mode:
     let fell_back = matches!(m, Material::Glass { .. }) && dielectric::falls_back(sp, wo);
     let corr = if fell_back { 1.0 } else { shading_correction(mode, sp, wo, s.wi) };
     Some(BsdfSample { weight: s.weight * corr, ..s })
+}
+
+#[cfg(test)]
+mod adjoint_tests {
+    use super::*;
+
+    /// A normal-mapped point: the geometric normal +z, the untilted shading normal too, the map's
+    /// normal tilted 35° toward +x.
+    fn tilted() -> ShadingPoint {
+        let n = Vec3::new(35f32.to_radians().sin(), 0.0, 35f32.to_radians().cos());
+        ShadingPoint { n0: Vec3::Z, ..ShadingPoint::new(Vec3::ZERO, Vec3::Z, n) }
+    }
+
+    /// A light path sees the transport `pt` measures: the importance-mode BSDF from `a` (toward
+    /// the light) to `b` is the radiance-mode BSDF from `b` (toward the camera) to `a` times
+    /// Veach's adjoint factor, the map's shadowing term on `a` in both; so is the sampled weight
+    /// of a Dirac conductor (its only direction), where the shadowing term of the sampled
+    /// direction (Mitsuba's choice) would differ.
+    #[test]
+    fn importance_mode_shadows_the_direction_toward_the_light() {
+        let sp = tilted();
+        let m = Material::Diffuse { albedo: Rgb::splat(0.5) };
+        let a = Vec3::new(-0.8, 0.1, 0.3).normalize(); // grazing, away from the tilt: G(a) < 1
+        let b = Vec3::new(0.3, -0.2, 0.9).normalize();
+        let (ga, gb) = (shadow_terminator(&sp, a), shadow_terminator(&sp, b));
+        assert!(ga < 0.95 && (ga - gb).abs() > 0.05, "G(a) {ga}, G(b) {gb}: the test has no power");
+        let imp = eval(&m, &sp, a, b, Mode::Importance);
+        let rad = eval(&m, &sp, b, a, Mode::Radiance);
+        assert!((imp.x - rad.x).abs() <= 1e-6 * rad.x.abs().max(1e-6), "importance {imp:?} radiance {rad:?}");
+        // a Dirac conductor: the importance weight's shadowing term is G(wo = toward the light)
+        let c = Material::Mirror { reflectance: Rgb::splat(1.0) };
+        let wo = Vec3::new(0.6, 0.1, 0.3).normalize(); // grazing toward the tilt: reflects near ns
+        let bs = sample(&c, &sp, wo, [0.5; 3], Mode::Importance).expect("reflects");
+        let (g_o, g_i) = (shadow_terminator(&sp, wo), shadow_terminator(&sp, bs.wi));
+        assert!((g_o - g_i).abs() > 0.05, "G(wo) {g_o}, G(wi) {g_i}: no power");
+        let want = shading_correction(Mode::Importance, &sp, wo, bs.wi) * g_o;
+        assert!((bs.weight.x - want).abs() < 1e-5, "weight {} against {want}", bs.weight.x);
+    }
 }

@@ -36,7 +36,7 @@ use crate::math::{Rgb, Vec3, PI};
 use crate::profile::{Phase, Profile};
 use crate::progress::Phases;
 use crate::scene::{Material, NO_EMITTER};
-use crate::transport::dirac::{environment, follow_dirac_chain};
+use crate::transport::dirac::{environment, follow_dirac_chain, prefix_emission};
 use crate::transport::direct;
 use crate::transport::light_select::{LightSelector, RisParams, MAX_CANDIDATES, MAX_SURVIVORS};
 use crate::transport::particle::MAX_VERTICES;
@@ -188,10 +188,8 @@ impl Iws {
             Some(b) if b >= 0.0 => b,
             _ => default_bound(world, params.vpl_paths.max(1)),
         };
-        let max_depth = match args.settings.cap() {
-            0 => MAX_VERTICES,
-            c => c,
-        };
+        // 0 (a Mitsuba `max_depth` of 1): the emitters seen directly, as `pt`
+        let max_depth = args.settings.cap();
         // out-of-range RIS parameters (API use; the CLI checks them) fall back to the nearest valid
         let ris = RisParams::new(
             params.ris_candidates.min(MAX_CANDIDATES),
@@ -457,7 +455,10 @@ impl Integrator for Iws {
     fn estimate(&self, world: &World, origin: Vec3, dir: Vec3, ctx: &mut Context) -> CameraEstimate {
         let t0 = ctx.profile.start(Phase::Radiance);
         let mut l = CameraEstimate::default();
-        if let Some(hit) = world.intersect(origin, dir, f32::INFINITY) {
+        if self.max_depth == 0 {
+            // no surface vertex: the emitters (one-sided) and the environment seen directly
+            l.prefix_le = prefix_emission(world, origin, dir, 1, &mut ctx.rng);
+        } else if let Some(hit) = world.intersect(origin, dir, f32::INFINITY) {
             // the camera ray follows Dirac chains to the first non-specular vertex (spec §1)
             match follow_dirac_chain(world, hit, dir, Rgb::ONE, self.max_depth, &mut ctx.rng) {
                 Some((Some(z), d, beta)) => {
@@ -467,7 +468,7 @@ impl Integrator for Iws {
                 Some((None, d, beta)) => l.prefix_le = beta * environment(world, d),
                 None => {}
             }
-        } else if self.max_depth > 0 {
+        } else {
             l.prefix_le = environment(world, dir);
         }
         ctx.profile.samples += 1;
@@ -476,7 +477,7 @@ impl Integrator for Iws {
     }
 
     fn prefix_cap(&self) -> u32 {
-        self.max_depth.min(MAX_VERTICES) // as `follow_dirac_chain`
+        self.max_depth.clamp(1, MAX_VERTICES) // as `follow_dirac_chain`; cap 0 as `estimate`
     }
 
     fn stats(&self, profile: &Profile) -> serde_json::Value {

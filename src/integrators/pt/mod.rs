@@ -103,8 +103,10 @@ impl Integrator for PathTracer {
         });
     }
 
+    /// `max_depth` + 1: the estimate reaches the emitter through up to `max_depth` Dirac vertices
+    /// (its last vertex's BSDF ray), and `prefix_emission` counts the emitter as a vertex.
     fn prefix_cap(&self) -> u32 {
-        self.max_depth
+        self.max_depth.saturating_add(1)
     }
 
     fn stats(&self, profile: &Profile) -> serde_json::Value {

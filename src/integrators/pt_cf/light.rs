@@ -26,7 +26,7 @@ use crate::integrators::{Context, LightSplats};
 use crate::math::{Rgb, Vec3};
 use crate::sampling::rng::{stream, Rng};
 use crate::scene::{Camera, Material, NO_EMITTER};
-use crate::transport::particle::{emit, Emission, MAX_VERTICES};
+use crate::transport::particle::{emit, Emission};
 use crate::transport::roulette::{q_particle, roulette};
 use rayon::prelude::*;
 
@@ -270,7 +270,8 @@ impl<'a, P: CameraPdf> Tracer<'a, P> {
         let Some(Start { mut o, mut d, mut beta, density }) = launch(self.world, self.light.emission, &mut rng) else {
             return;
         };
-        for depth in 1..MAX_VERTICES {
+        // the camera side reaches the emitter from at most `max_depth` surface vertices
+        for depth in 1..=self.light.max_depth {
             let Some(hit) = self.world.intersect(o, d, f32::INFINITY) else { return };
             if s.emitter_of(hit.prim) != NO_EMITTER {
                 return; // emitters absorb
@@ -284,7 +285,7 @@ impl<'a, P: CameraPdf> Tracer<'a, P> {
                 if depth == 1 && !m.has_mixed_lobes() {
                     return; // not a path of C
                 }
-                if depth > 1 && depth < self.light.max_depth {
+                if depth > 1 {
                     self.connect(&sp, m, w_in, beta, density, ctx);
                 }
             }

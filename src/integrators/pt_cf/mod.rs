@@ -38,7 +38,6 @@ use crate::sampling::rng::Rng;
 use crate::scene::{Camera, Material, NO_EMITTER};
 use crate::transport::context::ShadingQuery;
 use crate::transport::direct;
-use crate::transport::particle::MAX_VERTICES;
 use light::{CameraPdf, LightSide};
 use std::sync::Arc;
 
@@ -59,6 +58,19 @@ pub struct PtCfArgs {
     // The caustics L S+ (S|D)* D E, MIS-weighted; 0 leaves the camera side alone.
     #[arg(long, value_name = "N")]
     pub light_paths: Option<u64>,
+    /// Vertices whose BSDF is one microfacet lobe alone (roughconductor, roughdielectric) with
+    /// roughness below this are not guided (pt vertices); 0 guides them all.
+    // The tables are lobe-blind: at a narrow lobe their share of the directions is wasted.
+    #[arg(long, value_name = "ALPHA", default_value_t = GUIDE_MIN_ALPHA, value_parser = parse_min_alpha)]
+    pub guide_min_alpha: f32,
+}
+
+/// `--guide-min-alpha`'s default (`results/2026-12-07-glossy-caustics.md`).
+pub const GUIDE_MIN_ALPHA: f32 = 0.15;
+
+fn parse_min_alpha(s: &str) -> Result<f32, String> {
+    let a: f32 = s.trim().parse().map_err(|e| format!("`{s}` is not a number: {e}"))?;
+    (a >= 0.0 && a.is_finite()).then_some(a).ok_or_else(|| format!("{a} is not a roughness >= 0"))
 }
 
 impl PtCfArgs {
@@ -118,6 +130,7 @@ impl MethodSpec for PtCf {
             guided,
             guided_grid,
             guide_depth: if c >= 1.0 { 0 } else { args.cf.table_depth },
+            min_alpha: p.guide_min_alpha,
             split,
             split_s0: args.cf.split,
             cf: g,
@@ -165,6 +178,8 @@ pub struct GuidedPathTracer {
     guided_grid: SubsetGrid,
     /// Guided diffuse depths `d < guide_depth` (0 when `c = 1`: no lookups at all).
     guide_depth: u32,
+    /// `--guide-min-alpha`: single microfacet lobes rougher than this only are guided.
+    min_alpha: f32,
     /// Continuations at a guided vertex of diffuse depth 0, per kept cluster (1 deeper).
     split: Vec<usize>,
     /// `--split` (reported).
@@ -216,6 +231,12 @@ struct Guide {
 }
 
 impl GuidedPathTracer {
+    /// A microfacet lobe alone, narrower than `--guide-min-alpha`: a `pt` vertex.
+    #[inline(always)]
+    fn narrow_lobe(&self, m: &Material) -> bool {
+        m.lobe_alpha().is_some_and(|a| a < self.min_alpha)
+    }
+
     /// The guide at a non-Dirac vertex, or `None` for a `pt` vertex (a pure function of it).
     #[inline(always)]
     fn guide_at(&self, q: &ShadingQuery, ctx: &mut Context) -> Option<Guide> {
@@ -264,7 +285,7 @@ impl GuidedPathTracer {
     #[inline]
     fn camera_weight(&self, world: &World, st: &PathState, hit: &Hit, ctx: &Context) -> f32 {
         match (&self.light, &ctx.camera, st.mis) {
-            (Some(light), Some(cam), Some(ratio)) if st.walk.prev_delta && st.vertex < MAX_VERTICES => {
+            (Some(light), Some(cam), Some(ratio)) if st.walk.prev_delta && st.vertex <= light.max_depth => {
                 light::camera_weight(world, light, cam, hit, st.walk.d, ratio)
             }
             _ => 1.0,
@@ -276,7 +297,7 @@ impl GuidedPathTracer {
     #[inline]
     fn escape_weight(&self, world: &World, st: &PathState, ctx: &Context) -> f32 {
         match (&self.light, &ctx.camera, st.mis) {
-            (Some(light), Some(cam), Some(ratio)) if st.walk.prev_delta && st.vertex < MAX_VERTICES => {
+            (Some(light), Some(cam), Some(ratio)) if st.walk.prev_delta && st.vertex <= light.max_depth => {
                 light::camera_weight_escaped(world, light, cam, (st.walk.o, st.walk.d), ratio)
             }
             _ => 1.0,
@@ -324,7 +345,7 @@ impl GuidedPathTracer {
     /// vertex. (Not a field of `enter`'s result: a `None` then stays out of memory.)
     #[inline(always)]
     fn guide_of(&self, st: &PathState, v: &SurfaceVertex, ctx: &mut Context) -> Option<Guide> {
-        if v.m.is_dirac() {
+        if v.m.is_dirac() || self.narrow_lobe(v.m) {
             return None;
         }
         self.guide_at(&ShadingQuery { x: &v.sp, m: v.m, wo: v.wo, depth: st.diffuse }, ctx)
@@ -334,7 +355,9 @@ impl GuidedPathTracer {
     fn trace(&self, world: &World, mut st: PathState, ctx: &mut Context) -> CameraEstimate {
         let s = &world.scene;
         let mut l = CameraEstimate::default();
-        while st.vertex < self.max_depth {
+        // as `pt`: `max_depth` surface vertices, then the ray the last one drew, for the emitter
+        // it may reach (the other half of that vertex's NEE MIS)
+        loop {
             let Some(hit) = world.intersect(st.walk.o, st.walk.d, f32::INFINITY) else {
                 self.add_escaped(world, &st, ctx, &mut l);
                 break;
@@ -342,6 +365,9 @@ impl GuidedPathTracer {
             if s.emitter_of(hit.prim) != NO_EMITTER {
                 self.add_emitted(world, &st, &hit, ctx, &mut l);
                 break; // emitters reflect nothing
+            }
+            if st.vertex >= self.max_depth {
+                break;
             }
             let (m, sp) = world.shade(&hit, -st.walk.d);
             let v = self.enter(&mut st, &m, sp, &hit);
@@ -407,7 +433,8 @@ impl CameraPdf for GuidedPathTracer {
         depth: u32,
         ctx: &mut Context,
     ) -> f32 {
-        match self.guide_at(&ShadingQuery { x: sp, m, wo, depth }, ctx) {
+        let guide = if self.narrow_lobe(m) { None } else { self.guide_at(&ShadingQuery { x: sp, m, wo, depth }, ctx) };
+        match guide {
             Some(g) => g.n as f32 * DefensiveMixture::new(m, sp, wo, &g.tables, g.frame, g.weights).pdf_w(wi),
             None => bsdf::pdf_w(m, sp, wo, wi),
         }
@@ -458,8 +485,10 @@ impl Integrator for GuidedPathTracer {
         });
     }
 
+    /// `max_depth` + 1: the estimate reaches the emitter through up to `max_depth` Dirac vertices
+    /// (its last vertex's BSDF ray), and `prefix_emission` counts the emitter as a vertex.
     fn prefix_cap(&self) -> u32 {
-        self.max_depth
+        self.max_depth.saturating_add(1)
     }
 
     fn light_tracer(&self) -> Option<&dyn LightTracer> {
@@ -481,6 +510,7 @@ impl Integrator for GuidedPathTracer {
             "guide": {
                 "fraction_bsdf": self.weights.bsdf,
                 "depth": self.guide_depth,
+                "min_alpha": self.min_alpha,
                 "split_s0": self.split_s0,
                 "split_per_cluster": self.split,
                 "lookups": c.queries,

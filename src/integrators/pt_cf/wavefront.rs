@@ -62,7 +62,8 @@ impl GuidedPathTracer {
     ) {
         debug_assert!(self.filter.is_none() && rays.len() == rngs.len());
         cw.wave.start(world, rays, |i| Live { i, st: PathState::camera(rays[i as usize]) }, out);
-        for depth in 0..self.max_depth {
+        // as `trace`: after the last vertex, its BSDF ray only for the emitter it may reach
+        for depth in 0..=self.max_depth {
             if cw.wave.live.is_empty() {
                 break;
             }
@@ -96,6 +97,9 @@ impl GuidedPathTracer {
         if s.emitter_of(hit.prim) != NO_EMITTER {
             self.add_emitted(world, &w.live[k].st, &hit, ctx, &mut out[i as usize]);
             return false; // emitters reflect nothing
+        }
+        if w.live[k].st.vertex >= self.max_depth {
+            return false; // the cap: this ray was traced for the emitter it may reach
         }
         let (m, sp) = world.shade(&hit, -w.live[k].st.walk.d);
         // the state is updated in place, not copied out and back (a copy right after a field's
