@@ -182,3 +182,50 @@ fn tri_t(t: &RtTriangle, ray: &Ray) -> f32 {
     }
     f32::INFINITY
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `node_hits` gives obvhs' `intersect_ray` mask, bit for bit, at every node of a BVH over
+    /// random boxes, for random rays of every octant (axis-parallel and zero components among
+    /// them) and finite and infinite segments.
+    #[test]
+    fn node_test_is_obvhs_node_test() {
+        let mut s = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rnd = move || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (s >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let aabbs: Vec<Aabb> = (0..3000)
+            .map(|_| {
+                let c = Vec3A::new(rnd(), rnd(), rnd()) * 20.0 - 10.0;
+                let h = Vec3A::new(rnd(), rnd(), rnd()) * 0.5;
+                Aabb::new(c - h, c + h)
+            })
+            .collect();
+        let bvh = build::build_cwbvh(&aabbs, BvhBuildParams::medium_build());
+        assert!(bvh.nodes.len() > 100);
+        let mut checked = 0u64;
+        for i in 0..400 {
+            let mut d = Vec3A::new(rnd(), rnd(), rnd()) * 2.0 - 1.0;
+            if i % 7 == 0 {
+                d.x = 0.0;
+            }
+            if i % 11 == 0 {
+                d = Vec3A::new(0.0, 0.0, if i % 2 == 0 { 1.0 } else { -1.0 });
+            }
+            let d = d.normalize();
+            let o = Vec3A::new(rnd(), rnd(), rnd()) * 30.0 - 15.0;
+            let tmax = if i % 3 == 0 { f32::INFINITY } else { rnd() * 30.0 };
+            let ray = Ray::new(o, d, 0.0, tmax);
+            let oct = bvh.new_traversal(ray.direction).oct_inv4;
+            for n in &bvh.nodes {
+                let (ours, theirs) = (node_hits(n, &ray, oct), n.intersect_ray(&ray, oct));
+                assert_eq!(ours, theirs, "ray {i}: {ours:#034b} against {theirs:#034b}");
+                checked += (theirs != 0) as u64;
+            }
+        }
+        assert!(checked > 1000, "only {checked} nodes hit");
+    }
+}
