@@ -3,7 +3,9 @@
 //!
 //! `medium_build`, made robust to coincident primitives in `build`. Triangles are reordered into
 //! BVH slot order as `RtTriangle`s, so traversal needs no indirection; spheres are tested
-//! analytically (`super::sphere_t`) in the traversal callback.
+//! analytically (`super::sphere_t`) in the traversal callback. Traversal is obvhs' `traverse!`
+//! with this module's node test (`node_hits`: the 8 children's slabs in one AVX2 vector where the
+//! build has AVX2, obvhs' own test elsewhere), which gives obvhs' hit masks bit for bit.
 //!
 //! Invariants: the boxes handed in are finite and within `scene::MAX_EXTENT` (`World::build`
 //! checked them: obvhs panics otherwise); queries return `(primitive id as in Scene, t)` with t in
@@ -15,9 +17,11 @@ mod build;
 
 use crate::math::{Vec3, Vec3A};
 use crate::scene::Scene;
+use glam::UVec2;
 use obvhs::aabb::Aabb;
+use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::cwbvh::CwBvh;
-use obvhs::ray::{Ray, RayHit};
+use obvhs::ray::Ray;
 use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle as ObvTriangle;
 use obvhs::BvhBuildParams;
@@ -71,11 +75,19 @@ impl ObvhsBvh {
         }
         // + 0.0 turns −0.0 components into +0.0 (obvhs' node test misreads −0.0)
         let ray = Ray::new(origin.into(), (dir + Vec3::ZERO).into(), 0.0, tmax);
-        let mut hit = RayHit::none();
-        if !self.bvh.ray_traverse(ray, &mut hit, |r, slot| self.prim_t(scene, r, slot)) {
-            return None;
-        }
-        Some((self.slot_prim[hit.primitive_id as usize], hit.t))
+        let bvh = &self.bvh;
+        let mut r = ray;
+        let mut best = u32::MAX;
+        let mut state = bvh.new_traversal(ray.direction);
+        let mut node;
+        obvhs::traverse!(bvh, node, state, node_hits(node, &r, state.oct_inv4), {
+            let t = self.prim_t(scene, &r, state.primitive_id as usize);
+            if t < r.tmax {
+                best = state.primitive_id;
+                r.tmax = t;
+            }
+        });
+        (r.tmax < ray.tmax).then(|| (self.slot_prim[best as usize], r.tmax))
     }
 
     /// True if anything blocks the segment (0, tmax) along unit `dir`.
@@ -85,8 +97,67 @@ impl ObvhsBvh {
             return false;
         }
         let ray = Ray::new(origin.into(), (dir + Vec3::ZERO).into(), 0.0, tmax);
-        !self.bvh.ray_traverse_miss(ray, |r, slot| self.prim_t(scene, r, slot))
+        let bvh = &self.bvh;
+        let mut state = bvh.new_traversal(ray.direction);
+        let mut node;
+        let mut hit = false;
+        'outer: {
+            obvhs::traverse!(bvh, node, state, node_hits(node, &ray, state.oct_inv4), {
+                if self.prim_t(scene, &ray, state.primitive_id as usize) < ray.tmax {
+                    hit = true;
+                    break 'outer;
+                }
+            });
+        }
+        hit
     }
+}
+
+/// obvhs' `CwBvhNode::intersect_ray` (the hit mask of the node's 8 children) with all 8 slab
+/// tests in one AVX2 vector and the mask assembled without branches: per lane the same
+/// operations in the same order as obvhs' two 4-wide halves (multiply, then add; max of x
+/// with max of y, z; the 1e-4 floor; tmin ≤ tmax), so the mask is the same, bit for bit.
+#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+#[inline(always)]
+fn node_hits(n: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
+    use std::arch::x86_64::*;
+    const EPSILON: f32 = 0.0001; // obvhs' node::EPSILON
+    let inv = n.compute_extent() * ray.inv_direction;
+    let org = (Vec3A::from(n.p) - ray.origin) * ray.inv_direction;
+    let (child_bits8, bit_index8) = n.get_child_and_index_bits(oct_inv4);
+    // SAFETY: AVX2 is enabled at compile time (the cfg above); the loads read 8 bytes of [u8; 8].
+    unsafe {
+        let q = |a: &[u8; 8]| _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(a.as_ptr() as *const __m128i)));
+        let slab = |lo: &[u8; 8], hi: &[u8; 8], neg: bool, inv: f32, org: f32| {
+            let (lo, hi) = (q(lo), q(hi));
+            let (near, far) = if neg { (hi, lo) } else { (lo, hi) };
+            let (s, o) = (_mm256_set1_ps(inv), _mm256_set1_ps(org));
+            (_mm256_add_ps(_mm256_mul_ps(near, s), o), _mm256_add_ps(_mm256_mul_ps(far, s), o))
+        };
+        let d = ray.direction;
+        let (x0, x1) = slab(&n.child_min_x, &n.child_max_x, d.x < 0.0, inv.x, org.x);
+        let (y0, y1) = slab(&n.child_min_y, &n.child_max_y, d.y < 0.0, inv.y, org.y);
+        let (z0, z1) = slab(&n.child_min_z, &n.child_max_z, d.z < 0.0, inv.z, org.z);
+        let tmin = _mm256_max_ps(x0, _mm256_max_ps(y0, z0));
+        let tmax = _mm256_min_ps(x1, _mm256_min_ps(y1, z1));
+        let tmin = _mm256_max_ps(tmin, _mm256_set1_ps(EPSILON));
+        let tmax = _mm256_min_ps(tmax, _mm256_set1_ps(ray.tmax));
+        let hit = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax));
+        let bits = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(child_bits8 as i64));
+        let index = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(bit_index8 as i64));
+        let m = _mm256_and_si256(_mm256_sllv_epi32(bits, index), hit);
+        let m = _mm_or_si128(_mm256_castsi256_si128(m), _mm256_extracti128_si256::<1>(m));
+        let m = _mm_or_si128(m, _mm_shuffle_epi32::<0b01_00_11_10>(m));
+        let m = _mm_or_si128(m, _mm_shuffle_epi32::<0b10_11_00_01>(m));
+        _mm_cvtsi128_si32(m) as u32
+    }
+}
+
+/// The portable node test: obvhs' own.
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+#[inline(always)]
+fn node_hits(n: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
+    n.intersect_ray(ray, oct_inv4)
 }
 
 /// Möller–Trumbore on obvhs' precomputed triangle with inclusive edge tests: unlike
@@ -110,4 +181,51 @@ fn tri_t(t: &RtTriangle, ray: &Ray) -> f32 {
         }
     }
     f32::INFINITY
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `node_hits` gives obvhs' `intersect_ray` mask, bit for bit, at every node of a BVH over
+    /// random boxes, for random rays of every octant (axis-parallel and zero components among
+    /// them) and finite and infinite segments.
+    #[test]
+    fn node_test_is_obvhs_node_test() {
+        let mut s = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rnd = move || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (s >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let aabbs: Vec<Aabb> = (0..3000)
+            .map(|_| {
+                let c = Vec3A::new(rnd(), rnd(), rnd()) * 20.0 - 10.0;
+                let h = Vec3A::new(rnd(), rnd(), rnd()) * 0.5;
+                Aabb::new(c - h, c + h)
+            })
+            .collect();
+        let bvh = build::build_cwbvh(&aabbs, BvhBuildParams::medium_build());
+        assert!(bvh.nodes.len() > 100);
+        let mut checked = 0u64;
+        for i in 0..400 {
+            let mut d = Vec3A::new(rnd(), rnd(), rnd()) * 2.0 - 1.0;
+            if i % 7 == 0 {
+                d.x = 0.0;
+            }
+            if i % 11 == 0 {
+                d = Vec3A::new(0.0, 0.0, if i % 2 == 0 { 1.0 } else { -1.0 });
+            }
+            let d = d.normalize();
+            let o = Vec3A::new(rnd(), rnd(), rnd()) * 30.0 - 15.0;
+            let tmax = if i % 3 == 0 { f32::INFINITY } else { rnd() * 30.0 };
+            let ray = Ray::new(o, d, 0.0, tmax);
+            let oct = bvh.new_traversal(ray.direction).oct_inv4;
+            for n in &bvh.nodes {
+                let (ours, theirs) = (node_hits(n, &ray, oct), n.intersect_ray(&ray, oct));
+                assert_eq!(ours, theirs, "ray {i}: {ours:#034b} against {theirs:#034b}");
+                checked += (theirs != 0) as u64;
+            }
+        }
+        assert!(checked > 1000, "only {checked} nodes hit");
+    }
 }
