@@ -26,7 +26,7 @@ use crate::cf::estimator::{CausticForecast, ForecastOptions, PreprocessStats, Sp
 use crate::cf::subset_grid::SubsetGrid;
 use crate::math::{Rgb, Vec3};
 use crate::profile::{CfCounts, Profile};
-use crate::progress::{Hidden, Phases};
+use crate::progress::{Muted, Phases};
 use crate::sampling::rng::stream;
 use crate::transport::particle::{self, Emission, MAX_VERTICES};
 use crate::transport::target::Targets;
@@ -198,7 +198,7 @@ pub fn trace_forecasters(
     emission: Emission,
     target: u64,
     seed: u64,
-    stored: &dyn Fn(u64),
+    stored: &dyn Fn(u64) -> bool,
 ) -> (Vec<CausticPoint>, u64, f64) {
     let t0 = Instant::now();
     let (verts, paths) = particle::collect_caustic_points(world, emission, target, seed, stream::FORECAST, stored);
@@ -219,7 +219,8 @@ pub fn preprocess_forecast(world: &World, args: &MethodArgs, seed: u64, phases: 
         (None, Some(t)) if t.is_finite() && t > 0.0 && cap > PILOT_PHOTONS => {
             let phase = phases.phase("pilot", None);
             let t0 = Instant::now();
-            let pilot = build_forecast(world, PILOT_PHOTONS, args.forecast_options(), seed ^ 0x0050_494c_4f54, &Hidden);
+            let pilot =
+                build_forecast(world, PILOT_PHOTONS, args.forecast_options(), seed ^ 0x0050_494c_4f54, &Muted(phases));
             let cost = t0.elapsed().as_secs_f64() / pilot.stats.stored.max(1) as f64;
             phase.finish();
             let want = (PREPROCESS_SHARE * t / cost.max(1e-12)).max(MIN_BUDGET_PHOTONS as f64);
@@ -251,7 +252,10 @@ pub fn build_forecast(
 ) -> CausticForecast {
     let emission = targeted_emission(world);
     let tracing = phases.phase("tracing forecast photons", Some(target));
-    let (points, paths, tracing_s) = trace_forecasters(world, emission, target, seed, &|n| tracing.set(n));
+    let (points, paths, tracing_s) = trace_forecasters(world, emission, target, seed, &|n| {
+        tracing.set(n);
+        !phases.stop()
+    });
     tracing.finish();
     let stats = PreprocessStats {
         paths,
