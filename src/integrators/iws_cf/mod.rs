@@ -30,7 +30,7 @@ use crate::progress::{Muted, Phases};
 use crate::sampling::rng::stream;
 use crate::transport::particle::{self, Emission, MAX_VERTICES};
 use crate::transport::target::Targets;
-use share::caustic_shares;
+use share::caustic_shares_until;
 use std::time::Instant;
 
 /// Default forecast photons to store when neither the CLI nor the scene sets it (the paper's
@@ -232,7 +232,7 @@ pub fn preprocess_forecast(world: &World, args: &MethodArgs, seed: u64, phases: 
     let mut cf = build_forecast(world, n, args.forecast_options(), seed, phases);
     let t0 = Instant::now();
     let phase = phases.phase("caustic shares", None);
-    cf.shares = caustic_shares(world, &cf, args.settings.cap(), seed);
+    cf.shares = caustic_shares_until(world, &cf, args.settings.cap(), seed, &|| phases.stop());
     phase.finish();
     cf.stats.shares_s = t0.elapsed().as_secs_f64();
     cf.stats.photons_requested = n;
