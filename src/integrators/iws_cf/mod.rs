@@ -99,7 +99,11 @@ pub enum Variant {
 pub const PREPROCESS_SHARE: f64 = 0.05;
 /// Stored photons of the pilot run that measures the preprocess cost per photon.
 pub const PILOT_PHOTONS: u64 = 5_000;
-/// Fewest photons the budget rule picks (the tables need some forecasters to be useful).
+/// The pilot's stored photons per second of budget (between a tenth of [`PILOT_PHOTONS`] and all).
+pub const PILOT_PHOTONS_PER_S: f64 = 100.0;
+/// Fewest photons the budget rule picks (the tables need some forecasters to be useful), as long
+/// as they cost at most 4× [`PREPROCESS_SHARE`] of the budget (a budget of a few seconds gets
+/// fewer: every phase stays inside `--time`, `pipeline::budget`).
 pub const MIN_BUDGET_PHOTONS: u64 = 10_000;
 
 /// `--table-cache F`: a finite F ≥ 0 (NaN, negative and infinite cells are refused).
@@ -208,7 +212,8 @@ pub fn trace_forecasters(
 
 /// The CF preprocess of a run (used by every CF method): the photon count is `--forecast-photons`
 /// as given; else, with a time budget `T`, `min(cap, 0.05·T / cost)` where `cost` is the seconds
-/// per stored photon of a [`PILOT_PHOTONS`] pilot preprocess and `cap` the scene's (or default)
+/// per stored photon of a [`PILOT_PHOTONS`] pilot preprocess (with the lookup grid the
+/// integrator builds from the product) and `cap` the scene's (or default)
 /// count; else the scene's count. Any count leaves the image unbiased (the tables are a pdf).
 /// The rule and the pilot's cost go into `stats`. Phases: "pilot" (its own phases hidden), then
 /// those of [`build_forecast`], then "caustic shares" (`share::caustic_shares`).
@@ -219,11 +224,17 @@ pub fn preprocess_forecast(world: &World, args: &MethodArgs, seed: u64, phases: 
         (None, Some(t)) if t.is_finite() && t > 0.0 && cap > PILOT_PHOTONS => {
             let phase = phases.phase("pilot", None);
             let t0 = Instant::now();
-            let pilot =
-                build_forecast(world, PILOT_PHOTONS, args.forecast_options(), seed ^ 0x0050_494c_4f54, &Muted(phases));
+            // a short budget gets a smaller pilot (its clustering and grid cost with the photons)
+            let m = ((PILOT_PHOTONS_PER_S * t) as u64).clamp(PILOT_PHOTONS / 10, PILOT_PHOTONS);
+            let pilot = build_forecast(world, m, args.forecast_options(), seed ^ 0x0050_494c_4f54, &Muted(phases));
+            // the integrators' lookup grid over the kept clusters, built from the product after
+            // the broadcast, grows with the photons too: its cost is part of theirs
+            let _grid = pilot.kept_grid();
             let cost = t0.elapsed().as_secs_f64() / pilot.stats.stored.max(1) as f64;
             phase.finish();
-            let want = (PREPROCESS_SHARE * t / cost.max(1e-12)).max(MIN_BUDGET_PHOTONS as f64);
+            // the floor only while it costs at most 4 shares (a short budget gets fewer)
+            let want = PREPROCESS_SHARE * t / cost.max(1e-12);
+            let want = want.max((MIN_BUDGET_PHOTONS as f64).min(4.0 * want));
             ((want as u64).min(cap), "budget", cost)
         }
         (None, _) if world.scene.forecast_photons.is_some() => (cap, "scene", 0.0),
