@@ -24,9 +24,10 @@ pub const PROBE_SHARE: f64 = 0.10;
 pub const PREPROCESS_SHARE: f64 = 0.30;
 /// `pt-cf`'s light-path pilot's share of the budget left when it starts.
 pub const PILOT_SHARE: f64 = 0.10;
-/// Seconds reserved per pixel for writing `PREFIX.{exr,png,json}` (and a checkpoint), measured
-/// with margin on the 2-core machine of `results/2026-12-07-time-boxes.md`.
-pub const WRITE_S_PER_PIXEL: f64 = 1.5e-7;
+/// Seconds reserved per pixel for writing `PREFIX.{exr,png,json}` (and a checkpoint): the EXR
+/// and PNG of a 2048² image took 3.6–4.6 s of wall time (0.85–1.1 µs per pixel) on the shared
+/// 2-core machine of `results/2026-12-07-time-boxes.md`.
+pub const WRITE_S_PER_PIXEL: f64 = 1.0e-6;
 /// The least write reserve (seconds).
 pub const WRITE_MIN_S: f64 = 0.02;
 

@@ -16,8 +16,9 @@
 //! differ (the light seen through glass along some Fresnel choices only) mark it.
 //!
 //! Invariants: `L̂` is unbiased for any `K` (the contract on `E` is `transport::dirac`'s); the
-//! split set is a pure function of the scene, the camera, the resolution and the cap, never of
-//! the samples, so it cannot bias (a pixel it misses, an edge thinner than `1/m` pixel, is merely
+//! split set is a pure function of the scene, the camera, the resolution and the cap (and, when
+//! the probe runs against a time box's share, of how many bands it finished: the rest are not
+//! split), never of the samples, so it cannot bias (a pixel it misses, an edge thinner than `1/m` pixel, is merely
 //! not split); `K = 1` draws exactly the random numbers of the plain sampler and traces no probe.
 //! Measurements: `results/CONCLUSIONS.md`, "Emission splitting and its probe".
 
