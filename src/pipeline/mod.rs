@@ -220,8 +220,8 @@ impl Plan {
         match self.args.ptcf.light_paths {
             Some(n) if self.method == Method::PtCf && n > most => {
                 return Err(format!(
-                    "--light-paths {n}: at most {most} per pass at {w}x{h} ({} per pixel, at least {}): one pass \
-                     would take about {} camera passes, outlasting time boxes and signals",
+                    "--light-paths {n}: at most {most} per pass at {w}x{h} ({} per pixel, at least {}); {} per \
+                     pixel would make one pass outlast time boxes and signals",
                     crate::integrators::pt_cf::light::MAX_PATHS_PER_PIXEL,
                     crate::integrators::pt_cf::light::MAX_PATHS_FLOOR,
                     n / (w as u64 * h as u64).max(1)
