@@ -99,7 +99,10 @@ pub enum Variant {
 pub const PREPROCESS_SHARE: f64 = 0.05;
 /// Stored photons of the pilot run that measures the preprocess cost per photon.
 pub const PILOT_PHOTONS: u64 = 5_000;
-/// The pilot's stored photons per second of budget (between a tenth of [`PILOT_PHOTONS`] and all).
+/// The fewest photons of any budget (and the least pilot's).
+pub const LEAST_BUDGET_PHOTONS: u64 = PILOT_PHOTONS / 10;
+/// The pilot's stored photons per second of budget (between [`LEAST_BUDGET_PHOTONS`] and
+/// [`PILOT_PHOTONS`]).
 pub const PILOT_PHOTONS_PER_S: f64 = 100.0;
 /// Fewest photons the budget rule picks (the tables need some forecasters to be useful), as long
 /// as they cost at most 4× [`PREPROCESS_SHARE`] of the budget (a budget of a few seconds gets
@@ -225,16 +228,17 @@ pub fn preprocess_forecast(world: &World, args: &MethodArgs, seed: u64, phases: 
             let phase = phases.phase("pilot", None);
             let t0 = Instant::now();
             // a short budget gets a smaller pilot (its clustering and grid cost with the photons)
-            let m = ((PILOT_PHOTONS_PER_S * t) as u64).clamp(PILOT_PHOTONS / 10, PILOT_PHOTONS);
+            let m = ((PILOT_PHOTONS_PER_S * t) as u64).clamp(LEAST_BUDGET_PHOTONS, PILOT_PHOTONS);
             let pilot = build_forecast(world, m, args.forecast_options(), seed ^ 0x0050_494c_4f54, &Muted(phases));
             // the integrators' lookup grid over the kept clusters, built from the product after
             // the broadcast, grows with the photons too: its cost is part of theirs
             let _grid = pilot.kept_grid();
             let cost = t0.elapsed().as_secs_f64() / pilot.stats.stored.max(1) as f64;
             phase.finish();
-            // the floor only while it costs at most 4 shares (a short budget gets fewer)
+            // the floor only while it costs at most 4 shares (a short budget gets fewer, but never
+            // fewer than the least pilot)
             let want = PREPROCESS_SHARE * t / cost.max(1e-12);
-            let want = want.max((MIN_BUDGET_PHOTONS as f64).min(4.0 * want));
+            let want = want.max((MIN_BUDGET_PHOTONS as f64).min(4.0 * want)).max(LEAST_BUDGET_PHOTONS as f64);
             ((want as u64).min(cap), "budget", cost)
         }
         (None, _) if world.scene.forecast_photons.is_some() => (cap, "scene", 0.0),
