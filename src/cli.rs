@@ -323,7 +323,7 @@ pub struct RenderArgs {
     /// time, else 16).
     #[arg(long, value_name = "N", conflicts_with = "time", help_heading = RENDER_SETTINGS)]
     pub spp: Option<u64>,
-    /// Time budget, preprocess included (e.g. 30s, 4m); whole passes only.
+    /// Time budget, every phase included (loading to writing; e.g. 30s, 4m); whole passes only; too short for loading and writing: refused with the time needed.
     #[arg(long, value_name = "DURATION", value_parser = parse_secs, help_heading = RENDER_SETTINGS)]
     pub time: Option<f64>,
     /// Image size (default: the scene camera's).

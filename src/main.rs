@@ -369,7 +369,7 @@ fn forecast_map(a: &forecast::cli::ForecastMapArgs, opts: &forecast::scene::Load
                 n,
                 seed,
                 forecast::sampling::rng::stream::FORECAST,
-                &|_| {},
+                &|_| true,
             );
             (pts.len() as u64, paths)
         });

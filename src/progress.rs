@@ -92,9 +92,16 @@ impl Progress {
 
 /// Where the preprocess reports its phases (tracing, clustering, maps, photon map, pilot). It is
 /// passed down explicitly from the pipeline; an implementation only displays or records, so the
-/// product and every random stream are the same whichever one is passed (or [`Hidden`]).
+/// product and every random stream are the same whichever one is passed (or [`Hidden`]), except
+/// that it may also say when to [`Phases::stop`] (a time box's share or a signal): a phase that
+/// polls it then ends early with what it has (fewer photons, all traced from the same streams).
 /// Phases run one at a time: `begin`, any number of `advance`, then `end`.
 pub trait Phases: Sync {
+    /// True once the running phases should end early (their deadline or a signal); by default
+    /// never.
+    fn stop(&self) -> bool {
+        false
+    }
     /// A phase starts: its name and, where known, the count it runs to (e.g. photons requested).
     fn begin(&self, name: &'static str, total: Option<u64>);
     /// The current phase has reached `done` (e.g. photons stored so far).
@@ -135,6 +142,18 @@ impl Drop for PhaseGuard<'_> {
 /// Reports nothing (library callers, tests, the pilot's inner phases).
 pub struct Hidden;
 
+/// Reports nothing but stops when the wrapped reporter does (a pilot's inner phases).
+pub struct Muted<'a>(pub &'a dyn Phases);
+
+impl Phases for Muted<'_> {
+    fn stop(&self) -> bool {
+        self.0.stop()
+    }
+    fn begin(&self, _: &'static str, _: Option<u64>) {}
+    fn advance(&self, _: u64) {}
+    fn end(&self) {}
+}
+
 impl Phases for Hidden {
     fn begin(&self, _: &'static str, _: Option<u64>) {}
     fn advance(&self, _: u64) {}
@@ -148,12 +167,19 @@ impl Phases for Hidden {
 pub struct PhaseBar {
     visible: bool,
     bar: Mutex<Option<ProgressBar>>,
+    /// When the phases must end early (`Phases::stop`).
+    stop: crate::interrupt::Stop,
 }
 
 impl PhaseBar {
     /// A reporter that draws only when `visible` (and stderr is a terminal).
     pub fn new(visible: bool) -> PhaseBar {
-        PhaseBar { visible, bar: Mutex::new(None) }
+        PhaseBar { visible, bar: Mutex::new(None), stop: crate::interrupt::Stop::never() }
+    }
+
+    /// This reporter, whose phases stop at `stop` (a signal or the time box's deadline).
+    pub fn with_stop(self, stop: crate::interrupt::Stop) -> PhaseBar {
+        PhaseBar { stop, ..self }
     }
 
     fn current(&self) -> std::sync::MutexGuard<'_, Option<ProgressBar>> {
@@ -162,6 +188,10 @@ impl PhaseBar {
 }
 
 impl Phases for PhaseBar {
+    fn stop(&self) -> bool {
+        self.stop.is_due()
+    }
+
     fn begin(&self, name: &'static str, total: Option<u64>) {
         let target = ProgressDrawTarget::stderr();
         if !self.visible || target.is_hidden() {

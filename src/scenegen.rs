@@ -319,6 +319,44 @@ pub fn figurines_objs() -> Vec<(String, String)> {
     ]
 }
 
+/// Water grid: cells per side, side length (m), mean height and wave amplitude (m).
+const WATER_CELLS: usize = 256;
+const WATER_SIDE: f64 = 2.0;
+const WATER_Y: f64 = 0.5;
+const WATER_AMP: f64 = 0.012;
+
+/// The water surface's height at `(x, z)`: a sum of four fixed sine waves.
+fn water_height(x: f64, z: f64) -> f64 {
+    let waves = [(7.0, 3.0, 0.0, 1.0), (-4.0, 9.0, 1.3, 0.6), (11.0, -6.0, 2.1, 0.4), (2.0, 15.0, 0.7, 0.25)];
+    WATER_Y + WATER_AMP * waves.iter().map(|&(kx, kz, ph, a)| a * (kx * x + kz * z + ph).sin()).sum::<f64>()
+}
+
+fn water_mesh() -> Mesh {
+    let n = WATER_CELLS;
+    let mut m = Mesh::default();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, z) = (WATER_SIDE * (i as f64 / n as f64 - 0.5), WATER_SIDE * (j as f64 / n as f64 - 0.5));
+            m.vert([x, water_height(x, z), z]);
+        }
+    }
+    let at = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    for j in 0..n {
+        for i in 0..n {
+            // (x, z) winding seen from +y: normals up
+            m.quad(at(i, j), at(i, j + 1), at(i + 1, j + 1), at(i + 1, j));
+        }
+    }
+    m.area_weighted_normals();
+    m
+}
+
+/// The `water-caustic` stress scene's water surface (OBJ text): a 2 × 2 m height field of
+/// 131,072 smooth triangles (66,049 vertices, 5 decimals), normals up.
+pub fn water_obj() -> String {
+    water_mesh().to_obj("water", 5)
+}
+
 /// Writes `contents` to `path` via `path.tmp` and a rename.
 fn write_atomic(path: &Path, contents: &str) -> std::io::Result<()> {
     let mut tmp = path.as_os_str().to_owned();
@@ -328,7 +366,7 @@ fn write_atomic(path: &Path, contents: &str) -> std::io::Result<()> {
     std::fs::rename(&tmp, path)
 }
 
-/// Writes `ring.obj` and `figurines/*.obj` under `scenes_dir` (creating `figurines/`), each
+/// Writes `ring.obj`, `water.obj` and `figurines/*.obj` under `scenes_dir` (creating `figurines/`), each
 /// atomically (`path.tmp`, then rename); returns the paths written.
 pub fn write_all(scenes_dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     let mut written = Vec::new();
@@ -336,6 +374,9 @@ pub fn write_all(scenes_dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     let ring = scenes_dir.join("ring.obj");
     write_atomic(&ring, &ring_obj())?;
     written.push(ring);
+    let water = scenes_dir.join("water.obj");
+    write_atomic(&water, &water_obj())?;
+    written.push(water);
     for (name, text) in figurines_objs() {
         let p = scenes_dir.join("figurines").join(name);
         write_atomic(&p, &text)?;

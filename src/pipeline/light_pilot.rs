@@ -43,6 +43,7 @@ use super::Plan;
 use crate::accel::World;
 use crate::distributed::Cluster;
 use crate::integrators::{Integrator, Method, MethodArgs, MethodError};
+use crate::interrupt::Stop;
 use crate::math::luminance;
 use crate::render::{camera_tiles, tile_pixels, with_splat, PassCounters, PixelSampler};
 
@@ -57,6 +58,11 @@ pub const PILOT_PASS_BASE: u64 = 1 << 62;
 /// `figurines`, ½–1 on `ring`, 1 on the SMS ring), by factors of 2. Never 0, which would drop
 /// the point-light caustics that only the light side renders.
 pub const CANDIDATES: [f64; 5] = [0.125, 0.25, 0.5, 1.0, 2.0];
+
+/// The least share of a time box (seconds) worth a pilot: below it the pilot is skipped and the
+/// render takes the default count (the pilot's own integrator build alone takes a few tenths of
+/// a second on `cornell-box`).
+pub const PILOT_MIN_S: f64 = 1.0;
 
 /// The pilot image is cut into `SIDE × SIDE` blocks (regions) whose efficiencies the score
 /// weighs alike.
@@ -190,12 +196,15 @@ pub fn broadcast_count(
 
 /// Runs the pilot for a `pt-cf` render of `resolution` from the broadcast `product` and returns
 /// the rule's choice; `None` when the render has no light side (no light or Dirac object, or a
-/// `--path-filter`), whose count then does not matter. Runs on the current rayon pool.
+/// `--path-filter`), whose count then does not matter, or when `stop` came first (its share of
+/// the time box, a signal): the render then takes the default count
+/// (`pt_cf::light::default_paths`). Runs on the current rayon pool.
 pub fn choose(
     world: &World,
     args: &MethodArgs,
     (seed, resolution): (u64, (u32, u32)),
     product: &[u8],
+    stop: &Stop,
 ) -> Result<Option<LightPathRule>, MethodError> {
     let (pw, ph) = pilot_resolution(resolution.0, resolution.1);
     let px = pw as f64 * ph as f64;
@@ -204,7 +213,7 @@ pub fn choose(
     pilot_args.ptcf.light_paths = Some(paths(CANDIDATES[0]));
     let mut integrator = Method::PtCf.build(world, &pilot_args, product)?;
     let camera = world.scene.camera.with_resolution(pw, ph);
-    let pixels = PixelSampler::new(world, &camera, args.emission_split(), integrator.prefix_cap())
+    let pixels = PixelSampler::new_until(world, &camera, args.emission_split(), integrator.prefix_cap(), stop)
         .with_sampler(args.settings.sampler);
     let measured: Option<Vec<Measured>> = CANDIDATES
         .iter()
@@ -212,7 +221,7 @@ pub fn choose(
             if let Some(light) = integrator.light_tracer_mut() {
                 light.set_light_paths(paths(nu));
             }
-            measure(world, integrator.as_mut(), &pixels, seed, nu)
+            measure(world, integrator.as_mut(), &pixels, seed, nu, stop)
         })
         .collect();
     let Some(measured) = measured else { return Ok(None) };
@@ -246,12 +255,16 @@ fn measure(
     pixels: &PixelSampler,
     seed: u64,
     nu: f64,
+    stop: &Stop,
 ) -> Option<Measured> {
     let (w, h) = pixels.resolution();
     let (w, h) = (w as usize, h as usize);
     let mut m = Moments(vec![(0.0, 0.0); w * h]);
     let (mut rays, mut scratch) = (0u64, PassCounters::default());
     for i in 0..PILOT_PASSES {
+        if stop.is_due() {
+            return None;
+        }
         let pass = PILOT_PASS_BASE + i;
         integrator.begin_pass(world, seed, pass);
         let splats = integrator.light_tracer()?.light_splats(world, pixels.camera(), seed, pass);

@@ -31,11 +31,11 @@ use crate::distributed::{self, Cluster};
 use crate::image_io::{with_ext, Image};
 use crate::integrators::{Integrator, Method, MethodArgs, MethodChoice};
 use crate::param_limits as params;
-use crate::progress::PhaseBar;
 use crate::render::film::Film;
 use crate::render::PassCounters;
 use crate::scene::Scene;
 
+pub mod budget;
 mod checkpoints;
 mod identity;
 mod light_pilot;
@@ -56,6 +56,7 @@ mod error;
 pub use error::RenderError;
 pub use snapshots::{check_snapshots, snapshot_label, snapshot_prefix, SnapshotReport};
 
+use budget::Budget;
 use memory::local_ranks;
 use preprocess::preprocess;
 use std::path::PathBuf;
@@ -214,6 +215,21 @@ impl Plan {
             params::check_time(t).map_err(|m| format!("--time: {m}"))?;
         }
         self.args.check_for(self.method)?;
+        let (w, h) = self.resolution;
+        let most = crate::integrators::pt_cf::light::max_paths(w, h);
+        match self.args.ptcf.light_paths {
+            Some(n) if self.method == Method::PtCf && n > most => {
+                return Err(format!(
+                    "--light-paths {n}: at most {most} per pass at {w}x{h} ({} per pixel, at least {}); {} per \
+                     pixel would make one pass outlast time boxes and signals",
+                    crate::integrators::pt_cf::light::MAX_PATHS_PER_PIXEL,
+                    crate::integrators::pt_cf::light::MAX_PATHS_FLOOR,
+                    n / (w as u64 * h as u64).max(1)
+                )
+                .into())
+            }
+            _ => {}
+        }
         Ok(self.args.validate()?)
     }
 }
@@ -236,6 +252,9 @@ impl Drop for Disarm<'_> {
 pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Result<Option<RenderResult>, RenderError> {
     // the watchdog holds the setup to `--time` (the shared deadline re-arms it with the plan's)
     let _disarm = Disarm(cluster);
+    // one process with nothing finished yet: a signal exits at once (`interrupt`); under MPI the
+    // ranks leave together at the next agreement instead
+    job.interrupt.nothing_to_save(cluster.size() == 1);
     if let Some(at) =
         job.time.and_then(|t| std::time::Duration::try_from_secs_f64(t).ok()).and_then(|d| started.checked_add(d))
     {
@@ -245,9 +264,16 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
         .map_err(RenderError::from)
         .and_then(|()| Ok((thread_pool(job.threads)?, load(job, cluster.rank())?)));
     let (pool, (world, mut plan, mut timings)) = distributed::agree(cluster, setup)?;
+    // every phase runs inside the time box (`budget`): loading and the BVH are measured, the
+    // write is reserved, and a budget they alone use up is refused before any other work
+    let reserve = budget::write_reserve_s(plan.resolution, job.checkpoint_every.is_some());
+    let mut budget = Budget::new(started, plan.time, reserve, &job.interrupt);
+    budget.record("load", timings.load_s, None, false);
+    budget.record("bvh", timings.bvh_s, None, false);
+    distributed::agree(cluster, budget.check_minimal().map_err(RenderError::from))?;
     distributed::job::agree_job(cluster, &job_fields(job, &world.scene, &plan))?;
-    let deadline = distributed::shared_deadline(cluster, started, plan.time);
-    let mut pre = preprocess(&world, &mut plan, cluster, &PhaseBar::new(job.progress && cluster.rank() == 0))?;
+    let deadline = distributed::shared_deadline(cluster, started, budget.passes_budget());
+    let mut pre = preprocess(&world, &mut plan, cluster, job.progress && cluster.rank() == 0, &mut budget)?;
     timings.preprocess_s = pre.stats.preprocess_s;
     timings.broadcast_s = pre.stats.broadcast_s;
     let over_budget = preprocess_over_budget(&plan, &timings, started, cluster.rank());
@@ -265,13 +291,19 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
         preprocess_s,
         light_path_rule,
     };
-    let mut passes = run_passes(&run, pre.integrator.as_mut(), deadline)?;
+    let (probe_stop, probe_allowed) = budget.stop_for(budget::PROBE_SHARE);
+    let mut passes = run_passes(&run, pre.integrator.as_mut(), deadline, &probe_stop)?;
+    let split = passes.pixel_sampler;
+    if split.emission_split > 1 {
+        budget.record("probe", split.probe_s, probe_allowed, split.probe_stopped);
+    }
+    budget.record("passes", passes.render_s, budget.passes_budget().map(|t| (t - secs(started)).max(0.0)), false);
     passes.preprocess_over_budget = over_budget.is_some();
     passes.warnings.splice(0..0, over_budget);
     timings.render_s = passes.render_s;
     let outcome =
         reduce(&run, &passes, &pre.stats, &mut timings).map_err(RenderError::from).and_then(|reduced| match reduced {
-            Some(r) => finish(&run, &mut passes, r, timings, pre.integrator.as_ref()).map(Some),
+            Some(r) => finish(&run, &mut passes, r, (timings, budget), pre.integrator.as_ref()).map(Some),
             None => Ok(None),
         });
     // rank 0's write failing must end every rank with the error too
@@ -285,7 +317,7 @@ fn finish(
     run: &Run,
     passes: &mut Passes,
     reduced: Reduced,
-    mut timings: Timings,
+    (mut timings, mut budget): (Timings, Budget),
     integrator: &dyn Integrator,
 ) -> Result<RenderResult, RenderError> {
     let t_write = Instant::now();
@@ -303,9 +335,14 @@ fn finish(
     let image = image_files(&run.job.out, &reduced.film, &mut outputs)?;
     timings.write_s = secs(t_write);
     timings.total_s = secs(run.started);
+    // the JSON's own write follows: the phase is the checkpoint and the images' encoding
+    let write_allowed =
+        budget.passes_budget().and(run.plan.time).map(|t| (t - timings.total_s + timings.write_s).max(0.0));
+    budget.record("write", timings.reduce_s + timings.write_s, write_allowed, false);
     let stats = integrator.stats(&passes.counters.profile);
     // a signal's render is not complete; a time box reached is
-    let report = run.report(passes, reduced.parts, timings, stats, &image, !passes.interrupted);
+    let mut report = run.report(passes, reduced.parts, timings, stats, &image, !passes.interrupted);
+    report.phases = budget.phases;
     let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
     outputs.add(with_ext(&run.job.out, "json"), text.into_bytes());
     outputs.write()?;
@@ -507,6 +544,7 @@ impl Run<'_> {
             complete,
             interrupted: p.interrupted,
             image_mean: image.mean(),
+            phases: Vec::new(),
         }
     }
 }

@@ -52,14 +52,21 @@ impl Passes {
 
 /// Stage 4: rounds of interleaved passes until the spp or the time box is reached, with
 /// checkpoints at round boundaries.
-pub(super) fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: Deadline) -> Result<Passes, String> {
+/// The probe ends at `probe` (its share of the budget, or a signal).
+pub(super) fn run_passes(
+    run: &Run,
+    integrator: &mut dyn Integrator,
+    deadline: Deadline,
+    probe: &crate::interrupt::Stop,
+) -> Result<Passes, String> {
     let (rank, size) = (run.cluster.rank() as u64, run.cluster.size() as u64);
     let (first_pass, total) = (run.resumed.first_pass, run.plan.spp.map(|s| s.max(run.resumed.first_pass)));
     let (w, h) = run.plan.resolution;
     let camera = run.world.scene.camera.with_resolution(w, h);
     let (k, cap) = (run.plan.args.emission_split(), integrator.prefix_cap());
-    let pixels =
-        run.pool.install(|| PixelSampler::new(run.world, &camera, k, cap).with_sampler(run.plan.args.settings.sampler));
+    let pixels = run.pool.install(|| {
+        PixelSampler::new_until(run.world, &camera, k, cap, probe).with_sampler(run.plan.args.settings.sampler)
+    });
     let progress =
         Progress::new(run.job.progress && rank == 0, total.map(|t| t - first_pass), run.plan.time, run.started);
     let mut p = Passes::new(run, first_pass, pixels.stats());
@@ -95,6 +102,8 @@ pub(super) fn run_passes(run: &Run, integrator: &mut dyn Integrator, deadline: D
             p.my_passes += mine.len() as u64;
         }
         round_start += g * size;
+        // a round is done: a signal now saves it (`interrupt`)
+        run.job.interrupt.nothing_to_save(false);
         p.passes_done = total.map_or(round_start, |t| round_start.min(t));
         let rays = p.counters.closest_rays + p.counters.shadow_rays;
         progress.update(p.passes_done - first_pass, p.passes_done, secs(t_render), secs(run.started), rays * size);

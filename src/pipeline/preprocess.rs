@@ -5,6 +5,7 @@
 //! Invariant: every rank leaves together when rank 0 fails (`distributed::agree` before each
 //! collective), so none waits in a broadcast.
 
+use super::budget::{Budget, PILOT_SHARE, PREPROCESS_SHARE};
 use super::light_pilot::{self, LightPathRule};
 use super::{secs, Plan, RankStats, RenderError};
 use crate::accel::World;
@@ -25,21 +26,42 @@ pub(super) struct Prepared {
 /// `light_pilot`), broadcast to the others; every rank builds its integrator from the same
 /// bytes and the same light-path count, which `plan` then records. Its phases are shown under
 /// the render bar's rules.
+/// Each part runs inside its share of the budget (`budget::PREPROCESS_SHARE`, `PILOT_SHARE`) and
+/// ends early there or at a signal (fewer photons; the pilot cut short leaves the default count).
 pub(super) fn preprocess(
     world: &World,
     plan: &mut Plan,
     cluster: &dyn Cluster,
-    phases: &PhaseBar,
+    visible: bool,
+    budget: &mut Budget,
 ) -> Result<Prepared, RenderError> {
     let t_pre = Instant::now();
     let pilot = light_pilot::wanted(plan);
-    let run = || -> Result<(Vec<u8>, Option<LightPathRule>), RenderError> {
-        let product = plan.method.preprocess_reporting(world, &plan.args, plan.seed, phases)?;
-        let rule =
-            if pilot { light_pilot::choose(world, &plan.args, (plan.seed, plan.resolution), &product)? } else { None };
-        Ok((product, rule))
+    let pre = if cluster.rank() == 0 {
+        let (stop, allowed) = budget.stop_for(PREPROCESS_SHARE);
+        let phases = PhaseBar::new(visible).with_stop(stop.clone());
+        let product = plan.method.preprocess_reporting(world, &plan.args, plan.seed, &phases);
+        budget.record("preprocess", secs(t_pre), allowed, stop.is_due());
+        let t_pilot = Instant::now();
+        let (stop, allowed) = budget.stop_for(PILOT_SHARE);
+        let skip = allowed.is_some_and(|a| a < light_pilot::PILOT_MIN_S);
+        let rule = match product {
+            Ok(product) if pilot && skip => Ok((product, None)),
+            Ok(product) if pilot => {
+                light_pilot::choose(world, &plan.args, (plan.seed, plan.resolution), &product, &stop)
+                    .map(|rule| (product, rule))
+                    .map_err(RenderError::from)
+            }
+            Ok(product) => Ok((product, None)),
+            Err(e) => Err(e.into()),
+        };
+        if pilot {
+            budget.record("light pilot", secs(t_pilot), allowed, skip || stop.is_due());
+        }
+        rule
+    } else {
+        Ok((Vec::new(), None))
     };
-    let pre = if cluster.rank() == 0 { run() } else { Ok((Vec::new(), None)) };
     let preprocess_s = secs(t_pre);
     // every rank must leave together when rank 0 fails, or the others wait in the broadcast
     let (mut product, light_path_rule) = distributed::agree(cluster, pre)?;
@@ -56,6 +78,9 @@ pub(super) fn preprocess(
         product_hash: crate::checkpoint::checksum(&product),
         ..RankStats::default()
     };
+    let t_build = Instant::now();
     let integrator = plan.method.build(world, &plan.args, &product)?;
+    // the integrator's build (its lookup grids) cannot be cut: a minimal phase
+    budget.record("build", secs(t_build), None, false);
     Ok(Prepared { integrator, stats, light_path_rule })
 }

@@ -129,6 +129,8 @@ pub struct RenderReport {
     pub interrupted: bool,
     /// Mean of the image, per channel.
     pub image_mean: [f64; 3],
+    /// Every phase's wall seconds and share of the `--time` budget, in order (`pipeline::budget`).
+    pub phases: Vec<super::budget::PhaseTime>,
 }
 
 /// The warning of a render whose every sample is exactly 0 (the film's radiance sums are all

@@ -16,14 +16,16 @@
 //! differ (the light seen through glass along some Fresnel choices only) mark it.
 //!
 //! Invariants: `L̂` is unbiased for any `K` (the contract on `E` is `transport::dirac`'s); the
-//! split set is a pure function of the scene, the camera, the resolution and the cap, never of
-//! the samples, so it cannot bias (a pixel it misses, an edge thinner than `1/m` pixel, is merely
+//! split set is a pure function of the scene, the camera, the resolution and the cap (and, when
+//! the probe runs against a time box's share, of how many bands it finished: the rest are not
+//! split), never of the samples, so it cannot bias (a pixel it misses, an edge thinner than `1/m` pixel, is merely
 //! not split); `K = 1` draws exactly the random numbers of the plain sampler and traces no probe.
 //! Measurements: `results/CONCLUSIONS.md`, "Emission splitting and its probe".
 
 use super::Context;
 use crate::accel::{Ray, World};
 use crate::integrators::{CameraEstimate, Integrator};
+use crate::interrupt::Stop;
 use crate::math::Rgb;
 use crate::profile::Phase;
 use crate::sampling::qmc::SamplerKind;
@@ -48,6 +50,9 @@ pub struct SplitStats {
     pub split_fraction: f64,
     /// Wall seconds of the probe (before the first pass; on every rank).
     pub probe_s: f64,
+    /// Whether the probe stopped at its share of the time box (or a signal) before the last
+    /// band: the pixels of the bands not probed are not split (fewer split pixels, no bias).
+    pub probe_stopped: bool,
 }
 
 /// Draws pixel samples: the camera, the split `K`, the Dirac-chain cap of the extra rays (the
@@ -220,18 +225,25 @@ impl<'a> PixelSampler<'a> {
     /// finds a light-source edge; `cap` bounds the extra rays' Dirac chains and must be the
     /// integrator's `Integrator::prefix_cap`. Runs the probe on the current rayon pool.
     pub fn new(world: &World, camera: &'a Camera, k: u32, cap: u32) -> PixelSampler<'a> {
+        PixelSampler::new_until(world, camera, k, cap, &Stop::never())
+    }
+
+    /// [`PixelSampler::new`] whose probe ends at `stop` (its share of a time box, or a signal):
+    /// the bands not probed by then are not split (`SplitStats::probe_stopped`).
+    pub fn new_until(world: &World, camera: &'a Camera, k: u32, cap: u32, stop: &Stop) -> PixelSampler<'a> {
         let k = k.clamp(1, MAX_EMISSION_SPLIT);
         if k == 1 {
             return PixelSampler { cap, ..PixelSampler::plain(camera) };
         }
         let t0 = Instant::now();
-        let split = probe_edges(world, camera, cap);
+        let (split, probe_stopped) = probe_edges(world, camera, cap, stop);
         let n = split.iter().filter(|&&s| s).count() as u64;
         let stats = SplitStats {
             emission_split: k,
             split_pixels: n,
             split_fraction: n as f64 / split.len().max(1) as f64,
             probe_s: t0.elapsed().as_secs_f64(),
+            probe_stopped,
         };
         PixelSampler { camera, k, cap, split, stats, workers: Pool::default(), outs: Pool::default(), sobol: false }
     }
@@ -241,7 +253,7 @@ impl<'a> PixelSampler<'a> {
     pub fn everywhere(camera: &'a Camera, k: u32, cap: u32) -> PixelSampler<'a> {
         let k = k.clamp(1, MAX_EMISSION_SPLIT);
         let n = camera.width as u64 * camera.height as u64;
-        let stats = SplitStats { emission_split: k, split_pixels: n, split_fraction: 1.0, probe_s: 0.0 };
+        let stats = SplitStats { emission_split: k, split_pixels: n, split_fraction: 1.0, ..SplitStats::default() };
         PixelSampler {
             camera,
             k,
@@ -387,12 +399,16 @@ pub fn probe_subdivision(w: u32, h: u32) -> usize {
 /// The pixels whose prefix emission differs among their `(m+1)²` lattice points (`m` =
 /// [`probe_subdivision`]: at `m = 2` corners, edge midpoints and centre) or is random at one of
 /// them ([`probe_point`]), from a fixed stream keyed by the lattice index: a pure function of
-/// scene, camera, resolution and cap. Band by band, so the lattice never needs to be held whole.
-fn probe_edges(world: &World, camera: &Camera, cap: u32) -> Vec<bool> {
+/// scene, camera, resolution and cap, unless `stop` comes first (checked at every lattice point):
+/// then the band in flight and those after it are not split, and the flag returned is `true`.
+/// Band by band, so the lattice never needs to be held whole.
+fn probe_edges(world: &World, camera: &Camera, cap: u32, stop: &Stop) -> (Vec<bool>, bool) {
+    use std::sync::atomic::{AtomicBool, Ordering};
     let (w, h) = (camera.width as usize, camera.height as usize);
     let m = probe_subdivision(camera.width, camera.height);
     let (lw, step) = (m * w + 1, 1.0 / m as f32);
     let mut split = Vec::with_capacity(w * h);
+    let cut = AtomicBool::new(false);
     for y0 in (0..h).step_by(PROBE_BAND) {
         let y1 = (y0 + PROBE_BAND).min(h);
         // lattice rows m·y0 ..= m·y1
@@ -400,11 +416,19 @@ fn probe_edges(world: &World, camera: &Camera, cap: u32) -> Vec<bool> {
         let lattice: Vec<Option<Rgb>> = (base..(m * y1 + 1) * lw)
             .into_par_iter()
             .map(|i| {
+                if cut.load(Ordering::Relaxed) || stop.is_due() {
+                    cut.store(true, Ordering::Relaxed);
+                    return None;
+                }
                 let (u, v) = ((i % lw) as f32 * step, (i / lw) as f32 * step);
                 let mut rng = Rng::keyed(0, stream::PIXEL_SPLIT, u64::MAX, i as u64);
                 probe_point(world, camera, [u, v], cap, &mut rng)
             })
             .collect();
+        if cut.load(Ordering::Relaxed) {
+            split.resize(w * h, false);
+            return (split, true);
+        }
         let band = (y0 * w..y1 * w).into_par_iter().map(|p| {
             let (x, y) = (m * (p % w), m * (p / w - y0));
             let first = lattice[y * lw + x];
@@ -414,7 +438,7 @@ fn probe_edges(world: &World, camera: &Camera, cap: u32) -> Vec<bool> {
         });
         split.par_extend(band);
     }
-    split
+    (split, false)
 }
 
 #[cfg(test)]

@@ -404,7 +404,9 @@ pub const BLOCK: u64 = 16_384;
 /// vertices (non-specular hits after a Dirac vertex) are collected or `max_paths` are launched.
 /// Returns the vertices of whole paths `0..P` and `P`, the normaliser: deterministic for any
 /// thread count, since blocks run in parallel but are concatenated in path order. `stored(n)`
-/// is told the vertices collected so far after every block (progress display only).
+/// is told the vertices collected so far after every block, and the tracing ends there when it
+/// returns `false` (a deadline or a signal: the paths `0..P` launched so far are whole, so the
+/// normaliser stays `P`).
 pub fn collect_caustic_vertices(
     world: &World,
     emission: Emission,
@@ -412,7 +414,7 @@ pub fn collect_caustic_vertices(
     max_paths: u64,
     seed: u64,
     stream_id: u64,
-    stored: &dyn Fn(u64),
+    stored: &dyn Fn(u64) -> bool,
 ) -> (Vec<CausticVertex>, u64) {
     use rayon::prelude::*;
     struct Collect(Vec<CausticVertex>);
@@ -450,7 +452,9 @@ pub fn collect_caustic_vertices(
                 break;
             }
         }
-        stored(out.len() as u64);
+        if !stored(out.len() as u64) {
+            break;
+        }
     }
     (out, paths)
 }
@@ -469,7 +473,7 @@ pub fn collect_caustic_points(
     target: u64,
     seed: u64,
     stream_id: u64,
-    stored: &dyn Fn(u64),
+    stored: &dyn Fn(u64) -> bool,
 ) -> (Vec<CausticVertex>, u64) {
     let max_paths = target.saturating_mul(PATH_FACTOR).max(BLOCK);
     let (mut verts, paths) = collect_caustic_vertices(world, emission, target, max_paths, seed, stream_id, stored);

@@ -26,11 +26,11 @@ use crate::cf::estimator::{CausticForecast, ForecastOptions, PreprocessStats, Sp
 use crate::cf::subset_grid::SubsetGrid;
 use crate::math::{Rgb, Vec3};
 use crate::profile::{CfCounts, Profile};
-use crate::progress::{Hidden, Phases};
+use crate::progress::{Muted, Phases};
 use crate::sampling::rng::stream;
 use crate::transport::particle::{self, Emission, MAX_VERTICES};
 use crate::transport::target::Targets;
-use share::caustic_shares;
+use share::caustic_shares_until;
 use std::time::Instant;
 
 /// Default forecast photons to store when neither the CLI nor the scene sets it (the paper's
@@ -99,7 +99,14 @@ pub enum Variant {
 pub const PREPROCESS_SHARE: f64 = 0.05;
 /// Stored photons of the pilot run that measures the preprocess cost per photon.
 pub const PILOT_PHOTONS: u64 = 5_000;
-/// Fewest photons the budget rule picks (the tables need some forecasters to be useful).
+/// The fewest photons of any budget (and the least pilot's).
+pub const LEAST_BUDGET_PHOTONS: u64 = PILOT_PHOTONS / 10;
+/// The pilot's stored photons per second of budget (between [`LEAST_BUDGET_PHOTONS`] and
+/// [`PILOT_PHOTONS`]).
+pub const PILOT_PHOTONS_PER_S: f64 = 100.0;
+/// Fewest photons the budget rule picks (the tables need some forecasters to be useful), as long
+/// as they cost at most 4× [`PREPROCESS_SHARE`] of the budget (a budget of a few seconds gets
+/// fewer: every phase stays inside `--time`, `pipeline::budget`).
 pub const MIN_BUDGET_PHOTONS: u64 = 10_000;
 
 /// `--table-cache F`: a finite F ≥ 0 (NaN, negative and infinite cells are refused).
@@ -198,7 +205,7 @@ pub fn trace_forecasters(
     emission: Emission,
     target: u64,
     seed: u64,
-    stored: &dyn Fn(u64),
+    stored: &dyn Fn(u64) -> bool,
 ) -> (Vec<CausticPoint>, u64, f64) {
     let t0 = Instant::now();
     let (verts, paths) = particle::collect_caustic_points(world, emission, target, seed, stream::FORECAST, stored);
@@ -208,7 +215,8 @@ pub fn trace_forecasters(
 
 /// The CF preprocess of a run (used by every CF method): the photon count is `--forecast-photons`
 /// as given; else, with a time budget `T`, `min(cap, 0.05·T / cost)` where `cost` is the seconds
-/// per stored photon of a [`PILOT_PHOTONS`] pilot preprocess and `cap` the scene's (or default)
+/// per stored photon of a [`PILOT_PHOTONS`] pilot preprocess (with the lookup grid the
+/// integrator builds from the product) and `cap` the scene's (or default)
 /// count; else the scene's count. Any count leaves the image unbiased (the tables are a pdf).
 /// The rule and the pilot's cost go into `stats`. Phases: "pilot" (its own phases hidden), then
 /// those of [`build_forecast`], then "caustic shares" (`share::caustic_shares`).
@@ -219,10 +227,18 @@ pub fn preprocess_forecast(world: &World, args: &MethodArgs, seed: u64, phases: 
         (None, Some(t)) if t.is_finite() && t > 0.0 && cap > PILOT_PHOTONS => {
             let phase = phases.phase("pilot", None);
             let t0 = Instant::now();
-            let pilot = build_forecast(world, PILOT_PHOTONS, args.forecast_options(), seed ^ 0x0050_494c_4f54, &Hidden);
+            // a short budget gets a smaller pilot (its clustering and grid cost with the photons)
+            let m = ((PILOT_PHOTONS_PER_S * t) as u64).clamp(LEAST_BUDGET_PHOTONS, PILOT_PHOTONS);
+            let pilot = build_forecast(world, m, args.forecast_options(), seed ^ 0x0050_494c_4f54, &Muted(phases));
+            // the integrators' lookup grid over the kept clusters, built from the product after
+            // the broadcast, grows with the photons too: its cost is part of theirs
+            let _grid = pilot.kept_grid();
             let cost = t0.elapsed().as_secs_f64() / pilot.stats.stored.max(1) as f64;
             phase.finish();
-            let want = (PREPROCESS_SHARE * t / cost.max(1e-12)).max(MIN_BUDGET_PHOTONS as f64);
+            // the floor only while it costs at most 4 shares (a short budget gets fewer, but never
+            // fewer than the least pilot)
+            let want = PREPROCESS_SHARE * t / cost.max(1e-12);
+            let want = want.max((MIN_BUDGET_PHOTONS as f64).min(4.0 * want)).max(LEAST_BUDGET_PHOTONS as f64);
             ((want as u64).min(cap), "budget", cost)
         }
         (None, _) if world.scene.forecast_photons.is_some() => (cap, "scene", 0.0),
@@ -231,7 +247,7 @@ pub fn preprocess_forecast(world: &World, args: &MethodArgs, seed: u64, phases: 
     let mut cf = build_forecast(world, n, args.forecast_options(), seed, phases);
     let t0 = Instant::now();
     let phase = phases.phase("caustic shares", None);
-    cf.shares = caustic_shares(world, &cf, args.settings.cap(), seed);
+    cf.shares = caustic_shares_until(world, &cf, args.settings.cap(), seed, &|| phases.stop());
     phase.finish();
     cf.stats.shares_s = t0.elapsed().as_secs_f64();
     cf.stats.photons_requested = n;
@@ -251,7 +267,10 @@ pub fn build_forecast(
 ) -> CausticForecast {
     let emission = targeted_emission(world);
     let tracing = phases.phase("tracing forecast photons", Some(target));
-    let (points, paths, tracing_s) = trace_forecasters(world, emission, target, seed, &|n| tracing.set(n));
+    let (points, paths, tracing_s) = trace_forecasters(world, emission, target, seed, &|n| {
+        tracing.set(n);
+        !phases.stop()
+    });
     tracing.finish();
     let stats = PreprocessStats {
         paths,

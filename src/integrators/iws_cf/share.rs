@@ -27,6 +27,20 @@ const SHARE_DIRS: usize = 256;
 /// hit is an emitter are direct light and skipped. A pure function of (scene, product, seed):
 /// each path's random numbers are keyed by (cluster, path index), whatever the thread count.
 pub fn caustic_shares(world: &World, cf: &CausticForecast, max_depth: u32, seed: u64) -> Vec<CausticShare> {
+    caustic_shares_until(world, cf, max_depth, seed, &|| false)
+}
+
+/// [`caustic_shares`], each cluster's gather ending at its next point once `stop()` holds (a
+/// time box's share, a signal): its means are then over the points gathered (at least none:
+/// a share of 0, an unguided cluster). The shares only steer the guiding, never the image's
+/// expectation.
+pub fn caustic_shares_until(
+    world: &World,
+    cf: &CausticForecast,
+    max_depth: u32,
+    seed: u64,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Vec<CausticShare> {
     let kept = cf.clustering.kept(cf.opts.max_rank);
     let pt = PathTracer::new(max_depth);
     kept.par_iter()
@@ -35,7 +49,12 @@ pub fn caustic_shares(world: &World, cf: &CausticForecast, max_depth: u32, seed:
             let m = cl.members.len();
             let n_points = SHARE_POINTS.min(m);
             let (mut ec, mut ed) = (0.0f64, 0.0f64);
+            let mut gathered = 0;
             for i in 0..n_points {
+                if stop() {
+                    break;
+                }
+                gathered += 1;
                 let Some(cp) = cf.points.get(cl.members[i * m / n_points] as usize) else { continue };
                 let (x, frame) = (cp.pos(), Frame::from_normal(cp.normal()));
                 for j in 0..SHARE_DIRS {
@@ -52,7 +71,7 @@ pub fn caustic_shares(world: &World, cf: &CausticForecast, max_depth: u32, seed:
                     ed += (PI * luminance(l.rest)) as f64;
                 }
             }
-            let n = (n_points * SHARE_DIRS).max(1) as f64;
+            let n = (gathered * SHARE_DIRS).max(1) as f64;
             // the cluster's photon flux over its area (`Cluster::density`, power / area)
             let photons = if cl.density.is_finite() { cl.density } else { 0.0 };
             CausticShare { caustic: photons, caustic_gather: (ec / n) as f32, other: (ed / n) as f32 }

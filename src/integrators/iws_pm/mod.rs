@@ -75,7 +75,10 @@ impl MethodSpec for IwsPm {
     fn preprocess(world: &World, args: &MethodArgs, seed: u64, phases: &dyn Phases) -> Result<PhotonMap, MethodError> {
         let pm = &args.pm;
         let phase = phases.phase("photon map", Some(pm.photons));
-        let map = PhotonMap::build(world, pm.photons, pm.gather, pm.max_radius, seed, &|n| phase.set(n));
+        let map = PhotonMap::build(world, pm.photons, pm.gather, pm.max_radius, seed, &|n| {
+            phase.set(n);
+            !phases.stop()
+        });
         Ok(map)
     }
     fn build(world: &World, args: &MethodArgs, pm: PhotonMap) -> Result<Box<dyn Integrator>, MethodError> {
@@ -126,14 +129,15 @@ pub fn default_max_radius(world: &World) -> f32 {
 
 impl PhotonMap {
     /// Traces light paths until `target` caustic photons are stored (see the module doc).
-    /// `stored(n)` is told the photons stored so far after every block of paths (display only).
+    /// `stored(n)` is told the photons stored so far after every block of paths; `false` ends the
+    /// tracing there (a deadline or a signal: fewer photons, normalised by the paths launched).
     pub fn build(
         world: &World,
         target: u64,
         k: u32,
         max_radius: Option<f32>,
         seed: u64,
-        stored: &dyn Fn(u64),
+        stored: &dyn Fn(u64) -> bool,
     ) -> PhotonMap {
         let t0 = Instant::now();
         let (verts, paths) =

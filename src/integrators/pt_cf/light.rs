@@ -55,6 +55,19 @@ pub struct LightSide {
     pub max_depth: u32,
 }
 
+/// The most light paths per pixel a pass may trace (`--light-paths`): a pass then costs about as
+/// many camera passes, so that one pass stays a small part of any time box and a signal is
+/// honoured within about a pass (the pilot picks 1/8 to 2).
+pub const MAX_PATHS_PER_PIXEL: u64 = 16;
+/// The most light paths per pass at any resolution (about 0.1 s on one core).
+pub const MAX_PATHS_FLOOR: u64 = 1 << 16;
+
+/// The most light paths per pass for a `width × height` image: [`MAX_PATHS_PER_PIXEL`] per
+/// pixel, at least [`MAX_PATHS_FLOOR`].
+pub fn max_paths(width: u32, height: u32) -> u64 {
+    (MAX_PATHS_PER_PIXEL * width as u64 * height as u64).max(MAX_PATHS_FLOOR)
+}
+
 /// Light paths per pass without a count and without the pilot: [`PATHS_PER_PIXEL`] × the pixel count.
 pub fn default_paths(width: u32, height: u32) -> u64 {
     (PATHS_PER_PIXEL * width as f64 * height as f64).ceil() as u64

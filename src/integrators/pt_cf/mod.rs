@@ -54,7 +54,8 @@ pub struct PtCfArgs {
     #[arg(long, value_name = "S", default_value_t = 0.5, value_parser = parse_min_share)]
     pub guide_min_share: f32,
     /// Light paths per pass connected to the camera for the caustics, weighted against the
-    /// camera paths (0 = none; default: a pilot render picks 1/8 to 2 per pixel).
+    /// camera paths (0 = none; at most 16 per pixel or 65536; default: a pilot render picks 1/8
+    /// to 2 per pixel).
     // The caustics L S+ (S|D)* D E, MIS-weighted; 0 leaves the camera side alone.
     #[arg(long, value_name = "N")]
     pub light_paths: Option<u64>,
