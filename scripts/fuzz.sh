@@ -52,7 +52,7 @@ echo
 echo "== $secs s of fuzzing ($run test process(es); logs in $dir)"
 printf '%-11s %10s %10s %7s %6s %7s %10s\n' parser inputs loaded panics hangs aborts "slowest s"
 cat "$dir"/state*.counts 2>/dev/null | awk -v ab="$dir/aborts" '
-    BEGIN { while ((getline l < ab) > 0) { split(l, f, " "); a[f[1]]++ } }
+    BEGIN { while ((getline l < ab) > 0) { split(l, ff, " "); a[ff[1]]++ } }
     $1 != "rounds" { if (!($1 in n)) order[++k] = $1; n[$1] += $2; ld[$1] += $3; p[$1] += $4; h[$1] += $5;
                      if ($6 > w[$1]) w[$1] = $6; tp += $4; th += $5 }
     END { for (i = 1; i <= k; i++) { f = order[i]; ta += a[f]

@@ -169,27 +169,6 @@ pub struct MpiCluster {
     _universe: Universe,
 }
 
-/// Before `MPI_Finalize` (the `Universe`, dropped after this): every rank exchanges a byte with
-/// every other one, so that every network endpoint between two ranks has carried a message.
-/// MPICH 4.0's UCX netmod closes all endpoints in `MPI_Finalize` and waits for each, then enters
-/// a barrier without progressing UCX; an endpoint whose TCP connection was still being set up
-/// then waits for a peer that no longer answers, and that rank hangs (scripts/mpi-netns.sh,
-/// docs/mpi.md). Skipped while panicking (the other ranks may be in another collective).
-impl Drop for MpiCluster {
-    fn drop(&mut self) {
-        if std::thread::panicking() || self.size < 2 {
-            return;
-        }
-        let _waiting = self.watch.enter();
-        for k in 1..self.size {
-            let to = self.world.process_at_rank(((self.rank + k) % self.size) as i32);
-            let from = self.world.process_at_rank(((self.rank + self.size - k) % self.size) as i32);
-            to.send(&0u8);
-            let (_byte, _status) = from.receive::<u8>();
-        }
-    }
-}
-
 impl MpiCluster {
     /// Initialises MPI with `Threading::Funneled` and wraps the world communicator.
     ///

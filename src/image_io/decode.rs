@@ -258,9 +258,12 @@ fn decode_with_image(
     Ok(DecodedImage { width, height, channels, data, format: name })
 }
 
-/// OpenEXR: the header's sizes are checked first, then the `R`, `G`, `B` channels of the first
-/// layer that has them (or a lone `Y` of the first layer) are read as `f32`.
-fn decode_exr(path: &Path, bytes: &[u8]) -> Result<DecodedImage, ImageError> {
+/// Refuses an OpenEXR from its headers alone, before any sample is decoded: a layer empty or
+/// over [`MAX_TEXELS`], samples of all layers over four channels' worth of that limit, or more
+/// than the file can hold (see the module documentation). Every EXR this crate reads passes
+/// here first (textures, and `read_exr` of rendered images): a header claiming billions of
+/// samples otherwise keeps the decoder busy for minutes.
+pub(crate) fn check_exr_header(path: &Path, bytes: &[u8]) -> Result<(), ImageError> {
     let meta =
         exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(|e| decode_error(path, "EXR", e))?;
     let mut total: u64 = 0;
@@ -295,6 +298,13 @@ fn decode_exr(path: &Path, bytes: &[u8]) -> Result<DecodedImage, ImageError> {
             ),
         });
     }
+    Ok(())
+}
+
+/// OpenEXR: the header's sizes are checked first, then the `R`, `G`, `B` channels of the first
+/// layer that has them (or a lone `Y` of the first layer) are read as `f32`.
+fn decode_exr(path: &Path, bytes: &[u8]) -> Result<DecodedImage, ImageError> {
+    check_exr_header(path, bytes)?;
     let layers = &super::read_exr_layers(path, bytes)?;
     let rgb = layers.iter().find_map(|l| find_channels(l, &["R", "G", "B"]).map(|i| (l, i)));
     let (layer, idx) = rgb
