@@ -331,17 +331,20 @@ fn ranks_with_different_jobs_are_refused_naming_the_field() {
         a.iter().chain(extra).map(|s| s.to_string()).collect()
     };
     let cornell = scene();
-    let cases: [(&str, Vec<String>, &str); 4] = [
+    let cases: [(&str, Vec<String>, &str); 5] = [
         ("method", base(&cornell, "16x16", "1", &["--method", "iws"]), "--method differs"),
         ("resolution", base(&cornell, "32x32", "1", &[]), "--resolution differs"),
         ("scene", base(&ring, "16x16", "1", &[]), "the scene's content"),
         ("seed", base(&cornell, "16x16", "2", &[]), "--seed differs"),
+        // issue #63: rank 1's own --out was ignored without a word (only rank 0 writes)
+        ("out", base(&cornell, "16x16", "1", &[]), "--out differs"),
     ];
     for (name, other, field) in cases {
         let out = d.join(name);
+        let other_out = if name == "out" { d.join("out-of-rank-1") } else { out.clone() };
         let mut cmd = Command::new("mpirun");
         cmd.env("RAYON_NUM_THREADS", "1").args(["-n", "1"]).arg(bin()).args(base(&cornell, "16x16", "1", &[]));
-        cmd.arg("--out").arg(&out).args([":", "-n", "1"]).arg(bin()).args(&other).arg("--out").arg(&out);
+        cmd.arg("--out").arg(&out).args([":", "-n", "1"]).arg(bin()).args(&other).arg("--out").arg(&other_out);
         let child = cmd.stdout(std::process::Stdio::null()).stderr(std::process::Stdio::piped()).spawn().unwrap();
         let (status, err) = wait_for(child, std::time::Duration::from_secs(60));
         let status = status.unwrap_or_else(|| panic!("{name}: the job hung; stderr: {err}"));
@@ -350,6 +353,7 @@ fn ranks_with_different_jobs_are_refused_naming_the_field() {
         assert_eq!(err.matches("error: ").count(), 1, "{name}: printed once: {err}");
         assert!(!err.contains("panicked"), "{name}: {err}");
         assert!(!out.with_extension("exr").exists(), "{name}: a refused job wrote an image");
+        assert!(!other_out.with_extension("exr").exists(), "{name}: a refused job wrote an image");
     }
 }
 

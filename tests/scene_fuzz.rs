@@ -1071,10 +1071,13 @@ const CASES_EXR: usize = 1500;
 const CASES_CKPT: usize = 1500;
 const CASES_CLI: usize = 3000;
 
+/// Named files of a corpus.
+type Corpus = Vec<(String, Vec<u8>)>;
+
 /// What this program writes and reads back: the EXR and checkpoint of a tiny render (the binary
 /// run once per test process), beside the committed EXR textures (every compression they use).
-fn rendered_outputs() -> (Vec<(String, Vec<u8>)>, Vec<(String, Vec<u8>)>) {
-    static DONE: std::sync::OnceLock<(Vec<(String, Vec<u8>)>, Vec<(String, Vec<u8>)>)> = std::sync::OnceLock::new();
+fn rendered_outputs() -> (Corpus, Corpus) {
+    static DONE: std::sync::OnceLock<(Corpus, Corpus)> = std::sync::OnceLock::new();
     DONE.get_or_init(|| {
         let dir = tmp_dir("scene-fuzz-outputs");
         let out = dir.join("r");
@@ -1128,9 +1131,7 @@ fn mutate_ckpt(src: &[u8], rng: &mut Rng) -> Vec<u8> {
             2 => {
                 let (i, k) = (HEADER_LEN + pick(rng, n.saturating_sub(HEADER_LEN)), 1 + pick(rng, 9));
                 let v = [0u8, 0xff, 0x7f, 0x80][pick(rng, 4)];
-                for j in i..(i + k).min(n) {
-                    b[j] = v;
-                }
+                b[i.min(n)..(i + k).min(n)].fill(v);
             }
             3 => {
                 reseal = false;
