@@ -53,6 +53,7 @@ cleanup() {
         for p in $(ip netns pids "$pre-$i" 2>/dev/null); do kill -9 "$p" 2>/dev/null || true; done
         ip netns del "$pre-$i" 2>/dev/null || true
     done
+    ip netns del "$pre-probe" 2>/dev/null || true
     ip link del "$br" 2>/dev/null || true
     rm -rf "$dir"
 }
