@@ -4,7 +4,8 @@
 #   2. cargo test --release                    (unit + integration tests, single process)
 #   3. cargo test --release --features mpi --test mpi   (2-rank tests under mpirun; target/mpi), then
 #      with FORECAST_NETNS=1 scripts/mpi-netns.sh: 3 hosts in network namespaces, 2 ranks each,
-#      with faults (needs root; fails loudly when it cannot make the namespaces)
+#      with faults, where the machine allows (root, `ip netns`); else, and by default, a loud
+#      NOT RUN (docs/mpi.md: MPICH 4.0.2's MPI_Finalize hang over UCX TCP)
 #   4. installs libembree-dev if missing (root/sudo); FORECAST_NO_EMBREE=1 skips Embree, then
 #      cargo test --release --features embree --test accel_embree --test wavefront --test pass_groups
 #      --test bvh (target/embree; Embree against obvhs, pt image z-tests, the packet queries, the
@@ -32,13 +33,27 @@ if [ "${FORECAST_NO_MPI:-0}" != "1" ] && command -v mpirun >/dev/null 2>&1; then
     echo "== cargo test --release --features mpi --test mpi (2 ranks)"
     # a separate target dir keeps the MPI binary from replacing the default one
     CARGO_TARGET_DIR=target/mpi cargo test --release --features mpi --test mpi -- --test-threads=1 2>&1 | tee -a "$log"
-    if [ "${FORECAST_NETNS:-0}" = "1" ]; then
-        echo "== scripts/mpi-netns.sh (3 hosts in network namespaces, 2 ranks each)"
+    # the multi-host tests: with FORECAST_NETNS=1, where this machine can make network namespaces
+    # (root, `ip netns`). Not by default: MPICH 4.0.2's UCX netmod hangs in MPI_Finalize over TCP
+    # in a third to half of the 6-rank runs here (docs/mpi.md, measured), which would make the
+    # suite flaky; the banner below says so on every run.
+    netns_why=""
+    if [ "${FORECAST_NETNS:-0}" != "1" ]; then
+        netns_why="not requested (FORECAST_NETNS=1 runs it; off by default because of the MPI_Finalize hang of docs/mpi.md)"
+    elif [ "$(id -u)" != "0" ]; then
+        netns_why="not root (network namespaces, veths and tc need root)"
+    elif ! command -v ip >/dev/null 2>&1 || ! ip netns list >/dev/null 2>&1; then
+        netns_why="no working \`ip netns\` (iproute2) here"
+    fi
+    if [ -z "$netns_why" ]; then
+        echo "== scripts/mpi-netns.sh (3 hosts in network namespaces, 2 ranks each, with faults)"
         bash scripts/mpi-netns.sh 2>&1 | tee -a "$log"
     else
-        # not yet by default: with UCX's TCP alone, MPI_Finalize hangs in about half the runs here
-        # (docs/mpi.md), which would make the suite flaky
-        echo "warning: scripts/mpi-netns.sh NOT RUN (multi-host tests); FORECAST_NETNS=1 runs it" >&2
+        echo "" >&2
+        echo "############################################################################" >&2
+        echo "## NOT RUN: scripts/mpi-netns.sh, the multi-host MPI tests: $netns_why" >&2
+        echo "############################################################################" >&2
+        echo "" >&2
     fi
 else
     echo "warning: MPI tests skipped (mpirun not found)" >&2

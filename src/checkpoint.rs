@@ -346,7 +346,13 @@ impl Checkpoint {
         (width, height): (u32, u32),
         job: &[(String, String)],
     ) -> Result<(), ResumeMismatch> {
-        let mut why = job_mismatches(&self.job, job);
+        let mut why = Vec::new();
+        if self.method != method {
+            why.push(format!("method differs (checkpoint {:?}, requested {method:?})", self.method));
+        }
+        // another method has other options: only the `-D` values are worth comparing then
+        let other_method = self.method != method;
+        why.extend(job_mismatches(&self.job, job).into_iter().filter(|w| !(other_method && w.starts_with("option "))));
         if self.scene_hash != scene_hash {
             why.push(format!(
                 "scene changed (checkpoint scene hash {:016x}, current {:016x})",
@@ -355,9 +361,6 @@ impl Checkpoint {
         }
         if self.seed != seed {
             why.push(format!("seed differs (checkpoint {}, requested {seed})", self.seed));
-        }
-        if self.method != method {
-            why.push(format!("method differs (checkpoint {:?}, requested {method:?})", self.method));
         }
         if (self.width, self.height) != (width, height) {
             why.push(format!(
@@ -528,7 +531,7 @@ mod tests {
         let e = c.validate(1, 43, "pt", (8, 3), &c.job).expect_err("must fail");
         assert_eq!(e.reasons.len(), 4, "{e}");
         let e = e.to_string();
-        assert!(e.starts_with("cannot resume from this checkpoint: scene changed (checkpoint scene hash "), "{e}");
+        assert!(e.starts_with("cannot resume from this checkpoint: method differs (checkpoint \"iws+cf\""), "{e}");
         for part in ["scene changed", "seed differs", "method differs", "resolution differs", "4x3", "8x3"] {
             assert!(e.contains(part), "{e}");
         }
@@ -547,6 +550,10 @@ mod tests {
         assert!(e.contains("option max_depth differs (checkpoint 8, requested 3)"), "{e}");
         let e = c.validate(c.scene_hash, 42, "iws+cf", (4, 3), &other[1..]).expect_err("must fail").to_string();
         assert!(e.contains("-D spp differs (checkpoint 4, requested unset)"), "{e}");
+        // another method: its options are not listed (they are another method's), -D values are
+        let e = c.validate(c.scene_hash, 42, "pt", (4, 3), &other).expect_err("must fail");
+        assert_eq!(e.reasons.len(), 2, "{e}");
+        assert!(e.reasons[0].starts_with("method differs") && e.reasons[1].starts_with("-D spp differs"), "{e}");
     }
 
     #[test]

@@ -44,7 +44,16 @@ impl Cli {
     /// method, refuses a flag of another one ([`check_foreign_flags`]); `reference`, `compare`
     /// and `forecast-map` refuse, the same way, a flag they do not use.
     pub fn parse_checked() -> Result<Cli, clap::Error> {
-        let matches = Cli::command().try_get_matches()?;
+        Cli::parse_checked_from(std::env::args_os())
+    }
+
+    /// [`Cli::parse_checked`] of the command line `args` (its first item is the program name).
+    pub fn parse_checked_from<I, T>(args: I) -> Result<Cli, clap::Error>
+    where
+        I: IntoIterator<Item = T>,
+        T: Into<std::ffi::OsString> + Clone,
+    {
+        let matches = Cli::command().try_get_matches_from(args)?;
         let mut cli = Cli::from_arg_matches(&matches)?;
         match (&mut cli.command, matches.subcommand()) {
             (Command::Render(a), Some(("render", sub))) => {

@@ -258,19 +258,27 @@ fn decode_with_image(
     Ok(DecodedImage { width, height, channels, data, format: name })
 }
 
-/// OpenEXR: the header's sizes are checked first, then the `R`, `G`, `B` channels of the first
-/// layer that has them (or a lone `Y` of the first layer) are read as `f32`.
-fn decode_exr(path: &Path, bytes: &[u8]) -> Result<DecodedImage, ImageError> {
+/// Refuses an OpenEXR from its headers alone, before any sample is decoded: an empty layer, or
+/// samples (all layers and channels) more than the file can hold (see the module
+/// documentation); with `texture` also a layer over [`MAX_TEXELS`] or samples over four
+/// channels' worth of that limit. Every EXR this crate reads passes here first (textures, and
+/// `read_exr` of rendered images, which may be larger than a texture): a header claiming
+/// billions of samples otherwise keeps the decoder busy for minutes.
+pub(crate) fn check_exr_header(path: &Path, bytes: &[u8], texture: bool) -> Result<(), ImageError> {
     let meta =
         exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(|e| decode_error(path, "EXR", e))?;
     let mut total: u64 = 0;
     for header in meta.headers.iter() {
         let (w, h) = (header.layer_size.width() as u64, header.layer_size.height() as u64);
-        check_size(path, w, h)?;
-        total = total.saturating_add((w * h).saturating_mul(header.channels.list.len() as u64));
+        if texture {
+            check_size(path, w, h)?;
+        } else if w == 0 || h == 0 {
+            return Err(unsupported(path, format!("image of {w}x{h} pixels is empty")));
+        }
+        total = total.saturating_add(w.saturating_mul(h).saturating_mul(header.channels.list.len() as u64));
     }
     // every layer is read whole: bound the sum as four channels' worth of the texel limit
-    if total > 4 * MAX_TEXELS {
+    if texture && total > 4 * MAX_TEXELS {
         let (w, h) = meta.headers.first().map_or((0, 0), |h| (h.layer_size.width(), h.layer_size.height()));
         return Err(ImageError::TooLarge {
             path: path.to_path_buf(),
@@ -295,6 +303,13 @@ fn decode_exr(path: &Path, bytes: &[u8]) -> Result<DecodedImage, ImageError> {
             ),
         });
     }
+    Ok(())
+}
+
+/// OpenEXR: the header's sizes are checked first, then the `R`, `G`, `B` channels of the first
+/// layer that has them (or a lone `Y` of the first layer) are read as `f32`.
+fn decode_exr(path: &Path, bytes: &[u8]) -> Result<DecodedImage, ImageError> {
+    check_exr_header(path, bytes, true)?;
     let layers = &super::read_exr_layers(path, bytes)?;
     let rgb = layers.iter().find_map(|l| find_channels(l, &["R", "G", "B"]).map(|i| (l, i)));
     let (layer, idx) = rgb

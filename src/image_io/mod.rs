@@ -218,6 +218,7 @@ fn read_exr_layers(path: &Path, bytes: &[u8]) -> Result<Vec<FlatLayer>, ImageErr
 
 fn read_first_layer(path: &Path) -> Result<FlatLayer, ImageError> {
     let bytes = crate::atomic_io::read_regular(path).map_err(|e| io_error(path, "read", e))?;
+    decode::check_exr_header(path, &bytes, false)?;
     let mut layers = read_exr_layers(path, &bytes)?.into_iter();
     let first = layers.next().ok_or_else(|| unsupported(path, "EXR has no layers".into()))?;
     if find_channels(&first, &["R", "G", "B"]).is_some() || find_channels(&first, &["Y"]).is_some() {

@@ -80,6 +80,8 @@ pub fn job_fields(job: &RenderJob, scene: &Scene, plan: &Plan) -> Vec<JobField> 
         ("--time", format!("{:?}", plan.time)),
         ("--checkpoint-every", job.checkpoint_every.is_some().to_string()),
         ("--snapshots", format!("{:?}", job.snapshots)),
+        // only rank 0 writes: another rank's own --out would be ignored without a word
+        ("--out", job.out.display().to_string()),
     ]
 }
 
