@@ -9,8 +9,7 @@
 #
 # Environment:
 #   SCENES   "SCENE RESOLUTION" pairs separated by ';' (default: cornell-box 640x640, ring 256x256,
-#            figurines 640x360, and the pool of scenes/external/sms-pool at 384x216 where its four
-#            2K textures have been copied in, see scenes/external/README.md; skipped otherwise)
+#            figurines 640x360, and the pool of scenes/external/sms-pool at 384x216)
 #   BACKENDS "obvhs embree" (default: both; embree is skipped, with a line saying so, where
 #            Embree is not installed: .ci/install-embree.sh installs it)
 #   THREADS, MAX_DEPTH, RR_DEPTH, VARIANT, MITSUBA_VENV: as scripts/bench-vs-mitsuba.sh
@@ -50,7 +49,7 @@ echo "bench-set-vs-mitsuba: CPU: ${cpu:-unknown} ($(nproc) logical CPUs; flags:"
   "$(grep -o -w -E 'avx2|avx512f' /proc/cpuinfo | sort -u | tr '\n' ' ')), $(date -u +%Y-%m-%dT%H:%MZ)," \
   "commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown), ${budget} s per run, $runs runs"
 if [[ -z "${SCENES:-}" ]] && ((!pool_ok)); then
-  echo "bench-set-vs-mitsuba: skipping $pool: its four 2K textures are not in the repository (scenes/external/README.md)"
+  echo "bench-set-vs-mitsuba: skipping $pool: a texture of it is missing"
 fi
 
 have_embree() { [[ -f /usr/include/embree3/rtcore.h ]]; }
