@@ -9,7 +9,7 @@
 #
 # Environment:
 #   SCENES   "SCENE RESOLUTION" pairs separated by ';' (default: cornell-box 640x640, ring 256x256,
-#            figurines 640x360, and the pool of scenes/external/sms-pool at 384x216)
+#            figurines 640x360 with its table diffuse (Mitsuba 3 has no Phong), and the pool of scenes/external/sms-pool at 384x216)
 #   BACKENDS "obvhs embree" (default: both; embree is skipped, with a line saying so, where
 #            Embree is not installed: .ci/install-embree.sh installs it)
 #   THREADS, MAX_DEPTH, RR_DEPTH, VARIANT, MITSUBA_VENV: as scripts/bench-vs-mitsuba.sh
@@ -35,7 +35,7 @@ mkdir -p "$out"
 pool=scenes/external/sms-pool
 pool_tex=("$pool/textures/[2K]Tiles06/Tiles06_col.png" "$pool/textures/[2K]Tiles50/Tiles50_col.jpg"
   "$pool/textures/[2K]Tiles54/Tiles54_col.jpg" "$pool/textures/Striped_cotton_01_2K_Normal.jpg")
-default_scenes="scenes/cornell-box.toml 640x640;scenes/ring.toml 256x256;scenes/figurines.toml 640x360"
+default_scenes="scenes/cornell-box.toml 640x640;scenes/ring.toml 256x256;results/2026-12-03-auto-rule/figurines-diffuse-table.toml 640x360"
 pool_ok=1
 for f in "${pool_tex[@]}"; do [[ -f "$f" ]] || pool_ok=0; done
 if ((pool_ok)); then
