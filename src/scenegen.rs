@@ -593,7 +593,7 @@ mod tests {
     fn write_all_writes_every_file() {
         let dir = std::env::temp_dir().join(format!("scenegen-test-{}", std::process::id()));
         let paths = write_all(&dir).unwrap();
-        assert_eq!(paths.len(), 6);
+        assert_eq!(paths.len(), 7);
         assert_eq!(std::fs::read_to_string(&paths[0]).unwrap(), ring_obj());
         for p in &paths {
             assert!(p.exists());

@@ -95,8 +95,27 @@ fn glossy_note(scene: &Scene) -> &'static str {
         )
     };
     if scene.materials.iter().any(glossy) {
-        "; its receivers include glossy ones, which pt-cf guides by a mixture that keeps their BSDF \
-         (its gain there is unmeasured)"
+        "; its glossy receivers are guided, a lone microfacet lobe only from roughness --guide-min-alpha (0.15: below it \
+         guiding did not pay; results/2026-12-07-glossy-caustics.md)"
+    } else {
+        ""
+    }
+}
+
+/// What lights a scene's caustics, for the reason: area lights, else its environment.
+fn lit_by(scene: &Scene) -> &'static str {
+    if scene.emitters.is_empty() {
+        "an environment"
+    } else {
+        "area lights"
+    }
+}
+
+/// The note on an environment light, where the scene has one: the one scene measured.
+fn environment_note(scene: &Scene) -> &'static str {
+    if scene.environment.is_some() {
+        "; lit by an environment, measured on sms-pool only (60 s: 0.81x pt's noise on the pool floor, 1.08x on \
+         the whole image; results/2026-12-07-pool.md)"
     } else {
         ""
     }
@@ -119,7 +138,7 @@ pub fn choose(scene: &Scene) -> (Method, String) {
                 .into(),
         );
     }
-    (Method::PtCf, "caustics from area lights: pt-cf, the best unbiased whole image at equal time".into())
+    (Method::PtCf, format!("caustics from {}: pt-cf, the best unbiased whole image at equal time", lit_by(scene)))
 }
 
 /// What [`choose`]'s pick for `scene` rests on: the equal-time figures of `docs/auto.md` and the
@@ -137,10 +156,12 @@ pub fn evidence(scene: &Scene) -> String {
             .to_string();
     }
     format!(
-        "caustics from area lights: pt-cf, the best whole image of the unbiased methods at equal time \
+        "caustics from {}: pt-cf, the best whole image of the unbiased methods at equal time \
          (cornell-box 1 min: 0.49x pt's whole-image RMSE, iws-cf 0.64x; ring, before the light paths: 0.38-0.50x, \
-         iws-cf 0.44-0.53x; docs/auto.md){note}{}",
-        glossy_note(scene)
+         iws-cf 0.44-0.53x; docs/auto.md){note}{}{}",
+        lit_by(scene),
+        glossy_note(scene),
+        environment_note(scene)
     )
 }
 
