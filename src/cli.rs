@@ -456,12 +456,12 @@ pub struct BenchArgs {
 }
 
 fn parse_secs(s: &str) -> Result<f64, String> {
-    crate::scene::parse_duration(s)
+    crate::param_limits::parse_duration(s)
 }
 
 /// A positive duration (`30s`, `4m`, `500ms`).
 fn parse_budget(s: &str) -> Result<Duration, String> {
-    let v = crate::scene::parse_duration(s)?;
+    let v = crate::param_limits::parse_duration(s)?;
     if !(v.is_finite() && v > 0.0) {
         return Err(format!("budget `{s}` must be a positive duration"));
     }

@@ -1,5 +1,5 @@
 //! Math vocabulary shared by every module: glam re-exports, `Rgb`, luminance, an orthonormal
-//! shading `Frame` and the FNV-1a hash (scene and mesh content hashes).
+//! shading `Frame`, the FNV-1a hash (scene and mesh content hashes) and the Gauss–Legendre rule.
 //!
 //! Invariants: `Frame` is right-handed and orthonormal; `to_local(n) == (0,0,1)`. Local directions
 //! have `z = cos θ` against the frame normal.
@@ -69,6 +69,63 @@ pub fn fnv1a(mut h: u64, bytes: &[u8]) -> u64 {
     h
 }
 
+/// Nodes and weights of the `n`-point Gauss–Legendre rule on [−1, 1], ascending (Mitsuba's
+/// `quad::gauss_legendre`: Newton's method on P_n from Chebyshev guesses, in f64, stored as
+/// f32).
+pub fn gauss_legendre(n: usize) -> (Vec<f32>, Vec<f32>) {
+    assert!(n >= 1);
+    // (P_l(x), P_l'(x)) by the three-term recurrence (Mitsuba's `math::legendre_pd`)
+    let legendre_pd = |l: usize, x: f64| -> (f64, f64) {
+        match l {
+            0 => (1.0, 0.0),
+            1 => (x, 1.0),
+            _ => {
+                let (mut l_pp, mut l_p, mut d_pp, mut d_p) = (1.0, x, 0.0, 1.0);
+                let (mut k0, mut k1, mut k2) = (3.0, 2.0, 1.0);
+                let (mut l_cur, mut d_cur) = (0.0, 0.0);
+                for _ in 2..=l {
+                    l_cur = (k0 * x * l_p - k2 * l_pp) / k1;
+                    d_cur = d_pp + k0 * l_p;
+                    (l_pp, l_p, d_pp, d_p) = (l_p, l_cur, d_p, d_cur);
+                    k2 = k1;
+                    k0 += 2.0;
+                    k1 += 1.0;
+                }
+                (l_cur, d_cur)
+            }
+        }
+    };
+    let mut nodes = vec![0.0f32; n];
+    let mut weights = vec![0.0f32; n];
+    let last = n - 1;
+    if last == 0 {
+        weights[0] = 2.0;
+        return (nodes, weights);
+    }
+    for i in 0..n / 2 {
+        let mut x = -((2 * i + 1) as f64 / (2 * n) as f64 * std::f64::consts::PI).cos();
+        for it in 0.. {
+            assert!(it < 20, "gauss_legendre({n}): Newton did not converge");
+            let (p, dp) = legendre_pd(n, x);
+            let step = p / dp;
+            x -= step;
+            if step.abs() <= 4.0 * x.abs() * f64::EPSILON {
+                break;
+            }
+        }
+        let dp = legendre_pd(n, x).1;
+        let w = (2.0 / ((1.0 - x * x) * dp * dp)) as f32;
+        (weights[i], weights[last - i]) = (w, w);
+        (nodes[i], nodes[last - i]) = (x as f32, -x as f32);
+    }
+    if n % 2 == 1 {
+        let dp = legendre_pd(n, 0.0).1;
+        weights[n / 2] = (2.0 / (dp * dp)) as f32;
+        nodes[n / 2] = 0.0;
+    }
+    (nodes, weights)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -86,6 +143,22 @@ mod tests {
             assert!((f.s.cross(f.t) - n).length() < 1e-3, "right-handed");
             let v = Vec3::new(0.3, -0.5, 0.8).normalize();
             assert!((f.to_world(f.to_local(v)) - v).length() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn gauss_legendre_integrates_polynomials() {
+        let (x, w) = gauss_legendre(2);
+        assert!((x[1] - (1.0f32 / 3.0).sqrt()).abs() < 1e-7 && x[0] == -x[1] && w == vec![1.0, 1.0]);
+        for n in [5usize, 32, 128] {
+            let (x, w) = gauss_legendre(n);
+            assert!(x.windows(2).all(|p| p[0] < p[1]), "n = {n}: nodes not ascending");
+            // exact for degree ≤ 2n − 1: ∫x^k over [−1, 1] = 2/(k + 1) for even k, 0 for odd
+            for k in 0..(2 * n).min(40) {
+                let got: f64 = x.iter().zip(&w).map(|(&x, &w)| w as f64 * (x as f64).powi(k as i32)).sum();
+                let want = if k % 2 == 0 { 2.0 / (k + 1) as f64 } else { 0.0 };
+                assert!((got - want).abs() < 2e-6, "n = {n}, k = {k}: {got} vs {want}");
+            }
         }
     }
 }

@@ -117,3 +117,46 @@ mod tests {
         assert!(check_time(0.0).is_err() && check_time(f64::INFINITY).is_err() && check_time(0.001).is_ok());
     }
 }
+
+/// Parses a duration such as `500ms`, `30s`, `4m`, `1h` or `1m30s` into seconds.
+pub fn parse_duration(s: &str) -> Result<f64, String> {
+    let s = s.trim();
+    let mut total = 0.0;
+    let mut num = String::new();
+    let mut chars = s.chars().peekable();
+    let mut any = false;
+    while let Some(c) = chars.next() {
+        if c.is_ascii_digit() || c == '.' {
+            num.push(c);
+            continue;
+        }
+        let mut unit = c.to_string();
+        while let Some(&n) = chars.peek() {
+            if n.is_ascii_alphabetic() {
+                unit.push(n);
+                chars.next();
+            } else {
+                break;
+            }
+        }
+        let v: f64 = num.parse().map_err(|_| format!("bad duration `{s}` (expected e.g. 30s, 4m, 1h)"))?;
+        total += v * match unit.as_str() {
+            "ms" => 1e-3,
+            "s" => 1.0,
+            "m" | "min" => 60.0,
+            "h" => 3600.0,
+            _ => return Err(format!("bad duration unit `{unit}` in `{s}` (use ms, s, m, h)")),
+        };
+        num.clear();
+        any = true;
+    }
+    if !num.is_empty() {
+        // a bare number means seconds
+        total += num.parse::<f64>().map_err(|_| format!("bad duration `{s}`"))?;
+        any = true;
+    }
+    if !any || !total.is_finite() || total <= 0.0 {
+        return Err(format!("bad duration `{s}`: must be positive (e.g. 30s, 4m, 1h)"));
+    }
+    Ok(total)
+}

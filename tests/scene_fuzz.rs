@@ -774,17 +774,6 @@ fn image_corpus() -> Vec<(String, Vec<u8>)> {
 /// 0.8 GB), so such claims had to be left out of this corpus.
 const SIZES: &[i64] = &[0, 1, 2, 3, 4096, 8192, 16384, 16385, 65535, 65536, 100_000, 2_147_483_647, 4_294_967_295, -1];
 
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut c = !0u32;
-    for &b in bytes {
-        c ^= b as u32;
-        for _ in 0..8 {
-            c = if c & 1 != 0 { 0xedb8_8320 ^ (c >> 1) } else { c >> 1 };
-        }
-    }
-    !c
-}
-
 /// One header field of the image set to an extreme: PNG's IHDR width, height, bit depth, colour
 /// type or interlace method (its CRC kept valid, so the decoder reads the edit); JPEG's frame
 /// height, width, both, or component count; Radiance's `-Y h +X w`; OpenEXR's data or display window
@@ -799,7 +788,7 @@ fn edit_header(b: &mut Vec<u8>, rng: &mut Rng) {
             _ => (28, vec![[0, 1, 2][pick(rng, 3)]]),
         };
         b[at..at + v.len()].copy_from_slice(&v);
-        let crc = crc32(&b[12..29]);
+        let crc = crc32fast::hash(&b[12..29]);
         b[29..33].copy_from_slice(&crc.to_be_bytes());
     } else if b.starts_with(&[0xff, 0xd8]) {
         let sof = b.windows(2).position(|w| w[0] == 0xff && (0xc0..=0xc2).contains(&w[1]));

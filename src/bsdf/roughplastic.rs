@@ -34,7 +34,7 @@
 
 use super::microfacet::{fresnel, refract, MicrofacetDistribution, MicrofacetKind};
 use super::{fresnel_dielectric, BsdfSample, LocalBsdf, Mode};
-use crate::math::{reflect, Rgb, Vec3, INV_PI};
+use crate::math::{gauss_legendre, reflect, Rgb, Vec3, INV_PI};
 use crate::sampling::warp::sample_cosine_hemisphere;
 
 /// Entries of the transmittance table (Mitsuba's `MI_ROUGH_TRANSMITTANCE_RES`).
@@ -224,63 +224,6 @@ pub fn coat_transmittance(vndf: &MicrofacetDistribution, wi: Vec3, eta: f32) -> 
     result
 }
 
-/// Nodes and weights of the `n`-point Gauss–Legendre rule on [−1, 1], ascending (Mitsuba's
-/// `quad::gauss_legendre`: Newton's method on P_n from Chebyshev guesses, in f64, stored as
-/// f32).
-pub fn gauss_legendre(n: usize) -> (Vec<f32>, Vec<f32>) {
-    assert!(n >= 1);
-    // (P_l(x), P_l'(x)) by the three-term recurrence (Mitsuba's `math::legendre_pd`)
-    let legendre_pd = |l: usize, x: f64| -> (f64, f64) {
-        match l {
-            0 => (1.0, 0.0),
-            1 => (x, 1.0),
-            _ => {
-                let (mut l_pp, mut l_p, mut d_pp, mut d_p) = (1.0, x, 0.0, 1.0);
-                let (mut k0, mut k1, mut k2) = (3.0, 2.0, 1.0);
-                let (mut l_cur, mut d_cur) = (0.0, 0.0);
-                for _ in 2..=l {
-                    l_cur = (k0 * x * l_p - k2 * l_pp) / k1;
-                    d_cur = d_pp + k0 * l_p;
-                    (l_pp, l_p, d_pp, d_p) = (l_p, l_cur, d_p, d_cur);
-                    k2 = k1;
-                    k0 += 2.0;
-                    k1 += 1.0;
-                }
-                (l_cur, d_cur)
-            }
-        }
-    };
-    let mut nodes = vec![0.0f32; n];
-    let mut weights = vec![0.0f32; n];
-    let last = n - 1;
-    if last == 0 {
-        weights[0] = 2.0;
-        return (nodes, weights);
-    }
-    for i in 0..n / 2 {
-        let mut x = -((2 * i + 1) as f64 / (2 * n) as f64 * std::f64::consts::PI).cos();
-        for it in 0.. {
-            assert!(it < 20, "gauss_legendre({n}): Newton did not converge");
-            let (p, dp) = legendre_pd(n, x);
-            let step = p / dp;
-            x -= step;
-            if step.abs() <= 4.0 * x.abs() * f64::EPSILON {
-                break;
-            }
-        }
-        let dp = legendre_pd(n, x).1;
-        let w = (2.0 / ((1.0 - x * x) * dp * dp)) as f32;
-        (weights[i], weights[last - i]) = (w, w);
-        (nodes[i], nodes[last - i]) = (x as f32, -x as f32);
-    }
-    if n % 2 == 1 {
-        let dp = legendre_pd(n, 0.0).1;
-        weights[n / 2] = (2.0 / (dp * dp)) as f32;
-        nodes[n / 2] = 0.0;
-    }
-    (nodes, weights)
-}
-
 impl LocalBsdf for RoughPlastic {
     fn eval(&self, wo: Vec3, wi: Vec3, _: Mode) -> Rgb {
         if !(wo.z > 0.0 && wi.z > 0.0) {
@@ -387,22 +330,6 @@ mod tests {
 
     fn case(name: &str) -> &'static RoughPlastic {
         &cases().iter().find(|c| c.0 == name).unwrap().1
-    }
-
-    #[test]
-    fn gauss_legendre_integrates_polynomials() {
-        let (x, w) = gauss_legendre(2);
-        assert!((x[1] - (1.0f32 / 3.0).sqrt()).abs() < 1e-7 && x[0] == -x[1] && w == vec![1.0, 1.0]);
-        for n in [5usize, 32, 128] {
-            let (x, w) = gauss_legendre(n);
-            assert!(x.windows(2).all(|p| p[0] < p[1]), "n = {n}: nodes not ascending");
-            // exact for degree ≤ 2n − 1: ∫x^k over [−1, 1] = 2/(k + 1) for even k, 0 for odd
-            for k in 0..(2 * n).min(40) {
-                let got: f64 = x.iter().zip(&w).map(|(&x, &w)| w as f64 * (x as f64).powi(k as i32)).sum();
-                let want = if k % 2 == 0 { 2.0 / (k + 1) as f64 } else { 0.0 };
-                assert!((got - want).abs() < 2e-6, "n = {n}, k = {k}: {got} vs {want}");
-            }
-        }
     }
 
     #[test]

@@ -360,23 +360,12 @@ mod tests {
         e
     }
 
-    fn crc32(bytes: &[u8]) -> u32 {
-        let mut c = !0u32;
-        for &b in bytes {
-            c ^= b as u32;
-            for _ in 0..8 {
-                c = if c & 1 != 0 { 0xedb8_8320 ^ (c >> 1) } else { c >> 1 };
-            }
-        }
-        !c
-    }
-
     fn png_chunk(kind: &[u8; 4], body: &[u8]) -> Vec<u8> {
         let mut out = (body.len() as u32).to_be_bytes().to_vec();
         let mut typed = kind.to_vec();
         typed.extend_from_slice(body);
         out.extend_from_slice(&typed);
-        out.extend_from_slice(&crc32(&typed).to_be_bytes());
+        out.extend_from_slice(&crc32fast::hash(&typed).to_be_bytes());
         out
     }
 

@@ -20,111 +20,21 @@
 
 use super::limits::{extent_message, light_value_error, within_extent, MAX_INTENSITY, MAX_RADIANCE};
 use super::shape_uv::{ShapeUv, ShapeUvs};
+use super::spec::{CameraSpec, Corners, Origin, SceneError, ShapeIn, View};
 use super::{
     light_power, BoundingSphere, Camera, DirectionalLight, Emitter, Environment, LightRef, Lights, Material,
     PointLight, RenderDefaults, Roi, Scene, Sphere, Surface, Triangle, NO_EMITTER,
 };
-use crate::math::{Rgb, Vec2, Vec3, PI};
+use crate::math::{Rgb, Vec3, PI};
 use crate::param_limits as params;
 use crate::sampling::distribution::Distribution1D;
 use crate::texture::Texture;
-
-/// A scene loading error with its location.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SceneError {
-    /// File name.
-    pub file: String,
-    /// 1-based line (0 when unknown).
-    pub line: usize,
-    /// The offending key (may be empty).
-    pub key: String,
-    /// What is wrong.
-    pub message: String,
-}
-
-impl std::fmt::Display for SceneError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        // line 0 is "unknown": no line rather than a false one
-        match self.line {
-            0 => write!(f, "{}: ", self.file)?,
-            line => write!(f, "{}:{line}: ", self.file)?,
-        }
-        if !self.key.is_empty() {
-            write!(f, "key `{}`: ", self.key)?;
-        }
-        write!(f, "{}", self.message)
-    }
-}
-
-impl std::error::Error for SceneError {}
-
-/// Where an element came from in the scene file: its line (1-based, 0 unknown) and key.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub(super) struct Origin {
-    /// Line.
-    pub line: usize,
-    /// Key (`shape[2].u`, `rectangle.to_world`).
-    pub key: String,
-}
-
-impl Origin {
-    /// An origin.
-    pub fn new(line: usize, key: impl Into<String>) -> Origin {
-        Origin { line, key: key.into() }
-    }
-}
-
-/// How the camera looks: at a target with an up vector (TOML, a lone Mitsuba `lookat`), or along
-/// a frame taken from a matrix (forward, up, right).
-pub(super) enum View {
-    /// Target point and up vector.
-    LookAt { target: Vec3, up: Vec3 },
-    /// The columns of a camera matrix.
-    Frame { forward: Vec3, up: Vec3, right: Vec3 },
-}
-
-/// A camera as a format gives it, with the origin of each of its values.
-pub(super) struct CameraSpec {
-    /// Eye position.
-    pub position: (Vec3, Origin),
-    /// View; its origin names the target (or the matrix).
-    pub view: (View, Origin),
-    /// Origin of the up vector.
-    pub up_at: Origin,
-    /// Vertical field of view, degrees.
-    pub fov: (f32, Origin),
-    /// Width, height.
-    pub resolution: ([u32; 2], Origin),
-}
-
-/// One shape's common part: where it is, its material and emission, what it is (for messages).
-pub(super) struct ShapeIn {
-    /// The shape's origin (its line; the key prefix of the format, `shape[2]` or `shape.ply`).
-    pub at: Origin,
-    /// Material index (0 for emitters).
-    pub material: u32,
-    /// Area-light radiance (from `SceneBuilder::emission`) and its origin.
-    pub emission: Option<(Rgb, Origin)>,
-    /// Words after "in" in warnings (`ring.ply`, `shape `rectangle``).
-    pub what: String,
-    /// Keep shading normals of unit length to 1e-5 bit-exact (Mitsuba's exported meshes).
-    pub exact_normals: bool,
-}
 
 struct ShapeRec {
     shape: ShapeIn,
     skipped: usize,
     flat: usize,
     kept: usize,
-}
-
-/// What a triangle's corners carry beside their positions.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Corners {
-    /// Shading normals (smooth meshes).
-    pub n: Option<[Vec3; 3]>,
-    /// Texture coordinates.
-    pub uv: Option<[Vec2; 3]>,
 }
 
 /// The builder (see the module docs).
@@ -451,7 +361,7 @@ impl SceneBuilder {
 
     /// The default time budget, a duration (`30s`, `4m`; the limits of `--time`).
     pub fn time(&mut self, t: &str, at: &Origin) -> Result<(), SceneError> {
-        let secs = parse_duration(t).and_then(|v| params::check_time(v).map(|()| v));
+        let secs = params::parse_duration(t).and_then(|v| params::check_time(v).map(|()| v));
         self.render.time = Some(secs.map_err(|m| self.err(at, m))?);
         Ok(())
     }
@@ -678,49 +588,6 @@ pub(super) fn make_triangle(p: [Vec3; 3], corners: Corners, material: u32, exact
         })
     });
     Some(Triangle { p, n, uv, ng, area: 0.5 * len, material, emitter: NO_EMITTER })
-}
-
-/// Parses a duration such as `500ms`, `30s`, `4m`, `1h` or `1m30s` into seconds.
-pub fn parse_duration(s: &str) -> Result<f64, String> {
-    let s = s.trim();
-    let mut total = 0.0;
-    let mut num = String::new();
-    let mut chars = s.chars().peekable();
-    let mut any = false;
-    while let Some(c) = chars.next() {
-        if c.is_ascii_digit() || c == '.' {
-            num.push(c);
-            continue;
-        }
-        let mut unit = c.to_string();
-        while let Some(&n) = chars.peek() {
-            if n.is_ascii_alphabetic() {
-                unit.push(n);
-                chars.next();
-            } else {
-                break;
-            }
-        }
-        let v: f64 = num.parse().map_err(|_| format!("bad duration `{s}` (expected e.g. 30s, 4m, 1h)"))?;
-        total += v * match unit.as_str() {
-            "ms" => 1e-3,
-            "s" => 1.0,
-            "m" | "min" => 60.0,
-            "h" => 3600.0,
-            _ => return Err(format!("bad duration unit `{unit}` in `{s}` (use ms, s, m, h)")),
-        };
-        num.clear();
-        any = true;
-    }
-    if !num.is_empty() {
-        // a bare number means seconds
-        total += num.parse::<f64>().map_err(|_| format!("bad duration `{s}`"))?;
-        any = true;
-    }
-    if !any || !total.is_finite() || total <= 0.0 {
-        return Err(format!("bad duration `{s}`: must be positive (e.g. 30s, 4m, 1h)"));
-    }
-    Ok(total)
 }
 
 /// `None` when ROI `name` gives `compare` files of its own (`crops/NAME-*.png`, `strip-NAME.png`,

@@ -8,10 +8,11 @@
 //! warning; everything else that is wrong (NaN, negative values, zero-area lights, a bad fov, a
 //! missing OBJ, an empty scene) is an error, never a panic.
 
-use super::builder::{CameraSpec, Corners, Origin, SceneBuilder, ShapeIn, View};
+use super::builder::SceneBuilder;
 use super::limits::{self, extent_message, within_extent};
 use super::plugins::{self, IorValue, Param};
 use super::schema::{Doc, IorRaw, LightDef, MaterialDef, MaterialRaw, ParamRaw, ShapeDef, TextureRaw, UvRaw};
+use super::spec::{CameraSpec, Corners, Origin, ShapeIn, View};
 use super::{locate, Material, Scene, SceneError, Surface};
 use crate::math::{fnv1a, Rgb, Vec2, Vec3};
 use crate::texture::{BitmapParams, Checkerboard, FilterType, Texture, TextureCache, UvTransform, WrapMode};

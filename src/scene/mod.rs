@@ -24,15 +24,16 @@ mod plugins;
 pub mod ply;
 mod schema;
 mod shape_uv;
+mod spec;
 mod surface;
 
-pub use builder::{parse_duration, SceneError};
 pub use camera::Camera;
 pub use dirac_target::{MAX_OBJECTS, MAX_TARGETS, SPHERE_PAD};
 pub use emitters::{BoundingSphere, DirectionalLight, EnvMap, Environment, LatLong, Spot};
 pub use file::load_str;
 pub use limits::{within_extent, MAX_EXTENT};
 pub use shape_uv::ShapeUvs;
+pub use spec::SceneError;
 
 /// How a scene file is loaded: the `-D NAME=VALUE` substitutions for Mitsuba XML `$NAME`
 /// parameters (ignored by TOML scenes).

@@ -15,8 +15,8 @@ use super::params::{Plugin, Xform};
 use super::xml::Node;
 use super::Cx;
 use crate::math::{Mat3, Rgb, Vec3};
-use crate::scene::builder::Origin;
 use crate::scene::limits::MAX_RADIANCE;
+use crate::scene::spec::Origin;
 use crate::scene::{Environment, LatLong, SceneError, Spot};
 
 /// A top-level `<emitter>`.

@@ -28,7 +28,8 @@ mod xml;
 pub use shapes::SEGMENTS;
 
 use crate::math::Vec3;
-use crate::scene::builder::{CameraSpec, Origin, SceneBuilder, View};
+use crate::scene::builder::SceneBuilder;
+use crate::scene::spec::{CameraSpec, Origin, View};
 use crate::scene::{Material, Scene, SceneError};
 use crate::texture::TextureCache;
 use params::Plugin;

@@ -6,7 +6,7 @@
 use super::xml::Node;
 use super::Cx;
 use crate::math::Vec3;
-use crate::scene::builder::Origin;
+use crate::scene::spec::Origin;
 use crate::scene::SceneError;
 use std::collections::BTreeMap;
 

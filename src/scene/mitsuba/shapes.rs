@@ -17,10 +17,10 @@ use super::params::{Plugin, Xform};
 use super::xml::Node;
 use super::Cx;
 use crate::math::{Rgb, Vec2, Vec3};
-use crate::scene::builder::{Corners, Origin, ShapeIn};
 use crate::scene::limits;
 use crate::scene::ply::IndexedMesh;
 use crate::scene::shape_uv::{ShapeKind, ShapeUv};
+use crate::scene::spec::{Corners, Origin, ShapeIn};
 use crate::scene::SceneError;
 use glam::{DMat3, DMat4, DVec3};
 
