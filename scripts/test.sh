@@ -4,7 +4,7 @@
 #   2. cargo test --release                    (unit + integration tests, single process)
 #   3. cargo test --release --features mpi --test mpi   (2-rank tests under mpirun; target/mpi), then
 #      scripts/mpi-netns.sh: 3 hosts in network namespaces, 2 ranks each, with faults, on the
-#      MPICH 5.0.2 runtime it installs (about 2 minutes), where the machine allows (root, `ip netns`);
+#      MPICH 5.0.2 runtime it installs (about a minute), where the machine allows (root, `ip netns`);
 #      else a loud NOT RUN with the reason. FORECAST_NETNS=0 skips it.
 #   4. installs libembree-dev if missing (root/sudo); FORECAST_NO_EMBREE=1 skips Embree, then
 #      cargo test --release --features embree --test accel_embree --test wavefront --test pass_groups
