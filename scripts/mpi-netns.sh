@@ -14,6 +14,9 @@
 # are all killed, and 100 ms of added latency (tc netem, or the userspace delay) in the middle of a render end in a
 # bounded time with a clear error (latency: the same image).
 #
+# The ranks run on MPICH 5.0.2 (.ci/install-mpich-runtime.sh, run here: PyPI's `mpich` wheel in
+# /opt), the binary being the one built against Debian's MPICH 4.0.2 (the same ABI, libmpi.so.12):
+# 4.0.2's MPI_Finalize hangs over UCX's TCP across hosts in a third of the runs (docs/mpi.md).
 # Needs root (namespaces, veths, tc), iproute2 and MPICH (.ci/install-mpi.sh). Fails loudly when
 # the namespaces cannot be made; FORECAST_NO_MPI=1 skips it. Where the kernel has no sch_netem
 # (tc says "Specified qdisc kind is unknown"; such a kernel has no `tc` qdisc that adds a fixed
@@ -37,6 +40,14 @@ fail() {
 }
 [ "$(id -u)" = "0" ] || fail "needs root to create network namespaces"
 command -v mpiexec >/dev/null 2>&1 || fail "mpiexec not found (bash .ci/install-mpi.sh)"
+# the ranks' MPI runtime: MPICH 5.0.2 (Debian's 4.0.2 hangs in MPI_Finalize across hosts)
+# (FORECAST_NETNS_MPI=DIR: the MPI in DIR, bin/mpiexec and lib/, instead; /usr is Debian's 4.0.2)
+if [ -n "${FORECAST_NETNS_MPI:-}" ]; then
+    mpi="$FORECAST_NETNS_MPI"
+else
+    mpi="$(bash .ci/install-mpich-runtime.sh | tail -n 1)" || fail "cannot install the MPICH runtime (.ci/install-mpich-runtime.sh)"
+fi
+[ -x "$mpi/bin/mpiexec" ] || fail "no $mpi/bin/mpiexec"
 if ! command -v ip >/dev/null 2>&1 || ! command -v tc >/dev/null 2>&1; then
     bash .ci/apt-install.sh mpi-netns iproute2 || fail "cannot install iproute2 (ip, tc)"
 fi
@@ -117,8 +128,10 @@ exec ip netns exec "\$ns" sh -c "\$*"
 EOF
 chmod +x "$dir/launch"
 
-echo "== mpi-netns: 3 hosts ($net.10-12, namespaces $pre-0..2), 2 ranks each, over veths"
-export FORECAST_NETNS_DIR="$dir" FORECAST_NETNS_NETEM="$netem" FORECAST_NETNS_DELAY="$dir/delay"
+echo "== mpi-netns: 3 hosts ($net.10-12, namespaces $pre-0..2), 2 ranks each, over veths;" \
+    "$("$mpi/bin/mpichversion" | sed -n 1p | tr -s ' \t' ' ') ($mpi)"
+export FORECAST_NETNS_DIR="$dir" FORECAST_NETNS_NETEM="$netem" FORECAST_NETNS_DELAY="$dir/delay" \
+    FORECAST_NETNS_MPI="$mpi"
 if [ -n "${FORECAST_NETNS_TEST_BIN:-}" ]; then
     # a test binary built before (cargo test --release --features mpi --test mpi --no-run)
     "$FORECAST_NETNS_TEST_BIN" --ignored --nocapture --test-threads=1 "${1:-netns_}" </dev/null \
