@@ -400,19 +400,25 @@ impl Scene {
         if s.is_constant() {
             return (self.materials[id], sp);
         }
-        self.shade_varying(prim, id, sp, wo)
+        // the shading point is rewritten in place, so that the constant paths above return `sp`
+        // without a copy through the stack (`results/2026-12-07-mesh-speed-2.md`)
+        let mut sp = sp;
+        let m = self.shade_varying(prim, id, &mut sp, wo);
+        (m, sp)
     }
 
     /// `shade` where the material has textures, a normal or bump map or an anisotropic BSDF: its
-    /// parameters, shading normal and tangent at the hit's texture coordinates
+    /// parameters, and `sp`'s shading normal and tangent at the hit's texture coordinates
     /// (`Surface::shading_point`).
     #[inline(never)]
-    fn shade_varying(&self, prim: u32, id: usize, sp: ShadingPoint, wo: Vec3) -> (Material, ShadingPoint) {
-        let (uv, dpdu) = self.uv_at(prim, sp.p);
+    fn shade_varying(&self, prim: u32, id: usize, sp: &mut ShadingPoint, wo: Vec3) -> Material {
+        let at = *sp;
+        let (uv, dpdu) = self.uv_at(prim, at.p);
         let s = &self.surfaces[id];
         let m = s.material_at(&self.materials[id], &self.textures, uv);
-        let dpdv = || self.dpdv_at(prim, sp, dpdu);
-        (m, s.shading_point(sp, (uv, dpdu), dpdv, &self.textures, wo))
+        let dpdv = || self.dpdv_at(prim, at, dpdu);
+        *sp = s.shading_point(at, (uv, dpdu), dpdv, &self.textures, wo);
+        m
     }
 
     /// Emitter of a primitive, or `NO_EMITTER`.

@@ -167,13 +167,25 @@ impl TexelImage {
     /// Mitsuba's mean: of the luminance ([`super::LUMINANCE`]) of each texel, or of the one
     /// channel; summed in `f64`.
     fn compute_mean(&self) -> f32 {
-        let mut sum = 0.0f64;
-        for y in 0..self.height {
-            for x in 0..self.width {
-                let t = self.texel(x, y);
-                sum += if self.channels == 1 { t.x as f64 } else { luminance(t) as f64 };
+        // the texels in row-major order, as `texel` reads them, without its per-texel checks
+        let value = |t: Rgb| if self.channels == 1 { t.x as f64 } else { luminance(t) as f64 };
+        let sum: f64 = match &self.store {
+            Store::Codes { codes, table } => {
+                let c = |k: u8| table[k as usize];
+                if self.channels == 1 {
+                    codes.iter().fold(0.0, |s, &k| s + value(Rgb::splat(c(k))))
+                } else {
+                    codes.chunks_exact(3).fold(0.0, |s, t| s + value(Rgb::new(c(t[0]), c(t[1]), c(t[2]))))
+                }
             }
-        }
+            Store::Linear(v) => {
+                if self.channels == 1 {
+                    v.iter().fold(0.0, |s, &x| s + value(Rgb::splat(x)))
+                } else {
+                    v.chunks_exact(3).fold(0.0, |s, t| s + value(Rgb::new(t[0], t[1], t[2])))
+                }
+            }
+        };
         (sum / (self.width * self.height) as f64) as f32
     }
 
