@@ -87,9 +87,10 @@ pub fn normal_key(n: Vec3) -> [u32; 3] {
     n.to_array().map(f32::to_bits)
 }
 
-/// Normal bins per cube-face edge of [`normal_bin`]: a bin spans at most 2/32 rad ≈ 3.6° on each
-/// axis, so its centre is within ≈ 2.5° of every normal in it.
-pub const NORMAL_BINS: u32 = 32;
+/// Normal bins per cube-face edge of [`normal_bin`]: a bin spans at most 2/33 rad ≈ 3.5° on each
+/// axis, so its centre is within ≈ 2.5° of every normal in it; odd, so that the axes (the normals
+/// of most flat walls) are bin centres and keep their own frame.
+pub const NORMAL_BINS: u32 = 33;
 
 /// First word of the normal part of a key made by [`normal_bin`] (the bits of a NaN, which no
 /// [`normal_key`] of a unit normal has).
@@ -273,6 +274,10 @@ mod tests {
             let angle = n.dot(c).clamp(-1.0, 1.0).acos();
             assert!(angle <= max_angle * 1.01, "{n}: {}° from its bin centre", angle.to_degrees());
             assert_ne!(normal_bin(-n).0, k);
+        }
+        // an axis is its bin's centre
+        for n in [Vec3::X, -Vec3::Y, Vec3::Z] {
+            assert_eq!(normal_bin(n).1, n);
         }
         // degenerate input gets a bin, never a panic
         for n in [Vec3::ZERO, Vec3::splat(f32::NAN), Vec3::new(f32::INFINITY, 0.0, 0.0)] {
