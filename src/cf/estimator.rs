@@ -13,8 +13,10 @@
 //! on samples;
 //! the product is identical after a bitcode round trip (it is what rank 0 broadcasts).
 //! The [`TableCache`] (`table_cache.rs`) is an explicit object owned by the estimator and shared
-//! by all worker threads: a cached entry is a pure function of its cell, so sharing it changes
-//! no image.
+//! by all worker threads: a cached entry is a pure function of its key, so sharing it changes
+//! no image. [`CausticForecast::tables_in`] caches flat-shaded points only (the tables must cover
+//! the point's hemisphere); [`CausticForecast::guide_tables`], for a caller that mixes them with
+//! the BSDF, caches every non-Dirac point by the bin of its shading normal.
 
 use super::caustic_point::CausticPoint;
 use super::cluster::{cluster_points, Clustering};

@@ -1,8 +1,12 @@
 //! The CF table cache [spec §9 "caching tables per cluster cell"]: the
-//! direction tables of a flat-shaded, non-Dirac point are those of its cache cell, built once
-//! and shared by every worker thread.
+//! direction tables of a cacheable point are those of its cache key, built once and shared by
+//! every worker thread. Cacheable: flat-shaded non-Dirac points for `iws-cf` (which samples the
+//! tables alone, so their hemisphere must be the point's: normal part = the bits of `n_g`), and
+//! every non-Dirac point for `pt-cf` (whose BSDF share covers what the tables miss: normal part
+//! = the [`normal_bin`] of the lit-side shading normal, the tables built around the bin's centre,
+//! which is also the frame the caller samples and evaluates them in).
 //!
-//! The key is (cluster, cell, normal): the kept cluster `c` found at the point itself (the
+//! The key is (cluster, cell, normal part): the kept cluster `c` found at the point itself (the
 //! cluster map's membership test), and `c`'s cell of edge `F·r_c`, where
 //! `r_c = min(r, sqrt(n/(π ρ_c)))` is the radius that holds n forecasters at the cluster's own
 //! photon density `ρ_c = N_c/A_c`. The tables of a cell are built once, at its centre, from `c`'s
