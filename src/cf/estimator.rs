@@ -13,8 +13,10 @@
 //! on samples;
 //! the product is identical after a bitcode round trip (it is what rank 0 broadcasts).
 //! The [`TableCache`] (`table_cache.rs`) is an explicit object owned by the estimator and shared
-//! by all worker threads: a cached entry is a pure function of its cell, so sharing it changes
-//! no image.
+//! by all worker threads: a cached entry is a pure function of its key, so sharing it changes
+//! no image. [`CausticForecast::tables_in`] caches flat-shaded points only (the tables must cover
+//! the point's hemisphere); [`CausticForecast::guide_tables`], for a caller that mixes them with
+//! the BSDF, caches every non-Dirac point by the bin of its shading normal.
 
 use super::caustic_point::CausticPoint;
 use super::cluster::{cluster_points, Clustering};
@@ -24,7 +26,7 @@ use super::forecast_map::{search_radius, ForecastMaps};
 use super::share::CausticShare;
 use super::subset_grid::SubsetGrid;
 pub use super::table_cache::TableCache;
-use super::table_cache::{cell_of, normal_key, CellSizes};
+use super::table_cache::{cell_of, normal_bin, normal_key, CellSizes, NORMAL_BIN_TAG};
 use crate::bsdf::{self, Mode};
 use crate::math::{luminance, Frame, Rgb, Vec3};
 use crate::profile::Phase;
@@ -257,24 +259,25 @@ impl CausticForecast {
     }
 
     /// The tables of a cacheable point in cluster `c`: a pure function of `c`, its cell in
-    /// that cluster's grid and its normal (`table_cache.rs`). Cached tables are weighted by
-    /// lum(Φ)·cos and the cosine: independent of ωo, they serve every flat non-Dirac
-    /// BSDF (exact for Lambert).
+    /// that cluster's grid and the normal part `nk` of the key, built around the normal `n`
+    /// (`table_cache.rs`). Cached tables are weighted by lum(Φ)·cos and the cosine: independent
+    /// of ωo, they serve every non-Dirac BSDF (exact for Lambert).
     fn cached_tables(
         &self,
         cache: &TableCache,
-        (c, p, ng): (usize, Vec3, Vec3),
+        (c, p): (usize, Vec3),
+        (nk, n): ([u32; 3], Vec3),
         ctx: &mut Context,
     ) -> Arc<ForecastTables> {
         let (cell, centre) = cell_of(p, self.cells.edge[c]);
-        let key = (c as u32, cell, normal_key(ng));
+        let key = (c as u32, cell, nk);
         if let Some(t) = cache.get(&key) {
             ctx.profile.cf.cache_hits += 1;
             return t;
         }
         let t0 = Instant::now();
         let w = |cp: &CausticPoint, l: Vec3| cp.energy() * l.z;
-        let tables = Arc::new(self.build_tables((c, centre, &Frame::from_normal(ng)), &mut ctx.knn, w, |l| l.z));
+        let tables = Arc::new(self.build_tables((c, centre, &Frame::from_normal(n)), &mut ctx.knn, w, |l| l.z));
         ctx.profile.cf.tables_built += 1;
         ctx.profile.cf.cdf_ns += t0.elapsed().as_nanos() as u64;
         cache.insert(key, tables.clone());
@@ -348,11 +351,35 @@ impl CausticForecast {
         let frame = if cache.is_some() { Frame::from_normal(ng) } else { Frame::from_normal(ns) };
         let t_table = ctx.profile.start(Phase::CfTable);
         let tables = match cache {
-            Some(cache) => self.cached_tables(cache, (c, sp.p, ng), ctx),
+            Some(cache) => self.cached_tables(cache, (c, sp.p), (normal_key(ng), ng), ctx),
             None => self.point_tables(c, q, &frame, ctx),
         };
         ctx.profile.record(Phase::CfTable, t_table);
         (tables, frame)
+    }
+
+    /// The tables of kept cluster `c` at `q` for a caller that draws them in a mixture with the
+    /// BSDF (`pt-cf`'s defensive mixture, whose BSDF share covers every direction the tables
+    /// miss): with the cache on, every non-Dirac point (smooth or normal-mapped shading too)
+    /// takes the tables of its key (cluster, cell, [`normal_bin`] of the lit-side shading
+    /// normal), built at the cell's centre around the bin's centre normal, which is also the
+    /// frame returned. A pure function of the key, so sampling and `pdf_w` use one table and the
+    /// image does not depend on the threads. Without the cache: [`Self::tables_in`].
+    pub fn guide_tables(
+        &self,
+        c: usize,
+        q: &ShadingQuery,
+        ctx: &mut Context,
+        cache: &TableCache,
+    ) -> (Arc<ForecastTables>, Frame) {
+        if !self.cells.enabled() || q.m.is_dirac() {
+            return self.tables_in(c, q, ctx, None);
+        }
+        let (bin, n) = normal_bin(Self::lit_normals(q).1);
+        let t_table = ctx.profile.start(Phase::CfTable);
+        let tables = self.cached_tables(cache, (c, q.x.p), ([NORMAL_BIN_TAG, bin, 0], n), ctx);
+        ctx.profile.record(Phase::CfTable, t_table);
+        (tables, Frame::from_normal(n))
     }
 
     /// Ĺ_c at `q`. `g(ωi, w, ctx)` returns one sample's contribution: the integrand
@@ -399,5 +426,76 @@ impl CausticForecast {
     /// Decodes a broadcast product.
     pub fn from_bytes(b: &[u8]) -> Result<Self, String> {
         bitcode::decode(b).map_err(|e| format!("corrupt caustic-forecast product ({} bytes): {e}", b.len()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bsdf::ShadingPoint;
+    use crate::progress::Hidden;
+    use crate::sampling::rng::{stream, Rng};
+    use crate::scene::Material;
+
+    /// A 1 m² floor caustic lit from one side: one kept cluster.
+    fn forecast() -> CausticForecast {
+        let mut rng = Rng::keyed(7, stream::MISC, 0, 0);
+        let pts: Vec<CausticPoint> = (0..4000)
+            .map(|_| {
+                let (a, b) = (rng.next_f32(), rng.next_f32());
+                let wi = Vec3::new(0.3 * rng.next_f32(), 1.0, 0.2 * rng.next_f32()).normalize();
+                CausticPoint::new(Vec3::new(a, 0.0, b), Vec3::Y, wi, Vec3::splat(1.0))
+            })
+            .collect();
+        CausticForecast::build(pts, ForecastOptions::default(), 1, PreprocessStats::default(), &Hidden)
+    }
+
+    fn query<'a>(x: &'a ShadingPoint, m: &'a Material) -> ShadingQuery<'a> {
+        ShadingQuery { x, m, wo: Vec3::Y, depth: 0 }
+    }
+
+    fn point(p: Vec3, ns: Vec3) -> ShadingPoint {
+        ShadingPoint { p, ng: Vec3::Y, ns, n0: ns, s: Vec3::ZERO }
+    }
+
+    /// `guide_tables` is a pure function of (cluster, cell, normal bin): two smooth-shaded points
+    /// of one cell whose normals share a bin get the same table (a cache hit) in the same frame,
+    /// equal to what a fresh cache builds for either, in any order; another bin gets its own.
+    #[test]
+    fn guide_tables_are_a_pure_function_of_their_key() {
+        let cf = forecast();
+        let m = Material::Diffuse { albedo: Vec3::splat(0.5) };
+        let base = Vec3::new(0.5, 0.0, 0.5);
+        let mut ctx = Context::new(Rng::keyed(1, stream::MISC, 0, 0));
+        let at_base = point(base, Vec3::Y);
+        let c = cf.cluster_at(&query(&at_base, &m), &mut ctx, None).expect("a kept cluster");
+        let edge = cf.cells.edge[c];
+        let (cell, centre) = cell_of(base, edge);
+        let (a, b) = (centre - Vec3::splat(0.2 * edge), centre + Vec3::splat(0.2 * edge));
+        let (a, b) = (Vec3::new(a.x, 0.0, a.z), Vec3::new(b.x, 0.0, b.z));
+        assert_eq!((cell_of(a, edge).0, cell_of(b, edge).0), (cell, cell));
+        let (na, nb) = (Vec3::new(0.001, 1.0, 0.0).normalize(), Vec3::new(0.0, 1.0, 0.002).normalize());
+        assert_eq!(normal_bin(na).0, normal_bin(nb).0);
+        let tilted = Vec3::new(0.3, 1.0, 0.0).normalize();
+        assert_ne!(normal_bin(tilted).0, normal_bin(na).0);
+        let (spa, spb, spt) = (point(a, na), point(b, nb), point(a, tilted));
+        let run = |order: &[&ShadingPoint]| {
+            let (cache, mut ctx) = (TableCache::default(), Context::new(Rng::keyed(1, stream::MISC, 0, 0)));
+            let out: Vec<_> = order.iter().map(|sp| cf.guide_tables(c, &query(sp, &m), &mut ctx, &cache)).collect();
+            (out, ctx.profile.cf.tables_built, ctx.profile.cf.cache_hits)
+        };
+        let (ab, built, hits) = run(&[&spa, &spb, &spt]);
+        assert_eq!((built, hits), (2, 1));
+        assert!(Arc::ptr_eq(&ab[0].0, &ab[1].0));
+        assert_eq!(ab[0].1.to_local(Vec3::Y), ab[1].1.to_local(Vec3::Y));
+        assert!(ab[0].0.t1.is_some(), "the floor's tables hold its photons");
+        let (ba, _, _) = run(&[&spt, &spb, &spa]);
+        for (x, y) in [(&ab[0], &ba[2]), (&ab[1], &ba[1]), (&ab[2], &ba[0])] {
+            assert_eq!(*x.0, *y.0, "a table depends on what was built before it");
+            assert_eq!(x.1.to_local(Vec3::X), y.1.to_local(Vec3::X));
+        }
+        assert_ne!(*ab[0].0, *ab[2].0);
+        // the frame is the bin centre's, not the point's normal
+        assert_eq!(ab[0].1.to_local(normal_bin(na).1), Frame::from_normal(normal_bin(na).1).to_local(normal_bin(na).1));
     }
 }

@@ -1,8 +1,12 @@
 //! The CF table cache [spec §9 "caching tables per cluster cell"]: the
-//! direction tables of a flat-shaded, non-Dirac point are those of its cache cell, built once
-//! and shared by every worker thread.
+//! direction tables of a cacheable point are those of its cache key, built once and shared by
+//! every worker thread. Cacheable: flat-shaded non-Dirac points for `iws-cf` (which samples the
+//! tables alone, so their hemisphere must be the point's: normal part = the bits of `n_g`), and
+//! every non-Dirac point for `pt-cf` (whose BSDF share covers what the tables miss: normal part
+//! = the [`normal_bin`] of the lit-side shading normal, the tables built around the bin's centre,
+//! which is also the frame the caller samples and evaluates them in).
 //!
-//! The key is (cluster, cell, normal): the kept cluster `c` found at the point itself (the
+//! The key is (cluster, cell, normal part): the kept cluster `c` found at the point itself (the
 //! cluster map's membership test), and `c`'s cell of edge `F·r_c`, where
 //! `r_c = min(r, sqrt(n/(π ρ_c)))` is the radius that holds n forecasters at the cluster's own
 //! photon density `ρ_c = N_c/A_c`. The tables of a cell are built once, at its centre, from `c`'s
@@ -87,7 +91,50 @@ pub fn normal_key(n: Vec3) -> [u32; 3] {
     n.to_array().map(f32::to_bits)
 }
 
-/// Cache key: (cluster, cell, normal).
+/// Normal bins per cube-face edge of [`normal_bin`]: a bin spans at most 2/33 rad ≈ 3.5° on each
+/// axis, so its centre is within ≈ 2.5° of every normal in it; odd, so that the axes (the normals
+/// of most flat walls) are bin centres and keep their own frame.
+pub const NORMAL_BINS: u32 = 33;
+
+/// First word of the normal part of a key made by [`normal_bin`] (the bits of a NaN, which no
+/// [`normal_key`] of a unit normal has).
+pub const NORMAL_BIN_TAG: u32 = u32::MAX;
+
+/// The cube-map bin of a unit normal `n` and the bin's centre (a unit vector): the dominant axis
+/// and its sign choose the face, the other two coordinates over the dominant one, each in
+/// [-1, 1], are cut into [`NORMAL_BINS`] equal steps. A pure function of `n`; the centre lies in
+/// its own bin. The key's normal part is `[NORMAL_BIN_TAG, bin, 0]`.
+pub fn normal_bin(n: Vec3) -> (u32, Vec3) {
+    let a = n.abs().to_array();
+    // dominant axis, ties to the lower index (deterministic); a NaN or zero normal: +z
+    let axis = if a[0] >= a[1] && a[0] >= a[2] {
+        0
+    } else if a[1] >= a[2] {
+        1
+    } else {
+        2
+    };
+    let v = n.to_array();
+    let (d, b, c) = (v[axis], v[(axis + 1) % 3], v[(axis + 2) % 3]);
+    let q = NORMAL_BINS as f32;
+    let step = |x: f32| {
+        let t = if d.abs() > 0.0 { x / d.abs() } else { 0.0 };
+        let t = if t.is_finite() { t } else { 0.0 };
+        (((t.clamp(-1.0, 1.0) + 1.0) * 0.5 * q) as u32).min(NORMAL_BINS - 1)
+    };
+    let (neg, ib, ic) = (u32::from(d < 0.0), step(b), step(c));
+    let face = 2 * axis as u32 + neg;
+    let key = (face * NORMAL_BINS + ib) * NORMAL_BINS + ic;
+    let mid = |i: u32| -1.0 + (i as f32 + 0.5) * 2.0 / q;
+    let mut w = [0.0f32; 3];
+    w[axis] = if neg == 1 { -1.0 } else { 1.0 };
+    w[(axis + 1) % 3] = mid(ib);
+    w[(axis + 2) % 3] = mid(ic);
+    (key, Vec3::from_array(w).normalize())
+}
+
+/// Cache key: (cluster, cell, normal part): the bits of a flat point's normal ([`normal_key`]) or
+/// `[NORMAL_BIN_TAG, bin, 0]` for a [`normal_bin`].
 pub type CellKey = (u32, [i32; 3], [u32; 3]);
 
 /// The table cache of one CF estimator, shared by every worker thread: a sharded concurrent
@@ -204,5 +251,55 @@ mod tests {
             assert_eq!(cell_of(c, 0.25).0, k);
             assert!((c - p).abs().max_element() <= 0.125 + 1e-6);
         }
+    }
+
+    /// Every normal lands in one bin whose centre is a unit vector in that same bin and within
+    /// the bin's half-diagonal (≈ 2.5°) of it; the two sides of a wall never share a bin.
+    #[test]
+    fn normal_bins_are_pure_and_tight() {
+        let mut rng = Rng::keyed(5, stream::MISC, 0, 0);
+        let max_angle = (2.0f32.sqrt() / NORMAL_BINS as f32).atan(); // half-diagonal at a face centre
+        for i in 0..20_000 {
+            let n = match i {
+                0 => Vec3::Y,
+                1 => Vec3::new(1.0, 1.0, 1.0).normalize(), // a three-way tie of axes
+                2 => Vec3::new(0.0, -1.0, 0.0),
+                _ => {
+                    let (z, phi) = (2.0 * rng.next_f32() - 1.0, 2.0 * std::f32::consts::PI * rng.next_f32());
+                    let r = (1.0 - z * z).max(0.0).sqrt();
+                    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+                }
+            };
+            let (k, c) = normal_bin(n);
+            assert!(k < 6 * NORMAL_BINS * NORMAL_BINS);
+            assert_eq!(normal_bin(n), (k, c), "not a pure function of n");
+            assert!((c.length() - 1.0).abs() < 1e-5);
+            assert_eq!(normal_bin(c).0, k, "centre {c} of {n}'s bin lies in another bin");
+            let angle = n.dot(c).clamp(-1.0, 1.0).acos();
+            assert!(angle <= max_angle * 1.01, "{n}: {}° from its bin centre", angle.to_degrees());
+            assert_ne!(normal_bin(-n).0, k);
+        }
+        // an axis is its bin's centre
+        for n in [Vec3::X, -Vec3::Y, Vec3::Z] {
+            assert_eq!(normal_bin(n).1, n);
+        }
+        // degenerate input gets a bin, never a panic
+        for n in [Vec3::ZERO, Vec3::splat(f32::NAN), Vec3::new(f32::INFINITY, 0.0, 0.0)] {
+            let (k, _) = normal_bin(n);
+            assert!(k < 6 * NORMAL_BINS * NORMAL_BINS);
+        }
+    }
+
+    /// The cache holds what it was given under a key and nothing under another key.
+    #[test]
+    fn cache_returns_its_entries_by_key() {
+        let cache = TableCache::default();
+        let t = Arc::new(ForecastTables { t1: None, t2: None });
+        let k = (3, [1, -2, 5], [NORMAL_BIN_TAG, 17, 0]);
+        assert!(cache.get(&k).is_none());
+        cache.insert(k, t.clone());
+        assert!(Arc::ptr_eq(&cache.get(&k).unwrap(), &t));
+        assert!(cache.get(&(3, [1, -2, 5], [NORMAL_BIN_TAG, 18, 0])).is_none());
+        assert!(cache.get(&(4, [1, -2, 5], [NORMAL_BIN_TAG, 17, 0])).is_none());
     }
 }

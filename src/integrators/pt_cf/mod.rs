@@ -3,7 +3,7 @@
 //!
 //! Estimator. Exactly `pt` (`pt::vertex`) except at the guided vertices: non-Dirac hits at
 //! diffuse depth `d < --table-depth` inside a guided kept cluster `k` (`CausticForecast::
-//! cluster_at`, then `tables_in` through the shared `TableCache`). There the continuation is
+//! cluster_at`, then `guide_tables` through the shared `TableCache`). There the continuation is
 //! drawn from the defensive mixture `q(ω) = c_k·p_BSDF(ω) + (1−c_k)·p_CF(ω)` (`cf::mixture`),
 //! `c_k = max(c, 1 − s_k)` from the cluster's caustic share `s_k` (`cf::share`), and at `d = 0`
 //! split into `n` continuations (`--split`, `n` a function of the cluster only). NEE is
@@ -256,7 +256,7 @@ impl GuidedPathTracer {
     /// tables are empty.
     #[inline(never)]
     fn guide_in(&self, c: usize, weights: MixtureWeights, q: &ShadingQuery, ctx: &mut Context) -> Option<Guide> {
-        let (tables, frame) = self.cf.tables_in(c, q, ctx, Some(&self.cache));
+        let (tables, frame) = self.cf.guide_tables(c, q, ctx, &self.cache);
         if tables.t1.is_none() && tables.t2.is_none() {
             return None;
         }
