@@ -5,13 +5,20 @@
 //! not probed are not split), the caustic preprocess ([`PREPROCESS_SHARE`]: fewer photons, traced
 //! from the same streams) and `pt-cf`'s light-path pilot ([`PILOT_SHARE`]: cut short, the
 //! default count). The passes run until the budget less the write reserve
-//! (`schedule::Deadline`). A budget that loading, the BVH and writing alone exceed is refused
-//! before any other work, with the time the render needs ([`Budget::check_minimal`]).
+//! (`schedule::Deadline`): a round is started only if it is expected to fit, and a round still
+//! running at that deadline is cut within a tile (or a chunk of `pt-cf`'s light paths) and
+//! discarded whole on every rank, so the image holds whole passes only, bit for bit the `--spp`
+//! render of that many passes with the same preprocess and probe (`pipeline::passes`). The
+//! run's first round is the exception: it is never cut by the deadline (a time-boxed image is
+//! never empty), so a render whose one pass outlasts the budget ends up to a pass late, with a
+//! warning naming the `--time` it needs. A budget that loading, the BVH and writing alone exceed
+//! is refused before any other work, with the time the render needs ([`Budget::check_minimal`]).
 //!
 //! Invariants: every early end leaves the image unbiased (fewer split pixels, fewer photons in a
 //! pdf, another light-path count: each an unbiased estimator); a phase's deadline is never after
 //! the render's; the report lists each phase's wall seconds and share of the budget
-//! ([`PhaseTime`]). Without `--time` no phase has a deadline, and every phase still stops at a
+//! ([`PhaseTime`]; `passes` is `stopped` when a round was cut, and the JSON's `passes_cut` and
+//! `cut_s` say how many passes and seconds were discarded). Without `--time` no phase has a deadline, and every phase still stops at a
 //! signal (`interrupt::Stop`).
 
 use crate::interrupt::{Interrupt, Stop};

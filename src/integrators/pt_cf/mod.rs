@@ -443,10 +443,17 @@ impl CameraPdf for GuidedPathTracer {
 }
 
 impl LightTracer for GuidedPathTracer {
-    fn light_splats(&self, world: &World, camera: &Camera, seed: u64, pass: u64) -> LightSplats {
+    fn light_splats_until(
+        &self,
+        world: &World,
+        camera: &Camera,
+        seed: u64,
+        pass: u64,
+        stop: &crate::interrupt::Stop,
+    ) -> Option<LightSplats> {
         match &self.light {
-            Some(light) => light::light_splats(self, light, world, camera, (seed, pass)),
-            None => LightSplats::default(),
+            Some(light) => light::light_splats(self, light, world, camera, (seed, pass), stop),
+            None => Some(LightSplats::default()),
         }
     }
 
