@@ -177,20 +177,28 @@ fn a_cut_pass_leaves_the_film_as_it_was_and_a_whole_one_is_the_render_of_its_pas
     }
 }
 
-/// SIGTERM in the middle of a later pass of a long `--spp` render: the render ends within about a
+/// SIGTERM in the middle of a later round of a long `--spp` render: the render ends within about a
 /// second (the pass is cut, not finished), its JSON counts the cut passes, and its image is bit
 /// for bit the `--spp P` render of the P passes it kept.
 fn sigterm_cuts_a_pass(method: &str, extra: &[&str]) {
     let d = tmp_dir(&format!("tb-cut-{method}"));
     let (out, re) = (d.join("cut"), d.join("whole"));
     let common = [&["--emission-split", "1"][..], extra].concat();
-    let child =
-        render("scenes/cornell-box.toml", method, "256x256", &out, &[&["--spp", "100000"][..], &common].concat())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-    std::thread::sleep(Duration::from_millis(3000));
+    // a snapshot after 1 s is written at the first round boundary after it: once it is there,
+    // a round is done, and the signal then lands in a later one
+    let spp = [&["--spp", "100000", "--snapshots", "1s"][..], &common].concat();
+    let child = render("scenes/cornell-box.toml", method, "256x256", &out, &spp)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let snapped =
+        || std::fs::read_dir(&d).unwrap().flatten().any(|e| e.file_name().to_string_lossy().contains(".snap-"));
+    let t = Instant::now();
+    while !snapped() && t.elapsed() < Duration::from_secs(120) {
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    std::thread::sleep(Duration::from_millis(1000));
     let t = Instant::now();
     assert!(Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap().success());
     let o = child.wait_with_output().unwrap();

@@ -123,7 +123,9 @@ impl MethodSpec for PtCf {
             .collect();
         let guided: Vec<usize> = (0..n_kept).filter(|&c| per_cluster[c].is_some()).collect();
         let split = split_counts(&g.clustering.clusters[..n_kept], &guided, args.cf.split);
-        let guided_grid = SubsetGrid::build(&g.cluster_map, &guided);
+        let deadline = args.cf.build_deadline;
+        let stop = || deadline.is_some_and(|d| std::time::Instant::now() >= d);
+        let guided_grid = SubsetGrid::build_until(&g.cluster_map, &guided, &stop);
         Ok(Box::new(GuidedPathTracer {
             max_depth: args.settings.cap(),
             weights,
