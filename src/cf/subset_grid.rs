@@ -468,14 +468,20 @@ mod tests {
         let map = ClusterMap::build(&pts, &cl, 63, 32, 0.05);
         let n = map.n_clusters();
         let mut r = Rng::keyed(7, stream::MISC, 3, 0);
+        let reps: Vec<Vec3> = map.representatives().map(|(_, p)| Vec3::from_array(p)).collect();
         for subset in [vec![0usize], vec![1, 5, 7], (0..n).collect::<Vec<_>>()] {
             let grid = SubsetGrid::build_until(&map, &subset, &|| true);
             assert_eq!((grid.kinds().cells, grid.kinds().tree), (1, 1), "subset {subset:?}");
             let mut accepted = 0;
             for t in 0..100_000 {
-                let x = Vec3::new(8.0 * r.next_f32() - 0.5, 0.6 * r.next_f32() - 0.1, 8.0 * r.next_f32() - 0.5);
-                let x = if t % 2 == 0 { Vec3::new(x.x, 0.0, x.z) } else { x };
-                let nx = [Vec3::Y, Vec3::X, Vec3::new(0.6, 0.8, 0.0)][t % 3];
+                // anywhere in a box larger than the caustics (a third), near a representative (the rest)
+                let x = if t % 3 == 0 {
+                    Vec3::new(8.0 * r.next_f32() - 0.5, 0.6 * r.next_f32() - 0.1, 8.0 * r.next_f32() - 0.5)
+                } else {
+                    let d = Vec3::new(r.next_f32() - 0.5, r.next_f32() - 0.5, r.next_f32() - 0.5) * 0.3;
+                    reps[t % reps.len()] + d * r.next_f32()
+                };
+                let nx = [Vec3::Y, Vec3::X, Vec3::new(0.6, 0.8, 0.0)][(t / 3) % 3];
                 let got = grid.cluster_at(&map, x, nx);
                 assert_eq!(got, map.query(x, nx).filter(|c| subset.contains(c)), "subset {subset:?}: x = {x}");
                 accepted += usize::from(got.is_some());

@@ -11,6 +11,10 @@
 //! passes at once, each pixel's samples side by side in the batch. A sample's value depends only
 //! on (seed, pass, pixel), and each pixel's samples enter the film in pass order, so a group's
 //! film is bit for bit that of its passes rendered one by one; the grouping is pure speed.
+//!
+//! Cut passes (`trace_passes`): a group is traced before it enters the film, each tile (and each
+//! chunk of the light side's paths) started only while its `interrupt::Stop` is not due; a group
+//! the stop reached is dropped whole, never merged in part, so the film holds whole passes only.
 
 pub mod film;
 pub mod pixel;
