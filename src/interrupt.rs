@@ -1,6 +1,6 @@
-//! Ctrl-C and SIGTERM during `forecast render`: the first signal ends the
-//! render after the pass group in flight (about a second, `schedule::GROUP_SECS`), and the
-//! outputs (image, JSON, the checkpoint if checkpoints are on) are written as at the end of a
+//! Ctrl-C and SIGTERM during `forecast render`: the first signal cuts the pass group in flight
+//! (within a tile or a chunk of light paths; the cut passes are discarded whole,
+//! `render::trace_passes`), and the outputs (image, JSON, the checkpoint if checkpoints are on) are written as at the end of a
 //! time box, with `interrupted: true` and `complete: false` in the JSON and exit status 130; a
 //! second signal exits at once. While nothing is finished yet (loading, the BVH, the probe, the
 //! preprocess, the pilot, the first round of passes: [`Interrupt::nothing_to_save`]) a signal
@@ -39,7 +39,7 @@ impl Interrupt {
                 std::process::exit(EXIT_INTERRUPTED.into());
             }
             eprintln!(
-                "\ninterrupted: finishing the passes in flight, then writing what is done (again to quit at once)"
+                "\ninterrupted: dropping the passes in flight, then writing the passes done (again to quit at once)"
             );
         })
         .map_err(|e| format!("cannot install the Ctrl-C/SIGTERM handler: {e}"))?;

@@ -330,7 +330,12 @@ impl CausticForecast {
     /// The grid over every kept cluster ([`SubsetGrid`]: `cluster_at` with it is `cluster_at`
     /// without it, faster).
     pub fn kept_grid(&self) -> SubsetGrid {
-        SubsetGrid::build(&self.cluster_map, &(0..self.cluster_map.n_clusters()).collect::<Vec<_>>())
+        self.kept_grid_until(&|| false)
+    }
+
+    /// [`CausticForecast::kept_grid`] until `stop` (`SubsetGrid::build_until`).
+    pub fn kept_grid_until(&self, stop: &(dyn Fn() -> bool + Sync)) -> SubsetGrid {
+        SubsetGrid::build_until(&self.cluster_map, &(0..self.cluster_map.n_clusters()).collect::<Vec<_>>(), stop)
     }
 
     /// The tables of kept cluster `c` at `q` and their frame (z = the normal on `q.wo`'s side).

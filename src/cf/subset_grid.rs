@@ -17,6 +17,9 @@
 //! A point whose normal fails the map's normal test for every subset cluster (a wall, when the
 //! guided caustics lie on a floor) is rejected before its cell is looked at.
 //!
+//! A build stopped early ([`SubsetGrid::build_until`]: the time box's share of the integrator's
+//! build) leaves one cell over the subset's box that asks the map: as exact, only slower.
+//!
 //! Invariants: exact ([`SubsetGrid::cluster_at`]`(x, n_x)` = `query(x, n_x)` when that is a
 //! subset cluster, else `None`; distance bounds carry a relative slack for f32 rounding, and a
 //! point in the slack band around the grid asks the map; `tests` compare with the map on random
@@ -103,6 +106,12 @@ enum Place {
 impl SubsetGrid {
     /// The grid of the kept clusters `subset` of `map` (an empty subset never contains a point).
     pub fn build(map: &ClusterMap, subset: &[usize]) -> Self {
+        Self::build_until(map, subset, &|| false)
+    }
+
+    /// [`SubsetGrid::build`], its z slices built while `stop` is false; once it is true, the grid
+    /// is one cell over the subset's box that asks the map (exact, as every cell is).
+    pub fn build_until(map: &ClusterMap, subset: &[usize], stop: &(dyn Fn() -> bool + Sync)) -> Self {
         let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
         for &c in subset {
             if let Some((a, b)) = map.bounds(c) {
@@ -128,20 +137,32 @@ impl SubsetGrid {
         let b = Builder { map, reps, all, guided: KdTree::build(&guided), in_subset, reach };
         let half_diag = 0.5 * cell * 3f32.sqrt() * (1.0 + SLACK);
         // one z slice per task: the answers are a pure function of the cell, whatever the threads
-        let built: Vec<Built> = (0..dims[2])
+        let slices: Vec<Option<Vec<Built>>> = (0..dims[2])
             .into_par_iter()
-            .flat_map_iter(|k| {
-                let b = &b;
+            .map(|k| {
+                if stop() {
+                    return None;
+                }
                 let mut out = Vec::new();
-                (0..dims[1])
-                    .flat_map(move |j| (0..dims[0]).map(move |i| (i, j)))
-                    .map(move |(i, j)| {
-                        let o = lo + (Vec3::new(i as f32, j as f32, k as f32) + 0.5) * cell;
-                        b.cell(o, half_diag, &mut out)
-                    })
-                    .collect::<Vec<_>>()
+                let slice = (0..dims[1]).flat_map(move |j| (0..dims[0]).map(move |i| (i, j)));
+                Some(
+                    slice
+                        .map(|(i, j)| {
+                            let o = lo + (Vec3::new(i as f32, j as f32, k as f32) + 0.5) * cell;
+                            b.cell(o, half_diag, &mut out)
+                        })
+                        .collect(),
+                )
             })
             .collect();
+        if slices.iter().any(Option::is_none) {
+            // one cell that asks the map, over a cube holding the subset's box
+            let cell = extent.max_element().max(1e-6);
+            let normals = subset.iter().map(|&c| map.normal(c)).collect();
+            let (cells, in_subset) = (vec![TREE], b.in_subset);
+            return SubsetGrid { lo, inv_cell: 1.0 / cell, dims: [1; 3], cells, in_subset, normals, ..Self::default() };
+        }
+        let built: Vec<Built> = slices.into_iter().flatten().flatten().collect();
         let (mut cells, mut scans, mut candidates) = (Vec::with_capacity(built.len()), Vec::new(), Vec::new());
         for a in built {
             cells.push(match a {
@@ -436,5 +457,36 @@ mod tests {
             }
         }
         assert!(total.one > 0 && total.scan > 0 && total.empty > 0, "{total:?}");
+    }
+
+    /// A build stopped at once (a time box's end) leaves one cell that asks the map: still
+    /// `query` restricted to the subset, exactly.
+    #[test]
+    fn a_stopped_build_is_exact_too() {
+        let pts = points(12_000);
+        let cl = cluster_points(&pts, 24, 5);
+        let map = ClusterMap::build(&pts, &cl, 63, 32, 0.05);
+        let n = map.n_clusters();
+        let mut r = Rng::keyed(7, stream::MISC, 3, 0);
+        let reps: Vec<Vec3> = map.representatives().map(|(_, p)| Vec3::from_array(p)).collect();
+        for subset in [vec![0usize], vec![1, 5, 7], (0..n).collect::<Vec<_>>()] {
+            let grid = SubsetGrid::build_until(&map, &subset, &|| true);
+            assert_eq!((grid.kinds().cells, grid.kinds().tree), (1, 1), "subset {subset:?}");
+            let mut accepted = 0;
+            for t in 0..100_000 {
+                // anywhere in a box larger than the caustics (a third), near a representative (the rest)
+                let x = if t % 3 == 0 {
+                    Vec3::new(8.0 * r.next_f32() - 0.5, 0.6 * r.next_f32() - 0.1, 8.0 * r.next_f32() - 0.5)
+                } else {
+                    let d = Vec3::new(r.next_f32() - 0.5, r.next_f32() - 0.5, r.next_f32() - 0.5) * 0.3;
+                    reps[t % reps.len()] + d * r.next_f32()
+                };
+                let nx = [Vec3::Y, Vec3::X, Vec3::new(0.6, 0.8, 0.0)][(t / 3) % 3];
+                let got = grid.cluster_at(&map, x, nx);
+                assert_eq!(got, map.query(x, nx).filter(|c| subset.contains(c)), "subset {subset:?}: x = {x}");
+                accepted += usize::from(got.is_some());
+            }
+            assert!(accepted > 100, "subset {subset:?}: only {accepted} accepted");
+        }
     }
 }

@@ -119,7 +119,20 @@ pub trait Integrator: Send + Sync {
 pub trait LightTracer: Send + Sync {
     /// The pass's light-traced splats: a dense row-major image of `camera`'s size added to every
     /// pixel's camera sample of pass `pass`, a pure function of (seed, pass) and the scene.
-    fn light_splats(&self, world: &World, camera: &Camera, seed: u64, pass: u64) -> LightSplats;
+    fn light_splats(&self, world: &World, camera: &Camera, seed: u64, pass: u64) -> LightSplats {
+        self.light_splats_until(world, camera, seed, pass, &crate::interrupt::Stop::never())
+            .expect("light paths without a stop are all traced")
+    }
+    /// [`LightTracer::light_splats`] while `stop` is not due; `None` once it came due before every
+    /// path was traced (the pass is cut: its splats are not an estimator without all its paths).
+    fn light_splats_until(
+        &self,
+        world: &World,
+        camera: &Camera,
+        seed: u64,
+        pass: u64,
+        stop: &crate::interrupt::Stop,
+    ) -> Option<LightSplats>;
     /// Sets the light paths per pass of the next passes, both sides' MIS weights included (the
     /// light-path pilot, `pipeline::light_pilot`, tries several counts on one integrator and its
     /// warm table cache).

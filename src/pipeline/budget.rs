@@ -4,14 +4,22 @@
 //! starts and stops there with what it has: the emission-split probe ([`PROBE_SHARE`]: the bands
 //! not probed are not split), the caustic preprocess ([`PREPROCESS_SHARE`]: fewer photons, traced
 //! from the same streams) and `pt-cf`'s light-path pilot ([`PILOT_SHARE`]: cut short, the
-//! default count). The passes run until the budget less the write reserve
-//! (`schedule::Deadline`). A budget that loading, the BVH and writing alone exceed is refused
-//! before any other work, with the time the render needs ([`Budget::check_minimal`]).
+//! default count), and the integrator's build ([`BUILD_SHARE`]: the CF lookup grid, exact when
+//! stopped, slower per lookup). The passes run until the budget less the write reserve
+//! (`schedule::Deadline`): a round is started only if it is expected to fit, and a round still
+//! running at that deadline is cut within a tile (or a chunk of `pt-cf`'s light paths) and
+//! discarded whole on every rank, so the image holds whole passes only, bit for bit the `--spp`
+//! render of that many passes with the same preprocess and probe (`pipeline::passes`). The
+//! run's first round is the exception: it is never cut by the deadline (a time-boxed image is
+//! never empty), so a render whose one pass outlasts the budget ends up to a pass late, with a
+//! warning naming the `--time` it needs. A budget that loading, the BVH and writing alone exceed
+//! is refused before any other work, with the time the render needs ([`Budget::check_minimal`]).
 //!
 //! Invariants: every early end leaves the image unbiased (fewer split pixels, fewer photons in a
 //! pdf, another light-path count: each an unbiased estimator); a phase's deadline is never after
 //! the render's; the report lists each phase's wall seconds and share of the budget
-//! ([`PhaseTime`]). Without `--time` no phase has a deadline, and every phase still stops at a
+//! ([`PhaseTime`]; `passes` is `stopped` when a round was cut, and the JSON's `passes_cut` and
+//! `cut_s` say how many passes and seconds were discarded). Without `--time` no phase has a deadline, and every phase still stops at a
 //! signal (`interrupt::Stop`).
 
 use crate::interrupt::{Interrupt, Stop};
@@ -24,6 +32,9 @@ pub const PROBE_SHARE: f64 = 0.10;
 pub const PREPROCESS_SHARE: f64 = 0.30;
 /// `pt-cf`'s light-path pilot's share of the budget left when it starts.
 pub const PILOT_SHARE: f64 = 0.10;
+/// The integrator's build's share of the budget left when it starts: the CF methods' lookup
+/// grid (`cf::subset_grid`) stops there and answers from the cluster map (the same image).
+pub const BUILD_SHARE: f64 = 0.10;
 /// Seconds reserved per pixel for writing `PREFIX.{exr,png,json}` (and a checkpoint): the EXR
 /// and PNG of a 2048² image took 3.6–4.6 s of wall time (0.85–1.1 µs per pixel) on the shared
 /// 2-core machine of `results/2026-12-07-time-boxes.md`.

@@ -27,14 +27,18 @@ impl Run<'_> {
     /// checkpoint and `PREFIX.{exr,png,json}` replace the previous ones as one set. A write that
     /// fails is a warning (printed by rank 0, kept for the report): the previous set stays and
     /// the next interval tries again. Other errors end the render at the next round's agreement.
+    /// None after rank 0's `last_round` (the final checkpoint follows).
     pub(super) fn maybe_checkpoint(
         &self,
         p: &mut Passes,
         integrator: &dyn Integrator,
         last: &mut Instant,
+        last_round: bool,
     ) -> Result<(), String> {
         let Some(every) = self.job.checkpoint_every else { return Ok(()) };
-        let want = if self.cluster.rank() == 0 && last.elapsed().as_secs_f64() >= every { 1.0 } else { 0.0 };
+        // rank 0 decides (the others' 0 never outweighs it), so every rank takes the same branch
+        let due = self.cluster.rank() == 0 && !last_round && last.elapsed().as_secs_f64() >= every;
+        let want = if due { 1.0 } else { 0.0 };
         if self.cluster.all_reduce_max(want) == 0.0 {
             return Ok(());
         }

@@ -45,7 +45,7 @@ use crate::distributed::Cluster;
 use crate::integrators::{Integrator, Method, MethodArgs, MethodError};
 use crate::interrupt::Stop;
 use crate::math::luminance;
-use crate::render::{camera_tiles, tile_pixels, with_splat, PassCounters, PixelSampler};
+use crate::render::{camera_tiles_until, tile_pixels, with_splat, PassCounters, PixelSampler};
 
 /// Pixels of the pilot image (about; the aspect is kept).
 pub const PILOT_PIXELS: f64 = 4096.0;
@@ -267,9 +267,10 @@ fn measure(
         }
         let pass = PILOT_PASS_BASE + i;
         integrator.begin_pass(world, seed, pass);
-        let splats = integrator.light_tracer()?.light_splats(world, pixels.camera(), seed, pass);
+        // each side stops within a tile or a chunk of paths at the pilot's deadline
+        let splats = integrator.light_tracer()?.light_splats_until(world, pixels.camera(), seed, pass, stop)?;
         rays += splats.closest_rays + splats.shadow_rays;
-        for (tile, out, c) in camera_tiles(world, &*integrator, pixels, seed, &[pass]) {
+        for (tile, out, c) in camera_tiles_until(world, &*integrator, pixels, seed, &[pass], stop)? {
             rays += c.closest_rays + c.shadow_rays;
             for ((x, y), l) in tile_pixels(tile, (w, h)).zip(out) {
                 let v = with_splat(l, Some(&splats), y * w + x, &mut scratch);

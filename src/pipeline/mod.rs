@@ -297,7 +297,8 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
     if split.emission_split > 1 {
         budget.record("probe", split.probe_s, probe_allowed, split.probe_stopped);
     }
-    budget.record("passes", passes.render_s, budget.passes_budget().map(|t| (t - secs(started)).max(0.0)), false);
+    let passes_allowed = budget.passes_budget().map(|t| (t - secs(started) + passes.render_s).max(0.0));
+    budget.record("passes", passes.render_s, passes_allowed, passes.passes_cut > 0);
     passes.preprocess_over_budget = over_budget.is_some();
     passes.warnings.splice(0..0, over_budget);
     timings.render_s = passes.render_s;
@@ -543,6 +544,8 @@ impl Run<'_> {
             light_path_rule: self.light_path_rule.clone(),
             complete,
             interrupted: p.interrupted,
+            passes_cut: p.passes_cut,
+            cut_s: p.cut_s,
             image_mean: image.mean(),
             phases: Vec::new(),
         }

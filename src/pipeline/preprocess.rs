@@ -5,7 +5,7 @@
 //! Invariant: every rank leaves together when rank 0 fails (`distributed::agree` before each
 //! collective), so none waits in a broadcast.
 
-use super::budget::{Budget, PILOT_SHARE, PREPROCESS_SHARE};
+use super::budget::{Budget, BUILD_SHARE, PILOT_SHARE, PREPROCESS_SHARE};
 use super::light_pilot::{self, LightPathRule};
 use super::{secs, Plan, RankStats, RenderError};
 use crate::accel::World;
@@ -79,8 +79,11 @@ pub(super) fn preprocess(
         ..RankStats::default()
     };
     let t_build = Instant::now();
+    // the integrator's build: its lookup grid stops at its share (then asks the cluster map
+    // everywhere: the same image), the rest is a minimal phase
+    let (stop, allowed) = budget.stop_for(BUILD_SHARE);
+    plan.args.cf.build_deadline = stop.deadline();
     let integrator = plan.method.build(world, &plan.args, &product)?;
-    // the integrator's build (its lookup grids) cannot be cut: a minimal phase
-    budget.record("build", secs(t_build), None, false);
+    budget.record("build", secs(t_build), allowed, stop.is_due());
     Ok(Prepared { integrator, stats, light_path_rule })
 }

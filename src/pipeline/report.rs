@@ -127,6 +127,13 @@ pub struct RenderReport {
     /// Whether Ctrl-C or SIGTERM ended the render before its spp or time box (`interrupt`): the
     /// image holds the passes done.
     pub interrupted: bool,
+    /// Passes (every rank's) of the last round, cut at the time box's end or a signal before
+    /// they were whole and discarded: the image holds `passes` whole passes only (0: none cut).
+    #[serde(default)]
+    pub passes_cut: u64,
+    /// The wall seconds that cut round ran before it was discarded.
+    #[serde(default)]
+    pub cut_s: f64,
     /// Mean of the image, per channel.
     pub image_mean: [f64; 3],
     /// Every phase's wall seconds and share of the `--time` budget, in order (`pipeline::budget`).

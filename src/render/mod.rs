@@ -11,12 +11,17 @@
 //! passes at once, each pixel's samples side by side in the batch. A sample's value depends only
 //! on (seed, pass, pixel), and each pixel's samples enter the film in pass order, so a group's
 //! film is bit for bit that of its passes rendered one by one; the grouping is pure speed.
+//!
+//! Cut passes (`trace_passes`): a group is traced before it enters the film, each tile (and each
+//! chunk of the light side's paths) started only while its `interrupt::Stop` is not due; a group
+//! the stop reached is dropped whole, never merged in part, so the film holds whole passes only.
 
 pub mod film;
 pub mod pixel;
 
 use crate::accel::{take_ray_counts, World};
 use crate::integrators::{Integrator, LightSplats};
+use crate::interrupt::Stop;
 use crate::math::Rgb;
 use crate::profile::Profile;
 use crate::sampling::rng::{stream, Rng};
@@ -96,6 +101,19 @@ pub fn camera_tiles(
     seed: u64,
     passes: &[u64],
 ) -> Vec<TileResult> {
+    camera_tiles_until(world, integrator, pixels, seed, passes, &Stop::never()).expect("a pass without a stop is whole")
+}
+
+/// [`camera_tiles`], each tile started only while `stop` is not due: `None` when a tile was
+/// left out (the passes are cut; what was traced is dropped and its buffers given back).
+pub fn camera_tiles_until(
+    world: &World,
+    integrator: &dyn Integrator,
+    pixels: &PixelSampler,
+    seed: u64,
+    passes: &[u64],
+    stop: &Stop,
+) -> Option<Vec<TileResult>> {
     let (w, h) = pixels.resolution();
     let (w, h) = (w as usize, h as usize);
     let (tiles_x, tiles_y) = tile_counts(w, h);
@@ -111,9 +129,14 @@ pub fn camera_tiles(
         });
         Lease { pixels, w: Some(w) }
     };
-    (0..tiles_x * tiles_y)
+    let tiles: Vec<Option<TileResult>> = (0..tiles_x * tiles_y)
         .into_par_iter()
         .map_init(init, |lease, tile| {
+            // the deadline or a signal: the tiles not yet started are left out (a tile is at
+            // most 256 pixels × the group's passes, so the cut comes within a fraction of a second)
+            if stop.is_due() {
+                return None;
+            }
             let Worker { ctx, buf, px } = lease.w.as_mut().expect("a lease holds its worker until dropped");
             let _ = take_ray_counts();
             let mut c = PassCounters::default();
@@ -132,9 +155,14 @@ pub fn camera_tiles(
             c.closest_rays = closest;
             c.shadow_rays = shadow;
             c.profile = std::mem::take(&mut ctx.profile);
-            (tile, out, c)
+            Some((tile, out, c))
         })
-        .collect()
+        .collect();
+    if tiles.iter().all(Option::is_some) {
+        return Some(tiles.into_iter().flatten().collect());
+    }
+    pixels.put_outs(tiles.into_iter().flatten().map(|(_, out, _)| out));
+    None
 }
 
 /// Renders pass `pass` (one sample per pixel) into `film`.
@@ -162,47 +190,93 @@ pub fn render_passes(
     passes: &[u64],
     film: &mut Film,
 ) -> PassCounters {
-    let (w, h) = (film.width, film.height);
-    assert_eq!(pixels.resolution(), (w as u32, h as u32), "pixel sampler and film sizes differ");
+    let traced = trace_passes(world, integrator, pixels, seed, passes, &Stop::never());
+    traced.expect("a pass without a stop is whole").merge(pixels, film)
+}
+
+/// The passes of a group traced in full, not yet in the film: the camera side's tiles and the
+/// light side's splats of each pass, which enter the film together ([`Traced::merge`]) or not
+/// at all ([`Traced::discard`]).
+pub struct Traced {
+    tiles: Vec<TileResult>,
+    splats: Vec<Option<LightSplats>>,
+}
+
+/// Traces the passes `passes` as [`render_passes`] does, the camera side's tiles and then the
+/// light side's paths, while `stop` is not due; `None` when it came due first (the passes are
+/// cut: nothing of them may enter the film, as a pass's light paths and camera samples are one
+/// estimator, and the film holds whole passes only).
+pub fn trace_passes(
+    world: &World,
+    integrator: &dyn Integrator,
+    pixels: &PixelSampler,
+    seed: u64,
+    passes: &[u64],
+    stop: &Stop,
+) -> Option<Traced> {
     assert!(!passes.is_empty() && (passes.len() == 1 || integrator.independent_passes()));
-    let results = camera_tiles(world, integrator, pixels, seed, passes);
-    let light = integrator.light_tracer();
-    let splats: Vec<_> =
-        passes.iter().map(|&q| light.map(|l| l.light_splats(world, pixels.camera(), seed, q))).collect();
-    let g = passes.len();
-    // The merge runs in parallel over rows of tiles (each a contiguous band of the film); every
-    // pixel still gets its samples in pass order, so the film is the serial merge's.
-    let tiles_x = w.div_ceil(TILE);
-    let band = w * TILE * film::STRIDE;
-    let mut total = film
-        .data
-        .par_chunks_mut(band)
-        .zip(results.par_chunks(tiles_x))
-        .map(|(rows, tiles)| {
-            let mut c = PassCounters::default();
-            for (tile, out, tc) in tiles {
-                for ((x, y), ls) in tile_pixels(*tile, (w, h)).zip(out.chunks_exact(g)) {
-                    let i = (y % TILE) * w + x;
-                    for (&l, s) in ls.iter().zip(&splats) {
-                        let v = with_splat(l, s.as_ref(), y * w + x, &mut c);
-                        film::add_at(&mut rows[i * film::STRIDE..(i + 1) * film::STRIDE], v);
-                    }
-                }
-                c.add(tc);
+    let tiles = camera_tiles_until(world, integrator, pixels, seed, passes, stop)?;
+    let mut splats = Vec::with_capacity(passes.len());
+    for &q in passes {
+        match integrator.light_tracer().map(|l| l.light_splats_until(world, pixels.camera(), seed, q, stop)) {
+            Some(None) => {
+                pixels.put_outs(tiles.into_iter().map(|(_, out, _)| out));
+                return None;
             }
-            c
-        })
-        .reduce(PassCounters::default, |mut a, b| {
-            a.add(&b);
-            a
-        });
-    for s in splats.iter().flatten() {
-        total.nonfinite += s.nonfinite;
-        total.closest_rays += s.closest_rays;
-        total.shadow_rays += s.shadow_rays;
+            s => splats.push(s.flatten()),
+        }
     }
-    pixels.put_outs(results.into_iter().map(|(_, out, _)| out));
-    total
+    Some(Traced { tiles, splats })
+}
+
+impl Traced {
+    /// Adds the passes to `film` (each pixel its samples in pass order) and gives the buffers
+    /// back to `pixels`; what they cost.
+    pub fn merge(self, pixels: &PixelSampler, film: &mut Film) -> PassCounters {
+        let (w, h) = (film.width, film.height);
+        assert_eq!(pixels.resolution(), (w as u32, h as u32), "pixel sampler and film sizes differ");
+        let Traced { tiles: results, splats } = self;
+        let g = splats.len();
+        // The merge runs in parallel over rows of tiles (each a contiguous band of the film); every
+        // pixel still gets its samples in pass order, so the film is the serial merge's.
+        let tiles_x = w.div_ceil(TILE);
+        let band = w * TILE * film::STRIDE;
+        let mut total = film
+            .data
+            .par_chunks_mut(band)
+            .zip(results.par_chunks(tiles_x))
+            .map(|(rows, tiles)| {
+                let mut c = PassCounters::default();
+                for (tile, out, tc) in tiles {
+                    for ((x, y), ls) in tile_pixels(*tile, (w, h)).zip(out.chunks_exact(g)) {
+                        let i = (y % TILE) * w + x;
+                        for (&l, s) in ls.iter().zip(&splats) {
+                            let v = with_splat(l, s.as_ref(), y * w + x, &mut c);
+                            film::add_at(&mut rows[i * film::STRIDE..(i + 1) * film::STRIDE], v);
+                        }
+                    }
+                    c.add(tc);
+                }
+                c
+            })
+            .reduce(PassCounters::default, |mut a, b| {
+                a.add(&b);
+                a
+            });
+        for s in splats.iter().flatten() {
+            total.nonfinite += s.nonfinite;
+            total.closest_rays += s.closest_rays;
+            total.shadow_rays += s.shadow_rays;
+        }
+        pixels.put_outs(results.into_iter().map(|(_, out, _)| out));
+        total
+    }
+
+    /// Drops the passes (another rank's were cut: the round is discarded on every rank), giving
+    /// the buffers back to `pixels`.
+    pub fn discard(self, pixels: &PixelSampler) {
+        pixels.put_outs(self.tiles.into_iter().map(|(_, out, _)| out));
+    }
 }
 
 /// A worker borrowed from a pixel sampler for one rayon split; given back when the split ends.

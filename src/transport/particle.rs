@@ -397,16 +397,21 @@ pub struct CausticVertex {
     pub beta: Rgb,
 }
 
-/// Light paths launched per parallel block in `collect_caustic_vertices`.
+/// Light paths launched per parallel block in `collect_caustic_vertices`, at most.
 pub const BLOCK: u64 = 16_384;
+/// Light paths launched per parallel block in `collect_caustic_vertices`, at least (a block is
+/// about the vertices still wanted, so that a small target or a stop waits for no more).
+pub const MIN_BLOCK: u64 = 1_024;
 
 /// Traces light paths 0, 1, 2, … (stream `(seed, stream_id, 0, i)`) until `target` caustic
 /// vertices (non-specular hits after a Dirac vertex) are collected or `max_paths` are launched.
 /// Returns the vertices of whole paths `0..P` and `P`, the normaliser: deterministic for any
-/// thread count, since blocks run in parallel but are concatenated in path order. `stored(n)`
-/// is told the vertices collected so far after every block, and the tracing ends there when it
-/// returns `false` (a deadline or a signal: the paths `0..P` launched so far are whole, so the
-/// normaliser stays `P`).
+/// thread count, since blocks run in parallel but are concatenated in path order, and for any
+/// block size (a block holds about the vertices still wanted, between [`MIN_BLOCK`] and
+/// [`BLOCK`] paths; `max_paths` is rounded up to whole [`BLOCK`]s, as whole blocks of `BLOCK`
+/// traced it). `stored(n)` is told the vertices collected so far after every block, and the
+/// tracing ends there when it returns `false` (a deadline or a signal: the paths `0..P` launched
+/// so far are whole, so the normaliser stays `P`).
 pub fn collect_caustic_vertices(
     world: &World,
     emission: Emission,
@@ -432,9 +437,11 @@ pub fn collect_caustic_vertices(
     if world.scene.dirac_bounds().is_none() {
         return (out, 0);
     }
+    let max_paths = max_paths.div_ceil(BLOCK).saturating_mul(BLOCK);
     while target > 0 && (out.len() as u64) < target && paths < max_paths {
         let start = paths;
-        let block: Vec<Vec<CausticVertex>> = (start..start + BLOCK)
+        let n = (target - out.len() as u64).clamp(MIN_BLOCK, BLOCK).min(max_paths - start);
+        let block: Vec<Vec<CausticVertex>> = (start..start + n)
             .into_par_iter()
             .map(|i| {
                 let mut c = Collect(Vec::new());

@@ -72,6 +72,12 @@ pub struct CfArgs {
     #[arg(skip)]
     #[serde(skip)]
     pub time_budget_s: Option<f64>,
+    /// When the integrator's build from the product must end (set by the pipeline from its
+    /// share of `--time`, not a flag): the lookup grid stops there and asks the cluster map
+    /// everywhere (`SubsetGrid::build_until`, exact: the same image, slower lookups).
+    #[arg(skip)]
+    #[serde(skip)]
+    pub build_deadline: Option<std::time::Instant>,
 }
 
 /// `iws-cf`'s own options.
@@ -182,7 +188,8 @@ impl MethodSpec for IwsCf {
     }
     fn build(world: &World, args: &MethodArgs, cf: CausticForecast) -> Result<Box<dyn Integrator>, MethodError> {
         crate::integrators::iws::check_direct(world, &args.with_variant())?;
-        Ok(Box::new(Iws::new(world, &args.with_variant(), Box::new(ForecastCaustics::new(cf)))))
+        let caustics = ForecastCaustics::new_until(cf, args.cf.build_deadline);
+        Ok(Box::new(Iws::new(world, &args.with_variant(), Box::new(caustics))))
     }
 }
 
@@ -232,7 +239,7 @@ pub fn preprocess_forecast(world: &World, args: &MethodArgs, seed: u64, phases: 
             let pilot = build_forecast(world, m, args.forecast_options(), seed ^ 0x0050_494c_4f54, &Muted(phases));
             // the integrators' lookup grid over the kept clusters, built from the product after
             // the broadcast, grows with the photons too: its cost is part of theirs
-            let _grid = pilot.kept_grid();
+            let _grid = pilot.kept_grid_until(&|| phases.stop());
             let cost = t0.elapsed().as_secs_f64() / pilot.stats.stored.max(1) as f64;
             phase.finish();
             // the floor only while it costs at most 4 shares (a short budget gets fewer, but never
@@ -294,7 +301,13 @@ pub struct ForecastCaustics {
 impl ForecastCaustics {
     /// Wraps a product.
     pub fn new(cf: CausticForecast) -> Self {
-        ForecastCaustics { grid: cf.kept_grid(), cf, cache: TableCache::default() }
+        Self::new_until(cf, None)
+    }
+
+    /// [`ForecastCaustics::new`], its grid built until `deadline` (then exact but coarse).
+    pub fn new_until(cf: CausticForecast, deadline: Option<std::time::Instant>) -> Self {
+        let grid = cf.kept_grid_until(&|| deadline.is_some_and(|d| Instant::now() >= d));
+        ForecastCaustics { grid, cf, cache: TableCache::default() }
     }
 }
 

@@ -17,12 +17,15 @@
 //! Invariants: light paths run in chunks of [`CHUNK`] in parallel and their splats are added in
 //! chunk order into a dense per-pass image that `render::render_passes` adds to each pixel's
 //! camera sample, so a pass's pixel value is still one i.i.d. sample (the variance layer and the
-//! checkpoints stay valid) and the image does not depend on threads or ranks. Assumed: `x1` and
-//! the light lie in the same medium.
+//! checkpoints stay valid) and the image does not depend on threads or ranks. A pass cut by its
+//! `Stop` (the time box, a signal) yields no splats at all: `N_L` is in every MIS weight, so
+//! a part of a pass's paths is no estimator, and the cut pass is discarded whole
+//! (`render::trace_passes`). Assumed: `x1` and the light lie in the same medium.
 
 use crate::accel::{offset_origin, take_ray_counts, Hit, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::integrators::{Context, LightSplats};
+use crate::interrupt::Stop;
 use crate::math::{Rgb, Vec3};
 use crate::sampling::rng::{stream, Rng};
 use crate::scene::{Camera, Material, NO_EMITTER};
@@ -226,7 +229,8 @@ pub fn light_splats<P: CameraPdf>(
     world: &World,
     camera: &Camera,
     (seed, pass): (u64, u64),
-) -> LightSplats {
+    stop: &Stop,
+) -> Option<LightSplats> {
     let n = light.n_paths(camera);
     let mut out = LightSplats {
         image: vec![Rgb::ZERO; camera.width as usize * camera.height as usize],
@@ -235,9 +239,13 @@ pub fn light_splats<P: CameraPdf>(
     // batches of chunks, so that a pass's pending splats stay bounded whatever `n`
     let n_chunks = n.div_ceil(CHUNK);
     for first in (0..n_chunks).step_by(BATCH as usize) {
-        let chunks: Vec<Chunk> = (first..(first + BATCH).min(n_chunks))
+        let chunks: Vec<Option<Chunk>> = (first..(first + BATCH).min(n_chunks))
             .into_par_iter()
             .map(|c| {
+                // the deadline or a signal: the pass is cut (a chunk is a fraction of a second)
+                if stop.is_due() {
+                    return None;
+                }
                 let _ = take_ray_counts();
                 let mut ctx = Context::new(Rng::keyed(seed, stream::LIGHT_PATHS, pass, u64::MAX));
                 let mut t = Tracer { pt, light, world, camera, n, splats: Vec::new(), nonfinite: 0, verts: Vec::new() };
@@ -245,10 +253,13 @@ pub fn light_splats<P: CameraPdf>(
                     t.path(Rng::keyed(seed, stream::LIGHT_PATHS, pass, i), &mut ctx);
                 }
                 let (closest, shadow) = take_ray_counts();
-                Chunk { splats: t.splats, nonfinite: t.nonfinite, closest, shadow }
+                Some(Chunk { splats: t.splats, nonfinite: t.nonfinite, closest, shadow })
             })
             .collect();
-        for c in chunks {
+        if chunks.iter().any(Option::is_none) {
+            return None;
+        }
+        for c in chunks.into_iter().flatten() {
             for (p, v) in c.splats {
                 out.image[p as usize] += v;
             }
@@ -257,7 +268,7 @@ pub fn light_splats<P: CameraPdf>(
             out.shadow_rays += c.shadow;
         }
     }
-    out
+    Some(out)
 }
 
 /// One chunk's light tracer.

@@ -123,7 +123,9 @@ impl MethodSpec for PtCf {
             .collect();
         let guided: Vec<usize> = (0..n_kept).filter(|&c| per_cluster[c].is_some()).collect();
         let split = split_counts(&g.clustering.clusters[..n_kept], &guided, args.cf.split);
-        let guided_grid = SubsetGrid::build(&g.cluster_map, &guided);
+        let deadline = args.cf.build_deadline;
+        let stop = || deadline.is_some_and(|d| std::time::Instant::now() >= d);
+        let guided_grid = SubsetGrid::build_until(&g.cluster_map, &guided, &stop);
         Ok(Box::new(GuidedPathTracer {
             max_depth: args.settings.cap(),
             weights,
@@ -443,10 +445,17 @@ impl CameraPdf for GuidedPathTracer {
 }
 
 impl LightTracer for GuidedPathTracer {
-    fn light_splats(&self, world: &World, camera: &Camera, seed: u64, pass: u64) -> LightSplats {
+    fn light_splats_until(
+        &self,
+        world: &World,
+        camera: &Camera,
+        seed: u64,
+        pass: u64,
+        stop: &crate::interrupt::Stop,
+    ) -> Option<LightSplats> {
         match &self.light {
-            Some(light) => light::light_splats(self, light, world, camera, (seed, pass)),
-            None => LightSplats::default(),
+            Some(light) => light::light_splats(self, light, world, camera, (seed, pass), stop),
+            None => Some(LightSplats::default()),
         }
     }
 
