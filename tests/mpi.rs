@@ -378,8 +378,9 @@ fn rank_pid(rank: usize, marker: &str) -> Option<u32> {
 /// Starts a 2-rank render of `args` (with `env`), stops rank 1 (SIGSTOP) once it is inside the
 /// pass loop, and waits at most 60 s: (exit status, stderr, wall seconds from the start).
 fn stop_rank_1(args: &[&str], env: &[(&str, &str)]) -> (std::process::ExitStatus, String, f64) {
-    let d = tmp_dir("mpi-sigstop");
-    let out = d.join(format!("stopped-{}", args.join("-").replace('/', "_")));
+    // a folder of its own per test: tmp_dir empties the folder it is given
+    let name = format!("stopped-{}", args.join("-").replace('/', "_"));
+    let out = tmp_dir(&format!("mpi-sigstop-{name}")).join(&name);
     let marker = out.display().to_string();
     let child = Command::new("mpirun")
         .args(["-n", "2"])
