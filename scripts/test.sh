@@ -43,11 +43,13 @@ if [ "${FORECAST_NO_MPI:-0}" != "1" ] && command -v mpirun >/dev/null 2>&1; then
         command -v ip >/dev/null 2>&1 || bash .ci/apt-install.sh test.sh iproute2 || true
         if ! command -v ip >/dev/null 2>&1; then
             netns_why="no \`ip\` (iproute2) here"
-        elif ! said="$(ip netns add "fcprobe-$$" 2>&1)"; then
-            netns_why="\`ip netns add\` fails here: $said"
-        else
-            ip netns del "fcprobe-$$"
+        elif ! said="$( (ip netns add "fcprobe-$$" && ip link add "fcp$$a" type veth peer name "fcp$$b" \
+            && ip link set "fcp$$b" netns "fcprobe-$$" && ip -n "fcprobe-$$" link set "fcp$$b" up) 2>&1)"; then
+            # a namespace and a veth pair into it: what scripts/mpi-netns.sh builds for each host
+            netns_why="a network namespace with a veth pair cannot be made here: $said"
         fi
+        ip link del "fcp$$a" 2>/dev/null || true
+        ip netns del "fcprobe-$$" 2>/dev/null || true
     fi
     if [ -z "$netns_why" ]; then
         echo "== scripts/mpi-netns.sh (3 hosts in network namespaces, 2 ranks each, with faults)"
