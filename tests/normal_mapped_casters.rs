@@ -18,7 +18,9 @@
 //! the glass. With the light widened 15×, `pt`'s 32,768 passes held 0–6 such hits per floor pixel
 //! (effective count `mean²/var`), so its image typically lacked that light and its variance
 //! missed it too (per-pixel |z| 14–42: `results/2026-12-07-light-side-bias.md`); at 60× (16× the
-//! area) it holds 2–71 and agrees.
+//! area) it holds 2–71 and agrees. The light side takes only the Dirac vertices whose two ends see
+//! one shading normal (`pt_cf::light::reciprocal`: a normal map's normal flips with the
+//! direction it is seen from), as the camera side's weight assumes.
 
 mod common;
 use common::{assert_agrees, cf_test_opts, render_passes, render_profiled};

@@ -80,6 +80,17 @@ impl LightSide {
     }
 }
 
+/// Whether the Dirac lobe that turned `wo` into `wi` at `hit` (shading point `sp`, seen from
+/// `wo`) turns `wi` back into `wo`: the shading normal seen from `wi` is `sp`'s. A normal map
+/// mirrors its normal where the direction it is seen from lies on different sides of it and of
+/// the untilted normal (Mitsuba's `flip_invalid_normals`, `scene::surface`), so the two ends of
+/// a Dirac vertex can see two normals; the light side then has no path the camera side has, and
+/// the reverse. Class C takes only the vertices where both ends see one normal (the predicate is
+/// symmetric in `wo` and `wi`), so that both techniques draw exactly its paths.
+pub fn reciprocal(world: &World, hit: &Hit, sp: &ShadingPoint, wi: Vec3) -> bool {
+    sp.ns == sp.n0 || world.shade(hit, wi).1.ns == sp.ns
+}
+
 /// `1/(A_pix cos³θ_c)` for the unit direction `d` from the camera (0 behind it): the pinhole's
 /// importance per solid angle, and the camera's solid-angle density of a pixel sample.
 #[inline]
@@ -304,6 +315,9 @@ impl<'a, P: CameraPdf> Tracer<'a, P> {
             }
             let u = rng.next_3d();
             let Some(bs) = bsdf::sample(m, &sp, w_in, u, Mode::Importance) else { return };
+            if bs.is_delta && !reciprocal(self.world, &hit, &sp, bs.wi) {
+                return; // no transport `pt` measures (`reciprocal`)
+            }
             if depth == 1 && !bs.is_delta {
                 return; // not a path of C
             }
