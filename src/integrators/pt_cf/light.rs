@@ -83,6 +83,17 @@ impl LightSide {
     }
 }
 
+/// Whether the Dirac lobe that turned `wo` into `wi` at `hit` (shading point `sp`, seen from
+/// `wo`) turns `wi` back into `wo`: the shading normal seen from `wi` is `sp`'s. A normal map
+/// mirrors its normal where the direction it is seen from lies on different sides of it and of
+/// the untilted normal (Mitsuba's `flip_invalid_normals`, `scene::surface`), so the two ends of
+/// a Dirac vertex can see two normals; the light side then has no path the camera side has, and
+/// the reverse. Class C takes only the vertices where both ends see one normal (the predicate is
+/// symmetric in `wo` and `wi`), so that both techniques draw exactly its paths.
+pub fn reciprocal(world: &World, hit: &Hit, sp: &ShadingPoint, wi: Vec3) -> bool {
+    sp.ns == sp.n0 || world.shade(hit, wi).1.ns == sp.ns
+}
+
 /// `1/(A_pix cos³θ_c)` for the unit direction `d` from the camera (0 behind it): the pinhole's
 /// importance per solid angle, and the camera's solid-angle density of a pixel sample.
 #[inline]
@@ -315,6 +326,9 @@ impl<'a, P: CameraPdf> Tracer<'a, P> {
             }
             let u = rng.next_3d();
             let Some(bs) = bsdf::sample(m, &sp, w_in, u, Mode::Importance) else { return };
+            if bs.is_delta && !reciprocal(self.world, &hit, &sp, bs.wi) {
+                return; // no transport `pt` measures (`reciprocal`)
+            }
             if depth == 1 && !bs.is_delta {
                 return; // not a path of C
             }
@@ -533,6 +547,67 @@ emission = [5.0, 5.0, 5.0]
         eprintln!("{checked} one-vertex and {checked2} two-vertex paths, {mixed} with 0 < w_L < 1");
         assert!(checked == 12 && checked2 >= 6, "{checked} {checked2}");
         assert!(mixed > 0, "every weight was 0 or 1: the test has no power");
+    }
+
+    /// A glass ball under a normal map (its normal flips with the direction it is seen from):
+    /// `reciprocal` is symmetric in its two directions; where it holds, the camera side's Dirac
+    /// sample from the light side's sampled direction returns the light side's incoming one (the
+    /// same lobe), so both sides draw the same paths; and it fails on some pairs, where the
+    /// reverse sample goes elsewhere (the transport `pt` does not have, which the light side
+    /// carried before `reciprocal`: `results/2026-12-07-light-side-bias.md` §3).
+    #[test]
+    fn dirac_vertices_of_class_c_are_reciprocal_under_a_normal_map() {
+        const BALL: &str = r#"
+[camera]
+position = [0.0, 1.0, 3.0]
+look_at = [0.0, 0.0, 0.0]
+fov = 40.0
+resolution = [8, 8]
+[materials.glass]
+type = "glass"
+ior = 1.5
+normalmap = "../mitsuba-plugins/normals32.png"
+[[shape]]
+type = "sphere"
+center = [0.0, 0.0, 0.0]
+radius = 0.4
+material = "glass"
+[[shape]]
+type = "quad"
+corner = [-0.3, 2.0, -0.3]
+u = [0.6, 0.0, 0.0]
+v = [0.0, 0.0, 0.6]
+emission = [5.0, 5.0, 5.0]
+"#;
+        let dir = Path::new("tests/scenes/toml-materials");
+        let world = World::build(crate::scene::load_str(BALL, "ball.toml", dir).unwrap()).unwrap();
+        let mut rng = Rng::keyed(7, 0, 0, 0);
+        let (mut same, mut other) = (0, 0);
+        for _ in 0..20_000 {
+            // from a point around the ball toward a point on it: a light path's incoming ray
+            let o = crate::sampling::warp::sample_uniform_sphere(rng.next_2d()) * 2.0;
+            let t = crate::sampling::warp::sample_uniform_sphere(rng.next_2d()) * 0.39;
+            let Some(hit) = world.intersect(o, (t - o).normalize(), f32::INFINITY) else { continue };
+            let a = (o - hit.p).normalize();
+            let (m, sp) = world.shade(&hit, a);
+            // u = 0: reflection (F > 0); u just below 1: refraction where F < 1
+            for u0 in [0.0f32, 0.999_99] {
+                let Some(bs) = bsdf::sample(&m, &sp, a, [u0, 0.5, 0.5], Mode::Importance) else { continue };
+                let b = bs.wi;
+                let (m2, sp2) = world.shade(&hit, b);
+                let r = reciprocal(&world, &hit, &sp, b);
+                assert_eq!(r, reciprocal(&world, &hit, &sp2, a), "not symmetric at {:?}", hit.p);
+                let back = bsdf::sample(&m2, &sp2, b, [u0, 0.5, 0.5], Mode::Radiance).map(|s| s.wi.dot(a));
+                if r {
+                    assert!(back.is_some_and(|c| c > 1.0 - 1e-4), "reciprocal pair not retraced: {back:?}");
+                    same += 1;
+                } else {
+                    other += back.is_none_or(|c| c < 1.0 - 1e-3) as u32;
+                }
+            }
+        }
+        eprintln!("{same} reciprocal Dirac samples, {other} whose reverse goes elsewhere");
+        assert!(same > 10_000 && other > 0, "{same} {other}: the test has no power");
     }
 
     /// The pinhole's density per pixel sample.

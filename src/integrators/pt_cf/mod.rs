@@ -283,6 +283,16 @@ impl GuidedPathTracer {
         }
     }
 
+    /// Takes `st` out of class C where its Dirac vertex `v` (at `hit`) drew `bs` toward a
+    /// direction that sees another shading normal (`light::reciprocal`): the light side draws no
+    /// such path, so the camera side's weight there is 1.
+    #[inline(always)]
+    fn leave_c(&self, world: &World, st: &mut PathState, hit: &Hit, v: &SurfaceVertex, bs: &BsdfSample) {
+        if bs.is_delta && st.mis.is_some() && self.light.is_some() && !light::reciprocal(world, hit, &v.sp, bs.wi) {
+            st.mis = None;
+        }
+    }
+
     /// The camera side's MIS weight of an emitter hit against the light paths: `w_E` on a path of
     /// class C (first vertex non-Dirac, the emitter reached from a Dirac vertex), 1 otherwise.
     #[inline]
@@ -380,6 +390,7 @@ impl GuidedPathTracer {
                 let nee = |ls| l.rest += self.kept(class, beta * direct::unoccluded(world, ls));
                 let Some(bs) = vertex(world, &v, &mut ctx.rng, nee) else { break };
                 st.diffuse += u32::from(!m.is_dirac());
+                self.leave_c(world, &mut st, &hit, &v, &bs);
                 if !st.walk.scatter(&bs, v.index, &v.sp, &mut ctx.rng) {
                     break;
                 }

@@ -121,6 +121,7 @@ impl GuidedPathTracer {
         let nee = |ls| w.queue_nee(i, beta, ls, out);
         let Some(bs) = vertex(world, &v, &mut ctx.rng, nee) else { return false };
         st.diffuse += u32::from(!m.is_dirac());
+        self.leave_c(world, &mut st, &hit, &v, &bs);
         self.step(w, Live { i, st }, &bs, &v, ctx);
         false
     }
