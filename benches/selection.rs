@@ -79,7 +79,7 @@ fn dir(theta_deg: f32, phi_deg: f32) -> Vec3 {
 
 /// The mixture of `m` at a flat point seen from `wo`, tables from 200 forecasters near (θ, φ).
 fn bench_mixture(name: &str, m: Material, wo: Vec3, (theta, phi): (f32, f32)) {
-    let sp = ShadingPoint { p: Vec3::ZERO, ng: Vec3::Z, ns: Vec3::Z };
+    let sp = ShadingPoint::new(Vec3::ZERO, Vec3::Z, Vec3::Z);
     let mut r = Rng::keyed(5, stream::MISC, 5, 0);
     let photons: Vec<(Vec3, f32)> = (0..200)
         .map(|_| {
@@ -91,7 +91,7 @@ fn bench_mixture(name: &str, m: Material, wo: Vec3, (theta, phi): (f32, f32)) {
         })
         .collect();
     let frame = Frame::from_normal(sp.ns);
-    let fc = |l: Vec3| luminance(bsdf::eval(&m, &sp, wo, frame.to_world(l))) * l.z;
+    let fc = |l: Vec3| luminance(bsdf::eval(&m, &sp, wo, frame.to_world(l), Mode::Radiance)) * l.z;
     let t = ForecastTables::build_with(photons, fc, TableMode::Dual, Splat::None);
     let w = MixtureWeights::new(0.3, 0.5, 0.2).expect("valid weights");
     let mix = DefensiveMixture::new(&m, &sp, wo, &t, frame, w);

@@ -98,26 +98,6 @@ fn gib(bytes: u64) -> String {
     format!("{:.1} GiB", bytes as f64 / (1u64 << 30) as f64)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn bounds_are_inclusive_and_messages_name_the_value() {
-        assert!(SPP.check(1).is_ok());
-        assert_eq!(SPP.check(0).unwrap_err(), "spp must be at least 1 (got 0)");
-        assert!(SPLIT.check(1024).is_ok());
-        assert_eq!(
-            SPLIT.check_flag("--split", 4294967295).unwrap_err(),
-            "--split 4294967295: split must be between 1 and 1024 (got 4294967295)"
-        );
-        assert!(MAX_DEPTH.check(1).is_err() && MAX_DEPTH.check(2).is_ok());
-        assert!(check_memory(2 << 30, Some(1 << 30), "film").unwrap_err().contains("2.0 GiB"));
-        assert!(check_memory(2 << 30, None, "film").is_ok());
-        assert!(check_time(0.0).is_err() && check_time(f64::INFINITY).is_err() && check_time(0.001).is_ok());
-    }
-}
-
 /// Parses a duration such as `500ms`, `30s`, `4m`, `1h` or `1m30s` into seconds.
 pub fn parse_duration(s: &str) -> Result<f64, String> {
     let s = s.trim();
@@ -159,4 +139,24 @@ pub fn parse_duration(s: &str) -> Result<f64, String> {
         return Err(format!("bad duration `{s}`: must be positive (e.g. 30s, 4m, 1h)"));
     }
     Ok(total)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bounds_are_inclusive_and_messages_name_the_value() {
+        assert!(SPP.check(1).is_ok());
+        assert_eq!(SPP.check(0).unwrap_err(), "spp must be at least 1 (got 0)");
+        assert!(SPLIT.check(1024).is_ok());
+        assert_eq!(
+            SPLIT.check_flag("--split", 4294967295).unwrap_err(),
+            "--split 4294967295: split must be between 1 and 1024 (got 4294967295)"
+        );
+        assert!(MAX_DEPTH.check(1).is_err() && MAX_DEPTH.check(2).is_ok());
+        assert!(check_memory(2 << 30, Some(1 << 30), "film").unwrap_err().contains("2.0 GiB"));
+        assert!(check_memory(2 << 30, None, "film").is_ok());
+        assert!(check_time(0.0).is_err() && check_time(f64::INFINITY).is_err() && check_time(0.001).is_ok());
+    }
 }
