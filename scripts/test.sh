@@ -50,6 +50,10 @@ if [ "${FORECAST_NO_MPI:-0}" != "1" ] && command -v mpirun >/dev/null 2>&1; then
         fi
         ip link del "fcp$$a" 2>/dev/null || true
         ip netns del "fcprobe-$$" 2>/dev/null || true
+        # the ranks' MPI runtime (PyPI's mpich wheel): a machine that cannot fetch it says so
+        if [ -z "$netns_why" ] && ! bash .ci/install-mpich-runtime.sh >/dev/null; then
+            netns_why="the MPICH 5.0.2 runtime could not be installed (.ci/install-mpich-runtime.sh: python3-venv and PyPI)"
+        fi
     fi
     if [ -z "$netns_why" ]; then
         echo "== scripts/mpi-netns.sh (3 hosts in network namespaces, 2 ranks each, with faults)"

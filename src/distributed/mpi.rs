@@ -140,6 +140,10 @@ fn start_watchdog(rank: usize, heartbeat_floor: Option<Duration>) -> Arc<Watch> 
                 "error: rank {rank} {why}: another rank stopped responding (stopped, hung or lost, or its network \
                  link is down); ending the job (MPI_Abort)"
             );
+            // the message travels to mpiexec through this host's process manager, which the
+            // abort tears down: give it half a second to get there (without it, 2 of 7 runs of
+            // the netns link-down test ended with an empty stderr)
+            std::thread::sleep(Duration::from_millis(500));
             // SAFETY: MPI_Abort on the world communicator, which outlives every rank's threads;
             // MPICH accepts it from any thread and ends every process of the job.
             unsafe {
