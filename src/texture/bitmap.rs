@@ -167,26 +167,11 @@ impl TexelImage {
     /// Mitsuba's mean: of the luminance ([`super::LUMINANCE`]) of each texel, or of the one
     /// channel; summed in `f64`.
     fn compute_mean(&self) -> f32 {
-        // the texels in row-major order, as `texel` reads them, without its per-texel checks
+        // the texels in row-major order, as `texel` reads them, without its per-texel check
         let value = |t: Rgb| if self.channels == 1 { t.x as f64 } else { luminance(t) as f64 };
-        let sum: f64 = match &self.store {
-            Store::Codes { codes, table } => {
-                let c = |k: u8| table[k as usize];
-                if self.channels == 1 {
-                    codes.iter().fold(0.0, |s, &k| s + value(Rgb::splat(c(k))))
-                } else {
-                    codes.chunks_exact(3).fold(0.0, |s, t| s + value(Rgb::new(c(t[0]), c(t[1]), c(t[2]))))
-                }
-            }
-            Store::Linear(v) => {
-                if self.channels == 1 {
-                    v.iter().fold(0.0, |s, &x| s + value(Rgb::splat(x)))
-                } else {
-                    v.chunks_exact(3).fold(0.0, |s, t| s + value(Rgb::new(t[0], t[1], t[2])))
-                }
-            }
-        };
-        (sum / (self.width * self.height) as f64) as f32
+        let n = self.width * self.height;
+        let sum = (0..n).fold(0.0, |s, k| s + value(self.decode(k * self.channels)));
+        (sum / n as f64) as f32
     }
 
     /// Linear texel `(x, y)` (grey replicated to RGB). `x < width`, `y < height`, else it
@@ -194,7 +179,12 @@ impl TexelImage {
     #[inline]
     pub fn texel(&self, x: usize, y: usize) -> Rgb {
         assert!(x < self.width && y < self.height, "texel ({x}, {y}) outside {}x{}", self.width, self.height);
-        let i = (y * self.width + x) * self.channels;
+        self.decode((y * self.width + x) * self.channels)
+    }
+
+    /// The linear texel whose first sample is sample `i` of the store: the one decoding.
+    #[inline(always)]
+    fn decode(&self, i: usize) -> Rgb {
         match &self.store {
             Store::Codes { codes, table } => {
                 if self.channels == 1 {
