@@ -8,81 +8,21 @@
 //! warning; everything else that is wrong (NaN, negative values, zero-area lights, a bad fov, a
 //! missing OBJ, an empty scene) is an error, never a panic.
 
+mod ctx;
+mod params;
+
 use super::builder::SceneBuilder;
 use super::limits::{self, extent_message, within_extent};
-use super::plugins::{self, IorValue, Param};
-use super::schema::{Doc, IorRaw, LightDef, MaterialDef, MaterialRaw, ParamRaw, ShapeDef, TextureRaw, UvRaw};
+use super::plugins;
+use super::schema::{Doc, LightDef, MaterialDef, ShapeDef};
 use super::spec::{CameraSpec, Corners, Origin, ShapeIn, View};
 use super::{locate, Material, Scene, SceneError, Surface};
-use crate::math::{fnv1a, Rgb, Vec2, Vec3};
-use crate::texture::{BitmapParams, Checkerboard, FilterType, Texture, TextureCache, UvTransform, WrapMode};
+use crate::math::{fnv1a, Vec2, Vec3};
+use crate::texture::{BitmapParams, TextureCache};
+use ctx::Ctx;
+use params::{TomlParams, PARAM_KEYS};
 use std::collections::BTreeMap;
 use std::path::Path;
-use toml::Spanned;
-
-struct Ctx<'a> {
-    file: String,
-    src: &'a str,
-    /// Byte offset of each line's start (line numbers by binary search).
-    starts: Vec<usize>,
-}
-
-impl Ctx<'_> {
-    fn line_of(&self, offset: usize) -> usize {
-        self.starts.partition_point(|&s| s <= offset.min(self.src.len()))
-    }
-    /// The origin of `key` inside the entry spanning `span`.
-    fn at(&self, span: std::ops::Range<usize>, key: &str) -> Origin {
-        Origin::new(self.err(span, key, "").line, key)
-    }
-    /// Error at `key` inside the entry spanning `span` (finds the key's own line when present).
-    fn err(&self, span: std::ops::Range<usize>, key: &str, message: impl Into<String>) -> SceneError {
-        // toml spans of a table cover only its header: search from the header to the next one
-        let start = span.start.min(self.src.len());
-        let body_start = self.src[start..].find('\n').map_or(self.src.len(), |i| start + i + 1);
-        let mut end = self.src.len();
-        let mut off = body_start;
-        for line in self.src[body_start..].split_inclusive('\n') {
-            if line.trim_start().starts_with('[') {
-                end = off;
-                break;
-            }
-            off += line.len();
-        }
-        let end = end.max(span.end.min(self.src.len()));
-        self.err_between(start..end, key, message)
-    }
-    /// Error at `key` inside the value spanning `span`: within an inline table `{ ... }` its key
-    /// is searched for there only; a table given under its own header as `err`.
-    fn err_in(&self, span: std::ops::Range<usize>, key: &str, message: impl Into<String>) -> SceneError {
-        let inline = self.src.get(span.clone()).is_some_and(|t| t.starts_with('{'));
-        if inline {
-            return self.err_between(span, key, message);
-        }
-        self.err(span, key, message)
-    }
-    /// Error at the first `leaf =` of `key` in `range` (the range's start when there is none).
-    fn err_between(&self, range: std::ops::Range<usize>, key: &str, message: impl Into<String>) -> SceneError {
-        let text = &self.src[range.clone()];
-        let mut at = range.start;
-        if !key.is_empty() {
-            let leaf = key.rsplit('.').next().unwrap_or(key);
-            let mut search = 0;
-            while let Some(i) = text[search..].find(leaf) {
-                let pos = search + i;
-                let b = text.as_bytes();
-                let before_ok = pos == 0 || !(b[pos - 1].is_ascii_alphanumeric() || b[pos - 1] == b'_');
-                let rest = text[pos + leaf.len()..].trim_start();
-                if before_ok && rest.starts_with('=') {
-                    at = range.start + pos;
-                    break;
-                }
-                search = pos + leaf.len();
-            }
-        }
-        SceneError { file: self.file.clone(), line: self.line_of(at), key: key.to_string(), message: message.into() }
-    }
-}
 
 /// The smallest quad area |u × v| (its two triangles' doubled area; `make_triangle` drops less).
 const MIN_QUAD_AREA: f32 = 1e-12;
@@ -397,171 +337,6 @@ fn materials<'d>(
         names.insert(name.as_str(), b.material_with(mat, surface));
     }
     Ok(names)
-}
-
-/// The parameters of Mitsuba's plugin types that `TomlParams` hands to `scene::plugins`.
-const PARAM_KEYS: [&str; 15] = [
-    "diffuse_reflectance",
-    "specular_reflectance",
-    "specular_transmittance",
-    "int_ior",
-    "ext_ior",
-    "nonlinear",
-    "material",
-    "eta",
-    "k",
-    "distribution",
-    "alpha",
-    "alpha_u",
-    "alpha_v",
-    "sample_visible",
-    "albedo",
-];
-
-/// A `[materials.NAME]` table as `plugins::Params`: its keys by Mitsuba's names, a texture table
-/// registered with the builder, errors at the key's line (`materials.NAME.KEY`).
-struct TomlParams<'a, 'c> {
-    cx: &'a Ctx<'c>,
-    b: &'a mut SceneBuilder,
-    cache: &'a mut TextureCache,
-    dir: &'a Path,
-    raw: &'a MaterialRaw,
-    span: std::ops::Range<usize>,
-    /// `materials.NAME`.
-    key: String,
-    /// The keys read so far.
-    read: Vec<&'static str>,
-}
-
-impl TomlParams<'_, '_> {
-    fn mark(&mut self, name: &str) {
-        if let Some(k) = PARAM_KEYS.iter().find(|k| **k == name) {
-            self.read.push(k);
-        }
-    }
-}
-
-impl plugins::Params for TomlParams<'_, '_> {
-    fn has(&self, name: &str) -> bool {
-        self.raw.has(name)
-    }
-    fn param(&mut self, name: &str) -> Result<Option<Param>, SceneError> {
-        self.mark(name);
-        let Some(v) = self.raw.param(name) else { return Ok(None) };
-        let key = format!("{}.{name}", self.key);
-        let monochrome = name.starts_with("alpha");
-        match v.get_ref() {
-            ParamRaw::Texture(t) => {
-                let t = texture(self.cx, (self.b, self.cache, self.dir), t, v.span(), &key)?;
-                Ok(Some(Param::Texture(self.b.texture(t))))
-            }
-            ParamRaw::Rgb(_) if monochrome => Err(self.err(name, "takes a number or a texture, not a colour")),
-            c => constant(self.cx, c, v.span(), &key).map(|c| Some(Param::Constant(c))),
-        }
-    }
-    fn color(&mut self, name: &str) -> Result<Option<Rgb>, SceneError> {
-        self.mark(name);
-        let Some(v) = self.raw.param(name) else { return Ok(None) };
-        constant(self.cx, v.get_ref(), v.span(), &format!("{}.{name}", self.key)).map(Some)
-    }
-    fn float(&mut self, name: &str) -> Result<Option<f32>, SceneError> {
-        self.mark(name);
-        Ok(None) // no TOML type takes a plain number outside `param` and `ior_value`
-    }
-    fn boolean(&mut self, name: &str) -> Result<Option<bool>, SceneError> {
-        self.mark(name);
-        Ok(self.raw.boolean(name))
-    }
-    fn string(&mut self, name: &str) -> Result<Option<String>, SceneError> {
-        self.mark(name);
-        Ok(self.raw.string(name).map(str::to_string))
-    }
-    fn ior_value(&mut self, name: &str) -> Result<Option<IorValue>, SceneError> {
-        self.mark(name);
-        Ok(self.raw.ior(name).map(|v| match v {
-            IorRaw::Number(x) => IorValue { number: Some(*x), text: x.to_string() },
-            IorRaw::Name(s) => IorValue { number: None, text: s.clone() },
-        }))
-    }
-    fn err(&self, name: &str, message: &str) -> SceneError {
-        self.cx.err(self.span.clone(), &format!("{}.{name}", self.key), message)
-    }
-    fn texture(&self, t: u32) -> &Texture {
-        self.b.texture_at(t)
-    }
-}
-
-/// A constant: a finite number (grey) or three finite numbers.
-fn constant(cx: &Ctx, v: &ParamRaw, span: std::ops::Range<usize>, key: &str) -> Result<Rgb, SceneError> {
-    let c = match v {
-        ParamRaw::Number(x) => Rgb::splat(*x),
-        ParamRaw::Rgb(c) => v3(*c),
-        ParamRaw::Texture(_) => return Err(cx.err_in(span, key, "takes a constant here, not a texture")),
-    };
-    if !c.is_finite() {
-        return Err(cx.err_in(span, key, format!("must be finite, got {:?}", c.to_array())));
-    }
-    Ok(c)
-}
-
-/// A texture table (`key` its dotted path, `span` its value's): Mitsuba's `bitmap` (the image
-/// file relative to the scene's folder) or `checkerboard` (whose colours may be textures).
-fn texture(
-    cx: &Ctx,
-    (b, cache, dir): (&mut SceneBuilder, &mut TextureCache, &Path),
-    t: &TextureRaw,
-    span: std::ops::Range<usize>,
-    key: &str,
-) -> Result<Texture, SceneError> {
-    let bad = |k: &str, m: String| cx.err_in(span.clone(), &format!("{key}.{k}"), m);
-    t.check_keys().map_err(|(k, m)| bad(&k, m))?;
-    let to_uv = uv_transform(t.to_uv.as_ref()).map_err(|m| bad("to_uv", m))?;
-    if t.kind == "checkerboard" {
-        let default = Checkerboard::default();
-        let mut colour = |k: &str, c: &Option<Spanned<ParamRaw>>, d: Texture| -> Result<Texture, SceneError> {
-            let Some(c) = c else { return Ok(d) };
-            let k = format!("{key}.{k}");
-            match c.get_ref() {
-                ParamRaw::Texture(t) => texture(cx, (&mut *b, &mut *cache, dir), t, c.span(), &k),
-                v => constant(cx, v, c.span(), &k).map(Texture::Constant),
-            }
-        };
-        let c0 = colour("color0", &t.color0, *default.color0)?;
-        let c1 = colour("color1", &t.color1, *default.color1)?;
-        return Ok(Texture::Checkerboard(Checkerboard::new(c0, c1, to_uv)));
-    }
-    let Some(f) = &t.filename else { return Err(bad("filename", "a `bitmap` needs `filename`".into())) };
-    let mut params = BitmapParams::new(dir.join(f));
-    if let Some(v) = &t.filter_type {
-        params.filter_type = FilterType::parse(v).map_err(|m| bad("filter_type", m))?;
-    }
-    if let Some(v) = &t.wrap_mode {
-        params.wrap_mode = WrapMode::parse(v).map_err(|m| bad("wrap_mode", m))?;
-    }
-    params.raw = t.raw.unwrap_or(false);
-    params.to_uv = to_uv;
-    plugins::bitmap(b, cache, &params).map_err(|m| bad("filename", m))
-}
-
-/// `to_uv = { scale = [su, sv], rotate = degrees, translate = [tu, tv] }`, applied in that order.
-fn uv_transform(uv: Option<&UvRaw>) -> Result<UvTransform, String> {
-    let Some(uv) = uv else { return Ok(UvTransform::IDENTITY) };
-    let s = uv.scale.unwrap_or([1.0; 2]);
-    let (r, t) = (uv.rotate.unwrap_or(0.0), uv.translate.unwrap_or([0.0; 2]));
-    if !(s.iter().chain(&t).all(|x| x.is_finite()) && r.is_finite()) {
-        return Err(format!("scale {s:?}, rotate {r} and translate {t:?} must be finite"));
-    }
-    let mut x = UvTransform::IDENTITY;
-    if uv.scale.is_some() {
-        x = x.then(UvTransform::scale(Vec2::from_array(s)));
-    }
-    if uv.rotate.is_some() {
-        x = x.then(UvTransform::rotate(r));
-    }
-    if uv.translate.is_some() {
-        x = x.then(UvTransform::translate(Vec2::from_array(t)));
-    }
-    Ok(x)
 }
 
 /// A shape's material index and emission: emitters reflect nothing (material 0) but a material
