@@ -296,7 +296,16 @@ impl Bvh8 {
     fn tri_chunk(&self, ray: &Ray8, base: usize, cur: f32) -> [f32; LANES] {
         std::array::from_fn(|i| {
             let g = |k: usize| self.soa[k][base + i];
-            tri_t(&Tri { v0: [g(0), g(1), g(2)], e1: [g(3), g(4), g(5)], e2: [g(6), g(7), g(8)], ng: [g(9), g(10), g(11)] }, ray, cur)
+            tri_t(
+                &Tri {
+                    v0: [g(0), g(1), g(2)],
+                    e1: [g(3), g(4), g(5)],
+                    e2: [g(6), g(7), g(8)],
+                    ng: [g(9), g(10), g(11)],
+                },
+                ray,
+                cur,
+            )
         })
     }
 }

@@ -19,9 +19,9 @@ mod build;
 use super::bvh8::{Bvh8, Node, Ray8, Tri};
 use crate::math::{Vec3, Vec3A};
 use crate::scene::Scene;
-use obvhs::aabb::Aabb;
 #[cfg(test)]
 use glam::UVec2;
+use obvhs::aabb::Aabb;
 #[cfg(test)]
 use obvhs::cwbvh::node::CwBvhNode;
 #[cfg(test)]
@@ -310,7 +310,8 @@ mod tests {
     fn same_hits(scene: &Scene, n: usize, seed: u64) -> usize {
         let b = super::super::bounds(scene);
         let bvh = ObvhsBvh::build(scene, &b);
-        let (lo, hi) = b.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(l, h), &(a, c)| (l.min(a), h.max(c)));
+        let (lo, hi) =
+            b.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(l, h), &(a, c)| (l.min(a), h.max(c)));
         let (lo, hi) = (lo - (hi - lo) * 0.1, hi + (hi - lo) * 0.1);
         let mut r = Lcg(seed);
         let mut hits = 0;
