@@ -19,6 +19,7 @@
 use crate::bsdf::{Material, ShadingPoint};
 use crate::math::Vec3;
 use crate::scene::Scene;
+mod bvh8;
 #[cfg(feature = "embree")]
 mod embree;
 mod obvhs;

@@ -1,11 +1,12 @@
 //! The obvhs back end (the default, and the only obvhs user): one CWBVH over the AABBs of every
-//! triangle and analytic sphere.
+//! triangle and analytic sphere, traversed by the kernel in `super::bvh8`.
 //!
 //! `medium_build`, made robust to coincident primitives in `build`. Triangles are reordered into
-//! BVH slot order as `RtTriangle`s, so traversal needs no indirection; spheres are tested
-//! analytically (`super::sphere_t`) in the traversal callback. Traversal is obvhs' `traverse!`
-//! with this module's node test (`node_hits`: the 8 children's slabs in one AVX2 vector where the
-//! build has AVX2, obvhs' own test elsewhere), which gives obvhs' hit masks bit for bit.
+//! BVH slot order (obvhs' `RtTriangle` form, handed to the kernel as arrays), so traversal needs no
+//! indirection; spheres are tested analytically (`super::sphere_t`) in the kernel's callback for
+//! non-triangle slots. The traversal that the kernel replaced (obvhs' `traverse!` with the 8-wide
+//! `node_hits` and `tri_t` one slot at a time) stays here under `cfg(test)` as the reference that
+//! the kernel's hits are compared with, bit for bit.
 //!
 //! Invariants: the boxes handed in are finite and within `scene::MAX_EXTENT` (`World::build`
 //! checked them: obvhs panics otherwise); queries return `(primitive id as in Scene, t)` with t in
@@ -15,23 +16,30 @@
 
 mod build;
 
+use super::bvh8::{Bvh8, Node, Ray8, Tri};
 use crate::math::{Vec3, Vec3A};
 use crate::scene::Scene;
+#[cfg(test)]
 use glam::UVec2;
 use obvhs::aabb::Aabb;
+#[cfg(test)]
 use obvhs::cwbvh::node::CwBvhNode;
+#[cfg(test)]
 use obvhs::cwbvh::CwBvh;
+#[cfg(test)]
 use obvhs::ray::Ray;
 use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle as ObvTriangle;
 use obvhs::BvhBuildParams;
 
-/// The CWBVH with the triangles in slot order.
+/// The CWBVH handed to the traversal kernel (`super::bvh8`), with each slot's primitive id.
 pub(super) struct ObvhsBvh {
-    bvh: CwBvh,
-    slot_tri: Vec<RtTriangle>,
+    kernel: Bvh8,
     slot_prim: Vec<u32>,
     ntri: u32,
+    /// The CWBVH and its `RtTriangle`s, for the reference traversal the tests compare with.
+    #[cfg(test)]
+    reference: (CwBvh, Vec<RtTriangle>),
 }
 
 impl ObvhsBvh {
@@ -42,7 +50,7 @@ impl ObvhsBvh {
         let bvh = build::build_cwbvh(&aabbs, BvhBuildParams::medium_build());
         let slot_prim: Vec<u32> = bvh.primitive_indices.clone();
         let dummy = ObvTriangle { v0: Vec3A::ZERO, v1: Vec3A::X, v2: Vec3A::Y };
-        let slot_tri = slot_prim
+        let slot_tri: Vec<RtTriangle> = slot_prim
             .iter()
             .map(|&p| {
                 if p < ntri {
@@ -53,29 +61,79 @@ impl ObvhsBvh {
                 }
             })
             .collect();
-        ObvhsBvh { bvh, slot_tri, slot_prim, ntri }
+        let a = |v: Vec3A| v.to_array();
+        let tris: Vec<Tri> =
+            slot_tri.iter().map(|t| Tri { v0: a(t.v0), e1: a(t.e1), e2: a(t.e2), ng: a(t.ng) }).collect();
+        let other = slot_prim.iter().map(|&p| p >= ntri).collect();
+        let nodes = bvh
+            .nodes
+            .iter()
+            .map(|n| Node {
+                p: n.p.to_array(),
+                e: n.e,
+                imask: n.imask,
+                child_base: n.child_base_idx,
+                prim_base: n.primitive_base_idx,
+                meta: n.child_meta,
+                q: [n.child_min_x, n.child_max_x, n.child_min_y, n.child_max_y, n.child_min_z, n.child_max_z],
+            })
+            .collect();
+        let nodes = if slot_prim.is_empty() { Vec::new() } else { nodes };
+        ObvhsBvh {
+            kernel: Bvh8::new(nodes, &tris, other),
+            slot_prim,
+            ntri,
+            #[cfg(test)]
+            reference: (bvh, slot_tri),
+        }
     }
 
+    /// The distance to a sphere slot in (0, tmax), or ∞.
+    #[inline(always)]
+    fn sphere_t(&self, scene: &Scene, ray: &Ray8, slot: usize, tmax: f32) -> f32 {
+        let s = &scene.spheres[(self.slot_prim[slot] - self.ntri) as usize];
+        super::sphere_t(s.center, s.radius, ray.origin().into(), ray.dir().into(), 0.0, tmax)
+    }
+
+    /// Closest hit along `origin + t·dir`, t ∈ (0, tmax): (primitive id, t).
     #[inline]
+    pub(super) fn closest(&self, scene: &Scene, origin: Vec3, dir: Vec3, tmax: f32) -> Option<(u32, f32)> {
+        let ray = Ray8::new(origin.to_array(), dir.to_array());
+        let (slot, t) = self.kernel.closest(&ray, tmax, |s, tm| self.sphere_t(scene, &ray, s, tm))?;
+        Some((self.slot_prim[slot], t))
+    }
+
+    /// True if anything blocks the segment (0, tmax) along unit `dir`.
+    #[inline]
+    pub(super) fn occluded(&self, scene: &Scene, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
+        if tmax <= 0.0 {
+            return false;
+        }
+        let ray = Ray8::new(origin.to_array(), dir.to_array());
+        self.kernel.occluded(&ray, tmax, |s, tm| self.sphere_t(scene, &ray, s, tm))
+    }
+}
+
+/// The traversal the kernel replaced (obvhs' `traverse!` with `node_hits` and `tri_t`), kept as
+/// the tests' reference for the kernel's hits.
+#[cfg(test)]
+impl ObvhsBvh {
     fn prim_t(&self, scene: &Scene, r: &Ray, slot: usize) -> f32 {
         let p = self.slot_prim[slot];
         if p < self.ntri {
-            tri_t(&self.slot_tri[slot], r)
+            tri_t(&self.reference.1[slot], r)
         } else {
             let s = &scene.spheres[(p - self.ntri) as usize];
             super::sphere_t(s.center, s.radius, r.origin.into(), r.direction.into(), r.tmin, r.tmax)
         }
     }
 
-    /// Closest hit along `origin + t·dir`, t ∈ (0, tmax): (primitive id, t).
-    #[inline]
-    pub(super) fn closest(&self, scene: &Scene, origin: Vec3, dir: Vec3, tmax: f32) -> Option<(u32, f32)> {
+    pub(super) fn closest_reference(&self, scene: &Scene, origin: Vec3, dir: Vec3, tmax: f32) -> Option<(u32, f32)> {
         if self.slot_prim.is_empty() {
             return None;
         }
-        // + 0.0 turns −0.0 components into +0.0 (obvhs' node test misreads −0.0)
         let ray = Ray::new(origin.into(), (dir + Vec3::ZERO).into(), 0.0, tmax);
-        let bvh = &self.bvh;
+        let bvh = &self.reference.0;
         let mut r = ray;
         let mut best = u32::MAX;
         let mut state = bvh.new_traversal(ray.direction);
@@ -90,14 +148,12 @@ impl ObvhsBvh {
         (r.tmax < ray.tmax).then(|| (self.slot_prim[best as usize], r.tmax))
     }
 
-    /// True if anything blocks the segment (0, tmax) along unit `dir`.
-    #[inline]
-    pub(super) fn occluded(&self, scene: &Scene, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
+    pub(super) fn occluded_reference(&self, scene: &Scene, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
         if self.slot_prim.is_empty() || tmax <= 0.0 {
             return false;
         }
         let ray = Ray::new(origin.into(), (dir + Vec3::ZERO).into(), 0.0, tmax);
-        let bvh = &self.bvh;
+        let bvh = &self.reference.0;
         let mut state = bvh.new_traversal(ray.direction);
         let mut node;
         let mut hit = false;
@@ -117,7 +173,7 @@ impl ObvhsBvh {
 /// tests in one AVX2 vector and the mask assembled without branches: per lane the same
 /// operations in the same order as obvhs' two 4-wide halves (multiply, then add; max of x
 /// with max of y, z; the 1e-4 floor; tmin ≤ tmax), so the mask is the same, bit for bit.
-#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+#[cfg(all(test, target_arch = "x86_64", target_feature = "avx2"))]
 #[inline(always)]
 fn node_hits(n: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
     use std::arch::x86_64::*;
@@ -154,7 +210,7 @@ fn node_hits(n: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
 }
 
 /// The portable node test: obvhs' own.
-#[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+#[cfg(all(test, not(all(target_arch = "x86_64", target_feature = "avx2"))))]
 #[inline(always)]
 fn node_hits(n: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
     n.intersect_ray(ray, oct_inv4)
@@ -163,7 +219,7 @@ fn node_hits(n: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
 /// Möller–Trumbore on obvhs' precomputed triangle with inclusive edge tests: unlike
 /// `RtTriangle::intersect` (which rejects −0.0 barycentrics by sign bit), a ray through an edge
 /// shared by two triangles hits one of them (no pinhole leaks at quad diagonals).
-#[inline]
+#[cfg(test)]
 fn tri_t(t: &RtTriangle, ray: &Ray) -> f32 {
     let c = t.v0 - ray.origin;
     let r = ray.direction.cross(c);
@@ -227,5 +283,113 @@ mod tests {
             }
         }
         assert!(checked > 1000, "only {checked} nodes hit");
+    }
+
+    /// A small LCG for the tests' rays (fixed seed).
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn f(&mut self) -> f32 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (self.0 >> 40) as f32 / (1u64 << 24) as f32
+        }
+        fn v(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
+            lo + (hi - lo) * Vec3::new(self.f(), self.f(), self.f())
+        }
+    }
+
+    fn load(path: &str) -> Scene {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        crate::scene::load(&root.join(path)).expect("scene loads")
+    }
+
+    /// The kernel's closest hits and occlusion against the traversal it replaced, bit for bit
+    /// (primitive, t's bits, the occlusion answer), on `n` rays: from random points of the scene's
+    /// box, from points on its triangles (a surface's own hit at t ≈ 0), along random, axis-parallel
+    /// and −0.0-component directions, with tmax 0, ∞ and random. Returns the rays that hit.
+    fn same_hits(scene: &Scene, n: usize, seed: u64) -> usize {
+        let b = super::super::bounds(scene);
+        let bvh = ObvhsBvh::build(scene, &b);
+        let (lo, hi) =
+            b.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(l, h), &(a, c)| (l.min(a), h.max(c)));
+        let (lo, hi) = (lo - (hi - lo) * 0.1, hi + (hi - lo) * 0.1);
+        let mut r = Lcg(seed);
+        let mut hits = 0;
+        for i in 0..n {
+            let o = if i % 4 == 1 && scene.ntri() > 0 {
+                let t = &scene.triangles[(r.f() * scene.ntri() as f32) as usize % scene.ntri() as usize];
+                let (u, v) = (r.f(), r.f());
+                let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+                t.p[0] + u * (t.p[1] - t.p[0]) + v * (t.p[2] - t.p[0])
+            } else {
+                r.v(lo, hi)
+            };
+            let mut d = r.v(Vec3::splat(-1.0), Vec3::ONE).normalize_or(Vec3::Z);
+            match i % 16 {
+                3 => d = [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z][(i / 16) % 6],
+                5 => d = Vec3::new(-0.0, d.y, d.z).normalize(),
+                7 => d = Vec3::new(d.x, -0.0, -0.0).normalize_or(-Vec3::X),
+                9 => d = Vec3::new(-0.0, -1.0, -0.0),
+                _ => {}
+            }
+            let tmax = match i % 5 {
+                0 => f32::INFINITY,
+                1 => 0.0,
+                2 => r.f() * (hi - lo).length(),
+                _ => f32::MAX,
+            };
+            let (ours, theirs) = (bvh.closest(scene, o, d, tmax), bvh.closest_reference(scene, o, d, tmax));
+            let bits = |h: Option<(u32, f32)>| h.map(|(p, t)| (p, t.to_bits()));
+            assert_eq!(bits(ours), bits(theirs), "ray {i}: o {o:?} d {d:?} tmax {tmax}");
+            let (ours, theirs) = (bvh.occluded(scene, o, d, tmax), bvh.occluded_reference(scene, o, d, tmax));
+            assert_eq!(ours, theirs, "ray {i} (occlusion): o {o:?} d {d:?} tmax {tmax}");
+            hits += theirs as usize;
+        }
+        hits
+    }
+
+    /// The kernel on `ring` (12k triangles): 1M rays.
+    #[test]
+    fn kernel_hits_equal_reference_ring() {
+        let hits = same_hits(&load("scenes/ring.toml"), 1_000_000, 1);
+        assert!(hits > 100_000, "{hits}");
+    }
+
+    /// The kernel on the pool (45k triangles of a scene written by others): 1M rays.
+    #[test]
+    fn kernel_hits_equal_reference_pool() {
+        let hits = same_hits(&load("scenes/external/sms-pool/scene.xml"), 1_000_000, 2);
+        assert!(hits > 100_000, "{hits}");
+    }
+
+    /// A random-triangle soup (overlapping, slivers, coincident copies) and spheres among
+    /// triangles (the cornell box's and 200 random ones): 1M rays each.
+    #[test]
+    fn kernel_hits_equal_reference_soup_and_spheres() {
+        let mut scene = load("scenes/cornell-box.toml");
+        let mut r = Lcg(3);
+        let t0 = scene.triangles[0].clone();
+        let mut soup = scene.triangles.clone();
+        for k in 0..20_000 {
+            let c = r.v(Vec3::splat(-2.0), Vec3::splat(2.0));
+            let s = if k % 10 == 0 { 0.001 } else { 0.2 * r.f() };
+            let mut t = t0.clone();
+            t.p = [c + r.v(-Vec3::splat(s), Vec3::splat(s)), c + r.v(-Vec3::splat(s), Vec3::splat(s)), c];
+            if k % 50 == 1 {
+                t.p = soup[soup.len() - 1].p; // a coincident copy
+            }
+            soup.push(t);
+        }
+        let s0 = scene.spheres[0].clone();
+        for _ in 0..200 {
+            let mut sp = s0.clone();
+            sp.center = r.v(Vec3::splat(-2.0), Vec3::splat(2.0));
+            sp.radius = 0.01 + 0.2 * r.f();
+            scene.spheres.push(sp);
+        }
+        let with_spheres = same_hits(&scene, 1_000_000, 4);
+        scene.triangles = soup;
+        let soup_hits = same_hits(&scene, 1_000_000, 5);
+        assert!(with_spheres > 100_000 && soup_hits > 100_000, "{with_spheres} {soup_hits}");
     }
 }
