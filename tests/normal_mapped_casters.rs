@@ -158,3 +158,19 @@ fn pt_cf_agrees_with_pt_on_a_narrow_glossy_receiver() {
 fn pt_cf_agrees_with_pt_on_a_guided_glossy_receiver() {
     glossy_agrees(0.3, true);
 }
+
+/// `iws-cf` against `pt` on [`glossy_receiver`]`(0.3)`: its point lights and photons leave the
+/// light paths that bounce off the normal-mapped ball in importance mode, without `pt-cf`'s
+/// [`reciprocal`](forecast::integrators::pt_cf::light::reciprocal) check; the point lights on the
+/// floor's caustic light the back wall, which the camera sees.
+#[test]
+fn iws_cf_agrees_with_pt_through_a_normal_mapped_glass_ball() {
+    let w = glossy_receiver(0.3);
+    let o = cf_test_opts();
+    let mut p = Method::Pt.build(&w, &o, &[]).unwrap();
+    let reference = render_passes(&w, p.as_mut(), 12, 12, 16384, 11);
+    let bytes = Method::IwsCf.preprocess(&w, &o, 17).unwrap();
+    let mut g = Method::IwsCf.build(&w, &o, &bytes).unwrap();
+    let img = render_passes(&w, g.as_mut(), 12, 12, 4096, 3);
+    assert_agrees(&img, &reference, "iws-cf glossy receiver α 0.3, normal-mapped ball");
+}

@@ -145,7 +145,7 @@ fn pt_cf_agrees_with_pt_on_the_pool_with_a_wide_sun() {
 
 #[test]
 fn iws_cf_agrees_with_pt_on_the_pool_with_a_wide_sun() {
-    agrees(Method::IwsCf, 1024);
+    agrees(Method::IwsCf, 2048); // at 1,024 a 3% error moves the global z by 6.46 (needs 6.58)
 }
 
 /// Writes the variant as a CLI scene under `$POOL_VARIANT_DIR` (module docs).
