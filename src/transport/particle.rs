@@ -18,7 +18,9 @@
 //! by the number of events; nothing is reported at Dirac vertices; randomness is a pure function
 //! of (seed, stream, pass, path index). Russian roulette uses `q = min(1, lum(f·|cos|/p))` (spec
 //! §2, pbrt-v2 `igi.cpp`); the only cut is the documented 64-vertex safety cap ([`MAX_VERTICES`]),
-//! whose truncated energy is below `Π q ≤ 0.95^64`-scale for any physical scene.
+//! whose truncated energy is below `Π q ≤ 0.95^64`-scale for any physical scene. A path ends at
+//! a Dirac vertex whose two ends see two shading normals ([`reciprocal`]): the transport it
+//! would carry on is none that `pt` measures.
 
 use super::roulette::{q_particle, roulette};
 use super::target::{Cones, Targets};
