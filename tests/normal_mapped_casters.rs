@@ -183,5 +183,11 @@ fn iws_cf_agrees_with_pt_through_a_normal_mapped_glass_ball() {
     let mut g = Method::IwsCf.build(&w, &o, &bytes).unwrap();
     let img = render_passes(&w, g.as_mut(), 12, 12, 16384, 3);
     assert_agrees(&img, &reference, "iws-cf glossy receiver α 0.3, normal-mapped ball");
-    common::assert_detects(&img, &reference, 0.01, forecast::stats::z_test_threshold(1e-3, 1), "iws-cf glossy receiver");
+    common::assert_detects(
+        &img,
+        &reference,
+        0.01,
+        forecast::stats::z_test_threshold(1e-3, 1),
+        "iws-cf glossy receiver",
+    );
 }

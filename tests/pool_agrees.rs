@@ -26,8 +26,8 @@ use forecast::accel::World;
 use forecast::integrators::{Method, MethodArgs};
 use forecast::math::luminance;
 use forecast::math::Rgb;
-use std::f64::consts::PI;
 use forecast::render::film::Film;
+use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
