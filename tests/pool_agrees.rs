@@ -1,6 +1,7 @@
-//! `pt-cf` agrees with `pt` on the swimming pool (`scenes/external/sms-pool`) pixel by pixel
-//! (issue #62): Šidák per-pixel and whole-image z-tests at α = 1e-3 with the 3% negative control
-//! (`common::assert_agrees`), on the pool with its sun widened at equal power.
+//! `pt-cf` and `iws-cf` agree with `pt` on the swimming pool (`scenes/external/sms-pool`) pixel
+//! by pixel (issue #62): Šidák per-pixel and whole-image z-tests at α = 1e-3 with the 3% negative
+//! control (`common::assert_agrees`), at 24×14 on the pool with its sun widened at equal power;
+//! about 70–85 s on 2 cores, most of it `pt`'s 16,384 passes.
 //!
 //! Why the sun is widened: the pool floor is seen through the normal-mapped water (a Dirac
 //! surface), so `pt` reaches the sun's caustic on the floor only when a floor point's
