@@ -19,7 +19,7 @@
 //! (effective count `mean²/var`), so its image typically lacked that light and its variance
 //! missed it too (per-pixel |z| 14–42: `results/2026-12-07-light-side-bias.md`); at 60× (16× the
 //! area) it holds 2–71 and agrees. The light side takes only the Dirac vertices whose two ends see
-//! one shading normal (`pt_cf::light::reciprocal`: a normal map's normal flips with the
+//! one shading normal (`transport::particle::reciprocal`: a normal map's normal flips with the
 //! direction it is seen from), as the camera side's weight assumes.
 
 mod common;
