@@ -7,9 +7,10 @@
 //! surface), so `pt` reaches the sun's caustic on the floor only when a floor point's
 //! BSDF-sampled ray leaves through the water and hits the sun. The published map's sun (68% of
 //! its power in ~60 texels, 0.35° each) is found so rarely that `pt` at 16,384 samples per pixel
-//! misses it in most floor pixels, and its variance estimate misses it too: a per-pixel z-test
-//! against it fails where `pt-cf`'s guide and light side find the sun
-//! (`results/2026-12-07-pool-cf.md`). A reference must resolve every class of transport the
+//! holds 0–6 effective hits of it per floor pixel, and its variance estimate misses it too: a
+//! per-pixel z-test against it fails where `pt-cf`'s guide and light side find the sun (here at
+//! 24×14 max|z| 8.74, 34 pixels over the threshold; `results/2026-12-07-pool-cf.md` at 48×27).
+//! With the disc below `pt` holds 40–170 (`results/2026-12-07-pool-perpixel.md`). A reference must resolve every class of transport the
 //! other image carries (as `wide_light` in `tests/normal_mapped_casters.rs` does for
 //! `sms-sphere`), so the test renders a variant: [`wide_sun`] moves the sun's power (the excess of
 //! every texel over luminance [`SUN_LUMINANCE`]) into a uniform disc of radius [`SUN_RADIUS_DEG`]
