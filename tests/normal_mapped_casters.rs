@@ -19,7 +19,7 @@
 //! (effective count `mean²/var`), so its image typically lacked that light and its variance
 //! missed it too (per-pixel |z| 14–42: `results/2026-12-07-light-side-bias.md`); at 60× (16× the
 //! area) it holds 2–71 and agrees. The light side takes only the Dirac vertices whose two ends see
-//! one shading normal (`pt_cf::light::reciprocal`: a normal map's normal flips with the
+//! one shading normal (`transport::particle::reciprocal`: a normal map's normal flips with the
 //! direction it is seen from), as the camera side's weight assumes.
 
 mod common;
@@ -157,4 +157,37 @@ fn pt_cf_agrees_with_pt_on_a_narrow_glossy_receiver() {
 #[test]
 fn pt_cf_agrees_with_pt_on_a_guided_glossy_receiver() {
     glossy_agrees(0.3, true);
+}
+
+/// `iws-cf` against `pt` on [`glossy_receiver`]`(0.3)`: its point lights on the floor's caustic
+/// light the back wall, which the camera sees. Their light paths end at a glass vertex whose two
+/// ends see two shading normals (`transport::particle::reciprocal`, `pt-cf`'s rule): before they
+/// did, 1.1% of the point lights' flux had passed such a vertex, transport `pt` does not have,
+/// and `iws-cf` read the image +0.35% high (global z +3.21 here, +2.71 with other seeds; with
+/// the rule −0.93: `results/2026-12-07-pool-perpixel.md`). The 1% control needs 16,384 passes
+/// against 65,536.
+#[test]
+fn iws_cf_agrees_with_pt_through_a_normal_mapped_glass_ball() {
+    use forecast::transport::particle::{trace_paths, Emission, LightPaths, ParticleVisitor};
+    let w = glossy_receiver(0.3);
+    struct Nothing;
+    impl ParticleVisitor for Nothing {}
+    let batch = LightPaths { emission: Emission::Cosine, n_paths: 100_000, seed: 1, stream_id: 0, pass: 0 };
+    let counts = trace_paths(&w, &batch, &mut Nothing);
+    eprintln!("light paths ended at a non-reciprocal glass vertex: {} of {}", counts.non_reciprocal, counts.paths);
+    assert!(counts.non_reciprocal > 0, "the normal map never made the two ends see two normals");
+    let o = cf_test_opts();
+    let mut p = Method::Pt.build(&w, &o, &[]).unwrap();
+    let reference = render_passes(&w, p.as_mut(), 12, 12, 65536, 11);
+    let bytes = Method::IwsCf.preprocess(&w, &o, 17).unwrap();
+    let mut g = Method::IwsCf.build(&w, &o, &bytes).unwrap();
+    let img = render_passes(&w, g.as_mut(), 12, 12, 16384, 3);
+    assert_agrees(&img, &reference, "iws-cf glossy receiver α 0.3, normal-mapped ball");
+    common::assert_detects(
+        &img,
+        &reference,
+        0.01,
+        forecast::stats::z_test_threshold(1e-3, 1),
+        "iws-cf glossy receiver",
+    );
 }

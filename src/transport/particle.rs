@@ -18,11 +18,13 @@
 //! by the number of events; nothing is reported at Dirac vertices; randomness is a pure function
 //! of (seed, stream, pass, path index). Russian roulette uses `q = min(1, lum(f·|cos|/p))` (spec
 //! §2, pbrt-v2 `igi.cpp`); the only cut is the documented 64-vertex safety cap ([`MAX_VERTICES`]),
-//! whose truncated energy is below `Π q ≤ 0.95^64`-scale for any physical scene.
+//! whose truncated energy is below `Π q ≤ 0.95^64`-scale for any physical scene. A path ends at
+//! a Dirac vertex whose two ends see two shading normals ([`reciprocal`]): the transport it
+//! would carry on is none that `pt` measures.
 
 use super::roulette::{q_particle, roulette};
 use super::target::{Cones, Targets};
-use crate::accel::{offset_origin, World};
+use crate::accel::{offset_origin, Hit, World};
 use crate::bsdf::{self, Mode, ShadingPoint};
 use crate::math::{Frame, Rgb, Vec3};
 use crate::sampling::rng::Rng;
@@ -246,6 +248,8 @@ pub struct TraceCounts {
     pub caustic_vertices: u64,
     /// Paths cut by the vertex cap.
     pub capped: u64,
+    /// Paths ended at a Dirac vertex whose two ends see two shading normals ([`reciprocal`]).
+    pub non_reciprocal: u64,
 }
 
 /// A batch of light paths: path `i` is a pure function of these and `i`.
@@ -356,12 +360,29 @@ fn follow(
         let Some((wi, weight, is_delta)) = scatter(m, &sp, w_in, rng) else {
             return;
         };
+        if is_delta && !reciprocal(world, &hit, &sp, wi) {
+            counts.non_reciprocal += 1;
+            return; // no transport `pt` measures ([`reciprocal`])
+        }
         beta *= weight;
         prev_dirac = is_delta;
         o = offset_origin(hit.p, hit.ng, wi);
         d = wi;
     }
     counts.capped += 1;
+}
+
+/// Whether the Dirac lobe that turned `wo` into `wi` at `hit` (shading point `sp`, seen from
+/// `wo`) turns `wi` back into `wo`: the shading normal seen from `wi` is `sp`'s. A normal map
+/// mirrors its normal where the direction it is seen from lies on different sides of it and of
+/// the untilted normal (Mitsuba's `flip_invalid_normals`, `scene::surface`), so the two ends of
+/// a Dirac vertex can see two normals; a light path (which shades from the light's side) then
+/// carries transport that `pt` (which shades from the camera's side) does not have. Every light
+/// path ends at a vertex where this fails: the point lights, photons and forecasters here, and
+/// `pt-cf`'s light side, whose camera side takes those paths instead (`pt_cf::light`). The
+/// predicate is symmetric in `wo` and `wi`; without a normal map it always holds.
+pub fn reciprocal(world: &World, hit: &Hit, sp: &ShadingPoint, wi: Vec3) -> bool {
+    sp.ns == sp.n0 || world.shade(hit, wi).1.ns == sp.ns
 }
 
 /// One bounce of a light path: a BSDF sample in `Mode::Importance`, then Russian roulette

@@ -29,7 +29,7 @@ use crate::interrupt::Stop;
 use crate::math::{Rgb, Vec3};
 use crate::sampling::rng::{stream, Rng};
 use crate::scene::{Camera, Material, NO_EMITTER};
-use crate::transport::particle::{emit, Emission};
+use crate::transport::particle::{emit, reciprocal, Emission};
 use crate::transport::roulette::{q_particle, roulette};
 use rayon::prelude::*;
 
@@ -81,17 +81,6 @@ impl LightSide {
     pub fn n_paths(&self, camera: &Camera) -> u64 {
         self.paths.unwrap_or_else(|| default_paths(camera.width, camera.height))
     }
-}
-
-/// Whether the Dirac lobe that turned `wo` into `wi` at `hit` (shading point `sp`, seen from
-/// `wo`) turns `wi` back into `wo`: the shading normal seen from `wi` is `sp`'s. A normal map
-/// mirrors its normal where the direction it is seen from lies on different sides of it and of
-/// the untilted normal (Mitsuba's `flip_invalid_normals`, `scene::surface`), so the two ends of
-/// a Dirac vertex can see two normals; the light side then has no path the camera side has, and
-/// the reverse. Class C takes only the vertices where both ends see one normal (the predicate is
-/// symmetric in `wo` and `wi`), so that both techniques draw exactly its paths.
-pub fn reciprocal(world: &World, hit: &Hit, sp: &ShadingPoint, wi: Vec3) -> bool {
-    sp.ns == sp.n0 || world.shade(hit, wi).1.ns == sp.ns
 }
 
 /// `1/(A_pix cos³θ_c)` for the unit direction `d` from the camera (0 behind it): the pinhole's

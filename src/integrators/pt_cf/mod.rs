@@ -38,6 +38,7 @@ use crate::sampling::rng::Rng;
 use crate::scene::{Camera, Material, NO_EMITTER};
 use crate::transport::context::ShadingQuery;
 use crate::transport::direct;
+use crate::transport::particle::reciprocal;
 use light::{CameraPdf, LightSide};
 use std::sync::Arc;
 
@@ -284,11 +285,11 @@ impl GuidedPathTracer {
     }
 
     /// Takes `st` out of class C where its Dirac vertex `v` (at `hit`) drew `bs` toward a
-    /// direction that sees another shading normal (`light::reciprocal`): the light side draws no
-    /// such path, so the camera side's weight there is 1.
+    /// direction that sees another shading normal (`transport::particle::reciprocal`): the
+    /// light side draws no such path, so the camera side's weight there is 1.
     #[inline(always)]
     fn leave_c(&self, world: &World, st: &mut PathState, hit: &Hit, v: &SurfaceVertex, bs: &BsdfSample) {
-        if bs.is_delta && st.mis.is_some() && self.light.is_some() && !light::reciprocal(world, hit, &v.sp, bs.wi) {
+        if bs.is_delta && st.mis.is_some() && self.light.is_some() && !reciprocal(world, hit, &v.sp, bs.wi) {
             st.mis = None;
         }
     }
