@@ -372,22 +372,24 @@ fn child_and_index_bits(n: &Node, oct_inv4: u32) -> (u64, u64) {
     (child_bits8, bit_index8)
 }
 
-/// The node's frame scale per axis.
+/// The node's frame in the ray's parameter, as obvhs' node test computes it: per axis the scale
+/// (extent × inverse direction) and offset ((p − o) × inverse direction) of the quantized
+/// children's slabs, and the children's bits and indices for the ray's octant.
 #[inline(always)]
-fn extent(n: &Node) -> [f32; 3] {
-    n.e.map(|e| f32::from_bits((e as u32) << 23))
+fn node_frame(n: &Node, ray: &Ray8) -> ([f32; 3], [f32; 3], (u64, u64)) {
+    let ext = n.e.map(|e| f32::from_bits((e as u32) << 23));
+    let inv = [ext[0] * ray.inv[0], ext[1] * ray.inv[1], ext[2] * ray.inv[2]];
+    let org = [(n.p[0] - ray.o[0]) * ray.inv[0], (n.p[1] - ray.o[1]) * ray.inv[1], (n.p[2] - ray.o[2]) * ray.inv[2]];
+    (inv, org, child_and_index_bits(n, ray.oct_inv4))
 }
 
 /// The hit mask of the node's 8 children (obvhs' `intersect_ray` layout: inner children's bits
 /// 24–31, leaf slots' bits 0–23), all 8 slab tests in one AVX2 vector.
 #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
 #[inline(always)]
-fn node_hits(n: &Node, ray: &Ray8, tmax: f32) -> u32 {
+pub(super) fn node_hits(n: &Node, ray: &Ray8, tmax: f32) -> u32 {
     use std::arch::x86_64::*;
-    let ext = extent(n);
-    let inv = [ext[0] * ray.inv[0], ext[1] * ray.inv[1], ext[2] * ray.inv[2]];
-    let org = [(n.p[0] - ray.o[0]) * ray.inv[0], (n.p[1] - ray.o[1]) * ray.inv[1], (n.p[2] - ray.o[2]) * ray.inv[2]];
-    let (child_bits8, bit_index8) = child_and_index_bits(n, ray.oct_inv4);
+    let (inv, org, (child_bits8, bit_index8)) = node_frame(n, ray);
     // SAFETY: AVX2 is enabled at compile time (the cfg above); the loads read 8 bytes of [u8; 8].
     unsafe {
         let q = |a: &[u8; 8]| _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(a.as_ptr() as *const __m128i)));
@@ -419,11 +421,8 @@ fn node_hits(n: &Node, ray: &Ray8, tmax: f32) -> u32 {
 /// The portable node test: obvhs' `intersect_ray_basic`, the same arithmetic per child.
 #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
 #[inline(always)]
-fn node_hits(n: &Node, ray: &Ray8, tmax: f32) -> u32 {
-    let ext = extent(n);
-    let inv = [ext[0] * ray.inv[0], ext[1] * ray.inv[1], ext[2] * ray.inv[2]];
-    let org = [(n.p[0] - ray.o[0]) * ray.inv[0], (n.p[1] - ray.o[1]) * ray.inv[1], (n.p[2] - ray.o[2]) * ray.inv[2]];
-    let (child_bits8, bit_index8) = child_and_index_bits(n, ray.oct_inv4);
+pub(super) fn node_hits(n: &Node, ray: &Ray8, tmax: f32) -> u32 {
+    let (inv, org, (child_bits8, bit_index8)) = node_frame(n, ray);
     let mut mask = 0;
     for c in 0..8 {
         let mut t0 = [0.0f32; 3];

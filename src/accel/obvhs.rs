@@ -4,9 +4,9 @@
 //! `medium_build`, made robust to coincident primitives in `build`. Triangles are reordered into
 //! BVH slot order (obvhs' `RtTriangle` form, handed to the kernel as arrays), so traversal needs no
 //! indirection; spheres are tested analytically (`super::sphere_t`) in the kernel's callback for
-//! non-triangle slots. The traversal that the kernel replaced (obvhs' `traverse!` with the 8-wide
-//! `node_hits` and `tri_t` one slot at a time) stays here under `cfg(test)` as the reference that
-//! the kernel's hits are compared with, bit for bit.
+//! non-triangle slots. The traversal that the kernel replaced (obvhs' `traverse!` with obvhs' own node test and
+//! `tri_t` one slot at a time) stays here under `cfg(test)` as the reference that the kernel's
+//! hits are compared with, bit for bit.
 //!
 //! Invariants: the boxes handed in are finite and within `scene::MAX_EXTENT` (`World::build`
 //! checked them: obvhs panics otherwise); queries return `(primitive id as in Scene, t)` with t in
@@ -22,7 +22,6 @@ use crate::scene::Scene;
 #[cfg(test)]
 use glam::UVec2;
 use obvhs::aabb::Aabb;
-#[cfg(test)]
 use obvhs::cwbvh::node::CwBvhNode;
 #[cfg(test)]
 use obvhs::cwbvh::CwBvh;
@@ -65,19 +64,7 @@ impl ObvhsBvh {
         let tris: Vec<Tri> =
             slot_tri.iter().map(|t| Tri { v0: a(t.v0), e1: a(t.e1), e2: a(t.e2), ng: a(t.ng) }).collect();
         let other = slot_prim.iter().map(|&p| p >= ntri).collect();
-        let nodes = bvh
-            .nodes
-            .iter()
-            .map(|n| Node {
-                p: n.p.to_array(),
-                e: n.e,
-                imask: n.imask,
-                child_base: n.child_base_idx,
-                prim_base: n.primitive_base_idx,
-                meta: n.child_meta,
-                q: [n.child_min_x, n.child_max_x, n.child_min_y, n.child_max_y, n.child_min_z, n.child_max_z],
-            })
-            .collect();
+        let nodes = bvh.nodes.iter().map(kernel_node).collect();
         let nodes = if slot_prim.is_empty() { Vec::new() } else { nodes };
         ObvhsBvh {
             kernel: Bvh8::new(nodes, &tris, other),
@@ -114,8 +101,21 @@ impl ObvhsBvh {
     }
 }
 
-/// The traversal the kernel replaced (obvhs' `traverse!` with `node_hits` and `tri_t`), kept as
-/// the tests' reference for the kernel's hits.
+/// obvhs' CWBVH node as the kernel's `Node`, field for field.
+fn kernel_node(n: &CwBvhNode) -> Node {
+    Node {
+        p: n.p.to_array(),
+        e: n.e,
+        imask: n.imask,
+        child_base: n.child_base_idx,
+        prim_base: n.primitive_base_idx,
+        meta: n.child_meta,
+        q: [n.child_min_x, n.child_max_x, n.child_min_y, n.child_max_y, n.child_min_z, n.child_max_z],
+    }
+}
+
+/// The traversal the kernel replaced (obvhs' `traverse!` with obvhs' own node test,
+/// `CwBvhNode::intersect_ray`, and `tri_t`), kept as the tests' reference for the kernel's hits.
 #[cfg(test)]
 impl ObvhsBvh {
     fn prim_t(&self, scene: &Scene, r: &Ray, slot: usize) -> f32 {
@@ -138,7 +138,7 @@ impl ObvhsBvh {
         let mut best = u32::MAX;
         let mut state = bvh.new_traversal(ray.direction);
         let mut node;
-        obvhs::traverse!(bvh, node, state, node_hits(node, &r, state.oct_inv4), {
+        obvhs::traverse!(bvh, node, state, node.intersect_ray(&r, state.oct_inv4), {
             let t = self.prim_t(scene, &r, state.primitive_id as usize);
             if t < r.tmax {
                 best = state.primitive_id;
@@ -158,7 +158,7 @@ impl ObvhsBvh {
         let mut node;
         let mut hit = false;
         'outer: {
-            obvhs::traverse!(bvh, node, state, node_hits(node, &ray, state.oct_inv4), {
+            obvhs::traverse!(bvh, node, state, node.intersect_ray(&ray, state.oct_inv4), {
                 if self.prim_t(scene, &ray, state.primitive_id as usize) < ray.tmax {
                     hit = true;
                     break 'outer;
@@ -167,53 +167,6 @@ impl ObvhsBvh {
         }
         hit
     }
-}
-
-/// obvhs' `CwBvhNode::intersect_ray` (the hit mask of the node's 8 children) with all 8 slab
-/// tests in one AVX2 vector and the mask assembled without branches: per lane the same
-/// operations in the same order as obvhs' two 4-wide halves (multiply, then add; max of x
-/// with max of y, z; the 1e-4 floor; tmin ≤ tmax), so the mask is the same, bit for bit.
-#[cfg(all(test, target_arch = "x86_64", target_feature = "avx2"))]
-#[inline(always)]
-fn node_hits(n: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
-    use std::arch::x86_64::*;
-    const EPSILON: f32 = 0.0001; // obvhs' node::EPSILON
-    let inv = n.compute_extent() * ray.inv_direction;
-    let org = (Vec3A::from(n.p) - ray.origin) * ray.inv_direction;
-    let (child_bits8, bit_index8) = n.get_child_and_index_bits(oct_inv4);
-    // SAFETY: AVX2 is enabled at compile time (the cfg above); the loads read 8 bytes of [u8; 8].
-    unsafe {
-        let q = |a: &[u8; 8]| _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(a.as_ptr() as *const __m128i)));
-        let slab = |lo: &[u8; 8], hi: &[u8; 8], neg: bool, inv: f32, org: f32| {
-            let (lo, hi) = (q(lo), q(hi));
-            let (near, far) = if neg { (hi, lo) } else { (lo, hi) };
-            let (s, o) = (_mm256_set1_ps(inv), _mm256_set1_ps(org));
-            (_mm256_add_ps(_mm256_mul_ps(near, s), o), _mm256_add_ps(_mm256_mul_ps(far, s), o))
-        };
-        let d = ray.direction;
-        let (x0, x1) = slab(&n.child_min_x, &n.child_max_x, d.x < 0.0, inv.x, org.x);
-        let (y0, y1) = slab(&n.child_min_y, &n.child_max_y, d.y < 0.0, inv.y, org.y);
-        let (z0, z1) = slab(&n.child_min_z, &n.child_max_z, d.z < 0.0, inv.z, org.z);
-        let tmin = _mm256_max_ps(x0, _mm256_max_ps(y0, z0));
-        let tmax = _mm256_min_ps(x1, _mm256_min_ps(y1, z1));
-        let tmin = _mm256_max_ps(tmin, _mm256_set1_ps(EPSILON));
-        let tmax = _mm256_min_ps(tmax, _mm256_set1_ps(ray.tmax));
-        let hit = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax));
-        let bits = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(child_bits8 as i64));
-        let index = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(bit_index8 as i64));
-        let m = _mm256_and_si256(_mm256_sllv_epi32(bits, index), hit);
-        let m = _mm_or_si128(_mm256_castsi256_si128(m), _mm256_extracti128_si256::<1>(m));
-        let m = _mm_or_si128(m, _mm_shuffle_epi32::<0b01_00_11_10>(m));
-        let m = _mm_or_si128(m, _mm_shuffle_epi32::<0b10_11_00_01>(m));
-        _mm_cvtsi128_si32(m) as u32
-    }
-}
-
-/// The portable node test: obvhs' own.
-#[cfg(all(test, not(all(target_arch = "x86_64", target_feature = "avx2"))))]
-#[inline(always)]
-fn node_hits(n: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
-    n.intersect_ray(ray, oct_inv4)
 }
 
 /// Möller–Trumbore on obvhs' precomputed triangle with inclusive edge tests: unlike
@@ -241,18 +194,16 @@ fn tri_t(t: &RtTriangle, ray: &Ray) -> f32 {
 
 #[cfg(test)]
 mod tests {
+    use super::super::bvh8::node_hits;
     use super::*;
 
-    /// `node_hits` gives obvhs' `intersect_ray` mask, bit for bit, at every node of a BVH over
-    /// random boxes, for random rays of every octant (axis-parallel and zero components among
-    /// them) and finite and infinite segments.
+    /// The kernel's `node_hits` gives obvhs' `intersect_ray` mask, bit for bit, at every node of a
+    /// BVH over random boxes, for random rays of every octant (axis-parallel and zero components
+    /// among them) and finite and infinite segments.
     #[test]
     fn node_test_is_obvhs_node_test() {
-        let mut s = 0x9e37_79b9_7f4a_7c15u64;
-        let mut rnd = move || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut lcg = Lcg(0x9e37_79b9_7f4a_7c15);
+        let mut rnd = move || lcg.f();
         let aabbs: Vec<Aabb> = (0..3000)
             .map(|_| {
                 let c = Vec3A::new(rnd(), rnd(), rnd()) * 20.0 - 10.0;
@@ -276,8 +227,9 @@ mod tests {
             let tmax = if i % 3 == 0 { f32::INFINITY } else { rnd() * 30.0 };
             let ray = Ray::new(o, d, 0.0, tmax);
             let oct = bvh.new_traversal(ray.direction).oct_inv4;
+            let ray8 = Ray8::new(o.to_array(), d.to_array());
             for n in &bvh.nodes {
-                let (ours, theirs) = (node_hits(n, &ray, oct), n.intersect_ray(&ray, oct));
+                let (ours, theirs) = (node_hits(&kernel_node(n), &ray8, tmax), n.intersect_ray(&ray, oct));
                 assert_eq!(ours, theirs, "ray {i}: {ours:#034b} against {theirs:#034b}");
                 checked += (theirs != 0) as u64;
             }
