@@ -189,7 +189,9 @@ impl AccelKind {
     }
 }
 
-/// The built back end.
+/// The built back end. A `World` holds exactly one, so the variants' sizes do not matter (and a
+/// box would add a load to every query).
+#[allow(clippy::large_enum_variant)]
 enum Accel {
     Obvhs(obvhs::ObvhsBvh),
     #[cfg(feature = "embree")]
