@@ -183,7 +183,21 @@ fn a_cut_pass_leaves_the_film_as_it_was_and_a_whole_one_is_the_render_of_its_pas
 /// second (the pass is cut, not finished), its JSON counts the cut passes, and its image is bit
 /// for bit the `--spp P` render of the P passes it kept.
 fn sigterm_cuts_a_pass(method: &str, extra: &[&str]) {
-    let d = tmp_dir(&format!("tb-cut-{method}"));
+    // a round lasts about a second (pass groups are sized so): the signal, half a second after a
+    // round boundary, lands inside a round unless the machine stalls the render past it; a run
+    // whose signal fell between two rounds (nothing cut) is tried again, twice at most
+    for attempt in 0..3 {
+        if sigterm_in_a_round(method, extra, attempt) {
+            return;
+        }
+    }
+    panic!("{method}: three signals, each between two rounds: no round was cut");
+}
+
+/// One run of [`sigterm_cuts_a_pass`]: the interrupted image is the `--spp` render of its whole
+/// passes; true when the signal cut a round.
+fn sigterm_in_a_round(method: &str, extra: &[&str], attempt: u32) -> bool {
+    let d = tmp_dir(&format!("tb-cut-{method}-{attempt}"));
     let (out, re) = (d.join("cut"), d.join("whole"));
     let common = [&["--emission-split", "1"][..], extra].concat();
     // a snapshot after 1 s is written at the first round boundary after it: once it is there,
@@ -200,7 +214,7 @@ fn sigterm_cuts_a_pass(method: &str, extra: &[&str]) {
     while !snapped() && t.elapsed() < Duration::from_secs(120) {
         std::thread::sleep(Duration::from_millis(50));
     }
-    std::thread::sleep(Duration::from_millis(1000));
+    std::thread::sleep(Duration::from_millis(500));
     let t = Instant::now();
     assert!(Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap().success());
     let o = child.wait_with_output().unwrap();
@@ -212,8 +226,8 @@ fn sigterm_cuts_a_pass(method: &str, extra: &[&str]) {
     assert_eq!(j["interrupted"], true, "{method}: {j}");
     let p = j["passes"].as_u64().unwrap();
     assert!(p >= 1, "{method}: {j}");
-    // the signal lands inside a round (rounds are back to back), which is cut and discarded
-    assert!(j["passes_cut"].as_u64().unwrap() >= 1, "{method}: {j}");
+    // a signal inside a round cuts it, and the round is discarded
+    let cut = j["passes_cut"].as_u64().unwrap() >= 1;
     assert_eq!(j["spp"].as_u64().unwrap(), p, "{method}: the image holds whole passes only");
     let o =
         render("scenes/cornell-box.toml", method, "256x256", &re, &[&["--spp", &p.to_string()][..], &common].concat())
@@ -226,6 +240,7 @@ fn sigterm_cuts_a_pass(method: &str, extra: &[&str]) {
     );
     assert!(a == b, "{method}: the cut render's {p} passes differ from the --spp {p} render");
     let _ = std::fs::remove_dir_all(d);
+    cut
 }
 
 #[test]
