@@ -17,57 +17,22 @@ use forecast::integrators::{Integrator, Method, MethodArgs};
 use forecast::render::film::Film;
 use std::path::Path;
 
-const SCENE: &str = r#"
-[camera]
-position = [0.0, 1.0, 3.0]
-look_at = [0.0, 0.5, 0.0]
-fov = 40.0
-resolution = [12, 12]
-[materials.floor]
-type = "diffuse"
-albedo = [0.7, 0.7, 0.7]
-[materials.wall]
-type = "glossy"
-albedo = [0.3, 0.3, 0.3]
-specular = [0.4, 0.4, 0.4]
-exponent = 20.0
-[materials.glass]
-type = "glass"
-ior = 1.5
-[[shape]]
-type = "quad"
-corner = [-2.0, 0.0, -2.0]
-u = [0.0, 0.0, 4.0]
-v = [4.0, 0.0, 0.0]
-material = "floor"
-[[shape]]
-type = "quad"
-corner = [-2.0, 0.0, -1.0]
-u = [4.0, 0.0, 0.0]
-v = [0.0, 3.0, 0.0]
-material = "wall"
-[[shape]]
-type = "sphere"
-center = [0.0, 0.5, 0.0]
-radius = 0.4
-material = "glass"
-[[shape]]
-type = "quad"
-corner = [-0.3, 2.0, -0.3]
-u = [0.6, 0.0, 0.0]
-v = [0.0, 0.0, 0.6]
-emission = [5.0, 5.0, 5.0]
-"#;
+/// A glass ball over a diffuse floor, a glossy back wall, a 0.6 m light (`tests/scenes/glass-ball`).
+fn scene_src() -> String {
+    let dir = common::root().join("tests/scenes/glass-ball");
+    let read = |f: &str| std::fs::read_to_string(dir.join(f)).unwrap();
+    read("geometry.toml") + &read("plain.toml")
+}
 
 const RES: u32 = 12;
 
 fn world() -> World {
-    World::build(forecast::scene::load_str(SCENE, "caps.toml", Path::new(".")).unwrap()).unwrap()
+    World::build(forecast::scene::load_str(&scene_src(), "caps.toml", Path::new(".")).unwrap()).unwrap()
 }
 
 /// The scene seen from below the light, which the view then holds (and its image in the ball).
 fn world_up() -> World {
-    let src = SCENE.replace("look_at = [0.0, 0.5, 0.0]", "look_at = [0.0, 1.3, 0.0]");
+    let src = scene_src().replace("look_at = [0.0, 0.5, 0.0]", "look_at = [0.0, 1.3, 0.0]");
     World::build(forecast::scene::load_str(&src, "caps-up.toml", Path::new(".")).unwrap()).unwrap()
 }
 

@@ -85,13 +85,10 @@ fn pt_cf_agrees_with_pt_through_a_smooth_glass_sphere() {
 /// A glass ball under a normal map over a `roughconductor` floor of roughness `alpha`, a glossy
 /// back wall, a small light.
 fn glossy_receiver(alpha: f32) -> World {
-    let src = format!(
-        r#"
-[camera]
-position = [0.0, 1.0, 3.0]
-look_at = [0.0, 0.5, 0.0]
-fov = 40.0
-resolution = [12, 12]
+    let geometry = std::fs::read_to_string(common::root().join("tests/scenes/glass-ball/geometry.toml")).unwrap();
+    let src = geometry
+        + &format!(
+            r#"
 [materials.floor]
 type = "roughconductor"
 distribution = "ggx"
@@ -103,31 +100,8 @@ albedo = [0.5, 0.5, 0.5]
 type = "glass"
 ior = 1.5
 normalmap = "../mitsuba-plugins/normals32.png"
-[[shape]]
-type = "quad"
-corner = [-2.0, 0.0, -2.0]
-u = [0.0, 0.0, 4.0]
-v = [4.0, 0.0, 0.0]
-material = "floor"
-[[shape]]
-type = "quad"
-corner = [-2.0, 0.0, -1.0]
-u = [4.0, 0.0, 0.0]
-v = [0.0, 3.0, 0.0]
-material = "wall"
-[[shape]]
-type = "sphere"
-center = [0.0, 0.5, 0.0]
-radius = 0.4
-material = "glass"
-[[shape]]
-type = "quad"
-corner = [-0.3, 2.0, -0.3]
-u = [0.6, 0.0, 0.0]
-v = [0.0, 0.0, 0.6]
-emission = [5.0, 5.0, 5.0]
 "#
-    );
+        );
     let dir = common::root().join("tests/scenes/toml-materials");
     World::build(forecast::scene::load_str(&src, "glossy-receiver.toml", &dir).unwrap()).unwrap()
 }

@@ -5,48 +5,17 @@ use super::*;
 use crate::integrators::iws_cf::targeted_emission;
 use std::path::Path;
 
-/// A glass ball over a diffuse floor, a glossy back wall, a small quad light above.
-const SCENE: &str = r#"
-[camera]
-position = [0.0, 1.0, 3.0]
-look_at = [0.0, 0.5, 0.0]
-fov = 40.0
-resolution = [32, 24]
-[materials.floor]
-type = "diffuse"
-albedo = [0.7, 0.7, 0.7]
-[materials.wall]
-type = "glossy"
-albedo = [0.3, 0.3, 0.3]
-specular = [0.4, 0.4, 0.4]
-exponent = 20.0
-[materials.glass]
-type = "glass"
-ior = 1.5
-[[shape]]
-type = "quad"
-corner = [-2.0, 0.0, -2.0]
-u = [0.0, 0.0, 4.0]
-v = [4.0, 0.0, 0.0]
-material = "floor"
-[[shape]]
-type = "quad"
-corner = [-2.0, 0.0, -1.0]
-u = [4.0, 0.0, 0.0]
-v = [0.0, 3.0, 0.0]
-material = "wall"
-[[shape]]
-type = "sphere"
-center = [0.0, 0.5, 0.0]
-radius = 0.4
-material = "glass"
-[[shape]]
-type = "quad"
-corner = [-0.1, 2.0, -0.1]
-u = [0.2, 0.0, 0.0]
-v = [0.0, 0.0, 0.2]
-emission = [5.0, 5.0, 5.0]
-"#;
+/// A glass ball over a diffuse floor, a glossy back wall (`tests/scenes/glass-ball`), with a
+/// 0.2 m light and 32×24 pixels.
+fn scene_src() -> String {
+    let geometry = include_str!("../../../tests/scenes/glass-ball/geometry.toml");
+    let src = geometry.replace("resolution = [12, 12]", "resolution = [32, 24]").replace(
+        "corner = [-0.3, 2.0, -0.3]\nu = [0.6, 0.0, 0.0]\nv = [0.0, 0.0, 0.6]",
+        "corner = [-0.1, 2.0, -0.1]\nu = [0.2, 0.0, 0.0]\nv = [0.0, 0.0, 0.2]",
+    );
+    assert!(src.contains("[32, 24]") && src.contains("[0.2, 0.0, 0.0]"), "glass-ball/geometry.toml changed");
+    src + include_str!("../../../tests/scenes/glass-ball/plain.toml")
+}
 
 fn hit_along(world: &World, o: Vec3, d: Vec3) -> Hit {
     world.intersect(o, d.normalize(), f32::INFINITY).expect("a hit")
@@ -64,7 +33,7 @@ fn point(h: &Hit) -> ShadingPoint {
 fn camera_and_light_weights_sum_to_one() {
     // few light paths, so that both techniques matter on these paths (r ≈ 0.1 … 10)
     const N_L: u64 = 2;
-    let s = crate::scene::load_str(SCENE, "mis.toml", Path::new(".")).unwrap();
+    let s = crate::scene::load_str(&scene_src(), "mis.toml", Path::new(".")).unwrap();
     let world = World::build(s).unwrap();
     let cam = world.scene.camera.clone();
     let light = LightSide { paths: Some(N_L), emission: targeted_emission(&world), max_depth: 64 };
