@@ -22,15 +22,16 @@
 //! Sampling the map: a piecewise-constant distribution over the `W × H` cells
 //! `[i/W, (i+1)/W) × [j/H, (j+1)/H)` of (u, v), cell weight = the largest luminance of the texels
 //! its interpolation reads × its solid angle `Ω_ij = (2π/W)(cos θ_j − cos θ_{j+1})` (the sin θ
-//! weighting, integrated), a direction uniform in solid angle inside the cell. So
-//! `pdf_w(ω) = P_ij/Ω_ij`: finite at the poles, and positive wherever the radiance is (a bound,
-//! not Mitsuba's bilinear warp; any such pdf is unbiased).
+//! weighting, integrated), drawn as a row (the marginal, `u[1]`) and then a cell in the row (the
+//! conditional, `u[0]`: [`Distribution2D`]), a direction uniform in solid angle inside the cell.
+//! So `pdf_w(ω) = P_ij/Ω_ij`: finite at the poles, and positive wherever the radiance is (a
+//! bound, not Mitsuba's bilinear warp; any such pdf is unbiased).
 //!
 //! Invariants: every radiance is finite, non-negative and at most `MAX_RADIANCE`; `pdf_w` of a
 //! sampled direction is the pdf `pdf_w` returns for it (up to the cell boundary's rounding).
 
 use crate::math::{luminance, Frame, Mat3, Rgb, Vec3, PI};
-use crate::sampling::distribution::Distribution1D;
+use crate::sampling::distribution::Distribution2D;
 use crate::sampling::warp;
 
 /// A spot light's angular profile (`spot`); the light itself is a `PointLight`.
@@ -200,8 +201,8 @@ pub struct LatLong {
     pub height: usize,
     /// Texels, row-major, the top row (θ = 0, +y) first.
     pub texels: Vec<Rgb>,
-    /// The cell distribution (module docs), `j·W + i`.
-    pub cells: Distribution1D,
+    /// The cell distribution (module docs): cell `(i, j)` is column `i` of row `j`.
+    pub cells: Distribution2D,
     /// Each cell's weight (the pick's power estimate is their sum).
     pub total_weight: f32,
 }
@@ -235,7 +236,7 @@ impl LatLong {
             }
         }
         let total_weight: f32 = weights.iter().map(|&x| x as f64).sum::<f64>() as f32;
-        let cells = Distribution1D::new(&weights).unwrap_or_default();
+        let cells = Distribution2D::new(&weights, w).unwrap_or_default();
         Ok(LatLong { width, height, texels, cells, total_weight })
     }
 
@@ -249,6 +250,12 @@ impl LatLong {
         } else {
             (PI * j as f32 / h as f32).cos()
         }
+    }
+
+    /// The solid angle `Ω_ij` of a cell of row `j` (module docs): the sampler's and `pdf_w`'s.
+    #[inline]
+    fn cell_solid_angle(&self, j: usize) -> f32 {
+        2.0 * PI / self.width as f32 * (Self::cos_row(j, self.height) - Self::cos_row(j + 1, self.height))
     }
 
     /// The bilinear lookup at `(u, v)` (module docs).
@@ -311,12 +318,11 @@ impl Environment {
                 if m.cells.is_empty() {
                     return None;
                 }
-                let (k, pmf, ur) = m.cells.sample(u[0]);
-                let (i, j) = (k % m.width, k / m.width);
+                let ((i, j), pmf, [ur, vr]) = m.cells.sample(u);
                 let (c0, c1) = (LatLong::cos_row(j, m.height), LatLong::cos_row(j + 1, m.height));
-                let omega = 2.0 * PI / m.width as f32 * (c0 - c1);
+                let omega = m.cell_solid_angle(j);
                 let phi = 2.0 * PI * (i as f32 + ur) / m.width as f32;
-                let cos_t = c0 - u[1] * (c0 - c1);
+                let cos_t = c0 - vr * (c0 - c1);
                 let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
                 let local = Vec3::new(phi.sin() * sin_t, cos_t, -phi.cos() * sin_t);
                 let pdf = pmf / omega;
@@ -337,9 +343,7 @@ impl Environment {
                 let (u, v) = direction_to_uv((self.to_local * w).normalize());
                 let i = ((u * m.width as f32) as usize).min(m.width - 1);
                 let j = ((v * m.height as f32) as usize).min(m.height - 1);
-                let (c0, c1) = (LatLong::cos_row(j, m.height), LatLong::cos_row(j + 1, m.height));
-                let omega = 2.0 * PI / m.width as f32 * (c0 - c1);
-                let pdf = m.cells.pmf(j * m.width + i) / omega;
+                let pdf = m.cells.pmf(i, j) / m.cell_solid_angle(j);
                 if pdf.is_finite() {
                     pdf
                 } else {
