@@ -258,8 +258,7 @@ impl LatLong {
         let mut map = LatLong { width, height, texels: Vec::new(), cells, cos_rows, total_weight };
         map.texels = (0..w * h)
             .map(|k| {
-                let pdf_w = map.cells.pmf(k % w, k / w) / map.cell_solid_angle(k / w);
-                Texel { rgb: texels[k], pdf_w: if pdf_w.is_finite() { pdf_w } else { 0.0 } }
+                Texel { rgb: texels[k], pdf_w: map.cell_pdf_w(map.cells.pmf(k % w, k / w), k / w) }
             })
             .collect();
         Ok(map)
@@ -285,10 +284,16 @@ impl LatLong {
         self.texels[j * self.width + i].pdf_w
     }
 
-    /// The solid angle `Ω_ij` of a cell of row `j` (module docs).
+    /// `P_ij/Ω_ij` of a cell of row `j` whose probability is `pmf` (0 where not finite): the pdf
+    /// kept in the texels and the one the sampler reports (the same `pmf`, the same float).
     #[inline]
-    fn cell_solid_angle(&self, j: usize) -> f32 {
-        2.0 * PI / self.width as f32 * (self.cos_rows[j] - self.cos_rows[j + 1])
+    fn cell_pdf_w(&self, pmf: f32, j: usize) -> f32 {
+        let pdf = pmf / (2.0 * PI / self.width as f32 * (self.cos_rows[j] - self.cos_rows[j + 1]));
+        if pdf.is_finite() {
+            pdf
+        } else {
+            0.0
+        }
     }
 
     /// The bilinear lookup at `(u, v)` (module docs).
@@ -364,13 +369,14 @@ impl Environment {
                 if m.cells.is_empty() {
                     return None;
                 }
-                let ((i, j), _, [ur, vr]) = m.cells.sample(u);
+                let ((i, j), pmf, [ur, vr]) = m.cells.sample(u);
                 let (c0, c1) = (m.cos_rows[j], m.cos_rows[j + 1]);
                 let phi = 2.0 * PI * (i as f32 + ur) / m.width as f32;
                 let cos_t = c0 - vr * (c0 - c1);
                 let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
                 let local = Vec3::new(phi.sin() * sin_t, cos_t, -phi.cos() * sin_t);
-                let pdf = m.texels[j * m.width + i].pdf_w;
+                // not read from the texel: a draw that the BSDF rejects never loads its line
+                let pdf = m.cell_pdf_w(pmf, j);
                 (pdf > 0.0).then(|| ((self.to_world * local).normalize(), pdf))
             }
         }
