@@ -125,7 +125,7 @@ impl Distribution2D {
     /// Builds from `weights` (`width × height`, row-major); `None` if the total is not positive
     /// and finite or the length is not a multiple of `width` (> 0).
     pub fn new(weights: &[f32], width: usize) -> Option<Self> {
-        if width == 0 || weights.len() % width != 0 {
+        if width == 0 || !weights.len().is_multiple_of(width) {
             return None;
         }
         let rows: Vec<f32> =

@@ -257,9 +257,7 @@ impl LatLong {
         let cos_rows = (0..=h).map(|j| Self::cos_row(j, h)).collect();
         let mut map = LatLong { width, height, texels: Vec::new(), cells, cos_rows, total_weight };
         map.texels = (0..w * h)
-            .map(|k| {
-                Texel { rgb: texels[k], pdf_w: map.cell_pdf_w(map.cells.pmf(k % w, k / w), k / w) }
-            })
+            .map(|k| Texel { rgb: texels[k], pdf_w: map.cell_pdf_w(map.cells.pmf(k % w, k / w), k / w) })
             .collect();
         Ok(map)
     }
