@@ -21,8 +21,8 @@ const ALPHA: f64 = 0.01;
 /// Number of statistical tests that must pass in this file (chi-square + z-tests), counted below:
 /// cosine 1, uniform sphere 1, Phong lobe 4, diffuse BSDF 4, glossy BSDF 7, triangle 1,
 /// quad emitter 1, sphere emitter 2, glass Fresnel frequencies 8 (z-tests; the TIR case is exact,
-/// counted anyway: conservative), environment map 2, spot cone 1. Total 32.
-const N_TESTS: usize = 32;
+/// counted anyway: conservative), environment map 3, spot cone 1. Total 33.
+const N_TESTS: usize = 33;
 /// Samples per chi-square test (spec §8).
 const N: usize = 1_000_000;
 
@@ -85,9 +85,11 @@ fn uniform_sphere_matches_its_pdf() {
     check("uniform sphere", &r);
 }
 
-/// An `envmap`'s direction sampler (`scene::Environment::sample`, the cells of its lat-long image
-/// weighted by luminance × solid angle) against its `pdf_w`: a smooth map turned by a rotation,
-/// and a small map with one bright texel (a sun) beside black ones.
+/// An `envmap`'s direction sampler (`scene::Environment::sample`: the cells of its lat-long image
+/// weighted by luminance × solid angle, drawn as a row and then a cell in the row through
+/// `Distribution2D`'s blocked search) against its `pdf_w`: a smooth map turned by a rotation; a
+/// map 21 cells wide (rows of 2⅝ search blocks) with a bright band in one row; and a small map with
+/// one bright texel (a sun) beside black ones.
 #[test]
 fn environment_map_sampler_matches_its_pdf() {
     use forecast::math::{Mat3, Rgb};
@@ -102,11 +104,18 @@ fn environment_map_sampler_matches_its_pdf() {
     let env = Environment::lat_long(LatLong::new(16, 8, smooth).unwrap(), rot);
     let r = sphere_chi2(|rng| env.sample(rng.next_2d()).map(|s| s.0), |w| env.pdf_w(w) as f64, 64, 32, N, 140);
     check("envmap, smooth and turned", &r);
-    // A sun 170× its neighbours beside black texels: the (φ, cos θ) grid of `sphere_chi2` would cut
-    // its cells, whose pdf jumps, so this one bins in the map's own cells, each split 4 × 4 in φ
-    // and cos θ (uniform in solid angle inside a cell), expected counts from `pdf_w` at the
-    // sub-cell centres (exact: the pdf is constant in a cell).
-    let (w, h, k) = (6usize, 4usize, 4usize);
+    // The (φ, cos θ) grid of `sphere_chi2` would cut the cells of a map whose pdf jumps (a band,
+    // a sun), so these bin in the map's own cells (`map_cell_chi2`).
+    let banded: Vec<Rgb> = (0..21 * 7)
+        .map(|k| {
+            let (x, y) = ((k % 21) as f32, (k / 21) as f32);
+            Rgb::splat(0.3 + 0.2 * (x * 0.9 - y).cos() + if y == 2.0 && (x - 13.0).abs() < 3.0 { 4.0 } else { 0.0 })
+        })
+        .collect();
+    let env = Environment::lat_long(LatLong::new(21, 7, banded).unwrap(), Mat3::IDENTITY);
+    check("envmap, 21 wide, a bright band", &map_cell_chi2(&env, 21, 7, 3, 143));
+    // A sun 170× its neighbours beside black texels, each cell split 4 × 4.
+    let (w, h) = (6usize, 4usize);
     let sun: Vec<Rgb> = (0..w * h)
         .map(|i| {
             if i == 8 {
@@ -119,6 +128,13 @@ fn environment_map_sampler_matches_its_pdf() {
         })
         .collect();
     let env = Environment::lat_long(LatLong::new(w, h, sun).unwrap(), Mat3::IDENTITY);
+    check("envmap, a sun and black texels", &map_cell_chi2(&env, w, h, 4, 141));
+}
+
+/// The chi-square of `env`'s sampler (an unturned `w × h` map) binned in the map's own cells,
+/// each split `k × k` in φ and cos θ, expected counts from `pdf_w` at the sub-cell centres (exact:
+/// the pdf is constant in a cell).
+fn map_cell_chi2(env: &forecast::scene::Environment, w: usize, h: usize, k: usize, seed: u64) -> Chi2Result {
     let cos_row = |j: usize| (PI * j as f32 / h as f32).cos();
     let n_bins = w * h * k * k;
     let bin = |d: Vec3| {
@@ -131,7 +147,7 @@ fn environment_map_sampler_matches_its_pdf() {
         (j * k + a) * w * k + b
     };
     let mut obs = vec![0.0f64; n_bins];
-    let mut rng = Rng::keyed(141, stream::MISC, 0, 0);
+    let mut rng = Rng::keyed(seed, stream::MISC, 0, 0);
     for _ in 0..N {
         if let Some((d, _)) = env.sample(rng.next_2d()) {
             obs[bin(d)] += 1.0;
@@ -152,7 +168,7 @@ fn environment_map_sampler_matches_its_pdf() {
             }
         }
     }
-    check("envmap, a sun and black texels", &chi2_test(&obs, &exp, 5.0));
+    chi2_test(&obs, &exp, 5.0)
 }
 
 /// A `spot`'s emission directions (uniform in its cone, `PointLight::sample_dir`) against its pdf.

@@ -22,15 +22,20 @@
 //! Sampling the map: a piecewise-constant distribution over the `W × H` cells
 //! `[i/W, (i+1)/W) × [j/H, (j+1)/H)` of (u, v), cell weight = the largest luminance of the texels
 //! its interpolation reads × its solid angle `Ω_ij = (2π/W)(cos θ_j − cos θ_{j+1})` (the sin θ
-//! weighting, integrated), a direction uniform in solid angle inside the cell. So
-//! `pdf_w(ω) = P_ij/Ω_ij`: finite at the poles, and positive wherever the radiance is (a bound,
-//! not Mitsuba's bilinear warp; any such pdf is unbiased).
+//! weighting, integrated), drawn as a row (the marginal, `u[1]`) and then a cell in the row (the
+//! conditional, `u[0]`: [`Distribution2D`]), a direction uniform in solid angle inside the cell.
+//! So `pdf_w(ω) = P_ij/Ω_ij`: finite at the poles, and positive wherever the radiance is (a
+//! bound, not Mitsuba's bilinear warp; any such pdf is unbiased). `P_ij/Ω_ij` is computed once,
+//! when the map is built, and kept beside texel `(i, j)` ([`Texel`]): the sampler reports it,
+//! `pdf_w` reads it, and an escaped ray's radiance and pdf come from the same cache lines
+//! ([`Environment::radiance_pdf_w`]; the cell of `(u, v)` is one of the four texels its
+//! interpolation reads, or beside them).
 //!
 //! Invariants: every radiance is finite, non-negative and at most `MAX_RADIANCE`; `pdf_w` of a
 //! sampled direction is the pdf `pdf_w` returns for it (up to the cell boundary's rounding).
 
 use crate::math::{luminance, Frame, Mat3, Rgb, Vec3, PI};
-use crate::sampling::distribution::Distribution1D;
+use crate::sampling::distribution::Distribution2D;
 use crate::sampling::warp;
 
 /// A spot light's angular profile (`spot`); the light itself is a `PointLight`.
@@ -199,11 +204,24 @@ pub struct LatLong {
     /// Height (θ), at least 3.
     pub height: usize,
     /// Texels, row-major, the top row (θ = 0, +y) first.
-    pub texels: Vec<Rgb>,
-    /// The cell distribution (module docs), `j·W + i`.
-    pub cells: Distribution1D,
+    pub texels: Vec<Texel>,
+    /// The cell distribution (module docs): cell `(i, j)` is column `i` of row `j`.
+    pub cells: Distribution2D,
+    /// cos θ at the top of each cell row and at the bottom of the last (`H + 1` values).
+    cos_rows: Vec<f32>,
     /// Each cell's weight (the pick's power estimate is their sum).
     pub total_weight: f32,
+}
+
+/// A texel of a [`LatLong`] map and the pdf of its cell: one 16-byte record, so that a lookup
+/// reads both from one cache line.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(16))]
+pub struct Texel {
+    /// The radiance of texel `(i, j)`.
+    pub rgb: Rgb,
+    /// `pdf_w` of the directions of cell `(i, j)` (module docs).
+    pub pdf_w: f32,
 }
 
 impl LatLong {
@@ -235,8 +253,13 @@ impl LatLong {
             }
         }
         let total_weight: f32 = weights.iter().map(|&x| x as f64).sum::<f64>() as f32;
-        let cells = Distribution1D::new(&weights).unwrap_or_default();
-        Ok(LatLong { width, height, texels, cells, total_weight })
+        let cells = Distribution2D::new(&weights, w).unwrap_or_default();
+        let cos_rows = (0..=h).map(|j| Self::cos_row(j, h)).collect();
+        let mut map = LatLong { width, height, texels: Vec::new(), cells, cos_rows, total_weight };
+        map.texels = (0..w * h)
+            .map(|k| Texel { rgb: texels[k], pdf_w: map.cell_pdf_w(map.cells.pmf(k % w, k / w), k / w) })
+            .collect();
+        Ok(map)
     }
 
     /// cos θ at the top of cell row `j` (θ = π j/H).
@@ -248,6 +271,26 @@ impl LatLong {
             -1.0
         } else {
             (PI * j as f32 / h as f32).cos()
+        }
+    }
+
+    /// The pdf `P_ij/Ω_ij` of the cell `(u, v)` lies in.
+    #[inline]
+    fn pdf_w_at(&self, u: f32, v: f32) -> f32 {
+        let i = ((u * self.width as f32) as usize).min(self.width - 1);
+        let j = ((v * self.height as f32) as usize).min(self.height - 1);
+        self.texels[j * self.width + i].pdf_w
+    }
+
+    /// `P_ij/Ω_ij` of a cell of row `j` whose probability is `pmf` (0 where not finite): the pdf
+    /// kept in the texels and the one the sampler reports (the same `pmf`, the same float).
+    #[inline]
+    fn cell_pdf_w(&self, pmf: f32, j: usize) -> f32 {
+        let pdf = pmf / (2.0 * PI / self.width as f32 * (self.cos_rows[j] - self.cos_rows[j + 1]));
+        if pdf.is_finite() {
+            pdf
+        } else {
+            0.0
         }
     }
 
@@ -264,7 +307,7 @@ impl LatLong {
         let yc = v.clamp(0.0, 1.0) * (h - 1) as f32;
         let y0 = (yc.floor() as usize).min(h - 2);
         let fy = (yc - y0 as f32).clamp(0.0, 1.0);
-        let t = |x: usize, y: usize| self.texels[y * w + x];
+        let t = |x: usize, y: usize| self.texels[y * w + x].rgb;
         let top = t(x0, y0) * (1.0 - fx) + t(x1, y0) * fx;
         let bottom = t(x0, y0 + 1) * (1.0 - fx) + t(x1, y0 + 1) * fx;
         top * (1.0 - fy) + bottom * fy
@@ -301,6 +344,19 @@ impl Environment {
         }
     }
 
+    /// [`Environment::radiance`] and [`Environment::pdf_w`] of the unit world direction `w`, from
+    /// one `(u, v)` (an escaped ray: its radiance and its MIS weight).
+    #[inline]
+    pub fn radiance_pdf_w(&self, w: Vec3) -> (Rgb, f32) {
+        match &self.map {
+            EnvMap::Constant(l) => (*l, warp::uniform_sphere_pdf()),
+            EnvMap::LatLong(m) => {
+                let (u, v) = direction_to_uv((self.to_local * w).normalize());
+                (m.lookup(u, v), m.pdf_w_at(u, v))
+            }
+        }
+    }
+
     /// A direction toward the environment (unit, world) and its solid-angle pdf; `None` when the
     /// map is black.
     #[inline]
@@ -311,16 +367,15 @@ impl Environment {
                 if m.cells.is_empty() {
                     return None;
                 }
-                let (k, pmf, ur) = m.cells.sample(u[0]);
-                let (i, j) = (k % m.width, k / m.width);
-                let (c0, c1) = (LatLong::cos_row(j, m.height), LatLong::cos_row(j + 1, m.height));
-                let omega = 2.0 * PI / m.width as f32 * (c0 - c1);
+                let ((i, j), pmf, [ur, vr]) = m.cells.sample(u);
+                let (c0, c1) = (m.cos_rows[j], m.cos_rows[j + 1]);
                 let phi = 2.0 * PI * (i as f32 + ur) / m.width as f32;
-                let cos_t = c0 - u[1] * (c0 - c1);
+                let cos_t = c0 - vr * (c0 - c1);
                 let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
                 let local = Vec3::new(phi.sin() * sin_t, cos_t, -phi.cos() * sin_t);
-                let pdf = pmf / omega;
-                (pdf.is_finite() && pdf > 0.0).then(|| ((self.to_world * local).normalize(), pdf))
+                // not read from the texel: a draw that the BSDF rejects never loads its line
+                let pdf = m.cell_pdf_w(pmf, j);
+                (pdf > 0.0).then(|| ((self.to_world * local).normalize(), pdf))
             }
         }
     }
@@ -335,16 +390,7 @@ impl Environment {
                     return 0.0;
                 }
                 let (u, v) = direction_to_uv((self.to_local * w).normalize());
-                let i = ((u * m.width as f32) as usize).min(m.width - 1);
-                let j = ((v * m.height as f32) as usize).min(m.height - 1);
-                let (c0, c1) = (LatLong::cos_row(j, m.height), LatLong::cos_row(j + 1, m.height));
-                let omega = 2.0 * PI / m.width as f32 * (c0 - c1);
-                let pdf = m.cells.pmf(j * m.width + i) / omega;
-                if pdf.is_finite() {
-                    pdf
-                } else {
-                    0.0
-                }
+                m.pdf_w_at(u, v)
             }
         }
     }

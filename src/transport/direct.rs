@@ -32,11 +32,14 @@ pub fn emitter_pdf_w(world: &World, emitter: u32, dist2: f32, cos_l: f32) -> f32
 /// times `Environment::pdf_w`); 0 without an environment.
 #[inline]
 pub fn environment_pdf_w(world: &World, d: Vec3) -> f32 {
+    world.scene.environment.as_ref().map_or(0.0, |env| picked_environment_pdf_w(world, env.pdf_w(d)))
+}
+
+/// The pick's pmf times the environment's own `pdf_w` (0 when the environment is not a light).
+#[inline]
+fn picked_environment_pdf_w(world: &World, pdf_w: f32) -> f32 {
     let s = &world.scene;
-    match (s.environment_light(), &s.environment) {
-        (Some(li), Some(env)) => s.light_pick.pmf(li) * env.pdf_w(d),
-        _ => 0.0,
-    }
+    s.environment_light().map_or(0.0, |li| s.light_pick.pmf(li) * pdf_w)
 }
 
 /// A ray along `d` that hit nothing: `(Le, MIS weight)` of the environment, weighted as
@@ -44,8 +47,8 @@ pub fn environment_pdf_w(world: &World, d: Vec3) -> f32 {
 #[inline]
 pub fn escaped(world: &World, d: Vec3, prev_delta: bool, prev_pdf_w: f32) -> Option<(Rgb, f32)> {
     let env = world.scene.environment.as_ref()?;
-    let le = env.radiance(d);
-    let w = if prev_delta { 1.0 } else { power_heuristic(prev_pdf_w, environment_pdf_w(world, d)) };
+    let (le, pdf_w) = env.radiance_pdf_w(d);
+    let w = if prev_delta { 1.0 } else { power_heuristic(prev_pdf_w, picked_environment_pdf_w(world, pdf_w)) };
     Some((le, w))
 }
 
