@@ -23,6 +23,7 @@ mod bvh8;
 #[cfg(feature = "embree")]
 mod embree;
 mod obvhs;
+mod wide;
 
 use std::cell::Cell;
 
@@ -194,6 +195,7 @@ impl AccelKind {
 #[allow(clippy::large_enum_variant)]
 enum Accel {
     Obvhs(obvhs::ObvhsBvh),
+    Wide(wide::WideBvh),
     #[cfg(feature = "embree")]
     Embree(embree::EmbreeScene),
 }
@@ -250,7 +252,7 @@ impl World {
             return Err(BuildError::OutOfRange { prim: i as u32, lo: lo.to_array(), hi: hi.to_array() });
         }
         let accel = match kind {
-            AccelKind::Obvhs => Accel::Obvhs(obvhs::ObvhsBvh::build(&scene, &b)),
+            AccelKind::Obvhs => Accel::Wide(wide::WideBvh::build(&scene, &b)),
             #[cfg(feature = "embree")]
             AccelKind::Embree => Accel::Embree(embree::EmbreeScene::build(&scene).map_err(BuildError::Backend)?),
             #[cfg(not(feature = "embree"))]
@@ -262,7 +264,7 @@ impl World {
     /// The back end in use.
     pub fn accel(&self) -> AccelKind {
         match self.accel {
-            Accel::Obvhs(_) => AccelKind::Obvhs,
+            Accel::Obvhs(_) | Accel::Wide(_) => AccelKind::Obvhs,
             #[cfg(feature = "embree")]
             Accel::Embree(_) => AccelKind::Embree,
         }
@@ -283,6 +285,7 @@ impl World {
         count(1, 0);
         match &self.accel {
             Accel::Obvhs(b) => b.closest(&self.scene, origin, dir, tmax),
+            Accel::Wide(b) => b.closest(&self.scene, origin, dir, tmax),
             #[cfg(feature = "embree")]
             Accel::Embree(e) => e.closest(origin, dir, tmax),
         }
@@ -378,6 +381,7 @@ impl World {
         count(0, 1);
         match &self.accel {
             Accel::Obvhs(b) => b.occluded(&self.scene, origin, dir, tmax),
+            Accel::Wide(b) => b.occluded(&self.scene, origin, dir, tmax),
             #[cfg(feature = "embree")]
             Accel::Embree(e) => e.occluded(origin, dir, tmax),
         }

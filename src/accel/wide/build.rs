@@ -1,0 +1,223 @@
+//! The builder of `super::WideBvh`'s tree: binned SAH, top down, straight into 8-wide nodes.
+//!
+//! A node starts as one child holding its whole range; the child of largest surface area is split
+//! by a binned SAH (`BINS` bins per axis over the centroids) until the node has 8 children or
+//! every child is a leaf (Embree's and pbrt's wide-BVH collapse, done while building). A range
+//! becomes a leaf when it has at most `MAX_LEAF` primitives and the SAH finds no split cheaper
+//! than testing them all. Ranges whose centroids coincide are split at the median by count, and
+//! past `MEDIAN_DEPTH` binary splits every split is a median split, so that the depth (and the
+//! traversal stack) stays bounded: at most `MEDIAN_DEPTH + 32` levels.
+//!
+//! Invariants of the output: node 0 is the root (when there is a primitive); a node's leaf
+//! children's primitives are consecutive slots from `prim_base`, at most 32 (8 children × 4), and
+//! `child[i]` of a leaf is its slot mask relative to `prim_base`; an inner child's `child[i]` is
+//! its node index (> the parent's); an empty child has the box (+∞, −∞); each child's box is the
+//! union of its primitives' boxes, exactly.
+
+use super::Node;
+use crate::math::Vec3;
+
+/// Bins per axis.
+const BINS: usize = 32;
+/// Most primitives in a leaf.
+pub(super) const MAX_LEAF: usize = 4;
+/// The SAH cost of a node visit in units of one primitive test.
+const C_NODE: f32 = 1.0;
+/// Binary splits after which every split is a median split.
+const MEDIAN_DEPTH: u32 = 48;
+/// The deepest a tree can be (`MEDIAN_DEPTH` + log2 of 2^32 primitives).
+pub(super) const MAX_DEPTH: usize = MEDIAN_DEPTH as usize + 32;
+
+#[derive(Clone, Copy)]
+struct Prim {
+    lo: Vec3,
+    hi: Vec3,
+    id: u32,
+}
+
+impl Prim {
+    fn centroid(&self) -> Vec3 {
+        (self.lo + self.hi) * 0.5
+    }
+}
+
+#[derive(Clone, Copy)]
+struct Bounds {
+    lo: Vec3,
+    hi: Vec3,
+}
+
+impl Bounds {
+    const EMPTY: Bounds = Bounds { lo: Vec3::splat(f32::INFINITY), hi: Vec3::splat(f32::NEG_INFINITY) };
+    fn grow(&mut self, lo: Vec3, hi: Vec3) {
+        self.lo = self.lo.min(lo);
+        self.hi = self.hi.max(hi);
+    }
+    /// Half the surface area.
+    fn area(&self) -> f32 {
+        let d = (self.hi - self.lo).max(Vec3::ZERO);
+        d.x * d.y + d.y * d.z + d.z * d.x
+    }
+    fn of(prims: &[Prim]) -> (Bounds, Bounds) {
+        let (mut b, mut c) = (Bounds::EMPTY, Bounds::EMPTY);
+        for p in prims {
+            b.grow(p.lo, p.hi);
+            c.grow(p.centroid(), p.centroid());
+        }
+        (b, c)
+    }
+}
+
+/// A child range during the build: `prims[start..end]`, its box, binary depth, and whether it is
+/// final (a leaf the SAH chose).
+#[derive(Clone, Copy)]
+struct Range {
+    start: usize,
+    end: usize,
+    b: Bounds,
+    depth: u32,
+    leaf: bool,
+}
+
+struct Builder {
+    prims: Vec<Prim>,
+    nodes: Vec<Node>,
+    slot_prim: Vec<u32>,
+}
+
+/// The tree over `bounds` (one box per primitive, finite): its nodes and each slot's primitive.
+pub(super) fn build(bounds: &[(Vec3, Vec3)]) -> (Vec<Node>, Vec<u32>) {
+    if bounds.is_empty() {
+        return (Vec::new(), Vec::new());
+    }
+    let prims = bounds.iter().enumerate().map(|(i, &(lo, hi))| Prim { lo, hi, id: i as u32 }).collect();
+    let mut b = Builder { prims, nodes: Vec::with_capacity(bounds.len() / 4), slot_prim: Vec::with_capacity(bounds.len()) };
+    let (bb, _) = Bounds::of(&b.prims);
+    b.node(Range { start: 0, end: bounds.len(), b: bb, depth: 0, leaf: false });
+    (b.nodes, b.slot_prim)
+}
+
+impl Builder {
+    /// Builds the node over `r` (and its subtree); returns its index.
+    fn node(&mut self, r: Range) -> u32 {
+        let mut kids = vec![r];
+        while kids.len() < 8 {
+            let Some(k) = (0..kids.len())
+                .filter(|&k| !kids[k].leaf && kids[k].end - kids[k].start > 1)
+                .max_by(|&a, &b| kids[a].b.area().total_cmp(&kids[b].b.area()))
+            else {
+                break;
+            };
+            match self.split(kids[k]) {
+                Some((a, b)) => {
+                    kids[k] = a;
+                    kids.push(b);
+                }
+                None => kids[k].leaf = true,
+            }
+        }
+        let index = self.nodes.len() as u32;
+        self.nodes.push(Node::EMPTY);
+        let mut node = Node::EMPTY;
+        node.prim_base = self.slot_prim.len() as u32;
+        for (i, c) in kids.iter().enumerate() {
+            for (k, (lo, hi)) in [(c.b.lo.x, c.b.hi.x), (c.b.lo.y, c.b.hi.y), (c.b.lo.z, c.b.hi.z)].into_iter().enumerate() {
+                node.b[2 * k][i] = lo;
+                node.b[2 * k + 1][i] = hi;
+            }
+            let n = c.end - c.start;
+            if n <= MAX_LEAF {
+                let off = self.slot_prim.len() as u32 - node.prim_base;
+                node.child[i] = ((1u32 << n) - 1) << off;
+                self.slot_prim.extend(self.prims[c.start..c.end].iter().map(|p| p.id));
+            }
+        }
+        for (i, c) in kids.iter().enumerate() {
+            if c.end - c.start > MAX_LEAF {
+                node.inner |= 1 << i;
+                node.child[i] = self.node(Range { leaf: false, ..*c });
+            }
+        }
+        self.nodes[index as usize] = node;
+        index
+    }
+
+    /// Splits `r` in two by the binned SAH (or the median); `None` when it should be a leaf.
+    fn split(&mut self, r: Range) -> Option<(Range, Range)> {
+        let n = r.end - r.start;
+        let prims = &mut self.prims[r.start..r.end];
+        let (_, cb) = Bounds::of(prims);
+        let ext = cb.hi - cb.lo;
+        let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, last bin of the left side)
+        if r.depth < MEDIAN_DEPTH {
+            for axis in 0..3 {
+                if ext[axis] <= 0.0 {
+                    continue;
+                }
+                let k = BINS as f32 * (1.0 - 1e-6) / ext[axis];
+                let mut bins = [(Bounds::EMPTY, 0usize); BINS];
+                for p in prims.iter() {
+                    let bi = (((p.centroid()[axis] - cb.lo[axis]) * k) as usize).min(BINS - 1);
+                    bins[bi].0.grow(p.lo, p.hi);
+                    bins[bi].1 += 1;
+                }
+                let mut right = [0.0f32; BINS];
+                let (mut rb, mut rn) = (Bounds::EMPTY, 0usize);
+                for i in (1..BINS).rev() {
+                    rb.grow(bins[i].0.lo, bins[i].0.hi);
+                    rn += bins[i].1;
+                    right[i] = rb.area() * rn as f32;
+                }
+                let (mut lb, mut ln) = (Bounds::EMPTY, 0usize);
+                for i in 0..BINS - 1 {
+                    lb.grow(bins[i].0.lo, bins[i].0.hi);
+                    ln += bins[i].1;
+                    if ln == 0 || ln == n {
+                        continue;
+                    }
+                    let cost = lb.area() * ln as f32 + right[i + 1];
+                    if best.is_none_or(|b| cost < b.0) {
+                        best = Some((cost, axis, i));
+                    }
+                }
+            }
+        }
+        let area = r.b.area();
+        let mid = match best {
+            Some((cost, axis, last)) => {
+                if n <= MAX_LEAF && n as f32 <= C_NODE + cost / area.max(f32::MIN_POSITIVE) {
+                    return None;
+                }
+                let k = BINS as f32 * (1.0 - 1e-6) / ext[axis];
+                let left = |p: &Prim| (((p.centroid()[axis] - cb.lo[axis]) * k) as usize).min(BINS - 1) <= last;
+                partition(prims, left)
+            }
+            None if n <= MAX_LEAF => return None,
+            None => {
+                // coincident centroids, or past MEDIAN_DEPTH: the median along the widest axis
+                let axis = if ext.x >= ext.y && ext.x >= ext.z { 0 } else if ext.y >= ext.z { 1 } else { 2 };
+                prims.select_nth_unstable_by(n / 2, |a, b| a.centroid()[axis].total_cmp(&b.centroid()[axis]));
+                n / 2
+            }
+        };
+        let (lb, _) = Bounds::of(&prims[..mid]);
+        let (rb, _) = Bounds::of(&prims[mid..]);
+        let d = r.depth + 1;
+        Some((
+            Range { start: r.start, end: r.start + mid, b: lb, depth: d, leaf: false },
+            Range { start: r.start + mid, end: r.end, b: rb, depth: d, leaf: false },
+        ))
+    }
+}
+
+/// Moves the `left` elements first; returns how many there are.
+fn partition(v: &mut [Prim], left: impl Fn(&Prim) -> bool) -> usize {
+    let mut i = 0;
+    for j in 0..v.len() {
+        if left(&v[j]) {
+            v.swap(i, j);
+            i += 1;
+        }
+    }
+    i
+}
