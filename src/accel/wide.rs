@@ -13,8 +13,9 @@
 //!   `(b − o) · inv` (three roundings, so within γ3 of the exact ones), and the far end is compared
 //!   after scaling by 1 + 2γ3 (pbrt's robust slab test), with the entry floored at 0 (no 1e-4
 //!   floor as in obvhs' CWBVH);
-//! - `inv` is 1/d, with |d| < 1e-20 (and ±0) replaced by ±1e20, so every slab distance is finite
-//!   or ±∞ (empty children's (+∞, −∞) boxes), never NaN;
+//! - `inv` is 1/d (+∞ for a zero component: `Ray8` turned −0.0 into +0.0); a slab distance is NaN
+//!   only where the ray lies in the slab's plane (0 · ∞), and such a slab drops out of the node
+//!   test (the ray is inside it), so rays along an axis hit flat boxes they lie in;
 //! - the stack holds (node, entry distance) pairs; a popped node whose entry lies beyond the best
 //!   t (scaled as above) is skipped; its depth bound is `build::MAX_DEPTH` levels of 7 entries.
 
@@ -66,9 +67,16 @@ impl Slab {
     #[inline(always)]
     fn new(ray: &Ray8) -> Slab {
         let d = ray.dir();
-        let inv = d.map(|x| if x.abs() < 1e-20 { 1e20f32.copysign(x) } else { 1.0 / x });
+        let inv = d.map(|x| 1.0 / x);
         Slab { o: ray.origin(), inv, neg: d.map(|x| (x < 0.0) as usize) }
     }
+}
+
+/// A triangle in `bvh8::Tri`'s form (obvhs' `RtTriangle`: the cross product is glam's, fused
+/// where the build has FMA).
+fn tri([v0, v1, v2]: [Vec3; 3]) -> Tri {
+    let (e1, e2) = (glam::Vec3A::from(v0 - v1), glam::Vec3A::from(v2 - v0));
+    Tri { v0: v0.to_array(), e1: e1.to_array(), e2: e2.to_array(), ng: e1.cross(e2).to_array() }
 }
 
 /// The built tree and each slot's primitive.
@@ -88,10 +96,7 @@ impl WideBvh {
             .iter()
             .map(|&p| {
                 if p < ntri {
-                    let [v0, v1, v2] = scene.triangles[p as usize].p;
-                    // obvhs' `RtTriangle` form, with glam's (fused where FMA) cross product
-                    let (e1, e2) = (glam::Vec3A::from(v0 - v1), glam::Vec3A::from(v2 - v0));
-                    Tri { v0: v0.to_array(), e1: e1.to_array(), e2: e2.to_array(), ng: e1.cross(e2).to_array() }
+                    tri(scene.triangles[p as usize].p)
                 } else {
                     Tri { v0: [0.0; 3], e1: [0.0; 3], e2: [0.0; 3], ng: [0.0; 3] }
                 }
@@ -238,8 +243,9 @@ fn node_hits(n: &Node, r: &Slab, tmax: f32) -> (u32, [f32; 8]) {
         let (x0, x1) = slab(0);
         let (y0, y1) = slab(1);
         let (z0, z1) = slab(2);
-        let tn = _mm256_max_ps(_mm256_max_ps(x0, y0), _mm256_max_ps(z0, _mm256_setzero_ps()));
-        let tf = _mm256_min_ps(_mm256_min_ps(x1, y1), _mm256_min_ps(z1, s(tmax)));
+        // `max_ps(a, b)` is b where either is NaN: a NaN slab (0 · ∞) drops out of the chain
+        let tn = _mm256_max_ps(x0, _mm256_max_ps(y0, _mm256_max_ps(z0, _mm256_setzero_ps())));
+        let tf = _mm256_min_ps(x1, _mm256_min_ps(y1, _mm256_min_ps(z1, s(tmax))));
         let tf = _mm256_mul_ps(tf, s(FAR_SCALE));
         let hit = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
         let mut out = [0.0f32; 8];
@@ -262,4 +268,188 @@ fn node_hits(n: &Node, r: &Slab, tmax: f32) -> (u32, [f32; 8]) {
         out[c] = tn;
     }
     (hit, out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::bvh8::tri_t;
+    use super::super::obvhs::ObvhsBvh;
+    use super::*;
+
+    /// A small LCG for the tests' rays (fixed seed).
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn f(&mut self) -> f32 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (self.0 >> 40) as f32 / (1u64 << 24) as f32
+        }
+        fn v(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
+            lo + (hi - lo) * Vec3::new(self.f(), self.f(), self.f())
+        }
+    }
+
+    fn load(path: &str) -> Scene {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        crate::scene::load(&root.join(path)).expect("scene loads")
+    }
+
+    /// Every primitive's distance along the ray (the back ends' per-primitive tests).
+    fn brute_ts<'a>(scene: &'a Scene, tris: &'a [Tri], o: Vec3, d: Vec3, tmax: f32) -> impl Iterator<Item = (u32, f32)> + 'a {
+        let ray = Ray8::new(o.to_array(), d.to_array());
+        let (o, d) = (Vec3::from(ray.origin()), Vec3::from(ray.dir()));
+        let spheres = scene.spheres.iter().map(move |s| super::super::sphere_t(s.center, s.radius, o, d, 0.0, tmax));
+        tris.iter().map(move |t| tri_t(t, &ray, tmax)).chain(spheres).enumerate().map(|(i, t)| (i as u32, t))
+    }
+
+    /// Counts of `same_hits`.
+    #[derive(Debug, Default)]
+    struct Counts {
+        hits: usize,
+        /// Closest hits at the same t on another primitive than obvhs' (a tie).
+        ties: usize,
+        /// Closest hits at another t than obvhs' (obvhs' 1e-4 entry floor or a miss of its).
+        other_t: usize,
+        other_t_below_floor: usize,
+        /// Occlusion answers unlike obvhs'.
+        occlusion: usize,
+        /// Rays compared with brute force.
+        brute: usize,
+        /// Closest hits (occlusion answers) that skipped an edge-on hit which brute force found.
+        edge_on_skipped: usize,
+        edge_on_skipped_occlusion: usize,
+    }
+
+    /// The tree's closest hits and occlusion answers against obvhs' tree (the kernel `bvh8`) on `n`
+    /// rays: from random points of the scene's box, from points on its triangles (a surface's own
+    /// hit at t ≈ 0), along random, axis-parallel and −0.0-component directions, with tmax 0, ∞,
+    /// `f32::MAX` and random. Wherever the two differ, and on every 997th ray, the answer must be
+    /// the brute-force one over all primitives (the same per-primitive tests): t to the bit, a
+    /// primitive with exactly that t, nothing below it; the occlusion answer whether any
+    /// primitive has t < tmax. The one exception, counted: a hit that brute force finds on a
+    /// triangle whose plane the ray runs along (within 1e-5 rad; its t comes from rounding, the
+    /// point lies outside the triangle's box) may be skipped.
+    fn same_hits(scene: &Scene, n: usize, seed: u64) -> Counts {
+        let b = super::super::bounds(scene);
+        let wide = WideBvh::build(scene, &b);
+        let old = ObvhsBvh::build(scene, &b);
+        let tris: Vec<Tri> = scene.triangles.iter().map(|t| tri(t.p)).collect();
+        let (lo, hi) =
+            b.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(l, h), &(a, c)| (l.min(a), h.max(c)));
+        let (lo, hi) = (lo - (hi - lo) * 0.1, hi + (hi - lo) * 0.1);
+        let mut r = Lcg(seed);
+        let mut c = Counts::default();
+        for i in 0..n {
+            let o = if i % 4 == 1 && scene.ntri() > 0 {
+                let t = &scene.triangles[(r.f() * scene.ntri() as f32) as usize % scene.ntri() as usize];
+                let (u, v) = (r.f(), r.f());
+                let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+                t.p[0] + u * (t.p[1] - t.p[0]) + v * (t.p[2] - t.p[0])
+            } else {
+                r.v(lo, hi)
+            };
+            let mut d = r.v(Vec3::splat(-1.0), Vec3::ONE).normalize_or(Vec3::Z);
+            match i % 16 {
+                3 => d = [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z][(i / 16) % 6],
+                5 => d = Vec3::new(-0.0, d.y, d.z).normalize(),
+                7 => d = Vec3::new(d.x, -0.0, -0.0).normalize_or(-Vec3::X),
+                9 => d = Vec3::new(-0.0, -1.0, -0.0),
+                _ => {}
+            }
+            let tmax = match i % 5 {
+                0 => f32::INFINITY,
+                1 => 0.0,
+                2 => r.f() * (hi - lo).length(),
+                _ => f32::MAX,
+            };
+            let (ours, theirs) = (wide.closest(scene, o, d, tmax), old.closest(scene, o, d, tmax));
+            let bits = |h: Option<(u32, f32)>| h.map(|(p, t)| (p, t.to_bits()));
+            let (occ, occ_old) = (wide.occluded(scene, o, d, tmax), old.occluded(scene, o, d, tmax));
+            c.hits += ours.is_some() as usize;
+            if bits(ours) != bits(theirs) {
+                match (ours, theirs) {
+                    (Some((_, a)), Some((_, b))) if a == b => c.ties += 1,
+                    _ => {
+                        c.other_t += 1;
+                        c.other_t_below_floor += ours.is_some_and(|(_, t)| t < 1e-4) as usize;
+                    }
+                }
+            }
+            c.occlusion += (occ != occ_old) as usize;
+            if bits(ours) != bits(theirs) || occ != occ_old || i % 997 == 0 {
+                c.brute += 1;
+                let all: Vec<(u32, f32)> = brute_ts(scene, &tris, o, d, tmax).filter(|&(_, t)| t < tmax).collect();
+                let best = all.iter().map(|h| h.1).reduce(f32::min);
+                let msg = format!("ray {i}: o {o:?} d {d:?} tmax {tmax}: ours {ours:?}, obvhs {theirs:?}, brute force t {best:?}");
+                // an edge-on hit: the ray within 1e-5 rad of the triangle's plane
+                let edge_on = |p: u32| {
+                    let Some(t) = tris.get(p as usize) else { return false };
+                    let ng = Vec3::from(t.ng);
+                    ng.dot(d).abs() < 1e-5 * ng.length()
+                };
+                let ours_t = ours.map_or(f32::INFINITY, |h| h.1);
+                if ours.map(|h| h.1) != best {
+                    // only edge-on hits (the triangle test's rounding, outside the triangle's box) skipped
+                    let skipped: Vec<_> = all.iter().filter(|h| h.1 < ours_t).collect();
+                    assert!(skipped.iter().all(|h| edge_on(h.0)), "{msg}: skipped {skipped:?}");
+                    c.edge_on_skipped += 1;
+                }
+                if let Some((p, t)) = ours {
+                    let tp = brute_ts(scene, &tris, o, d, tmax).nth(p as usize).unwrap().1;
+                    assert_eq!(tp.to_bits(), t.to_bits(), "{msg}: the primitive's own t");
+                }
+                if occ != best.is_some() {
+                    assert!(!occ && all.iter().all(|h| edge_on(h.0)), "{msg} (occlusion {occ})");
+                    c.edge_on_skipped_occlusion += 1;
+                }
+            }
+        }
+        eprintln!("{c:?}");
+        c
+    }
+
+    /// `ring` (12k triangles): 1M rays.
+    #[test]
+    fn hits_equal_brute_force_ring() {
+        let c = same_hits(&load("scenes/ring.toml"), 1_000_000, 1);
+        assert!(c.hits > 100_000, "{c:?}");
+    }
+
+    /// The pool (45k triangles of a scene written by others): 1M rays.
+    #[test]
+    fn hits_equal_brute_force_pool() {
+        let c = same_hits(&load("scenes/external/sms-pool/scene.xml"), 1_000_000, 2);
+        assert!(c.hits > 100_000, "{c:?}");
+    }
+
+    /// A random-triangle soup (overlapping, slivers, coincident copies) and spheres among
+    /// triangles (the cornell box's and 200 random ones): 1M rays each.
+    #[test]
+    fn hits_equal_brute_force_soup_and_spheres() {
+        let mut scene = load("scenes/cornell-box.toml");
+        let mut r = Lcg(3);
+        let t0 = scene.triangles[0].clone();
+        let mut soup = scene.triangles.clone();
+        for k in 0..20_000 {
+            let c = r.v(Vec3::splat(-2.0), Vec3::splat(2.0));
+            let s = if k % 10 == 0 { 0.001 } else { 0.2 * r.f() };
+            let mut t = t0.clone();
+            t.p = [c + r.v(-Vec3::splat(s), Vec3::splat(s)), c + r.v(-Vec3::splat(s), Vec3::splat(s)), c];
+            if k % 50 == 1 {
+                t.p = soup[soup.len() - 1].p; // a coincident copy
+            }
+            soup.push(t);
+        }
+        let s0 = scene.spheres[0].clone();
+        for _ in 0..200 {
+            let mut sp = s0.clone();
+            sp.center = r.v(Vec3::splat(-2.0), Vec3::splat(2.0));
+            sp.radius = 0.01 + 0.2 * r.f();
+            scene.spheres.push(sp);
+        }
+        let with_spheres = same_hits(&scene, 1_000_000, 4);
+        scene.triangles = soup;
+        let soup_hits = same_hits(&scene, 1_000_000, 5);
+        assert!(with_spheres.hits > 100_000 && soup_hits.hits > 100_000, "{with_spheres:?} {soup_hits:?}");
+    }
 }

@@ -12,7 +12,7 @@
 //! children's primitives are consecutive slots from `prim_base`, at most 32 (8 children × 4), and
 //! `child[i]` of a leaf is its slot mask relative to `prim_base`; an inner child's `child[i]` is
 //! its node index (> the parent's); an empty child has the box (+∞, −∞); each child's box is the
-//! union of its primitives' boxes, exactly.
+//! union of its primitives' boxes widened by `PAD` (relative) on each side.
 
 use super::Node;
 use crate::math::Vec3;
@@ -23,6 +23,10 @@ const BINS: usize = 32;
 pub(super) const MAX_LEAF: usize = 4;
 /// The SAH cost of a node visit in units of one primitive test.
 const C_NODE: f32 = 1.0;
+/// Boxes are widened by this fraction of their largest coordinate's magnitude (a few ulps): the
+/// triangle test accepts points a rounding error outside a triangle, and a ray along an axis
+/// meets a box's face exactly (see `super`'s header).
+const PAD: f32 = 4.0 * f32::EPSILON;
 /// Binary splits after which every split is a median split.
 const MEDIAN_DEPTH: u32 = 48;
 /// The deepest a tree can be (`MEDIAN_DEPTH` + log2 of 2^32 primitives).
@@ -121,9 +125,11 @@ impl Builder {
         let mut node = Node::EMPTY;
         node.prim_base = self.slot_prim.len() as u32;
         for (i, c) in kids.iter().enumerate() {
-            for (k, (lo, hi)) in [(c.b.lo.x, c.b.hi.x), (c.b.lo.y, c.b.hi.y), (c.b.lo.z, c.b.hi.z)].into_iter().enumerate() {
-                node.b[2 * k][i] = lo;
-                node.b[2 * k + 1][i] = hi;
+            for k in 0..3 {
+                let (lo, hi) = (c.b.lo[k], c.b.hi[k]);
+                let pad = PAD * lo.abs().max(hi.abs());
+                node.b[2 * k][i] = lo - pad;
+                node.b[2 * k + 1][i] = hi + pad;
             }
             let n = c.end - c.start;
             if n <= MAX_LEAF {
