@@ -29,12 +29,13 @@ use forecast::scene::{load_str, Scene};
 use std::fmt::Write;
 use std::path::Path;
 
-/// `World::build_with` on the back end under test (`FORECAST_TEST_ACCEL`, default obvhs).
+/// `World::build_with` on the back end under test (`FORECAST_TEST_ACCEL`, default wide).
 fn build(s: Scene) -> Result<World, BuildError> {
     let kind = match std::env::var("FORECAST_TEST_ACCEL").as_deref() {
         Ok("embree") => AccelKind::Embree,
-        Ok("obvhs") | Err(_) => AccelKind::Obvhs,
-        Ok(other) => panic!("FORECAST_TEST_ACCEL={other}: expected obvhs or embree"),
+        Ok("obvhs") => AccelKind::Obvhs,
+        Ok("wide") | Err(_) => AccelKind::Wide,
+        Ok(other) => panic!("FORECAST_TEST_ACCEL={other}: expected wide, obvhs or embree"),
     };
     World::build_with(s, kind)
 }

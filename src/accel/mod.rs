@@ -1,6 +1,8 @@
 //! `World`: the scene plus its ray-tracing acceleration structure, from one of two back ends.
 //!
-//! `AccelKind::Obvhs` (the default, `obvhs.rs`): a CWBVH from the obvhs crate.
+//! `AccelKind::Wide` (the default, `wide.rs`): an 8-wide float-box BVH of our own (binned SAH,
+//! traced near to far). `AccelKind::Obvhs` (`obvhs.rs`): a CWBVH from the obvhs crate (the
+//! default before `wide`, kept as the reference its images are z-tested against).
 //! `AccelKind::Embree` (`embree.rs`, cargo feature `embree`): Intel Embree 3 through the system
 //! library. `World` holds the chosen one in an enum (no trait object in the hot path); a back end
 //! answers only "which primitive, at which t"; this module turns that into a `Hit` (normals,
@@ -151,10 +153,13 @@ impl std::error::Error for BuildError {}
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum AccelKind {
-    // The obvhs crate's CWBVH (always built in); no doc comment, which would be a help text
+    // The own 8-wide BVH (`wide.rs`, always built in); no doc comment, which would be a help text
     // turning `render --help` into the long format.
     #[allow(missing_docs)]
     #[default]
+    Wide,
+    // The obvhs crate's CWBVH (always built in).
+    #[allow(missing_docs)]
     Obvhs,
     /// Intel Embree 3, in builds with --features embree only.
     // Hidden in a build without the feature, so that `--help` offers only what the build has;
@@ -167,6 +172,7 @@ impl AccelKind {
     /// The command-line name.
     pub fn name(self) -> &'static str {
         match self {
+            AccelKind::Wide => "wide",
             AccelKind::Obvhs => "obvhs",
             AccelKind::Embree => "embree",
         }
@@ -175,7 +181,7 @@ impl AccelKind {
     /// Whether this build has the back end.
     pub fn available(self) -> bool {
         match self {
-            AccelKind::Obvhs => true,
+            AccelKind::Wide | AccelKind::Obvhs => true,
             AccelKind::Embree => cfg!(feature = "embree"),
         }
     }
@@ -231,10 +237,10 @@ impl World {
         self.scene.shade(hit.prim, hit.shading_point(), wo)
     }
 
-    /// Builds the default (obvhs) BVH over the scene's primitives; refuses boxes that are not
+    /// Builds the default (`wide`) BVH over the scene's primitives; refuses boxes that are not
     /// finite or exceed `scene::MAX_EXTENT` (obvhs would panic on them).
     pub fn build(scene: Scene) -> Result<World, BuildError> {
-        World::build_with(scene, AccelKind::Obvhs)
+        World::build_with(scene, AccelKind::Wide)
     }
 
     /// Builds the acceleration structure of back end `kind` (same checks as `build`).
@@ -252,7 +258,8 @@ impl World {
             return Err(BuildError::OutOfRange { prim: i as u32, lo: lo.to_array(), hi: hi.to_array() });
         }
         let accel = match kind {
-            AccelKind::Obvhs => Accel::Wide(wide::WideBvh::build(&scene, &b)),
+            AccelKind::Wide => Accel::Wide(wide::WideBvh::build(&scene, &b)),
+            AccelKind::Obvhs => Accel::Obvhs(obvhs::ObvhsBvh::build(&scene, &b)),
             #[cfg(feature = "embree")]
             AccelKind::Embree => Accel::Embree(embree::EmbreeScene::build(&scene).map_err(BuildError::Backend)?),
             #[cfg(not(feature = "embree"))]
@@ -264,7 +271,8 @@ impl World {
     /// The back end in use.
     pub fn accel(&self) -> AccelKind {
         match self.accel {
-            Accel::Obvhs(_) | Accel::Wide(_) => AccelKind::Obvhs,
+            Accel::Wide(_) => AccelKind::Wide,
+            Accel::Obvhs(_) => AccelKind::Obvhs,
             #[cfg(feature = "embree")]
             Accel::Embree(_) => AccelKind::Embree,
         }

@@ -1,7 +1,7 @@
 //! The builder of `super::WideBvh`'s tree: binned SAH, top down, straight into 8-wide nodes.
 //!
 //! A node starts as one child holding its whole range; the child of largest surface area is split
-//! by a binned SAH (`BINS` bins per axis over the centroids) until the node has 8 children or
+//! by a binned SAH (`BINS` bins per axis over the centroids, fewer below `BINS` primitives) until the node has 8 children or
 //! every child is a leaf (Embree's and pbrt's wide-BVH collapse, done while building). A range
 //! becomes a leaf when it has at most `MAX_LEAF` primitives and the SAH finds no split cheaper
 //! than testing them all. Ranges whose centroids coincide are split at the median by count, and
@@ -79,6 +79,8 @@ struct Range {
     start: usize,
     end: usize,
     b: Bounds,
+    /// The box of the centroids.
+    cb: Bounds,
     depth: u32,
     leaf: bool,
 }
@@ -96,8 +98,8 @@ pub(super) fn build(bounds: &[(Vec3, Vec3)]) -> (Vec<Node>, Vec<u32>) {
     }
     let prims = bounds.iter().enumerate().map(|(i, &(lo, hi))| Prim { lo, hi, id: i as u32 }).collect();
     let mut b = Builder { prims, nodes: Vec::with_capacity(bounds.len() / 4), slot_prim: Vec::with_capacity(bounds.len()) };
-    let (bb, _) = Bounds::of(&b.prims);
-    b.node(Range { start: 0, end: bounds.len(), b: bb, depth: 0, leaf: false });
+    let (bb, cb) = Bounds::of(&b.prims);
+    b.node(Range { start: 0, end: bounds.len(), b: bb, cb, depth: 0, leaf: false });
     (b.nodes, b.slot_prim)
 }
 
@@ -152,67 +154,86 @@ impl Builder {
     fn split(&mut self, r: Range) -> Option<(Range, Range)> {
         let n = r.end - r.start;
         let prims = &mut self.prims[r.start..r.end];
-        let (_, cb) = Bounds::of(prims);
+        let cb = r.cb;
         let ext = cb.hi - cb.lo;
-        let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, last bin of the left side)
+        // per axis and bin: box, centroid box, count (one pass over the primitives)
+        // (fewer bins for small ranges: there, the sweep over the bins cost more than the binning)
+        let nb = BINS.min(n.max(4));
+        let mut bins = [[(Bounds::EMPTY, Bounds::EMPTY, 0usize); BINS]; 3];
+        let k = Vec3::from_array(std::array::from_fn(|a| {
+            if ext[a] > 0.0 {
+                nb as f32 * (1.0 - 1e-6) / ext[a]
+            } else {
+                0.0
+            }
+        }));
+        let bin = |c: f32, a: usize| (((c - cb.lo[a]) * k[a]) as usize).min(nb - 1);
         if r.depth < MEDIAN_DEPTH {
-            for axis in 0..3 {
-                if ext[axis] <= 0.0 {
-                    continue;
-                }
-                let k = BINS as f32 * (1.0 - 1e-6) / ext[axis];
-                let mut bins = [(Bounds::EMPTY, 0usize); BINS];
-                for p in prims.iter() {
-                    let bi = (((p.centroid()[axis] - cb.lo[axis]) * k) as usize).min(BINS - 1);
-                    bins[bi].0.grow(p.lo, p.hi);
-                    bins[bi].1 += 1;
-                }
-                let mut right = [0.0f32; BINS];
-                let (mut rb, mut rn) = (Bounds::EMPTY, 0usize);
-                for i in (1..BINS).rev() {
-                    rb.grow(bins[i].0.lo, bins[i].0.hi);
-                    rn += bins[i].1;
-                    right[i] = rb.area() * rn as f32;
-                }
-                let (mut lb, mut ln) = (Bounds::EMPTY, 0usize);
-                for i in 0..BINS - 1 {
-                    lb.grow(bins[i].0.lo, bins[i].0.hi);
-                    ln += bins[i].1;
-                    if ln == 0 || ln == n {
-                        continue;
-                    }
-                    let cost = lb.area() * ln as f32 + right[i + 1];
-                    if best.is_none_or(|b| cost < b.0) {
-                        best = Some((cost, axis, i));
-                    }
+            for p in prims.iter() {
+                let c = p.centroid();
+                for (a, bins) in bins.iter_mut().enumerate() {
+                    let b = &mut bins[bin(c[a], a)];
+                    b.0.grow(p.lo, p.hi);
+                    b.1.grow(c, c);
+                    b.2 += 1;
                 }
             }
         }
-        let area = r.b.area();
-        let mid = match best {
+        // (cost, axis, last bin of the left side)
+        let mut best: Option<(f32, usize, usize)> = None;
+        for (axis, bins) in bins.iter().enumerate() {
+            if ext[axis] <= 0.0 || r.depth >= MEDIAN_DEPTH {
+                continue;
+            }
+            let mut right = [0.0f32; BINS];
+            let (mut rb, mut rn) = (Bounds::EMPTY, 0usize);
+            for i in (1..nb).rev() {
+                rb.grow(bins[i].0.lo, bins[i].0.hi);
+                rn += bins[i].2;
+                right[i] = rb.area() * rn as f32;
+            }
+            let (mut lb, mut ln) = (Bounds::EMPTY, 0usize);
+            for i in 0..nb - 1 {
+                lb.grow(bins[i].0.lo, bins[i].0.hi);
+                ln += bins[i].2;
+                if ln == 0 || ln == n {
+                    continue;
+                }
+                let cost = lb.area() * ln as f32 + right[i + 1];
+                if best.is_none_or(|b| cost < b.0) {
+                    best = Some((cost, axis, i));
+                }
+            }
+        }
+        let d = r.depth + 1;
+        let range = |start: usize, end: usize, (b, cb): (Bounds, Bounds)| Range { start, end, b, cb, depth: d, leaf: false };
+        match best {
             Some((cost, axis, last)) => {
-                if n <= MAX_LEAF && n as f32 <= C_NODE + cost / area.max(f32::MIN_POSITIVE) {
+                if n <= MAX_LEAF && n as f32 <= C_NODE + cost / r.b.area().max(f32::MIN_POSITIVE) {
                     return None;
                 }
-                let k = BINS as f32 * (1.0 - 1e-6) / ext[axis];
-                let left = |p: &Prim| (((p.centroid()[axis] - cb.lo[axis]) * k) as usize).min(BINS - 1) <= last;
-                partition(prims, left)
+                let mid = partition(prims, |p| bin(p.centroid()[axis], axis) <= last);
+                let side = |bins: &[(Bounds, Bounds, usize)]| {
+                    let (mut b, mut c) = (Bounds::EMPTY, Bounds::EMPTY);
+                    for x in bins {
+                        b.grow(x.0.lo, x.0.hi);
+                        c.grow(x.1.lo, x.1.hi);
+                    }
+                    (b, c)
+                };
+                let (lo, hi) = (side(&bins[axis][..=last]), side(&bins[axis][last + 1..nb]));
+                Some((range(r.start, r.start + mid, lo), range(r.start + mid, r.end, hi)))
             }
-            None if n <= MAX_LEAF => return None,
+            None if n <= MAX_LEAF => None,
             None => {
                 // coincident centroids, or past MEDIAN_DEPTH: the median along the widest axis
                 let axis = if ext.x >= ext.y && ext.x >= ext.z { 0 } else if ext.y >= ext.z { 1 } else { 2 };
-                prims.select_nth_unstable_by(n / 2, |a, b| a.centroid()[axis].total_cmp(&b.centroid()[axis]));
-                n / 2
+                let mid = n / 2;
+                prims.select_nth_unstable_by(mid, |a, b| a.centroid()[axis].total_cmp(&b.centroid()[axis]));
+                let (lo, hi) = (Bounds::of(&prims[..mid]), Bounds::of(&prims[mid..]));
+                Some((range(r.start, r.start + mid, lo), range(r.start + mid, r.end, hi)))
             }
-        };
-        let (lb, _) = Bounds::of(&prims[..mid]);
-        let (rb, _) = Bounds::of(&prims[mid..]);
-        let d = r.depth + 1;
-        Some((
-            Range { start: r.start, end: r.start + mid, b: lb, depth: d, leaf: false },
-            Range { start: r.start + mid, end: r.end, b: rb, depth: d, leaf: false },
-        ))
+        }
     }
 }
 
