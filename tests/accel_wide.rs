@@ -20,8 +20,8 @@
 mod common;
 
 use forecast::accel::{AccelKind, World};
-use forecast::render::film::Film;
 use forecast::integrators::{Method, MethodArgs};
+use forecast::render::film::Film;
 use std::path::Path;
 
 /// `method` on `w` (its preprocess with seed 17), `passes` passes of a `w`×`h` image.
@@ -58,7 +58,8 @@ fn agree_no_control(scene: World, method: Method, o: &MethodArgs, res: (u32, u32
 }
 
 fn pool() -> World {
-    World::build(forecast::scene::load(Path::new("scenes/external/sms-pool/scene.xml")).expect("loads")).expect("builds")
+    World::build(forecast::scene::load(Path::new("scenes/external/sms-pool/scene.xml")).expect("loads"))
+        .expect("builds")
 }
 
 #[test]
@@ -68,7 +69,14 @@ fn pt_ring() {
 
 #[test]
 fn pt_cf_ring() {
-    agree(common::ring_with_wide_light(), Method::PtCf, &common::cf_test_opts(), (8, 8), 32768, "pt-cf wide vs obvhs (ring)");
+    agree(
+        common::ring_with_wide_light(),
+        Method::PtCf,
+        &common::cf_test_opts(),
+        (8, 8),
+        32768,
+        "pt-cf wide vs obvhs (ring)",
+    );
 }
 
 #[test]

@@ -39,10 +39,14 @@ pub(super) struct Node {
 
 impl Node {
     const EMPTY: Node = Node {
-        b: [[f32::INFINITY; 8], [f32::NEG_INFINITY; 8], [f32::INFINITY; 8], [f32::NEG_INFINITY; 8], [f32::INFINITY; 8], [
-            f32::NEG_INFINITY;
-            8
-        ]],
+        b: [
+            [f32::INFINITY; 8],
+            [f32::NEG_INFINITY; 8],
+            [f32::INFINITY; 8],
+            [f32::NEG_INFINITY; 8],
+            [f32::INFINITY; 8],
+            [f32::NEG_INFINITY; 8],
+        ],
         child: [0; 8],
         prim_base: 0,
         inner: 0,
@@ -295,7 +299,13 @@ mod tests {
     }
 
     /// Every primitive's distance along the ray (the back ends' per-primitive tests).
-    fn brute_ts<'a>(scene: &'a Scene, tris: &'a [Tri], o: Vec3, d: Vec3, tmax: f32) -> impl Iterator<Item = (u32, f32)> + 'a {
+    fn brute_ts<'a>(
+        scene: &'a Scene,
+        tris: &'a [Tri],
+        o: Vec3,
+        d: Vec3,
+        tmax: f32,
+    ) -> impl Iterator<Item = (u32, f32)> + 'a {
         let ray = Ray8::new(o.to_array(), d.to_array());
         let (o, d) = (Vec3::from(ray.origin()), Vec3::from(ray.dir()));
         let spheres = scene.spheres.iter().map(move |s| super::super::sphere_t(s.center, s.radius, o, d, 0.0, tmax));
@@ -380,7 +390,9 @@ mod tests {
                 c.brute += 1;
                 let all: Vec<(u32, f32)> = brute_ts(scene, &tris, o, d, tmax).filter(|&(_, t)| t < tmax).collect();
                 let best = all.iter().map(|h| h.1).reduce(f32::min);
-                let msg = format!("ray {i}: o {o:?} d {d:?} tmax {tmax}: ours {ours:?}, obvhs {theirs:?}, brute force t {best:?}");
+                let msg = format!(
+                    "ray {i}: o {o:?} d {d:?} tmax {tmax}: ours {ours:?}, obvhs {theirs:?}, brute force t {best:?}"
+                );
                 // an edge-on hit: the ray within 1e-5 rad of the triangle's plane
                 let edge_on = |p: u32| {
                     let Some(t) = tris.get(p as usize) else { return false };

@@ -97,7 +97,8 @@ pub(super) fn build(bounds: &[(Vec3, Vec3)]) -> (Vec<Node>, Vec<u32>) {
         return (Vec::new(), Vec::new());
     }
     let prims = bounds.iter().enumerate().map(|(i, &(lo, hi))| Prim { lo, hi, id: i as u32 }).collect();
-    let mut b = Builder { prims, nodes: Vec::with_capacity(bounds.len() / 4), slot_prim: Vec::with_capacity(bounds.len()) };
+    let mut b =
+        Builder { prims, nodes: Vec::with_capacity(bounds.len() / 4), slot_prim: Vec::with_capacity(bounds.len()) };
     let (bb, cb) = Bounds::of(&b.prims);
     b.node(Range { start: 0, end: bounds.len(), b: bb, cb, depth: 0, leaf: false });
     (b.nodes, b.slot_prim)
@@ -160,13 +161,16 @@ impl Builder {
         // (fewer bins for small ranges: there, the sweep over the bins cost more than the binning)
         let nb = BINS.min(n.max(4));
         let mut bins = [[(Bounds::EMPTY, Bounds::EMPTY, 0usize); BINS]; 3];
-        let k = Vec3::from_array(std::array::from_fn(|a| {
-            if ext[a] > 0.0 {
-                nb as f32 * (1.0 - 1e-6) / ext[a]
-            } else {
-                0.0
-            }
-        }));
+        let k =
+            Vec3::from_array(std::array::from_fn(
+                |a| {
+                    if ext[a] > 0.0 {
+                        nb as f32 * (1.0 - 1e-6) / ext[a]
+                    } else {
+                        0.0
+                    }
+                },
+            ));
         let bin = |c: f32, a: usize| (((c - cb.lo[a]) * k[a]) as usize).min(nb - 1);
         if r.depth < MEDIAN_DEPTH {
             for p in prims.iter() {
@@ -206,7 +210,8 @@ impl Builder {
             }
         }
         let d = r.depth + 1;
-        let range = |start: usize, end: usize, (b, cb): (Bounds, Bounds)| Range { start, end, b, cb, depth: d, leaf: false };
+        let range =
+            |start: usize, end: usize, (b, cb): (Bounds, Bounds)| Range { start, end, b, cb, depth: d, leaf: false };
         match best {
             Some((cost, axis, last)) => {
                 if n <= MAX_LEAF && n as f32 <= C_NODE + cost / r.b.area().max(f32::MIN_POSITIVE) {
@@ -227,7 +232,13 @@ impl Builder {
             None if n <= MAX_LEAF => None,
             None => {
                 // coincident centroids, or past MEDIAN_DEPTH: the median along the widest axis
-                let axis = if ext.x >= ext.y && ext.x >= ext.z { 0 } else if ext.y >= ext.z { 1 } else { 2 };
+                let axis = if ext.x >= ext.y && ext.x >= ext.z {
+                    0
+                } else if ext.y >= ext.z {
+                    1
+                } else {
+                    2
+                };
                 let mid = n / 2;
                 prims.select_nth_unstable_by(mid, |a, b| a.centroid()[axis].total_cmp(&b.centroid()[axis]));
                 let (lo, hi) = (Bounds::of(&prims[..mid]), Bounds::of(&prims[mid..]));
