@@ -416,7 +416,7 @@ mod tests {
                 }
             }
         }
-        eprintln!("{c:?}");
+        eprintln!("seed {seed}: {c:?}");
         c
     }
 
