@@ -247,13 +247,7 @@ impl Slots {
                 }
             }
         }
-        let mut best = (f32::INFINITY, usize::MAX);
-        for i in (0..LANES).rev() {
-            if bits & (1 << i) != 0 && t[i] < best.0 {
-                best = (t[i], base + i);
-            }
-        }
-        best
+        smallest(&t, bits, base)
     }
 
     /// `tri_t` of the 8 slots from `base` with tmin 0 and tmax `cur` (NaN slots give ∞).
@@ -321,6 +315,44 @@ impl Slots {
             )
         })
     }
+}
+
+/// The smallest `t[i]` over the set bits `i` of `bits` and its slot `base + i`, the highest `i`
+/// among equal ones (+0.0 and −0.0 equal; the lane's own value is returned); (∞, `usize::MAX`)
+/// where none is below ∞. The loop from the highest lane down, as one AVX2 horizontal minimum.
+#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+#[inline(always)]
+fn smallest(t: &[f32; LANES], bits: u32, base: usize) -> (f32, usize) {
+    use std::arch::x86_64::*;
+    // SAFETY: AVX2 is enabled at compile time (the cfg above); the load reads the 8 floats of `t`.
+    let (m, eq) = unsafe {
+        let lane = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+        let sel = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(bits as i32), lane), lane);
+        let v = _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), _mm256_loadu_ps(t.as_ptr()), _mm256_castsi256_ps(sel));
+        let m = _mm256_min_ps(v, _mm256_permute2f128_ps::<1>(v, v));
+        let m = _mm256_min_ps(m, _mm256_shuffle_ps::<0b01_00_11_10>(m, m));
+        let m = _mm256_min_ps(m, _mm256_shuffle_ps::<0b10_11_00_01>(m, m));
+        (_mm256_cvtss_f32(m), _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(v, m)) as u32)
+    };
+    if m < f32::INFINITY {
+        let i = (31 - eq.leading_zeros()) as usize;
+        (t[i], base + i)
+    } else {
+        (f32::INFINITY, usize::MAX)
+    }
+}
+
+/// The portable form of `smallest`: the loop from the highest lane down.
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+#[inline(always)]
+fn smallest(t: &[f32; LANES], bits: u32, base: usize) -> (f32, usize) {
+    let mut best = (f32::INFINITY, usize::MAX);
+    for i in (0..LANES).rev() {
+        if bits & (1 << i) != 0 && t[i] < best.0 {
+            best = (t[i], base + i);
+        }
+    }
+    best
 }
 
 /// Möller–Trumbore with inclusive edges on one triangle, t in [0, tmax] or ∞: the arithmetic of
