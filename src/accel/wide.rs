@@ -16,6 +16,9 @@
 //! - `inv` is 1/d (+∞ for a zero component: `Ray8` turned −0.0 into +0.0); a slab distance is NaN
 //!   only where the ray lies in the slab's plane (0 · ∞), and such a slab drops out of the node
 //!   test (the ray is inside it), so rays along an axis hit flat boxes they lie in;
+//! - child boxes are their primitives' boxes widened by 4 ulps (`build::PAD`); a hit that the
+//!   triangle test reports outside that box (a ray running along the triangle's plane, where its
+//!   t is rounding) may be missed: the one difference from brute force that the tests allow;
 //! - the stack holds (node, entry distance) pairs; a popped node whose entry lies beyond the best
 //!   t (scaled as above) is skipped; its depth bound is `build::MAX_DEPTH` levels of 7 entries.
 
