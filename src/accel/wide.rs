@@ -29,8 +29,8 @@ use crate::math::Vec3;
 use crate::scene::Scene;
 
 /// An 8-wide node: the children's boxes as 8 lanes per bound (min x, max x, min y, max y, min z,
-/// max z), each child's node index (inner) or slot mask from `prim_base` (leaf), which children
-/// are inner.
+/// max z), each child's node index (inner) or first slot's offset from `prim_base` | count << 8
+/// (leaf), which children are inner.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub(super) struct Node {
@@ -175,16 +175,17 @@ impl WideBvh {
             let node = &self.nodes[n as usize];
             let (hit, tnear) = node_hits(node, &slab, *cur);
             // the hit leaves' slots, 8 at a time from the lowest
-            let mut leaves = 0u32;
+            let mut leaves = 0u64;
             let mut lh = hit & !node.inner;
             while lh != 0 {
-                leaves |= node.child[lh.trailing_zeros() as usize];
+                let c = node.child[lh.trailing_zeros() as usize];
+                leaves |= ((1u64 << (c >> 8)) - 1) << (c & 0xff);
                 lh &= lh - 1;
             }
             while leaves != 0 {
                 let lo = leaves.trailing_zeros();
-                let bits = (leaves >> lo) & 0xff;
-                leaves &= !(0xffu32.wrapping_shl(lo));
+                let bits = ((leaves >> lo) & 0xff) as u32;
+                leaves &= !(0xffu64.wrapping_shl(lo));
                 if leaf(&self.slots, (node.prim_base + lo) as usize, bits, cur) {
                     return;
                 }

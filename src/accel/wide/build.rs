@@ -9,10 +9,10 @@
 //! traversal stack) stays bounded: at most `MEDIAN_DEPTH + 32` levels.
 //!
 //! Invariants of the output: node 0 is the root (when there is a primitive); a node's leaf
-//! children's primitives are consecutive slots from `prim_base`, at most 32 (8 children × 4), and
-//! `child[i]` of a leaf is its slot mask relative to `prim_base`; an inner child's `child[i]` is
-//! its node index (> the parent's); an empty child has the box (+∞, −∞); each child's box is the
-//! union of its primitives' boxes widened by `PAD` (relative) on each side.
+//! children's primitives are consecutive slots from `prim_base`, at most 64 (8 children × 8), and
+//! `child[i]` of a leaf is its first slot's offset from `prim_base` | its count << 8; an inner
+//! child's `child[i]` is its node index (> the parent's); an empty child has the box (+∞, −∞);
+//! each child's box is the union of its primitives' boxes widened by `PAD` (relative) on each side.
 
 use super::Node;
 use crate::math::Vec3;
@@ -20,7 +20,7 @@ use crate::math::Vec3;
 /// Bins per axis.
 const BINS: usize = 32;
 /// Most primitives in a leaf.
-pub(super) const MAX_LEAF: usize = 4;
+pub(super) const MAX_LEAF: usize = 8;
 /// The SAH cost of a node visit in units of one primitive test.
 const C_NODE: f32 = 1.0;
 /// Boxes are widened by this fraction of their largest coordinate's magnitude (a few ulps): the
@@ -137,7 +137,7 @@ impl Builder {
             let n = c.end - c.start;
             if n <= MAX_LEAF {
                 let off = self.slot_prim.len() as u32 - node.prim_base;
-                node.child[i] = ((1u32 << n) - 1) << off;
+                node.child[i] = off | (n as u32) << 8;
                 self.slot_prim.extend(self.prims[c.start..c.end].iter().map(|p| p.id));
             }
         }
