@@ -451,7 +451,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 2)]
     pub spp: u64,
     /// Ray-tracing back end.
-    #[arg(long, value_enum, default_value_t = crate::accel::AccelKind::Obvhs)]
+    #[arg(long, value_enum, default_value_t = crate::accel::AccelKind::Wide)]
     pub accel: crate::accel::AccelKind,
 }
 

@@ -29,12 +29,13 @@ use forecast::scene::{load_str, Scene};
 use std::fmt::Write;
 use std::path::Path;
 
-/// `World::build_with` on the back end under test (`FORECAST_TEST_ACCEL`, default obvhs).
+/// `World::build_with` on the back end under test (`FORECAST_TEST_ACCEL`, default wide).
 fn build(s: Scene) -> Result<World, BuildError> {
     let kind = match std::env::var("FORECAST_TEST_ACCEL").as_deref() {
         Ok("embree") => AccelKind::Embree,
-        Ok("obvhs") | Err(_) => AccelKind::Obvhs,
-        Ok(other) => panic!("FORECAST_TEST_ACCEL={other}: expected obvhs or embree"),
+        Ok("obvhs") => AccelKind::Obvhs,
+        Ok("wide") | Err(_) => AccelKind::Wide,
+        Ok(other) => panic!("FORECAST_TEST_ACCEL={other}: expected wide, obvhs or embree"),
     };
     World::build_with(s, kind)
 }
@@ -443,10 +444,14 @@ fn comparison_detects_a_wrong_bvh() {
 
 /// Hits closer than 1e-4 on geometry smaller than 1e-4 (a millimetre-scale scene, or a ray spawned
 /// in a crease next to small detail) must be found: `intersect` promises t ∈ (0, tmax).
-/// FAILS with obvhs 0.4 (see `OBVHS_NODE_EPSILON`); reported, not fixed here (src/accel is not ours).
+/// Passes on the default tree (`wide`) and on Embree; FAILS with obvhs 0.4's tree (see
+/// `OBVHS_NODE_EPSILON`; docs/limitations.md), so it is skipped under `FORECAST_TEST_ACCEL=obvhs`.
 #[test]
-#[ignore = "known obvhs 0.4 limitation: CWBVH node entry is clamped to t >= 1e-4 (docs/limitations.md)"]
 fn hits_closer_than_1e4_are_found() {
+    if std::env::var("FORECAST_TEST_ACCEL").as_deref() == Ok("obvhs") {
+        eprintln!("skipped: obvhs 0.4 clamps its CWBVH node entry to t >= 1e-4");
+        return;
+    }
     let src = format!(
         "{HEADER}\n[[shape]]\ntype = \"quad\"\ncorner = [-2e-5, -2e-5, 5e-5]\nu = [4e-5, 0.0, 0.0]\nv = [0.0, 4e-5, 0.0]\nmaterial = \"m\"\n\n[[shape]]\ntype = \"quad\"\ncorner = [-1.0, -1.0, 1.0]\nu = [2.0, 0.0, 0.0]\nv = [0.0, 2.0, 0.0]\nmaterial = \"m\"\n"
     );

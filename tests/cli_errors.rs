@@ -204,7 +204,7 @@ fn the_json_records_only_the_chosen_methods_options() {
     let mut names: Vec<&str> = pt.keys().map(String::as_str).collect();
     names.sort_unstable();
     assert_eq!(names, ["accel", "emission_split", "max_depth", "path_filter", "sampler"], "{pt:?}");
-    assert_eq!(pt["accel"].as_str(), Some("obvhs"), "the default back end is recorded");
+    assert_eq!(pt["accel"].as_str(), Some("wide"), "the default back end is recorded");
     assert_eq!(pt["sampler"].as_str(), Some("independent"), "the default sampler is recorded");
     let cf = keys("iws-cf", &["--variant", "baj08", "--forecast-photons", "2000", "--clusters", "4"]);
     for k in ["max_depth", "emission_split", "vpl_paths", "direct", "clusters", "split", "table_depth", "variant"] {

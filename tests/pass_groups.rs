@@ -46,7 +46,7 @@ fn grouped(world: &World, integ: &dyn Integrator, pixels: &PixelSampler, groups:
 
 #[test]
 fn a_pass_group_is_its_passes_one_by_one_bit_for_bit() {
-    let kinds = [AccelKind::Obvhs, AccelKind::Embree].into_iter().filter(|k| k.available());
+    let kinds = [AccelKind::Wide, AccelKind::Obvhs, AccelKind::Embree].into_iter().filter(|k| k.available());
     for kind in kinds {
         let scene = forecast::scene::load(&root().join("scenes/cornell-box.toml")).unwrap();
         let world = World::build_with(scene, kind).unwrap();

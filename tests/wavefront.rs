@@ -27,7 +27,7 @@ use forecast::math::Vec3;
 use forecast::sampling::rng::{stream, Rng};
 
 fn backends() -> Vec<AccelKind> {
-    [AccelKind::Obvhs, AccelKind::Embree].into_iter().filter(|k| k.available()).collect()
+    [AccelKind::Wide, AccelKind::Obvhs, AccelKind::Embree].into_iter().filter(|k| k.available()).collect()
 }
 
 fn world(path: &str, kind: AccelKind) -> World {

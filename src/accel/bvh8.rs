@@ -100,6 +100,11 @@ pub struct Tri {
 /// The kernel's arrays.
 pub struct Bvh8 {
     nodes: Vec<Node>,
+    slots: Slots,
+}
+
+/// The primitive slots as the 8-wide triangle test reads them (shared with `super::wide`).
+pub struct Slots {
     /// v0, e1, e2, ng, each x, y, z: 12 arrays of `slots + 8` entries.
     soa: [Vec<f32>; 12],
     other: Vec<bool>,
@@ -116,24 +121,7 @@ impl Bvh8 {
     /// The kernel over `nodes` (root first) and the slots' triangles; `other[s]`: slot `s` is not a
     /// triangle (its entry of `tris` is ignored).
     pub fn new(nodes: Vec<Node>, tris: &[Tri], other: Vec<bool>) -> Bvh8 {
-        assert_eq!(tris.len(), other.len());
-        let n = tris.len();
-        let mut soa: [Vec<f32>; 12] = std::array::from_fn(|_| vec![f32::NAN; n + LANES]);
-        for (s, (t, &o)) in tris.iter().zip(&other).enumerate() {
-            if o {
-                continue;
-            }
-            for k in 0..3 {
-                soa[k][s] = t.v0[k];
-                soa[3 + k][s] = t.e1[k];
-                soa[6 + k][s] = t.e2[k];
-                soa[9 + k][s] = t.ng[k];
-            }
-        }
-        let any_other = other.iter().any(|&o| o);
-        let mut other = other;
-        other.resize(n + LANES, false);
-        Bvh8 { nodes, soa, other, any_other }
+        Bvh8 { nodes, slots: Slots::new(tris, other) }
     }
 
     /// Closest hit in [0, tmax]: (slot, t). `other(slot, tmax)` is the distance to a non-triangle
@@ -143,7 +131,7 @@ impl Bvh8 {
         let mut best = usize::MAX;
         let mut cur = tmax;
         self.traverse(ray, &mut cur, |bvh, base, bits, cur| {
-            let (t, s) = bvh.leaf_chunk(ray, base, bits, *cur, &mut other);
+            let (t, s) = bvh.slots.leaf_chunk(ray, base, bits, *cur, &mut other);
             if t < *cur {
                 *cur = t;
                 best = s;
@@ -159,7 +147,7 @@ impl Bvh8 {
         let mut cur = tmax;
         let mut hit = false;
         self.traverse(ray, &mut cur, |bvh, base, bits, cur| {
-            hit = bvh.leaf_chunk(ray, base, bits, *cur, &mut other).0 < *cur;
+            hit = bvh.slots.leaf_chunk(ray, base, bits, *cur, &mut other).0 < *cur;
             hit
         });
         hit
@@ -214,11 +202,36 @@ impl Bvh8 {
             }
         }
     }
+}
+
+impl Slots {
+    /// The slots' triangles; `other[s]`: slot `s` is not a triangle (its entry of `tris` is
+    /// ignored).
+    pub fn new(tris: &[Tri], other: Vec<bool>) -> Slots {
+        assert_eq!(tris.len(), other.len());
+        let n = tris.len();
+        let mut soa: [Vec<f32>; 12] = std::array::from_fn(|_| vec![f32::NAN; n + LANES]);
+        for (s, (t, &o)) in tris.iter().zip(&other).enumerate() {
+            if o {
+                continue;
+            }
+            for k in 0..3 {
+                soa[k][s] = t.v0[k];
+                soa[3 + k][s] = t.e1[k];
+                soa[6 + k][s] = t.e2[k];
+                soa[9 + k][s] = t.ng[k];
+            }
+        }
+        let any_other = other.iter().any(|&o| o);
+        let mut other = other;
+        other.resize(n + LANES, false);
+        Slots { soa, other, any_other }
+    }
 
     /// The slots `base + i` for the set bits `i` of `bits` against [0, cur]: the smallest t (∞ if
     /// none below `cur`... or a t ≥ cur) and its slot, the highest slot among equal t.
     #[inline(always)]
-    fn leaf_chunk(
+    pub fn leaf_chunk(
         &self,
         ray: &Ray8,
         base: usize,
@@ -234,13 +247,7 @@ impl Bvh8 {
                 }
             }
         }
-        let mut best = (f32::INFINITY, usize::MAX);
-        for i in (0..LANES).rev() {
-            if bits & (1 << i) != 0 && t[i] < best.0 {
-                best = (t[i], base + i);
-            }
-        }
-        best
+        smallest(&t, bits, base)
     }
 
     /// `tri_t` of the 8 slots from `base` with tmin 0 and tmax `cur` (NaN slots give ∞).
@@ -308,6 +315,44 @@ impl Bvh8 {
             )
         })
     }
+}
+
+/// The smallest `t[i]` over the set bits `i` of `bits` and its slot `base + i`, the highest `i`
+/// among equal ones (+0.0 and −0.0 equal; the lane's own value is returned); (∞, `usize::MAX`)
+/// where none is below ∞. The loop from the highest lane down, as one AVX2 horizontal minimum.
+#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+#[inline(always)]
+fn smallest(t: &[f32; LANES], bits: u32, base: usize) -> (f32, usize) {
+    use std::arch::x86_64::*;
+    // SAFETY: AVX2 is enabled at compile time (the cfg above); the load reads the 8 floats of `t`.
+    let (m, eq) = unsafe {
+        let lane = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+        let sel = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(bits as i32), lane), lane);
+        let v = _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), _mm256_loadu_ps(t.as_ptr()), _mm256_castsi256_ps(sel));
+        let m = _mm256_min_ps(v, _mm256_permute2f128_ps::<1>(v, v));
+        let m = _mm256_min_ps(m, _mm256_shuffle_ps::<0b01_00_11_10>(m, m));
+        let m = _mm256_min_ps(m, _mm256_shuffle_ps::<0b10_11_00_01>(m, m));
+        (_mm256_cvtss_f32(m), _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(v, m)) as u32)
+    };
+    if m < f32::INFINITY {
+        let i = (31 - eq.leading_zeros()) as usize;
+        (t[i], base + i)
+    } else {
+        (f32::INFINITY, usize::MAX)
+    }
+}
+
+/// The portable form of `smallest`: the loop from the highest lane down.
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+#[inline(always)]
+fn smallest(t: &[f32; LANES], bits: u32, base: usize) -> (f32, usize) {
+    let mut best = (f32::INFINITY, usize::MAX);
+    for i in (0..LANES).rev() {
+        if bits & (1 << i) != 0 && t[i] < best.0 {
+            best = (t[i], base + i);
+        }
+    }
+    best
 }
 
 /// Möller–Trumbore with inclusive edges on one triangle, t in [0, tmax] or ∞: the arithmetic of
@@ -472,7 +517,7 @@ mod tests {
             })
             .collect();
         let other = vec![false; tris.len()];
-        let bvh = Bvh8::new(Vec::new(), &tris, other);
+        let bvh = Slots::new(&tris, other);
         let mut found = 0;
         for k in 0..20_000 {
             let d = glam::Vec3::from(v()).normalize_or(glam::Vec3::X).to_array();

@@ -1,6 +1,8 @@
 //! `World`: the scene plus its ray-tracing acceleration structure, from one of two back ends.
 //!
-//! `AccelKind::Obvhs` (the default, `obvhs.rs`): a CWBVH from the obvhs crate.
+//! `AccelKind::Wide` (the default, `wide.rs`): an 8-wide float-box BVH of our own (binned SAH,
+//! traced near to far). `AccelKind::Obvhs` (`obvhs.rs`): a CWBVH from the obvhs crate (the
+//! default before `wide`, kept as the reference its images are z-tested against).
 //! `AccelKind::Embree` (`embree.rs`, cargo feature `embree`): Intel Embree 3 through the system
 //! library. `World` holds the chosen one in an enum (no trait object in the hot path); a back end
 //! answers only "which primitive, at which t"; this module turns that into a `Hit` (normals,
@@ -23,6 +25,7 @@ mod bvh8;
 #[cfg(feature = "embree")]
 mod embree;
 mod obvhs;
+mod wide;
 
 use std::cell::Cell;
 
@@ -150,10 +153,13 @@ impl std::error::Error for BuildError {}
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum AccelKind {
-    // The obvhs crate's CWBVH (always built in); no doc comment, which would be a help text
+    // The own 8-wide BVH (`wide.rs`, always built in); no doc comment, which would be a help text
     // turning `render --help` into the long format.
     #[allow(missing_docs)]
     #[default]
+    Wide,
+    // The obvhs crate's CWBVH (always built in).
+    #[allow(missing_docs)]
     Obvhs,
     /// Intel Embree 3, in builds with --features embree only.
     // Hidden in a build without the feature, so that `--help` offers only what the build has;
@@ -166,6 +172,7 @@ impl AccelKind {
     /// The command-line name.
     pub fn name(self) -> &'static str {
         match self {
+            AccelKind::Wide => "wide",
             AccelKind::Obvhs => "obvhs",
             AccelKind::Embree => "embree",
         }
@@ -174,7 +181,7 @@ impl AccelKind {
     /// Whether this build has the back end.
     pub fn available(self) -> bool {
         match self {
-            AccelKind::Obvhs => true,
+            AccelKind::Wide | AccelKind::Obvhs => true,
             AccelKind::Embree => cfg!(feature = "embree"),
         }
     }
@@ -194,6 +201,7 @@ impl AccelKind {
 #[allow(clippy::large_enum_variant)]
 enum Accel {
     Obvhs(obvhs::ObvhsBvh),
+    Wide(wide::WideBvh),
     #[cfg(feature = "embree")]
     Embree(embree::EmbreeScene),
 }
@@ -229,10 +237,10 @@ impl World {
         self.scene.shade(hit.prim, hit.shading_point(), wo)
     }
 
-    /// Builds the default (obvhs) BVH over the scene's primitives; refuses boxes that are not
+    /// Builds the default (`wide`) BVH over the scene's primitives; refuses boxes that are not
     /// finite or exceed `scene::MAX_EXTENT` (obvhs would panic on them).
     pub fn build(scene: Scene) -> Result<World, BuildError> {
-        World::build_with(scene, AccelKind::Obvhs)
+        World::build_with(scene, AccelKind::Wide)
     }
 
     /// Builds the acceleration structure of back end `kind` (same checks as `build`).
@@ -250,6 +258,7 @@ impl World {
             return Err(BuildError::OutOfRange { prim: i as u32, lo: lo.to_array(), hi: hi.to_array() });
         }
         let accel = match kind {
+            AccelKind::Wide => Accel::Wide(wide::WideBvh::build(&scene, &b)),
             AccelKind::Obvhs => Accel::Obvhs(obvhs::ObvhsBvh::build(&scene, &b)),
             #[cfg(feature = "embree")]
             AccelKind::Embree => Accel::Embree(embree::EmbreeScene::build(&scene).map_err(BuildError::Backend)?),
@@ -262,6 +271,7 @@ impl World {
     /// The back end in use.
     pub fn accel(&self) -> AccelKind {
         match self.accel {
+            Accel::Wide(_) => AccelKind::Wide,
             Accel::Obvhs(_) => AccelKind::Obvhs,
             #[cfg(feature = "embree")]
             Accel::Embree(_) => AccelKind::Embree,
@@ -283,6 +293,7 @@ impl World {
         count(1, 0);
         match &self.accel {
             Accel::Obvhs(b) => b.closest(&self.scene, origin, dir, tmax),
+            Accel::Wide(b) => b.closest(&self.scene, origin, dir, tmax),
             #[cfg(feature = "embree")]
             Accel::Embree(e) => e.closest(origin, dir, tmax),
         }
@@ -378,6 +389,7 @@ impl World {
         count(0, 1);
         match &self.accel {
             Accel::Obvhs(b) => b.occluded(&self.scene, origin, dir, tmax),
+            Accel::Wide(b) => b.occluded(&self.scene, origin, dir, tmax),
             #[cfg(feature = "embree")]
             Accel::Embree(e) => e.occluded(origin, dir, tmax),
         }

@@ -31,7 +31,7 @@ pub struct RenderSettings {
     /// Ray-tracing back end.
     // `AccelKind::Embree` is a hidden value in a build without the `embree` feature: it parses
     // there, and `validate` refuses it with the rebuild hint.
-    #[arg(long, value_name = "BACKEND", value_enum, default_value_t = AccelKind::Obvhs)]
+    #[arg(long, value_name = "BACKEND", value_enum, default_value_t = AccelKind::Wide)]
     pub accel: AccelKind,
     /// The camera paths' random numbers across passes: independent (the variance layer is exact)
     /// or sobol (each pixel's first samples stratified over its passes: lower error, a variance
