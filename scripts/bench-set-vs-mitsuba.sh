@@ -5,20 +5,22 @@
 #
 #   scripts/bench-set-vs-mitsuba.sh [BUDGET_S] [RUNS]
 #   e.g. scripts/bench-set-vs-mitsuba.sh 15 3
-# Defaults: 15 s per run, 3 runs (each run: forecast obvhs, Mitsuba, forecast Embree, Mitsuba).
+# Defaults: 15 s per run, 3 runs (each run: forecast, Mitsuba, per back end).
 #
 # Environment:
 #   SCENES   "SCENE RESOLUTION" pairs separated by ';' (default: cornell-box 640x640, ring 256x256,
 #            figurines 640x360 with its table diffuse (Mitsuba 3 has no Phong), and the pool of scenes/external/sms-pool at 384x216)
-#   BACKENDS "obvhs embree" (default: both; embree is skipped, with a line saying so, where
-#            Embree is not installed: .ci/install-embree.sh installs it)
+#   BACKENDS of "wide obvhs embree" (default "wide embree"): wide = the default build's default
+#            tree, obvhs = the default build with `--accel obvhs`, embree = the `embree` feature's
+#            build with `--accel embree` (skipped, with a line saying so, where Embree is not
+#            installed: .ci/install-embree.sh installs it)
 #   THREADS, MAX_DEPTH, RR_DEPTH, VARIANT, MITSUBA_VENV: as scripts/bench-vs-mitsuba.sh
 #   OUT      work folder (default out/bench-set-vs-mitsuba); the full output of each scene and
 #            back end is kept there as NAME-BACKEND.txt
 #
-# Builds: obvhs = `cargo build --release` (target/release/forecast, what the README's first
-# command makes); embree = `cargo build --release --features embree` in target/embree. Set
-# FORECAST_OBVHS / FORECAST_EMBREE to binaries to skip the builds.
+# Builds: wide and obvhs = `cargo build --release` (target/release/forecast, what the README's
+# first command makes); embree = `cargo build --release --features embree` in target/embree. Set
+# FORECAST_DEFAULT / FORECAST_EMBREE to binaries to skip the builds.
 #
 # The table gives, per scene and back end, forecast's samples per second over Mitsuba's (the
 # mean of the per-run ratios, wall clock) and the same per CPU second (user + system time of
@@ -42,7 +44,7 @@ if ((pool_ok)); then
   default_scenes+=";$pool/scene.xml 384x216"
 fi
 scenes="${SCENES:-$default_scenes}"
-backends="${BACKENDS:-obvhs embree}"
+backends="${BACKENDS:-wide embree}"
 
 cpu="$(lscpu 2>/dev/null | sed -n 's/^Model name: *//p' | head -1)"
 echo "bench-set-vs-mitsuba: CPU: ${cpu:-unknown} ($(nproc) logical CPUs; flags:" \
@@ -56,12 +58,12 @@ have_embree() { [[ -f /usr/include/embree3/rtcore.h ]]; }
 declare -A bin
 for b in $backends; do
   case "$b" in
-    obvhs)
-      if [[ -z "${FORECAST_OBVHS:-}" ]]; then
+    wide | obvhs)
+      if [[ -z "${FORECAST_DEFAULT:-}" ]]; then
         cargo build --release --quiet
-        FORECAST_OBVHS="$root/target/release/forecast"
+        FORECAST_DEFAULT="$root/target/release/forecast"
       fi
-      bin[obvhs]="$FORECAST_OBVHS"
+      bin[$b]="$FORECAST_DEFAULT"
       ;;
     embree)
       if [[ -z "${FORECAST_EMBREE:-}" ]]; then
@@ -74,7 +76,7 @@ for b in $backends; do
       fi
       bin[embree]="$FORECAST_EMBREE"
       ;;
-    *) echo "bench-set-vs-mitsuba: unknown back end $b (obvhs, embree)" >&2; exit 2 ;;
+    *) echo "bench-set-vs-mitsuba: unknown back end $b (wide, obvhs, embree)" >&2; exit 2 ;;
   esac
 done
 
@@ -85,8 +87,7 @@ for entry in "${list[@]}"; do
   name="$(basename "$(dirname "$scene")")-$(basename "${scene%.*}")"
   for b in $backends; do
     [[ -n "${bin[$b]:-}" ]] || continue
-    args=""
-    [[ "$b" == embree ]] && args="--accel embree"
+    args="--accel $b"
     log="$out/$name-$b.txt"
     echo "== $scene $res, $b"
     FORECAST="${bin[$b]}" FORECAST_ARGS="$args" OUT="$out/$name-$b" \
