@@ -25,6 +25,8 @@ mod bvh8;
 #[cfg(feature = "embree")]
 mod embree;
 mod obvhs;
+#[cfg(test)]
+mod test_rays;
 mod wide;
 
 use std::cell::Cell;

@@ -195,6 +195,7 @@ fn tri_t(t: &RtTriangle, ray: &Ray) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::super::bvh8::node_hits;
+    use super::super::test_rays::{load, rays, spheres_and_soup, Lcg};
     use super::*;
 
     /// The kernel's `node_hits` gives obvhs' `intersect_ray` mask, bit for bit, at every node of a
@@ -237,24 +238,6 @@ mod tests {
         assert!(checked > 1000, "only {checked} nodes hit");
     }
 
-    /// A small LCG for the tests' rays (fixed seed).
-    struct Lcg(u64);
-
-    impl Lcg {
-        fn f(&mut self) -> f32 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (self.0 >> 40) as f32 / (1u64 << 24) as f32
-        }
-        fn v(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
-            lo + (hi - lo) * Vec3::new(self.f(), self.f(), self.f())
-        }
-    }
-
-    fn load(path: &str) -> Scene {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        crate::scene::load(&root.join(path)).expect("scene loads")
-    }
-
     /// The kernel's closest hits and occlusion against the traversal it replaced, bit for bit
     /// (primitive, t's bits, the occlusion answer), on `n` rays: from random points of the scene's
     /// box, from points on its triangles (a surface's own hit at t ≈ 0), along random, axis-parallel
@@ -262,34 +245,8 @@ mod tests {
     fn same_hits(scene: &Scene, n: usize, seed: u64) -> usize {
         let b = super::super::bounds(scene);
         let bvh = ObvhsBvh::build(scene, &b);
-        let (lo, hi) =
-            b.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(l, h), &(a, c)| (l.min(a), h.max(c)));
-        let (lo, hi) = (lo - (hi - lo) * 0.1, hi + (hi - lo) * 0.1);
-        let mut r = Lcg(seed);
         let mut hits = 0;
-        for i in 0..n {
-            let o = if i % 4 == 1 && scene.ntri() > 0 {
-                let t = &scene.triangles[(r.f() * scene.ntri() as f32) as usize % scene.ntri() as usize];
-                let (u, v) = (r.f(), r.f());
-                let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
-                t.p[0] + u * (t.p[1] - t.p[0]) + v * (t.p[2] - t.p[0])
-            } else {
-                r.v(lo, hi)
-            };
-            let mut d = r.v(Vec3::splat(-1.0), Vec3::ONE).normalize_or(Vec3::Z);
-            match i % 16 {
-                3 => d = [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z][(i / 16) % 6],
-                5 => d = Vec3::new(-0.0, d.y, d.z).normalize(),
-                7 => d = Vec3::new(d.x, -0.0, -0.0).normalize_or(-Vec3::X),
-                9 => d = Vec3::new(-0.0, -1.0, -0.0),
-                _ => {}
-            }
-            let tmax = match i % 5 {
-                0 => f32::INFINITY,
-                1 => 0.0,
-                2 => r.f() * (hi - lo).length(),
-                _ => f32::MAX,
-            };
+        for (i, o, d, tmax) in rays(scene, &b, n, seed) {
             let (ours, theirs) = (bvh.closest(scene, o, d, tmax), bvh.closest_reference(scene, o, d, tmax));
             let bits = |h: Option<(u32, f32)>| h.map(|(p, t)| (p, t.to_bits()));
             assert_eq!(bits(ours), bits(theirs), "ray {i}: o {o:?} d {d:?} tmax {tmax}");
@@ -318,30 +275,9 @@ mod tests {
     /// triangles (the cornell box's and 200 random ones): 1M rays each.
     #[test]
     fn kernel_hits_equal_reference_soup_and_spheres() {
-        let mut scene = load("scenes/cornell-box.toml");
-        let mut r = Lcg(3);
-        let t0 = scene.triangles[0].clone();
-        let mut soup = scene.triangles.clone();
-        for k in 0..20_000 {
-            let c = r.v(Vec3::splat(-2.0), Vec3::splat(2.0));
-            let s = if k % 10 == 0 { 0.001 } else { 0.2 * r.f() };
-            let mut t = t0.clone();
-            t.p = [c + r.v(-Vec3::splat(s), Vec3::splat(s)), c + r.v(-Vec3::splat(s), Vec3::splat(s)), c];
-            if k % 50 == 1 {
-                t.p = soup[soup.len() - 1].p; // a coincident copy
-            }
-            soup.push(t);
-        }
-        let s0 = scene.spheres[0].clone();
-        for _ in 0..200 {
-            let mut sp = s0.clone();
-            sp.center = r.v(Vec3::splat(-2.0), Vec3::splat(2.0));
-            sp.radius = 0.01 + 0.2 * r.f();
-            scene.spheres.push(sp);
-        }
+        let (scene, with_soup) = spheres_and_soup();
         let with_spheres = same_hits(&scene, 1_000_000, 4);
-        scene.triangles = soup;
-        let soup_hits = same_hits(&scene, 1_000_000, 5);
+        let soup_hits = same_hits(&with_soup, 1_000_000, 5);
         assert!(with_spheres > 100_000 && soup_hits > 100_000, "{with_spheres} {soup_hits}");
     }
 }

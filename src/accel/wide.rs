@@ -282,25 +282,8 @@ fn node_hits(n: &Node, r: &Slab, tmax: f32) -> (u32, [f32; 8]) {
 mod tests {
     use super::super::bvh8::tri_t;
     use super::super::obvhs::ObvhsBvh;
+    use super::super::test_rays::{load, rays, spheres_and_soup};
     use super::*;
-
-    /// A small LCG for the tests' rays (fixed seed).
-    struct Lcg(u64);
-
-    impl Lcg {
-        fn f(&mut self) -> f32 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (self.0 >> 40) as f32 / (1u64 << 24) as f32
-        }
-        fn v(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
-            lo + (hi - lo) * Vec3::new(self.f(), self.f(), self.f())
-        }
-    }
-
-    fn load(path: &str) -> Scene {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        crate::scene::load(&root.join(path)).expect("scene loads")
-    }
 
     /// Every primitive's distance along the ray (the back ends' per-primitive tests).
     fn brute_ts<'a>(
@@ -348,34 +331,8 @@ mod tests {
         let wide = WideBvh::build(scene, &b);
         let old = ObvhsBvh::build(scene, &b);
         let tris: Vec<Tri> = scene.triangles.iter().map(|t| tri(t.p)).collect();
-        let (lo, hi) =
-            b.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(l, h), &(a, c)| (l.min(a), h.max(c)));
-        let (lo, hi) = (lo - (hi - lo) * 0.1, hi + (hi - lo) * 0.1);
-        let mut r = Lcg(seed);
         let mut c = Counts::default();
-        for i in 0..n {
-            let o = if i % 4 == 1 && scene.ntri() > 0 {
-                let t = &scene.triangles[(r.f() * scene.ntri() as f32) as usize % scene.ntri() as usize];
-                let (u, v) = (r.f(), r.f());
-                let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
-                t.p[0] + u * (t.p[1] - t.p[0]) + v * (t.p[2] - t.p[0])
-            } else {
-                r.v(lo, hi)
-            };
-            let mut d = r.v(Vec3::splat(-1.0), Vec3::ONE).normalize_or(Vec3::Z);
-            match i % 16 {
-                3 => d = [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z][(i / 16) % 6],
-                5 => d = Vec3::new(-0.0, d.y, d.z).normalize(),
-                7 => d = Vec3::new(d.x, -0.0, -0.0).normalize_or(-Vec3::X),
-                9 => d = Vec3::new(-0.0, -1.0, -0.0),
-                _ => {}
-            }
-            let tmax = match i % 5 {
-                0 => f32::INFINITY,
-                1 => 0.0,
-                2 => r.f() * (hi - lo).length(),
-                _ => f32::MAX,
-            };
+        for (i, o, d, tmax) in rays(scene, &b, n, seed) {
             let (ours, theirs) = (wide.closest(scene, o, d, tmax), old.closest(scene, o, d, tmax));
             let bits = |h: Option<(u32, f32)>| h.map(|(p, t)| (p, t.to_bits()));
             let (occ, occ_old) = (wide.occluded(scene, o, d, tmax), old.occluded(scene, o, d, tmax));
@@ -442,30 +399,9 @@ mod tests {
     /// triangles (the cornell box's and 200 random ones): 1M rays each.
     #[test]
     fn hits_equal_brute_force_soup_and_spheres() {
-        let mut scene = load("scenes/cornell-box.toml");
-        let mut r = Lcg(3);
-        let t0 = scene.triangles[0].clone();
-        let mut soup = scene.triangles.clone();
-        for k in 0..20_000 {
-            let c = r.v(Vec3::splat(-2.0), Vec3::splat(2.0));
-            let s = if k % 10 == 0 { 0.001 } else { 0.2 * r.f() };
-            let mut t = t0.clone();
-            t.p = [c + r.v(-Vec3::splat(s), Vec3::splat(s)), c + r.v(-Vec3::splat(s), Vec3::splat(s)), c];
-            if k % 50 == 1 {
-                t.p = soup[soup.len() - 1].p; // a coincident copy
-            }
-            soup.push(t);
-        }
-        let s0 = scene.spheres[0].clone();
-        for _ in 0..200 {
-            let mut sp = s0.clone();
-            sp.center = r.v(Vec3::splat(-2.0), Vec3::splat(2.0));
-            sp.radius = 0.01 + 0.2 * r.f();
-            scene.spheres.push(sp);
-        }
+        let (scene, with_soup) = spheres_and_soup();
         let with_spheres = same_hits(&scene, 1_000_000, 4);
-        scene.triangles = soup;
-        let soup_hits = same_hits(&scene, 1_000_000, 5);
+        let soup_hits = same_hits(&with_soup, 1_000_000, 5);
         assert!(with_spheres.hits > 100_000 && soup_hits.hits > 100_000, "{with_spheres:?} {soup_hits:?}");
     }
 }
