@@ -23,7 +23,8 @@
 # budget), samples = passes·W·H over its JSON `timings.total_s`. Mitsuba: scripts/mitsuba_timed.py
 # (from just before `load_file`, so scene load, BVH and LLVM JIT are inside the budget; chunks of
 # spp, each kernel compiled once, until the next chunk would pass the budget); samples = spp·W·H
-# over the elapsed time. Both counts are whole samples per
+# over the elapsed time (Mitsuba renders forecast's box pixel: PIXEL_FILTER, as in mitsuba_timed.py).
+# Both counts are whole samples per
 # pixel. The ratio printed is forecast / Mitsuba, per run and averaged over RUNS. The cpu ratio
 # divides the same sample counts by each process's user + system CPU seconds instead (Mitsuba's
 # counted from just before `load_file`): it is the figure to read when other work shares the

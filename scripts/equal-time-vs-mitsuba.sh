@@ -47,12 +47,20 @@
 #   CYCLES     "cycles" (path guiding) and/or "cycles-noguide" (default "cycles" when BLENDER_VENV
 #              has bpy, else none); BLENDER_VENV (default out/blender-venv)
 #   THREADS    threads of every renderer (default nproc); MAX_DEPTH (see above)
+#   PIXEL_FILTER  box (default): every peer renders forecast's box pixel (Mitsuba rfilter box,
+#              LuxCore BOX ½, Cycles BOX 1), so all estimate the same pixel and their noise
+#              compares; scene: the peers keep the file's filter (the SMS scenes' gaussian spreads a
+#              sample over ~π pixels and cuts a pixel's variance ~3×: not comparable; docs/peers.md)
 #   FORECAST   binary (default target/release/forecast, built if missing); MITSUBA_VENV
 #              (default out/mitsuba-venv; see docs/mitsuba.md); VARIANT (default llvm_ad_rgb)
 #
 # The named crops of the SMS scenes (fractions of the frame; chosen from 120x68 Mitsuba and
 # peer renders before any equal-time run, docs/peers.md):
-#   sms-sphere-smooth, sms-sphere  shadow_caustic: the caustic in the sphere's shadow
+#   sms-sphere-smooth, sms-sphere  shadow_caustic: the caustic in the sphere's shadow (its right
+#                                  eighth is the sphere's silhouette: glass seen directly);
+#                                  shadow_floor: the same crop without those columns, floor only
+#                                  (added 2026-12-08 from the geometry, for Mitsuba's ptracer,
+#                                  which renders the glass black)
 #   sms-plane                      plate_caustic: the gold plate's caustic on the floor
 #   sms-pool                       pool_floor: the pool floor seen through the water
 set -euo pipefail
@@ -65,6 +73,8 @@ w="${BASH_REMATCH[1]}"; h="${BASH_REMATCH[2]}"
 [[ "$seeds" =~ ^[2-9]$|^[1-9][0-9]+$ ]] || { echo "equal-time-vs-mitsuba: at least 2 seeds (the noise needs pairs), got $seeds" >&2; exit 2; }
 [ -f "$scene" ] || { echo "equal-time-vs-mitsuba: no scene $scene" >&2; exit 2; }
 methods="${METHODS:-auto}"; peers="${PEERS-path ptracer}"
+export PIXEL_FILTER="${PIXEL_FILTER:-box}"
+case "$PIXEL_FILTER" in box|scene) ;; *) echo "equal-time-vs-mitsuba: PIXEL_FILTER must be box or scene, got $PIXEL_FILTER" >&2; exit 2 ;; esac
 threads="${THREADS:-$(nproc)}"; variant="${VARIANT:-llvm_ad_rgb}"
 venv="${MITSUBA_VENV:-$root/out/mitsuba-venv}"
 lux_venv="${LUXCORE_VENV:-$root/out/luxcore-venv}"
@@ -101,8 +111,7 @@ fc_depth=$((seg - 1))
 # the named crops of the SMS scenes (fractions of the frame; see the header)
 if [ -z "${CROPS+x}" ]; then
     case "$(basename "$(dirname "$(readlink -f "$scene")")")" in
-        sms-sphere-smooth) CROPS="shadow_caustic=0.150,0.230,0.120,0.330" ;;
-        sms-sphere) CROPS="shadow_caustic=0.150,0.230,0.120,0.330" ;;
+        sms-sphere-smooth|sms-sphere) CROPS="shadow_caustic=0.150,0.230,0.120,0.330 shadow_floor=0.150,0.230,0.090,0.330" ;;
         sms-plane) CROPS="plate_caustic=0.100,0.600,0.400,0.350" ;;
         sms-pool) CROPS="pool_floor=0.300,0.500,0.350,0.300" ;;
         *) CROPS="" ;;
@@ -166,6 +175,6 @@ for ((s = 1; s <= seeds; s++)); do
         render_cycles "$c" "$s" || echo "equal-time-vs-mitsuba: Cycles $c seed $s failed" >&2; done
 done
 
-printf '# %s %s, %s s, seeds 1..%s, %s threads, %s segments (commit %s); crops: whole %s\n' "$scene" "$res" "$budget" "$seeds" \
-    "$threads" "$seg" "$(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)" "$CROPS" | tee "$out/table.txt"
+printf '# %s %s, %s s, seeds 1..%s, %s threads, %s segments (commit %s); peers'"'"' pixel filter %s; crops: whole %s\n' "$scene" "$res" "$budget" "$seeds" \
+    "$threads" "$seg" "$(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)" "$PIXEL_FILTER" "$CROPS" | tee "$out/table.txt"
 "$venv/bin/python" "$root/scripts/et_metrics.py" "$out" "$seeds" "${renderers[*]}" "$CROPS" "$reference"

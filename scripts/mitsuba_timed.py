@@ -7,6 +7,11 @@ into the film). The film size and integrator are set in a temporary copy of XML 
 the SMS renderer's `caustic_*` parameters); the XML's folder goes on Mitsuba's file resolver for
 its relative mesh paths. OUT_EXR `-` writes no image.
 
+The pixel filter: PIXEL_FILTER=box (the default) sets the film's `rfilter` to `box`, forecast's
+pixel, so that every renderer of a comparison estimates the same pixel; PIXEL_FILTER=scene keeps
+the file's (the SMS scenes' `gaussian`, σ ½ px, spreads each sample over about π pixels and cuts
+a pixel's variance about 3×: its noise is not comparable with a box pixel's; docs/peers.md).
+
 Timing: from just before `load_file` (scene load, BVH and LLVM JIT inside the budget) it renders
 chunks of spp, the first two chunks 1 spp (the first carries the JIT), then one chunk size of about
 one second (one kernel, compiled once), until the next chunk would pass the budget. The image is
@@ -41,10 +46,22 @@ def scene_copy(xml, w, h, integrator, max_depth, rr_depth, folder):
             for e in [e for e in film if e.get('name') == k]:
                 film.remove(e)
             ET.SubElement(film, 'integer', name=k, value=str(v))
+        if pixel_filter() == 'box':
+            for e in [e for e in film if e.tag == 'rfilter']:
+                film.remove(e)
+            ET.SubElement(film, 'rfilter', type='box')
     fd, tmp = tempfile.mkstemp(suffix='.xml', dir=folder)
     os.close(fd)
     tree.write(tmp)
     return tmp
+
+
+def pixel_filter():
+    """`box` (forecast's pixel, the default) or `scene` (the file's rfilter), from PIXEL_FILTER."""
+    f = os.environ.get('PIXEL_FILTER', 'box')
+    if f not in ('box', 'scene'):
+        sys.exit(f'mitsuba_timed.py: PIXEL_FILTER must be box or scene, got {f!r}')
+    return f
 
 
 def cpu_s():

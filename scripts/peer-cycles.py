@@ -6,9 +6,10 @@ wall-clock budget: a peer of the equal-time comparison (issue 62; docs/peers.md)
 
 Cycles on the CPU, path tracing with path guiding (Open PGL: surface guiding; training samples
 Cycles' default), light tree on (the default), no adaptive sampling, no denoising, no clamping
-(direct and indirect), Filter Glossy 0, reflective and refractive caustics on, the pixel filter a
-Gaussian of width 2 px (Cycles tabulates exp(−2·(6v/3w)²) over ±1.5w: σ = w/4 = ½ px, Mitsuba's
-σ; Mitsuba cuts it at 2 px, Cycles at 3),
+(direct and indirect), Filter Glossy 0, reflective and refractive caustics on, the pixel filter
+forecast's box pixel (BOX, width 1 px; PIXEL_FILTER=scene gives Mitsuba's instead: a Gaussian of
+width 2 px, Cycles tabulates exp(−2·(6v/3w)²) over ±1.5w: σ = w/4 = ½ px, Mitsuba's σ; Mitsuba
+cuts it at 2 px, Cycles at 3),
 SEED as `cycles.seed`, THREADS fixed. Prints `spp seconds cpu_seconds` (as mitsuba_timed.py): the
 clock starts after `import bpy`; the scene build (textures, meshes) is inside the budget and
 Cycles' `time_limit` gets what is left. That limit leaves out Cycles' scene synchronisation (BVH
@@ -287,8 +288,10 @@ def build(bpy, s, w, h, seed, threads):
     cy.blur_glossy = 0.0
     cy.sample_clamp_direct = 0.0
     cy.sample_clamp_indirect = 0.0
-    cy.pixel_filter_type = "GAUSSIAN"
-    cy.filter_width = 2.0
+    f = os.environ.get("PIXEL_FILTER", "box")
+    if f not in ("box", "scene"):
+        sys.exit(f"peer-cycles.py: PIXEL_FILTER must be box or scene, got {f!r}")
+    cy.pixel_filter_type, cy.filter_width = ("BOX", 1.0) if f == "box" else ("GAUSSIAN", 2.0)
     cy.use_light_tree = True
     return sc
 

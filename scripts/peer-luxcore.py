@@ -7,7 +7,8 @@ peer of the equal-time comparison (issue 62; docs/peers.md). Not a test.
 ENGINE: `path` = PATHCPU with hybrid back/forward light tracing (LuxCore's caustic answer: light
 paths splatted onto the film), `path-nohybrid` = PATHCPU alone, `bidir` = BIDIRCPU. Sampler SOBOL
 with its adaptive part off (`sampler.sobol.adaptive.strength` 0), no clamping, no denoiser, the
-film's pixel filter Mitsuba's (gaussian, α 2, radius 2 px), SEED as `renderengine.seed`.
+film's pixel filter forecast's box pixel (BOX, width ½ px: the pixel's square; PIXEL_FILTER=scene
+gives Mitsuba's gaussian instead, GAUSSIAN α 2, radius 2 px), SEED as `renderengine.seed`.
 Prints `spp seconds cpu_seconds` (as scripts/mitsuba_timed.py): the clock starts before the scene
 is read (textures decoded, meshes defined, BVH built inside the budget); the session is stopped
 when the budget is spent (or after N samples per pixel with --spp: mean checks).
@@ -155,6 +156,17 @@ class Builder:
             self.set(p + ".emission.normalizebycolor", 0)
 
 
+def pixel_filter():
+    """The film's filter lines: forecast's box pixel (PIXEL_FILTER=box, the default) or Mitsuba's
+    gaussian (PIXEL_FILTER=scene; the SMS scenes' rfilter)."""
+    f = os.environ.get("PIXEL_FILTER", "box")
+    if f == "box":
+        return ["film.filter.type = BOX", "film.filter.width = 0.5"]
+    if f == "scene":
+        return ["film.filter.type = GAUSSIAN", "film.filter.width = 2.0", "film.filter.gaussian.alpha = 2.0"]
+    sys.exit(f"peer-luxcore.py: PIXEL_FILTER must be box or scene, got {f!r}")
+
+
 def build(lux, s, w, h, seed, threads, engine, spp):
     scene = lux.Scene()
     props = lux.Properties()
@@ -203,7 +215,7 @@ def build(lux, s, w, h, seed, threads, engine, spp):
         "sampler.sobol.adaptive.strength = 0",
         "sampler.random.adaptive.strength = 0",
         f"film.width = {w}", f"film.height = {h}",
-        "film.filter.type = GAUSSIAN", "film.filter.width = 2.0", "film.filter.gaussian.alpha = 2.0",
+        *pixel_filter(),
         "film.outputs.0.type = RGB", "film.outputs.0.filename = unused.exr",
         "path.clamping.variance.maxvalue = 0",
         "path.forceblackbackground.enable = 0",
