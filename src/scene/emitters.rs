@@ -277,9 +277,7 @@ impl LatLong {
     /// The pdf `P_ij/Ω_ij` of the cell `(u, v)` lies in.
     #[inline]
     fn pdf_w_at(&self, u: f32, v: f32) -> f32 {
-        let i = ((u * self.width as f32) as usize).min(self.width - 1);
-        let j = ((v * self.height as f32) as usize).min(self.height - 1);
-        self.texels[j * self.width + i].pdf_w
+        self.texels[self.cell_index(u, v)].pdf_w
     }
 
     /// `P_ij/Ω_ij` of a cell of row `j` whose probability is `pmf` (0 where not finite): the pdf
@@ -294,9 +292,19 @@ impl LatLong {
         }
     }
 
-    /// The bilinear lookup at `(u, v)` (module docs).
-    #[inline]
-    pub fn lookup(&self, u: f32, v: f32) -> Rgb {
+    /// The texel index of the cell `(u, v)` lies in, whose pdf `pdf_w_at` reads.
+    #[inline(always)]
+    fn cell_index(&self, u: f32, v: f32) -> usize {
+        let i = ((u * self.width as f32) as usize).min(self.width - 1);
+        let j = ((v * self.height as f32) as usize).min(self.height - 1);
+        j * self.width + i
+    }
+
+    /// The bilinear footprint of `lookup` at `(u, v)` (module docs): the columns `x0`, `x1`
+    /// (wrapped), the first of the two rows `y0` and `y0 + 1`, and the weights toward `x1` and
+    /// `y0 + 1`.
+    #[inline(always)]
+    fn bilinear_cell(&self, u: f32, v: f32) -> (usize, usize, usize, f32, f32) {
         let (w, h) = (self.width, self.height);
         let u = u - u.floor();
         let xc = u * w as f32 - 0.5;
@@ -307,10 +315,27 @@ impl LatLong {
         let yc = v.clamp(0.0, 1.0) * (h - 1) as f32;
         let y0 = (yc.floor() as usize).min(h - 2);
         let fy = (yc - y0 as f32).clamp(0.0, 1.0);
+        (x0, x1, y0, fx, fy)
+    }
+
+    /// The bilinear lookup at `(u, v)` (module docs).
+    #[inline]
+    pub fn lookup(&self, u: f32, v: f32) -> Rgb {
+        let (x0, x1, y0, fx, fy) = self.bilinear_cell(u, v);
+        let w = self.width;
         let t = |x: usize, y: usize| self.texels[y * w + x].rgb;
         let top = t(x0, y0) * (1.0 - fx) + t(x1, y0) * fx;
         let bottom = t(x0, y0 + 1) * (1.0 - fx) + t(x1, y0 + 1) * fx;
         top * (1.0 - fy) + bottom * fy
+    }
+
+    /// The texel indices `lookup` and `pdf_w_at` at `(u, v)` read: the bilinear footprint's four
+    /// (`(x0, y0), (x1, y0), (x0, y0 + 1), (x1, y0 + 1)`), then the cell's pdf.
+    #[inline]
+    pub fn texels_read(&self, u: f32, v: f32) -> [usize; 5] {
+        let (x0, x1, y0, _, _) = self.bilinear_cell(u, v);
+        let w = self.width;
+        [y0 * w + x0, y0 * w + x1, (y0 + 1) * w + x0, (y0 + 1) * w + x1, self.cell_index(u, v)]
     }
 }
 
@@ -353,6 +378,18 @@ impl Environment {
             EnvMap::LatLong(m) => {
                 let (u, v) = direction_to_uv((self.to_local * w).normalize());
                 (m.lookup(u, v), m.pdf_w_at(u, v))
+            }
+        }
+    }
+
+    /// Asks the cache for the texels [`Environment::radiance_pdf_w`] of the unit world direction
+    /// `w` reads ([`LatLong::texels_read`]): a hint, no effect on any value.
+    #[inline]
+    pub fn prefetch(&self, w: Vec3) {
+        if let EnvMap::LatLong(m) = &self.map {
+            let (u, v) = direction_to_uv((self.to_local * w).normalize());
+            for k in m.texels_read(u, v) {
+                crate::texture::prefetch(m.texels.as_ptr().wrapping_add(k));
             }
         }
     }

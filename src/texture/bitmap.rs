@@ -179,7 +179,31 @@ impl TexelImage {
     #[inline]
     pub fn texel(&self, x: usize, y: usize) -> Rgb {
         assert!(x < self.width && y < self.height, "texel ({x}, {y}) outside {}x{}", self.width, self.height);
-        self.decode((y * self.width + x) * self.channels)
+        self.decode(self.sample_index(x, y))
+    }
+
+    /// The store's index of texel `(x, y)`'s first sample: where `texel` reads and
+    /// `prefetch_texel` fetches.
+    #[inline(always)]
+    fn sample_index(&self, x: usize, y: usize) -> usize {
+        (y * self.width + x) * self.channels
+    }
+
+    /// The address of texel `(x, y)`'s first sample, the byte `texel(x, y)` reads first (not
+    /// dereferenced here: any `x`, `y` give some address).
+    #[inline(always)]
+    pub fn texel_address(&self, x: usize, y: usize) -> *const u8 {
+        let i = self.sample_index(x, y);
+        match &self.store {
+            Store::Codes { codes, .. } => codes.as_ptr().wrapping_add(i),
+            Store::Linear(v) => v.as_ptr().wrapping_add(i) as *const u8,
+        }
+    }
+
+    /// Asks the cache for texel `(x, y)`'s line ([`super::prefetch`]): no effect on any value.
+    #[inline(always)]
+    pub fn prefetch_texel(&self, x: usize, y: usize) {
+        super::prefetch(self.texel_address(x, y));
     }
 
     /// The linear texel whose first sample is sample `i` of the store: the one decoding.
@@ -310,12 +334,9 @@ impl Bitmap {
     pub fn eval(&self, uv: Vec2) -> Rgb {
         let p = self.to_uv.apply(uv);
         let img = &*self.image;
-        let (w, h) = (img.width, img.height);
-        let wrap = self.wrap_mode;
         match self.filter_type {
             FilterType::Nearest => {
-                let x = wrap.wrap(floor_index(p.x * w as f32), w);
-                let y = wrap.wrap(floor_index(p.y * h as f32), h);
+                let (x, y) = self.nearest_texel(p);
                 img.texel(x, y)
             }
             FilterType::Bilinear => {
@@ -326,6 +347,39 @@ impl Bitmap {
                     + img.texel(c.x0, c.y1) * (gx * c.fy)
                     + img.texel(c.x1, c.y1) * (c.fx * c.fy)
             }
+        }
+    }
+
+    /// The texel a `nearest` lookup at `p` (after `to_uv`) reads, wrapped.
+    #[inline]
+    fn nearest_texel(&self, p: Vec2) -> (usize, usize) {
+        let (w, h) = (self.image.width, self.image.height);
+        let wrap = self.wrap_mode;
+        (wrap.wrap(floor_index(p.x * w as f32), w), wrap.wrap(floor_index(p.y * h as f32), h))
+    }
+
+    /// The texels `eval`, `eval_1` and `eval_1_grad` at `uv` may read, as `(x, y)`: the bilinear
+    /// cell's four (`(x0, y0), (x1, y0), (x0, y1), (x1, y1)`), or the nearest texel four times
+    /// (`eval_1_grad` reads none then). From the lookups' own formulas (`nearest_texel`,
+    /// `bilinear_cell`).
+    #[inline]
+    pub fn texels_read(&self, uv: Vec2) -> [(usize, usize); 4] {
+        let p = self.to_uv.apply(uv);
+        match self.filter_type {
+            FilterType::Nearest => [self.nearest_texel(p); 4],
+            FilterType::Bilinear => {
+                let c = self.bilinear_cell(p);
+                [(c.x0, c.y0), (c.x1, c.y0), (c.x0, c.y1), (c.x1, c.y1)]
+            }
+        }
+    }
+
+    /// Asks the cache for the lines of [`Bitmap::texels_read`] (the two rows' pairs; a pair
+    /// split across lines gets both): a hint, no effect on any value.
+    #[inline]
+    pub fn prefetch(&self, uv: Vec2) {
+        for (x, y) in self.texels_read(uv) {
+            self.image.prefetch_texel(x, y);
         }
     }
 
