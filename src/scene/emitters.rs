@@ -475,6 +475,37 @@ mod tests {
         assert_eq!(m.lookup(0.0, 1.0), Rgb::splat(11.0 * 0.5 + 8.0 * 0.5));
     }
 
+    /// The texels an escaped ray's prefetch fetches are the texels its lookup reads: with 1 on
+    /// the four of `texels_read(u, v)` and 0 elsewhere the lookup is 1, with 0 on them and 1
+    /// elsewhere it is 0; the fifth is the cell of `(u, v)`, whose pdf `pdf_w_at` returns.
+    #[test]
+    fn texels_read_are_the_texels_the_lookup_reads() {
+        let (w, h) = (7, 5);
+        let mut rng = Rng::keyed(5, stream::MISC, 0, 0);
+        let map = |read: &[usize], on: f32, off: f32| {
+            let texels = (0..w * h).map(|k| Rgb::splat(if read.contains(&k) { on } else { off })).collect();
+            LatLong::new(w, h, texels).unwrap()
+        };
+        let pdfs = test_map();
+        let EnvMap::LatLong(pdfs) = &pdfs.map else { unreachable!() };
+        for n in 0..2000 {
+            let [a, b] = rng.next_2d();
+            // u beyond [0, 1) too, and v on the poles
+            let (u, v) = (a * 3.0 - 1.0, if n % 10 == 0 { (n / 10 % 2) as f32 } else { b });
+            let read = map(&[], 0.0, 0.0).texels_read(u, v);
+            let ones = map(&read[..4], 1.0, 0.0).lookup(u, v);
+            assert!((ones - Rgb::ONE).abs().max_element() < 1e-5, "{u} {v}: {read:?} {ones}");
+            assert_eq!(map(&read[..4], 0.0, 1.0).lookup(u, v), Rgb::ZERO, "{u} {v}: {read:?}");
+            let pr = pdfs.texels_read(u, v);
+            assert_eq!(pdfs.texels[pr[4]].pdf_w, pdfs.pdf_w_at(u, v));
+            if (0.0..1.0).contains(&u) && v < 1.0 {
+                let (i, j) = ((pr[4] % pdfs.width) as f32, (pr[4] / pdfs.width) as f32);
+                let (cw, ch) = (pdfs.width as f32, pdfs.height as f32);
+                assert!(i <= u * cw && u * cw < i + 1.0 && j <= v * ch && v * ch < j + 1.0, "{u} {v}: {pr:?}");
+            }
+        }
+    }
+
     /// The sampler's pdf integrates to 1 and agrees with `pdf_w` at its samples; the radiance is
     /// positive only where the pdf is.
     #[test]

@@ -482,10 +482,14 @@ impl BitmapParams {
 }
 
 /// The decoded images of a scene: one [`TexelImage`] per canonical file path and `raw` flag,
-/// decoded on first use and shared (`Arc`) by every bitmap that reads it.
+/// decoded on first use and shared (`Arc`) by every bitmap that reads it. A reader that knows
+/// the files ahead can have them decoded in parallel first ([`TextureCache::predecode`]): each
+/// `load` then returns the image, or the error, that decoding it then would have given.
 #[derive(Debug, Default)]
 pub struct TextureCache {
     images: HashMap<(PathBuf, bool), Arc<TexelImage>>,
+    /// Decoded by `predecode`, not yet asked for by `load`: the image or the decoding's error.
+    decoded: HashMap<(PathBuf, bool), Result<Arc<TexelImage>, ImageError>>,
 }
 
 impl TextureCache {
@@ -506,9 +510,33 @@ impl TextureCache {
         if let Some(image) = self.images.get(&key) {
             return Ok(Arc::clone(image));
         }
-        let image = Arc::new(TexelImage::load(&key.0, raw)?);
+        let image = match self.decoded.remove(&key) {
+            Some(decoded) => decoded?,
+            None => Arc::new(TexelImage::load(&key.0, raw)?),
+        };
         self.images.insert(key, Arc::clone(&image));
         Ok(image)
+    }
+
+    /// Decodes the images `files` names (path and `raw` flag), each distinct canonical file and
+    /// flag once, in parallel on the current rayon pool, and keeps each result for the
+    /// [`TextureCache::load`] that asks for it: the same image, or the same error, as decoding
+    /// it there, so a reader that loads its bitmaps in file order still meets the first error in
+    /// file order. A file no `load` asks for costs its decoding only (its error is never
+    /// reported); one that cannot be opened, or is held already, is left to `load`.
+    pub fn predecode(&mut self, files: &[(PathBuf, bool)]) {
+        use rayon::prelude::*;
+        let mut todo: Vec<(PathBuf, bool)> = Vec::new();
+        for (path, raw) in files {
+            let Ok(canonical) = std::fs::canonicalize(path) else { continue };
+            let key = (canonical, *raw);
+            if !self.images.contains_key(&key) && !self.decoded.contains_key(&key) && !todo.contains(&key) {
+                todo.push(key);
+            }
+        }
+        let results: Vec<_> =
+            todo.into_par_iter().map(|k| { let r = TexelImage::load(&k.0, k.1).map(Arc::new); (k, r) }).collect();
+        self.decoded.extend(results);
     }
 
     /// The bitmap `params` declares, its image through [`TextureCache::load`].
