@@ -113,6 +113,8 @@ pub struct TexelImage {
     srgb: bool,
     store: Store,
     mean: f32,
+    /// `content_hash`, computed once when decoded (on the decoding's thread).
+    hash: u64,
 }
 
 /// sRGB-encoded value in `[0, 1]` to linear, the exact curve (IEC 61966-2-1), in `f64`.
@@ -159,8 +161,10 @@ impl TexelImage {
                 Store::Linear(v)
             }
         };
-        let mut image = TexelImage { path: path.to_path_buf(), raw, width, height, channels, srgb, store, mean: 0.0 };
+        let mut image =
+            TexelImage { path: path.to_path_buf(), raw, width, height, channels, srgb, store, mean: 0.0, hash: 0 };
         image.mean = image.compute_mean();
+        image.hash = image.compute_hash();
         Ok(image)
     }
 
@@ -251,6 +255,12 @@ impl TexelImage {
     /// A hash of what it holds (size, channels, decoding and every texel): a changed image is
     /// another scene for `--resume` and MPI's job identity (`Scene::hash`).
     pub fn content_hash(&self) -> u64 {
+        self.hash
+    }
+
+    /// `content_hash`'s value: FNV-1a over the sizes, then the codes and their table or the
+    /// linear samples.
+    fn compute_hash(&self) -> u64 {
         let dims = [self.width as u64, self.height as u64, self.channels as u64, self.srgb as u64];
         let mut h = crate::math::fnv1a(0xcbf2_9ce4_8422_2325, &dims.map(u64::to_le_bytes).concat());
         match &self.store {
