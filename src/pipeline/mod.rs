@@ -260,13 +260,11 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
     {
         cluster.watch(distributed::job::watchdog_limit(at, job.time));
     }
-    let setup = crate::atomic_io::check_output_prefix(&job.out)
-        .map_err(RenderError::from)
-        .and_then(|()| {
-            let pool = thread_pool(job.threads)?;
-            let loaded = load(job, cluster.rank(), &pool)?;
-            Ok((pool, loaded))
-        });
+    let setup = crate::atomic_io::check_output_prefix(&job.out).map_err(RenderError::from).and_then(|()| {
+        let pool = thread_pool(job.threads)?;
+        let loaded = load(job, cluster.rank(), &pool)?;
+        Ok((pool, loaded))
+    });
     let (pool, (world, mut plan, mut timings)) = distributed::agree(cluster, setup)?;
     // every phase runs inside the time box (`budget`): loading and the BVH are measured, the
     // write is reserved, and a budget they alone use up is refused before any other work

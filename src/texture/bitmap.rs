@@ -544,8 +544,13 @@ impl TextureCache {
                 todo.push(key);
             }
         }
-        let results: Vec<_> =
-            todo.into_par_iter().map(|k| { let r = TexelImage::load(&k.0, k.1).map(Arc::new); (k, r) }).collect();
+        let results: Vec<_> = todo
+            .into_par_iter()
+            .map(|k| {
+                let r = TexelImage::load(&k.0, k.1).map(Arc::new);
+                (k, r)
+            })
+            .collect();
         self.decoded.extend(results);
     }
 

@@ -608,7 +608,9 @@ fn texels_read_are_the_texels_the_lookups_read() {
     };
     let to_uvs = [
         UvTransform::IDENTITY,
-        UvTransform::scale(Vec2::new(2.5, -1.5)).then(UvTransform::rotate(33.0)).then(UvTransform::translate(Vec2::new(0.3, -0.7))),
+        UvTransform::scale(Vec2::new(2.5, -1.5))
+            .then(UvTransform::rotate(33.0))
+            .then(UvTransform::translate(Vec2::new(0.3, -0.7))),
     ];
     let mut state = 0x2545_f491_4f6c_dd1du64;
     let mut next = || {
