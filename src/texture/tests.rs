@@ -640,10 +640,22 @@ fn texels_read_are_the_texels_the_lookups_read() {
         }
     }
     assert_eq!(checked, 2 * 3 * 2 * 2 * 200);
+    // each texel's first sample is its index: the address holds the value `texel` returns
     for channels in [1, 3] {
-        let i = image(&[], 0.0, 0.0, channels);
-        let base = i.texel_address(0, 0) as usize;
-        let step = if channels == 1 { 4 } else { 12 }; // f32 samples
-        assert_eq!(i.texel_address(3, 2) as usize - base, (2 * w + 3) * step);
+        let data = (0..w * h).flat_map(|k| std::iter::repeat_n(k as f32, channels)).collect();
+        let decoded = DecodedImage { width: w, height: h, channels, data: TexelData::F32(data), format: "EXR" };
+        let i = TexelImage::from_decoded(Path::new("index"), decoded, false).unwrap();
+        for (x, y) in (0..h).flat_map(|y| (0..w).map(move |x| (x, y))) {
+            // SAFETY: `x < w`, `y < h`: the address of a sample of the store, an aligned f32
+            let at = unsafe { *(i.texel_address(x, y) as *const f32) };
+            assert_eq!((at, i.texel(x, y).x), ((y * w + x) as f32, (y * w + x) as f32));
+        }
+        let data = (0..w * h).flat_map(|k| std::iter::repeat_n(k as u8, channels)).collect();
+        let decoded = DecodedImage { width: w, height: h, channels, data: TexelData::U8(data), format: "PNG" };
+        let i = TexelImage::from_decoded(Path::new("codes"), decoded, true).unwrap();
+        for (x, y) in (0..h).flat_map(|y| (0..w).map(move |x| (x, y))) {
+            // SAFETY: as above, a code of the store
+            assert_eq!(unsafe { *i.texel_address(x, y) }, (y * w + x) as u8);
+        }
     }
 }
