@@ -1380,3 +1380,39 @@ fn an_unknown_line_is_left_out() {
     assert_eq!(e(0), "s.xml: key `k`: m");
     assert_eq!(e(7), "s.xml:7: key `k`: m");
 }
+
+/// The bitmaps of an XML scene are decoded in parallel before it is read (`TextureCache::
+/// predecode`); the error is still the first bad texture's in file order, with its line and key,
+/// whichever decoding ends first, on one thread or four; the good ones load as before.
+#[test]
+fn parallel_texture_decoding_keeps_the_first_error_in_file_order() {
+    let dir = tmp_dir("mitsuba-bad-textures");
+    let good = forecast::image_io::Image::from_fn(4, 4, |x, y| [0.1 * x as f32, 0.2, 0.1 * y as f32]);
+    forecast::image_io::write_exr(&dir.join("good.exr"), &good).unwrap();
+    std::fs::write(dir.join("torn-a.png"), b"\x89PNG\r\n\x1a\nnot a png").unwrap();
+    std::fs::write(dir.join("torn-b.exr"), b"v/1\x01 not an exr").unwrap();
+    let shape = |f: &str| {
+        format!(
+            "<shape type=\"rectangle\"><bsdf type=\"diffuse\">\n<texture name=\"reflectance\" type=\"bitmap\">\
+             <string name=\"filename\" value=\"{f}\"/></texture></bsdf></shape>"
+        )
+    };
+    let scene = |files: &[&str]| {
+        let body: Vec<String> = files.iter().map(|f| shape(f)).collect();
+        ply_scene(&body.join("\n"))
+    };
+    for threads in [1, 4] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        for (files, bad) in [
+            (vec!["good.exr", "torn-a.png", "torn-b.exr"], "torn-a.png"),
+            (vec!["good.exr", "torn-b.exr", "good.exr", "torn-a.png"], "torn-b.exr"),
+        ] {
+            let src = scene(&files);
+            let Err(e) = pool.install(|| xml(&src, &dir)) else { panic!("accepted {files:?}") };
+            let line = line_with(&src, bad);
+            assert!(e.line == line && e.key.ends_with("filename"), "{threads} threads, want line {line}: {e}");
+            assert!(e.to_string().contains(bad), "{threads} threads: {e}");
+        }
+        pool.install(|| xml(&scene(&["good.exr", "good.exr"]), &dir)).unwrap_or_else(|e| panic!("{e}"));
+    }
+}

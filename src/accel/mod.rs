@@ -224,6 +224,13 @@ fn bounds(scene: &Scene) -> Vec<(Vec3, Vec3)> {
     tris.chain(scene.spheres.iter().map(|s| (s.center - r(s), s.center + r(s)))).collect()
 }
 
+/// The point `p` near sphere `s` re-projected onto its surface (`World::hit`'s hit point on a
+/// sphere: it limits error growth along Dirac chains).
+#[inline(always)]
+fn on_sphere(s: &crate::scene::Sphere, p: Vec3) -> Vec3 {
+    s.center + (p - s.center).normalize() * s.radius
+}
+
 impl Hit {
     /// Its position and normals as a BSDF sees them.
     #[inline(always)]
@@ -380,9 +387,44 @@ impl World {
             if s.inward {
                 n = -n;
             }
-            // re-project onto the surface to limit error growth along Dirac chains
-            let p = s.center + (p - s.center).normalize() * s.radius;
-            Hit { t, p, ng: n, ns: n, prim }
+            Hit { t, p: on_sphere(s, p), ng: n, ns: n, prim }
+        }
+    }
+
+    /// `hit`'s point `p` of the hit `(prim, t)` along `ray`, without the rest of the record.
+    #[inline(always)]
+    fn hit_point(&self, ray: &Ray, (prim, t): (u32, f32)) -> Vec3 {
+        let p = ray.o + t * ray.d;
+        let ntri = self.scene.ntri();
+        if prim < ntri {
+            p
+        } else {
+            on_sphere(&self.scene.spheres[(prim - ntri) as usize], p)
+        }
+    }
+
+    /// Prefetches what shading the batch answer `found` (`intersect_batch`) of `rays` will read
+    /// from memory: for a hit, the texels of its surface's textures and map at its point
+    /// (`Scene::prefetch_shading`), where `surfaces` (false where no hit of the batch will be
+    /// shaded, only checked for an emitter); for a ray that escaped, the environment texels of its
+    /// direction (`Environment::prefetch`). Issued for the whole batch before its first hit is
+    /// shaded, so that the misses overlap; a hint, with no effect on any value
+    /// (`results/2026-12-08-prefetch.md`).
+    pub fn prefetch_shading(&self, rays: &[Ray], found: &[Option<(u32, f32)>], surfaces: bool) {
+        let s = &self.scene;
+        if s.textures.is_empty() && s.environment.is_none() {
+            return;
+        }
+        for (ray, f) in rays.iter().zip(found) {
+            match *f {
+                Some(h) if surfaces => s.prefetch_shading(h.0, self.hit_point(ray, h)),
+                Some(_) => {}
+                None => {
+                    if let Some(env) = &s.environment {
+                        env.prefetch(ray.d);
+                    }
+                }
+            }
         }
     }
 

@@ -135,7 +135,8 @@ impl Material {
         true
     }
 
-    /// True for Dirac (delta) BSDFs: the S side of the L_d / L_c split.
+    /// True for Dirac (delta) BSDFs: the S side of the L_d / L_c split. A property of the variant
+    /// alone ([`Material::set`] never changes it: `transport::dirac` relies on it).
     #[inline]
     pub fn is_dirac(&self) -> bool {
         matches!(

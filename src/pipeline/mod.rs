@@ -260,9 +260,11 @@ pub fn render(job: &RenderJob, cluster: &dyn Cluster, started: Instant) -> Resul
     {
         cluster.watch(distributed::job::watchdog_limit(at, job.time));
     }
-    let setup = crate::atomic_io::check_output_prefix(&job.out)
-        .map_err(RenderError::from)
-        .and_then(|()| Ok((thread_pool(job.threads)?, load(job, cluster.rank())?)));
+    let setup = crate::atomic_io::check_output_prefix(&job.out).map_err(RenderError::from).and_then(|()| {
+        let pool = thread_pool(job.threads)?;
+        let loaded = load(job, cluster.rank(), &pool)?;
+        Ok((pool, loaded))
+    });
     let (pool, (world, mut plan, mut timings)) = distributed::agree(cluster, setup)?;
     // every phase runs inside the time box (`budget`): loading and the BVH are measured, the
     // write is reserved, and a budget they alone use up is refused before any other work
@@ -369,12 +371,13 @@ fn preprocess_over_budget(plan: &Plan, timings: &Timings, started: Instant, rank
     Some(w)
 }
 
-/// Stage 1: load the scene (warnings printed on rank 0), resolve the job (validation and the
-/// memory estimate), build the BVH.
-fn load(job: &RenderJob, rank: usize) -> Result<(World, Plan, Timings), RenderError> {
+/// Stage 1: load the scene (on the render's `pool`: its textures are decoded on its threads;
+/// warnings printed on rank 0), resolve the job (validation and the memory estimate), build the
+/// BVH.
+fn load(job: &RenderJob, rank: usize, pool: &rayon::ThreadPool) -> Result<(World, Plan, Timings), RenderError> {
     let t_load = Instant::now();
     crate::atomic_io::check_input("scene file", &job.scene)?; // named without a line: it has none
-    let mut scene = crate::scene::load_with(&job.scene, &job.load_options())?;
+    let mut scene = pool.install(|| crate::scene::load_with(&job.scene, &job.load_options()))?;
     job.output_set(&scene).not_writer(rank != 0).check()?; // before anything is written
     let load_s = secs(t_load);
     if rank == 0 {

@@ -277,9 +277,7 @@ impl LatLong {
     /// The pdf `P_ij/Ω_ij` of the cell `(u, v)` lies in.
     #[inline]
     fn pdf_w_at(&self, u: f32, v: f32) -> f32 {
-        let i = ((u * self.width as f32) as usize).min(self.width - 1);
-        let j = ((v * self.height as f32) as usize).min(self.height - 1);
-        self.texels[j * self.width + i].pdf_w
+        self.texels[self.cell_index(u, v)].pdf_w
     }
 
     /// `P_ij/Ω_ij` of a cell of row `j` whose probability is `pmf` (0 where not finite): the pdf
@@ -294,9 +292,19 @@ impl LatLong {
         }
     }
 
-    /// The bilinear lookup at `(u, v)` (module docs).
-    #[inline]
-    pub fn lookup(&self, u: f32, v: f32) -> Rgb {
+    /// The texel index of the cell `(u, v)` lies in, whose pdf `pdf_w_at` reads.
+    #[inline(always)]
+    fn cell_index(&self, u: f32, v: f32) -> usize {
+        let i = ((u * self.width as f32) as usize).min(self.width - 1);
+        let j = ((v * self.height as f32) as usize).min(self.height - 1);
+        j * self.width + i
+    }
+
+    /// The bilinear footprint of `lookup` at `(u, v)` (module docs): the columns `x0`, `x1`
+    /// (wrapped), the first of the two rows `y0` and `y0 + 1`, and the weights toward `x1` and
+    /// `y0 + 1`.
+    #[inline(always)]
+    fn bilinear_cell(&self, u: f32, v: f32) -> (usize, usize, usize, f32, f32) {
         let (w, h) = (self.width, self.height);
         let u = u - u.floor();
         let xc = u * w as f32 - 0.5;
@@ -307,10 +315,27 @@ impl LatLong {
         let yc = v.clamp(0.0, 1.0) * (h - 1) as f32;
         let y0 = (yc.floor() as usize).min(h - 2);
         let fy = (yc - y0 as f32).clamp(0.0, 1.0);
+        (x0, x1, y0, fx, fy)
+    }
+
+    /// The bilinear lookup at `(u, v)` (module docs).
+    #[inline]
+    pub fn lookup(&self, u: f32, v: f32) -> Rgb {
+        let (x0, x1, y0, fx, fy) = self.bilinear_cell(u, v);
+        let w = self.width;
         let t = |x: usize, y: usize| self.texels[y * w + x].rgb;
         let top = t(x0, y0) * (1.0 - fx) + t(x1, y0) * fx;
         let bottom = t(x0, y0 + 1) * (1.0 - fx) + t(x1, y0 + 1) * fx;
         top * (1.0 - fy) + bottom * fy
+    }
+
+    /// The texel indices `lookup` and `pdf_w_at` at `(u, v)` read: the bilinear footprint's four
+    /// (`(x0, y0), (x1, y0), (x0, y0 + 1), (x1, y0 + 1)`), then the cell's pdf.
+    #[inline]
+    pub fn texels_read(&self, u: f32, v: f32) -> [usize; 5] {
+        let (x0, x1, y0, _, _) = self.bilinear_cell(u, v);
+        let w = self.width;
+        [y0 * w + x0, y0 * w + x1, (y0 + 1) * w + x0, (y0 + 1) * w + x1, self.cell_index(u, v)]
     }
 }
 
@@ -353,6 +378,18 @@ impl Environment {
             EnvMap::LatLong(m) => {
                 let (u, v) = direction_to_uv((self.to_local * w).normalize());
                 (m.lookup(u, v), m.pdf_w_at(u, v))
+            }
+        }
+    }
+
+    /// Asks the cache for the texels [`Environment::radiance_pdf_w`] of the unit world direction
+    /// `w` reads ([`LatLong::texels_read`]): a hint, no effect on any value.
+    #[inline]
+    pub fn prefetch(&self, w: Vec3) {
+        if let EnvMap::LatLong(m) = &self.map {
+            let (u, v) = direction_to_uv((self.to_local * w).normalize());
+            for k in m.texels_read(u, v) {
+                crate::texture::prefetch(m.texels.as_ptr().wrapping_add(k));
             }
         }
     }
@@ -436,6 +473,37 @@ mod tests {
         assert_eq!(m.lookup(2.5 / 4.0, 0.5), Rgb::splat(6.0));
         // u = 0 lies between the last column and the first (periodic): texels 11 and 8 of row 2
         assert_eq!(m.lookup(0.0, 1.0), Rgb::splat(11.0 * 0.5 + 8.0 * 0.5));
+    }
+
+    /// The texels an escaped ray's prefetch fetches are the texels its lookup reads: with 1 on
+    /// the four of `texels_read(u, v)` and 0 elsewhere the lookup is 1, with 0 on them and 1
+    /// elsewhere it is 0; the fifth is the cell of `(u, v)`, whose pdf `pdf_w_at` returns.
+    #[test]
+    fn texels_read_are_the_texels_the_lookup_reads() {
+        let (w, h) = (7, 5);
+        let mut rng = Rng::keyed(5, stream::MISC, 0, 0);
+        let map = |read: &[usize], on: f32, off: f32| {
+            let texels = (0..w * h).map(|k| Rgb::splat(if read.contains(&k) { on } else { off })).collect();
+            LatLong::new(w, h, texels).unwrap()
+        };
+        let pdfs = test_map();
+        let EnvMap::LatLong(pdfs) = &pdfs.map else { unreachable!() };
+        for n in 0..2000 {
+            let [a, b] = rng.next_2d();
+            // u beyond [0, 1) too, and v on the poles
+            let (u, v) = (a * 3.0 - 1.0, if n % 10 == 0 { (n / 10 % 2) as f32 } else { b });
+            let read = map(&[], 0.0, 0.0).texels_read(u, v);
+            let ones = map(&read[..4], 1.0, 0.0).lookup(u, v);
+            assert!((ones - Rgb::ONE).abs().max_element() < 1e-5, "{u} {v}: {read:?} {ones}");
+            assert_eq!(map(&read[..4], 0.0, 1.0).lookup(u, v), Rgb::ZERO, "{u} {v}: {read:?}");
+            let pr = pdfs.texels_read(u, v);
+            assert_eq!(pdfs.texels[pr[4]].pdf_w, pdfs.pdf_w_at(u, v));
+            if (0.0..1.0).contains(&u) && v < 1.0 {
+                let (i, j) = ((pr[4] % pdfs.width) as f32, (pr[4] / pdfs.width) as f32);
+                let (cw, ch) = (pdfs.width as f32, pdfs.height as f32);
+                assert!(i <= u * cw && u * cw < i + 1.0 && j <= v * ch && v * ch < j + 1.0, "{u} {v}: {pr:?}");
+            }
+        }
     }
 
     /// The sampler's pdf integrates to 1 and agrees with `pdf_w` at its samples; the radiance is

@@ -407,6 +407,18 @@ impl Scene {
         (m, sp)
     }
 
+    /// Prefetches the texels [`Scene::shade`] at the point `p` of `prim` reads (its textures and
+    /// map at the point's uv, [`Surface::prefetch`]); nothing for a surface without textures or
+    /// map. A hint for a batch of hits about to be shaded: no effect on any value.
+    #[inline]
+    pub fn prefetch_shading(&self, prim: u32, p: Vec3) {
+        let s = &self.surfaces[self.material_id(prim)];
+        if s.textures.is_empty() && !s.has_map() {
+            return;
+        }
+        s.prefetch(&self.textures, self.uv_at(prim, p).0);
+    }
+
     /// `shade` where the material has textures, a normal or bump map or an anisotropic BSDF: its
     /// parameters, and `sp`'s shading normal and tangent at the hit's texture coordinates
     /// (`Surface::shading_point`).

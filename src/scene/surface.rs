@@ -138,6 +138,18 @@ impl Surface {
         ShadingPoint { s: tilted.s, ..tilted.sp }
     }
 
+    /// Prefetches the texels `material_at` and `shading_point` at `uv` read: each parameter's
+    /// texture and the normal or bump map's ([`Texture::prefetch`]). No effect on any value.
+    #[inline]
+    pub fn prefetch(&self, textures: &[Texture], uv: Vec2) {
+        for t in &self.textures {
+            textures[t.texture as usize].prefetch(uv);
+        }
+        if let Some(t) = self.normalmap.or(self.bumpmap.map(|b| b.texture)) {
+            textures[t as usize].prefetch(uv);
+        }
+    }
+
     /// The material `base` at a point of texture coordinates `uv`, its textured parameters looked
     /// up in `textures`.
     pub fn material_at(&self, base: &Material, textures: &[Texture], uv: Vec2) -> Material {

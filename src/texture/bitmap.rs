@@ -113,6 +113,8 @@ pub struct TexelImage {
     srgb: bool,
     store: Store,
     mean: f32,
+    /// `content_hash`, computed once when decoded (on the decoding's thread).
+    hash: u64,
 }
 
 /// sRGB-encoded value in `[0, 1]` to linear, the exact curve (IEC 61966-2-1), in `f64`.
@@ -159,8 +161,10 @@ impl TexelImage {
                 Store::Linear(v)
             }
         };
-        let mut image = TexelImage { path: path.to_path_buf(), raw, width, height, channels, srgb, store, mean: 0.0 };
+        let mut image =
+            TexelImage { path: path.to_path_buf(), raw, width, height, channels, srgb, store, mean: 0.0, hash: 0 };
         image.mean = image.compute_mean();
+        image.hash = image.compute_hash();
         Ok(image)
     }
 
@@ -179,7 +183,31 @@ impl TexelImage {
     #[inline]
     pub fn texel(&self, x: usize, y: usize) -> Rgb {
         assert!(x < self.width && y < self.height, "texel ({x}, {y}) outside {}x{}", self.width, self.height);
-        self.decode((y * self.width + x) * self.channels)
+        self.decode(self.sample_index(x, y))
+    }
+
+    /// The store's index of texel `(x, y)`'s first sample: where `texel` reads and
+    /// `prefetch_texel` fetches.
+    #[inline(always)]
+    fn sample_index(&self, x: usize, y: usize) -> usize {
+        (y * self.width + x) * self.channels
+    }
+
+    /// The address of texel `(x, y)`'s first sample, the byte `texel(x, y)` reads first (not
+    /// dereferenced here: any `x`, `y` give some address).
+    #[inline(always)]
+    pub fn texel_address(&self, x: usize, y: usize) -> *const u8 {
+        let i = self.sample_index(x, y);
+        match &self.store {
+            Store::Codes { codes, .. } => codes.as_ptr().wrapping_add(i),
+            Store::Linear(v) => v.as_ptr().wrapping_add(i) as *const u8,
+        }
+    }
+
+    /// Asks the cache for texel `(x, y)`'s line ([`super::prefetch`]): no effect on any value.
+    #[inline(always)]
+    pub fn prefetch_texel(&self, x: usize, y: usize) {
+        super::prefetch(self.texel_address(x, y));
     }
 
     /// The linear texel whose first sample is sample `i` of the store: the one decoding.
@@ -227,6 +255,12 @@ impl TexelImage {
     /// A hash of what it holds (size, channels, decoding and every texel): a changed image is
     /// another scene for `--resume` and MPI's job identity (`Scene::hash`).
     pub fn content_hash(&self) -> u64 {
+        self.hash
+    }
+
+    /// `content_hash`'s value: FNV-1a over the sizes, then the codes and their table or the
+    /// linear samples.
+    fn compute_hash(&self) -> u64 {
         let dims = [self.width as u64, self.height as u64, self.channels as u64, self.srgb as u64];
         let mut h = crate::math::fnv1a(0xcbf2_9ce4_8422_2325, &dims.map(u64::to_le_bytes).concat());
         match &self.store {
@@ -310,12 +344,9 @@ impl Bitmap {
     pub fn eval(&self, uv: Vec2) -> Rgb {
         let p = self.to_uv.apply(uv);
         let img = &*self.image;
-        let (w, h) = (img.width, img.height);
-        let wrap = self.wrap_mode;
         match self.filter_type {
             FilterType::Nearest => {
-                let x = wrap.wrap(floor_index(p.x * w as f32), w);
-                let y = wrap.wrap(floor_index(p.y * h as f32), h);
+                let (x, y) = self.nearest_texel(p);
                 img.texel(x, y)
             }
             FilterType::Bilinear => {
@@ -326,6 +357,39 @@ impl Bitmap {
                     + img.texel(c.x0, c.y1) * (gx * c.fy)
                     + img.texel(c.x1, c.y1) * (c.fx * c.fy)
             }
+        }
+    }
+
+    /// The texel a `nearest` lookup at `p` (after `to_uv`) reads, wrapped.
+    #[inline]
+    fn nearest_texel(&self, p: Vec2) -> (usize, usize) {
+        let (w, h) = (self.image.width, self.image.height);
+        let wrap = self.wrap_mode;
+        (wrap.wrap(floor_index(p.x * w as f32), w), wrap.wrap(floor_index(p.y * h as f32), h))
+    }
+
+    /// The texels `eval`, `eval_1` and `eval_1_grad` at `uv` may read, as `(x, y)`: the bilinear
+    /// cell's four (`(x0, y0), (x1, y0), (x0, y1), (x1, y1)`), or the nearest texel four times
+    /// (`eval_1_grad` reads none then). From the lookups' own formulas (`nearest_texel`,
+    /// `bilinear_cell`).
+    #[inline]
+    pub fn texels_read(&self, uv: Vec2) -> [(usize, usize); 4] {
+        let p = self.to_uv.apply(uv);
+        match self.filter_type {
+            FilterType::Nearest => [self.nearest_texel(p); 4],
+            FilterType::Bilinear => {
+                let c = self.bilinear_cell(p);
+                [(c.x0, c.y0), (c.x1, c.y0), (c.x0, c.y1), (c.x1, c.y1)]
+            }
+        }
+    }
+
+    /// Asks the cache for the lines of [`Bitmap::texels_read`] (the two rows' pairs; a pair
+    /// split across lines gets both): a hint, no effect on any value.
+    #[inline]
+    pub fn prefetch(&self, uv: Vec2) {
+        for (x, y) in self.texels_read(uv) {
+            self.image.prefetch_texel(x, y);
         }
     }
 
@@ -428,10 +492,14 @@ impl BitmapParams {
 }
 
 /// The decoded images of a scene: one [`TexelImage`] per canonical file path and `raw` flag,
-/// decoded on first use and shared (`Arc`) by every bitmap that reads it.
+/// decoded on first use and shared (`Arc`) by every bitmap that reads it. A reader that knows
+/// the files ahead can have them decoded in parallel first ([`TextureCache::predecode`]): each
+/// `load` then returns the image, or the error, that decoding it then would have given.
 #[derive(Debug, Default)]
 pub struct TextureCache {
     images: HashMap<(PathBuf, bool), Arc<TexelImage>>,
+    /// Decoded by `predecode`, not yet asked for by `load`: the image or the decoding's error.
+    decoded: HashMap<(PathBuf, bool), Result<Arc<TexelImage>, ImageError>>,
 }
 
 impl TextureCache {
@@ -452,9 +520,38 @@ impl TextureCache {
         if let Some(image) = self.images.get(&key) {
             return Ok(Arc::clone(image));
         }
-        let image = Arc::new(TexelImage::load(&key.0, raw)?);
+        let image = match self.decoded.remove(&key) {
+            Some(decoded) => decoded?,
+            None => Arc::new(TexelImage::load(&key.0, raw)?),
+        };
         self.images.insert(key, Arc::clone(&image));
         Ok(image)
+    }
+
+    /// Decodes the images `files` names (path and `raw` flag), each distinct canonical file and
+    /// flag once, in parallel on the current rayon pool, and keeps each result for the
+    /// [`TextureCache::load`] that asks for it: the same image, or the same error, as decoding
+    /// it there, so a reader that loads its bitmaps in file order still meets the first error in
+    /// file order. A file no `load` asks for costs its decoding only (its error is never
+    /// reported); one that cannot be opened, or is held already, is left to `load`.
+    pub fn predecode(&mut self, files: &[(PathBuf, bool)]) {
+        use rayon::prelude::*;
+        let mut todo: Vec<(PathBuf, bool)> = Vec::new();
+        for (path, raw) in files {
+            let Ok(canonical) = std::fs::canonicalize(path) else { continue };
+            let key = (canonical, *raw);
+            if !self.images.contains_key(&key) && !self.decoded.contains_key(&key) && !todo.contains(&key) {
+                todo.push(key);
+            }
+        }
+        let results: Vec<_> = todo
+            .into_par_iter()
+            .map(|k| {
+                let r = TexelImage::load(&k.0, k.1).map(Arc::new);
+                (k, r)
+            })
+            .collect();
+        self.decoded.extend(results);
     }
 
     /// The bitmap `params` declares, its image through [`TextureCache::load`].

@@ -25,6 +25,11 @@
 //!   blending, unless `raw`; float images (EXR, Radiance HDR) are linear already and `raw` does
 //!   nothing to them. Grey images stay one channel and read as grey RGB. Alpha is ignored.
 //!
+//! * [`Texture::prefetch`] asks the cache for the lines a later `eval`, `eval_1` or
+//!   `eval_1_grad` at the same `uv` reads (the texels of [`Bitmap::texels_read`], the one
+//!   formula the lookups use): a hint, with no effect on any value. A wavefront issues it for a
+//!   whole batch of hits before it shades them, so that their misses overlap.
+//!
 //! Invariants: evaluation never panics and never allocates; a [`TexelImage`] is immutable once
 //! built and shared through an `Arc` by every bitmap that names the same file with the same
 //! `raw` ([`TextureCache`]); texels are finite and `>= 0`.
@@ -103,6 +108,16 @@ impl Texture {
         }
     }
 
+    /// Prefetches the texels a lookup at `uv` reads ([`Bitmap::prefetch`]; a checkerboard's
+    /// colours are constants or bitmaps of their own, and a checkerboard reads one of them at a
+    /// time: nothing is fetched for it). Changes no value.
+    #[inline]
+    pub fn prefetch(&self, uv: Vec2) {
+        if let Texture::Bitmap(b) = self {
+            b.prefetch(uv);
+        }
+    }
+
     /// `false` for a texture Mitsuba's `eval_1_grad` refuses (a checkerboard): a scene reader
     /// rejects it as a bump map's height.
     pub fn has_eval_1_grad(&self) -> bool {
@@ -162,6 +177,21 @@ impl From<Rgb> for Texture {
     fn from(c: Rgb) -> Texture {
         Texture::Constant(c)
     }
+}
+
+/// Asks the cache for the line holding `*p` (on x86-64 `prefetcht0`; nothing elsewhere). A
+/// hint: it never faults, reads nothing the program sees and changes no value, so `p` need not
+/// be dereferenceable.
+#[inline(always)]
+pub fn prefetch<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: `prefetcht0` (SSE, baseline on x86-64) does not access memory architecturally: it
+    // cannot fault, whatever the address.
+    unsafe {
+        core::arch::x86_64::_mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>(p as *const i8)
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
 }
 
 /// `(r + g + b) / 3`, in Mitsuba's order of operations.

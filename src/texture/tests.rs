@@ -592,3 +592,70 @@ fn grad_of_constants_and_checkerboards() {
     assert!(!k.has_eval_1_grad());
     assert!(Texture::Bitmap(bitmap(FilterType::Nearest, WrapMode::Repeat)).has_eval_1_grad());
 }
+
+/// The texels a prefetch fetches are the texels a lookup reads: with 1 on `texels_read(uv)` and
+/// 0 elsewhere, `eval` is 1 (its weights sum to 1 on them); with 0 on them and 1 elsewhere,
+/// `eval` and `eval_1_grad` are 0 (no other texel has a weight); for every filter, wrap mode and
+/// `to_uv`, uvs inside and outside `[0, 1]²`. And `texel_address` is the sample `texel` reads.
+#[test]
+fn texels_read_are_the_texels_the_lookups_read() {
+    let (w, h) = (5, 4);
+    let image = |inside: &[(usize, usize)], on: f32, off: f32, channels: usize| {
+        let texel = |x, y| if inside.contains(&(x, y)) { on } else { off };
+        let data = (0..h).flat_map(|y| (0..w).flat_map(move |x| std::iter::repeat_n(texel(x, y), channels)));
+        let image = DecodedImage { width: w, height: h, channels, data: TexelData::F32(data.collect()), format: "EXR" };
+        Arc::new(TexelImage::from_decoded(Path::new("mask"), image, false).unwrap())
+    };
+    let to_uvs = [
+        UvTransform::IDENTITY,
+        UvTransform::scale(Vec2::new(2.5, -1.5))
+            .then(UvTransform::rotate(33.0))
+            .then(UvTransform::translate(Vec2::new(0.3, -0.7))),
+    ];
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut next = || {
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (state >> 40) as f32 / (1u64 << 24) as f32 * 6.0 - 2.5
+    };
+    let mut checked = 0;
+    for filter_type in [FilterType::Bilinear, FilterType::Nearest] {
+        for wrap_mode in [WrapMode::Repeat, WrapMode::Mirror, WrapMode::Clamp] {
+            for to_uv in to_uvs {
+                for channels in [1, 3] {
+                    for _ in 0..200 {
+                        let uv = Vec2::new(next(), next());
+                        let probe = Bitmap { image: image(&[], 0.0, 0.0, channels), filter_type, wrap_mode, to_uv };
+                        let read = probe.texels_read(uv);
+                        assert!(read.iter().all(|&(x, y)| x < w && y < h), "{read:?}");
+                        let ones = Bitmap { image: image(&read, 1.0, 0.0, channels), ..probe.clone() };
+                        let zeros = Bitmap { image: image(&read, 0.0, 1.0, channels), ..probe.clone() };
+                        let at = format!("{filter_type:?} {wrap_mode:?} {to_uv:?} {channels} at {uv}: {read:?}");
+                        assert!(close(ones.eval(uv), Rgb::ONE), "{at}: {}", ones.eval(uv));
+                        assert_eq!(zeros.eval(uv), Rgb::ZERO, "{at}");
+                        assert_eq!(zeros.eval_1_grad(uv), Vec2::ZERO, "{at}");
+                        checked += 1;
+                    }
+                }
+            }
+        }
+    }
+    assert_eq!(checked, 2 * 3 * 2 * 2 * 200);
+    // each texel's first sample is its index: the address holds the value `texel` returns
+    for channels in [1, 3] {
+        let data = (0..w * h).flat_map(|k| std::iter::repeat_n(k as f32, channels)).collect();
+        let decoded = DecodedImage { width: w, height: h, channels, data: TexelData::F32(data), format: "EXR" };
+        let i = TexelImage::from_decoded(Path::new("index"), decoded, false).unwrap();
+        for (x, y) in (0..h).flat_map(|y| (0..w).map(move |x| (x, y))) {
+            // SAFETY: `x < w`, `y < h`: the address of a sample of the store, an aligned f32
+            let at = unsafe { *(i.texel_address(x, y) as *const f32) };
+            assert_eq!((at, i.texel(x, y).x), ((y * w + x) as f32, (y * w + x) as f32));
+        }
+        let data = (0..w * h).flat_map(|k| std::iter::repeat_n(k as u8, channels)).collect();
+        let decoded = DecodedImage { width: w, height: h, channels, data: TexelData::U8(data), format: "PNG" };
+        let i = TexelImage::from_decoded(Path::new("codes"), decoded, true).unwrap();
+        for (x, y) in (0..h).flat_map(|y| (0..w).map(move |x| (x, y))) {
+            // SAFETY: as above, a code of the store
+            assert_eq!(unsafe { *i.texel_address(x, y) }, (y * w + x) as u8);
+        }
+    }
+}

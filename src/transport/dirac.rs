@@ -47,8 +47,15 @@ fn follow_chain(
     let s = &world.scene;
     let mut t = Throughput::new(beta);
     for v in 0..cap {
+        // a chain ends on an emitter or a non-Dirac BSDF: whether the BSDF is Dirac is its
+        // stored variant's (textures set parameters, never the variant), so the point is shaded
+        // (its textures read) only where it may go on; there `shade` may still give `Black` (a
+        // one-sided mirror seen from behind)
+        if s.emitter_of(hit.prim) != NO_EMITTER || !s.material_of(hit.prim).is_dirac() {
+            return Some((Some(hit), d, t.beta));
+        }
         let (m, sp) = world.shade(&hit, -d);
-        if s.emitter_of(hit.prim) != NO_EMITTER || !m.is_dirac() {
+        if !m.is_dirac() {
             return Some((Some(hit), d, t.beta));
         }
         let u = rng.next_3d();

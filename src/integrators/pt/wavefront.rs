@@ -128,9 +128,12 @@ impl<P> Wave<P> {
     }
 
     /// Traces the bounce's rays (the camera rays, `depth` 0, of a pass group run pixel by
-    /// pixel, side by side).
-    pub(crate) fn intersect(&mut self, world: &World, depth: u32) {
+    /// pixel, side by side), then prefetches the texels their shading will read
+    /// (`World::prefetch_shading`; the surfaces' only where `shade`, false at the bounce after
+    /// the last vertex, whose hits are only checked for an emitter).
+    pub(crate) fn intersect(&mut self, world: &World, depth: u32, shade: bool) {
         world.intersect_batch(&self.rays, &mut self.scratch, &mut self.hits, depth == 0);
+        world.prefetch_shading(&self.rays, &self.hits, shade);
     }
 
     /// Queues path `i`'s NEE sample: `β·value` if its segment is unoccluded, `β·0` for `None`
@@ -180,7 +183,7 @@ pub(crate) fn trace_batch(
         if w.live.is_empty() {
             break;
         }
-        w.intersect(world, depth);
+        w.intersect(world, depth, depth < max_depth);
         if depth == max_depth {
             for k in 0..w.live.len() {
                 emitted(world, w, k, out);

@@ -67,7 +67,7 @@ impl GuidedPathTracer {
             if cw.wave.live.is_empty() {
                 break;
             }
-            cw.wave.intersect(world, depth);
+            cw.wave.intersect(world, depth, depth < self.max_depth);
             for k in 0..cw.wave.live.len() {
                 let i = cw.wave.live[k].i as usize;
                 std::mem::swap(&mut ctx.rng, &mut rngs[i]);

@@ -93,6 +93,11 @@ pub fn load_str(src: &str, file: &str, dir: &Path, defines: &[(String, String)])
         default_diffuse: None,
     };
     let (root, _version, vars) = xml::parse(src, defines).map_err(|(l, m)| cx.err(l, "", m))?;
+    // the bitmaps' files decoded in parallel up front; each is taken, with its error, where the
+    // loop below reaches it
+    let mut files = Vec::new();
+    texture::bitmap_files(&root, dir, &mut files);
+    cx.textures.predecode(&files);
     let mut sensor_line = None;
     for n in &root.children {
         match n.tag.as_str() {

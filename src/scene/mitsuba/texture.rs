@@ -14,6 +14,7 @@ use super::Cx;
 use crate::math::Rgb;
 use crate::scene::SceneError;
 use crate::texture::{BitmapParams, Checkerboard, FilterType, Texture, UvTransform, WrapMode};
+use std::path::{Path, PathBuf};
 
 /// A BSDF parameter that may be a colour or a texture.
 pub(super) use crate::scene::plugins::Param;
@@ -85,6 +86,24 @@ fn constant_or_texture(cx: &mut Cx, p: &mut Plugin, name: &str, default: f32) ->
         None => Ok(Texture::Constant(Rgb::splat(default))),
         Some(Param::Constant(c)) => Ok(Texture::Constant(c)),
         Some(Param::Texture(i)) => Ok(cx.b.texture_at(i).clone()),
+    }
+}
+
+/// The files (resolved against `dir`) and `raw` flags of the `bitmap` textures anywhere under
+/// `node`, in file order, as `bitmap` reads them when they are well formed (a `<string>`
+/// `filename`, a `<boolean>` `raw`): what `TextureCache::predecode` decodes ahead. A guess only:
+/// `bitmap` reads each one itself and reports its errors.
+pub(super) fn bitmap_files(node: &Node, dir: &Path, out: &mut Vec<(PathBuf, bool)>) {
+    if node.tag == "texture" && node.ty() == "bitmap" {
+        let child = |tag: &str, name: &str| {
+            node.children.iter().find(|c| c.tag == tag && c.name() == name).and_then(|c| c.attr("value"))
+        };
+        if let Some(f) = child("string", "filename") {
+            out.push((dir.join(f), child("boolean", "raw").map(str::trim) == Some("true")));
+        }
+    }
+    for c in &node.children {
+        bitmap_files(c, dir, out);
     }
 }
 
