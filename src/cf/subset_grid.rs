@@ -77,6 +77,10 @@ pub struct SubsetGrid {
     half_diag: f32,
 }
 
+/// A cell level's candidate lists: `scans[k]` is the range of `candidates` (position, cluster)
+/// that `SCAN | k` scans.
+type Lists<'a> = (&'a [(u32, u32)], &'a [([f32; 3], u32)]);
+
 /// The `SUB`³ subcells of one cell: their codes (never `SPLIT`; `SCAN | k` indexes `scans`).
 #[derive(Clone, Debug)]
 struct Subcells {
@@ -302,13 +306,7 @@ impl SubsetGrid {
     /// The answer at `(x, n_x)` of a cell (or subcell) of code `code` (never `SPLIT`), whose
     /// candidate lists are `lists`.
     #[inline(always)]
-    fn answer(
-        &self,
-        map: &ClusterMap,
-        code: u32,
-        (scans, candidates): (&[(u32, u32)], &[([f32; 3], u32)]),
-        (x, n_x): (Vec3, Vec3),
-    ) -> Option<usize> {
+    fn answer(&self, map: &ClusterMap, code: u32, (scans, candidates): Lists, (x, n_x): (Vec3, Vec3)) -> Option<usize> {
         let (c, d2) = match code {
             EMPTY => return None,
             TREE => return map.query(x, n_x).filter(|&c| self.in_subset[c]),
