@@ -195,7 +195,7 @@ impl Default for TableCache {
 }
 
 /// Entries of a worker's [`TableMemo`] (direct-mapped by the key's hash).
-const MEMO: usize = 64;
+const MEMO: usize = 1024;
 
 /// A worker's memo of the shared [`TableCache`]'s answers (kept in `Context::memo`): the
 /// tables of the keys it looked up last, one per slot of the key's hash. A table is a pure
