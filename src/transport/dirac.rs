@@ -47,8 +47,13 @@ fn follow_chain(
     let s = &world.scene;
     let mut t = Throughput::new(beta);
     for v in 0..cap {
+        // a surface whose material is not Dirac ends the chain before it is shaded (no texture
+        // lookups): `shade` keeps the material's kind, or gives black behind a one-sided one
+        if s.emitter_of(hit.prim) != NO_EMITTER || !s.material_of(hit.prim).is_dirac() {
+            return Some((Some(hit), d, t.beta));
+        }
         let (m, sp) = world.shade(&hit, -d);
-        if s.emitter_of(hit.prim) != NO_EMITTER || !m.is_dirac() {
+        if !m.is_dirac() {
             return Some((Some(hit), d, t.beta));
         }
         let u = rng.next_3d();
