@@ -26,7 +26,7 @@ use super::forecast_map::{search_radius, ForecastMaps};
 use super::share::CausticShare;
 use super::subset_grid::SubsetGrid;
 pub use super::table_cache::TableCache;
-use super::table_cache::{cell_of, normal_bin, normal_key, CellSizes, NORMAL_BIN_TAG};
+use super::table_cache::{cell_of, normal_bin, normal_key, CellSizes, TableMemo, NORMAL_BIN_TAG};
 use crate::bsdf::{self, Mode};
 use crate::math::{luminance, Frame, Rgb, Vec3};
 use crate::profile::Phase;
@@ -271,7 +271,7 @@ impl CausticForecast {
     ) -> Arc<ForecastTables> {
         let (cell, centre) = cell_of(p, self.cells.edge[c]);
         let key = (c as u32, cell, nk);
-        if let Some(t) = cache.get(&key) {
+        if let Some(t) = cache.get_memo(&key, ctx.memo::<TableMemo>()) {
             ctx.profile.cf.cache_hits += 1;
             return t;
         }
@@ -280,7 +280,7 @@ impl CausticForecast {
         let tables = Arc::new(self.build_tables((c, centre, &Frame::from_normal(n)), &mut ctx.knn, w, |l| l.z));
         ctx.profile.cf.tables_built += 1;
         ctx.profile.cf.cdf_ns += t0.elapsed().as_nanos() as u64;
-        cache.insert(key, tables.clone());
+        cache.insert_memo(key, tables.clone(), ctx.memo::<TableMemo>());
         tables
     }
 

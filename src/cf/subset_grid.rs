@@ -12,7 +12,11 @@
 //!   all belong to `c` and `d_n + h ≤ reach_c` (only the normal test is left);
 //! - **a scan** of its candidates, smallest `(dist², cluster)` first with the map's own squared
 //!   distance (`spatial::dist2`): that is the map's nearest whenever the map could accept it;
-//! - **ask the map**, with more than [`MAX_CANDIDATES`] candidates.
+//! - **ask the map**, with more than [`MAX_CANDIDATES`] candidates; or rather, once a query
+//!   falls in it, its [`SUB`]³ subcells, each one of the four kinds above by the same bounds with
+//!   its own centre and half-diagonal (built on the cell's first query, a pure function of the
+//!   cell, so the answers do not depend on the threads; on `sms-sphere` the caustic's cells ask
+//!   the map).
 //!
 //! A point whose normal fails the map's normal test for every subset cluster (a wall, when the
 //! guided caustics lie on a floor) is rejected before its cell is looked at.
@@ -31,6 +35,7 @@ use super::cluster_map::{ClusterMap, MIN_NORMAL_COS};
 use crate::math::Vec3;
 use crate::spatial::{dist2, KdTree};
 use rayon::prelude::*;
+use std::sync::{Arc, OnceLock};
 
 /// The most cells along the grid's longest axis (≤ 49³ cells, built in a few ms).
 const MAX_CELLS_PER_AXIS: f32 = 48.0;
@@ -39,11 +44,14 @@ const SLACK: f32 = 1e-3;
 /// The most candidates a cell scans; a cell with more asks the map's kd-tree.
 pub const MAX_CANDIDATES: usize = 64;
 
-/// Cell codes: no subset cluster here; ask the map; `SCAN | k`: scan candidate list `k`; any other
-/// value: that one cluster.
+/// Cell codes: no subset cluster here; ask the map; `SCAN | k`: scan candidate list `k`;
+/// `SPLIT | k`: the subcells `k`; any other value (< `SPLIT`): that one cluster.
 const EMPTY: u32 = u32::MAX;
 const TREE: u32 = u32::MAX - 1;
 const SCAN: u32 = 1 << 31;
+const SPLIT: u32 = 1 << 30;
+/// Subcells per axis of a cell that would ask the map (built on its first query).
+pub const SUB: usize = 3;
 
 /// A grid over the boxes of a subset of kept clusters: per cell, what the cluster map can answer
 /// there for a subset cluster.
@@ -60,6 +68,35 @@ pub struct SubsetGrid {
     in_subset: Vec<bool>,
     /// The subset clusters' mean normals.
     normals: Vec<Vec3>,
+    /// Per `SPLIT` cell: its centre and its subcells, built on its first query.
+    split: Vec<(Vec3, OnceLock<Subcells>)>,
+    /// What a subcell's build reads (shared by the clones of the grid).
+    reps: Option<Arc<Reps>>,
+    /// A cell's edge and half-diagonal (the latter with its slack).
+    cell: f32,
+    half_diag: f32,
+}
+
+/// A cell level's candidate lists: `scans[k]` is the range of `candidates` (position, cluster)
+/// that `SCAN | k` scans.
+type Lists<'a> = (&'a [(u32, u32)], &'a [([f32; 3], u32)]);
+
+/// The `SUB`³ subcells of one cell: their codes (never `SPLIT`; `SCAN | k` indexes `scans`).
+#[derive(Clone, Debug)]
+struct Subcells {
+    codes: [u32; SUB * SUB * SUB],
+    scans: Vec<(u32, u32)>,
+    candidates: Vec<([f32; 3], u32)>,
+}
+
+/// The representatives a cell's answer is built from: all (with their clusters), as a tree, the
+/// subset's as a tree, and the subset's largest reach.
+#[derive(Debug)]
+struct Reps {
+    reps: Vec<([f32; 3], u32)>,
+    all: KdTree,
+    guided: KdTree,
+    reach: f32,
 }
 
 /// The cells of a [`SubsetGrid`] by how they answer (`pt-cf`'s JSON report).
@@ -73,7 +110,8 @@ pub struct GridKinds {
     pub one: usize,
     /// Cells that scan a candidate list.
     pub scan: usize,
-    /// Cells with more than [`MAX_CANDIDATES`] candidates (the map's kd-tree answers).
+    /// Cells with more than [`MAX_CANDIDATES`] candidates (their subcells answer, built on
+    /// their first query; the map's kd-tree where a subcell has more).
     pub tree: usize,
     /// Candidates stored over all scanned cells.
     pub candidates: usize,
@@ -85,22 +123,19 @@ enum Built {
     Scan(Vec<([f32; 3], u32)>),
 }
 
-/// What the cell builder reads: the map, its representatives (all, and the subset's) and the
-/// subset's largest reach.
+/// What the cell builder reads: the map, its representatives and the subset.
 struct Builder<'a> {
     map: &'a ClusterMap,
-    reps: Vec<([f32; 3], u32)>,
-    all: KdTree,
-    guided: KdTree,
-    in_subset: Vec<bool>,
-    reach: f32,
+    r: &'a Reps,
+    in_subset: &'a [bool],
 }
 
-/// Where a point falls: outside the grid (no subset cluster), in its slack band, or in a cell.
+/// Where a point falls: outside the grid (no subset cluster), in its slack band, or in a cell
+/// (and its subcell, were the cell split).
 enum Place {
     Outside,
     Band,
-    Cell(usize),
+    Cell(usize, usize),
 }
 
 impl SubsetGrid {
@@ -134,7 +169,8 @@ impl SubsetGrid {
         let dims = (extent / cell).to_array().map(|e| (e.ceil() as usize).clamp(1, MAX_CELLS_PER_AXIS as usize + 1));
         let reach = subset.iter().map(|&c| map.reach(c)).fold(0.0f32, f32::max);
         let all = KdTree::build(&reps.iter().map(|r| r.0).collect::<Vec<_>>());
-        let b = Builder { map, reps, all, guided: KdTree::build(&guided), in_subset, reach };
+        let r = Arc::new(Reps { reps, all, guided: KdTree::build(&guided), reach });
+        let b = Builder { map, r: &r, in_subset: &in_subset };
         let half_diag = 0.5 * cell * 3f32.sqrt() * (1.0 + SLACK);
         // one z slice per task: the answers are a pure function of the cell, whatever the threads
         let slices: Vec<Option<Vec<Built>>> = (0..dims[2])
@@ -159,24 +195,58 @@ impl SubsetGrid {
             // one cell that asks the map, over a cube holding the subset's box
             let cell = extent.max_element().max(1e-6);
             let normals = subset.iter().map(|&c| map.normal(c)).collect();
-            let (cells, in_subset) = (vec![TREE], b.in_subset);
+            let cells = vec![TREE];
             return SubsetGrid { lo, inv_cell: 1.0 / cell, dims: [1; 3], cells, in_subset, normals, ..Self::default() };
         }
         let built: Vec<Built> = slices.into_iter().flatten().flatten().collect();
         let (mut cells, mut scans, mut candidates) = (Vec::with_capacity(built.len()), Vec::new(), Vec::new());
-        for a in built {
+        let mut split = Vec::new();
+        for (idx, a) in built.into_iter().enumerate() {
             cells.push(match a {
-                Built::Code(c) => c,
-                Built::Scan(list) => {
-                    let s = candidates.len() as u32;
-                    candidates.extend(list);
-                    scans.push((s, candidates.len() as u32));
-                    SCAN | (scans.len() as u32 - 1)
+                Built::Code(TREE) => {
+                    let (i, j, k) = (idx % dims[0], idx / dims[0] % dims[1], idx / (dims[0] * dims[1]));
+                    split.push((lo + (Vec3::new(i as f32, j as f32, k as f32) + 0.5) * cell, OnceLock::new()));
+                    SPLIT | (split.len() as u32 - 1)
                 }
+                Built::Code(c) => c,
+                Built::Scan(list) => push_scan(&mut scans, &mut candidates, list),
             });
         }
         let normals = subset.iter().map(|&c| map.normal(c)).collect();
-        SubsetGrid { lo, inv_cell: 1.0 / cell, dims, cells, scans, candidates, in_subset: b.in_subset, normals }
+        let reps = Some(r);
+        SubsetGrid {
+            lo,
+            inv_cell: 1.0 / cell,
+            dims,
+            cells,
+            scans,
+            candidates,
+            in_subset,
+            normals,
+            split,
+            reps,
+            cell,
+            half_diag,
+        }
+    }
+
+    /// The subcells of `SPLIT` cell `k` (built now on its first query).
+    #[cold]
+    fn build_subcells(&self, map: &ClusterMap, k: usize) -> Subcells {
+        let mut sub = Subcells { codes: [TREE; SUB * SUB * SUB], scans: Vec::new(), candidates: Vec::new() };
+        let (Some(r), Some((o, _))) = (&self.reps, self.split.get(k)) else { return sub };
+        let b = Builder { map, r, in_subset: &self.in_subset };
+        let (edge, h) = (self.cell / SUB as f32, self.half_diag / SUB as f32);
+        let mut out = Vec::new();
+        for (s, code) in sub.codes.iter_mut().enumerate() {
+            let v = Vec3::new((s % SUB) as f32, (s / SUB % SUB) as f32, (s / (SUB * SUB)) as f32);
+            let c = *o - 0.5 * self.cell + (v + 0.5) * edge;
+            *code = match b.cell(c, h, &mut out) {
+                Built::Code(c) => c,
+                Built::Scan(list) => push_scan(&mut sub.scans, &mut sub.candidates, list),
+            };
+        }
+        sub
     }
 
     /// Where `x` falls, after the normal test (`Outside` when no subset cluster can accept `n_x`).
@@ -186,7 +256,7 @@ impl SubsetGrid {
             return Place::Outside;
         }
         let u = (x - self.lo) * self.inv_cell;
-        let (mut idx, mut band) = ([0usize; 3], false);
+        let (mut idx, mut sub, mut band) = ([0usize; 3], [0usize; 3], false);
         for a in 0..3 {
             let n = self.dims[a] as f32;
             // outside the box (or NaN): no subset cluster's box holds x
@@ -195,11 +265,14 @@ impl SubsetGrid {
             }
             band |= !(u[a] >= 0.0 && u[a] < n);
             idx[a] = (u[a].max(0.0) as usize).min(self.dims[a] - 1);
+            // the subcell of a split cell (its bounds carry the slack that covers this rounding)
+            sub[a] = (((u[a] - idx[a] as f32) * SUB as f32).max(0.0) as usize).min(SUB - 1);
         }
         if band {
             return Place::Band;
         }
-        Place::Cell((idx[2] * self.dims[1] + idx[1]) * self.dims[0] + idx[0])
+        let cell = (idx[2] * self.dims[1] + idx[1]) * self.dims[0] + idx[0];
+        Place::Cell(cell, (sub[2] * SUB + sub[1]) * SUB + sub[0])
     }
 
     /// False when `ClusterMap::query(x, n_x)` cannot return a cluster of the subset.
@@ -208,25 +281,38 @@ impl SubsetGrid {
         match self.place(x, n_x) {
             Place::Outside => false,
             Place::Band => true,
-            Place::Cell(i) => self.cells[i] != EMPTY,
+            Place::Cell(i, _) => self.cells[i] != EMPTY,
         }
     }
 
     /// `map.query(x, n_x)` when that is a subset cluster, else `None` (`map` is the map the grid
-    /// was built from): the cell's answer, a scan of its candidates, or the map's kd-tree.
+    /// was built from): the cell's (or its subcell's) answer, a scan of its candidates, or the
+    /// map's kd-tree.
     #[inline]
     pub fn cluster_at(&self, map: &ClusterMap, x: Vec3, n_x: Vec3) -> Option<usize> {
-        let code = match self.place(x, n_x) {
+        let (code, sub) = match self.place(x, n_x) {
             Place::Outside => return None,
-            Place::Band => TREE,
-            Place::Cell(i) => self.cells[i],
+            Place::Band => (TREE, 0),
+            Place::Cell(i, sub) => (self.cells[i], sub),
         };
+        if code != EMPTY && code != TREE && code & (SCAN | SPLIT) == SPLIT {
+            let k = (code & !SPLIT) as usize;
+            let s = self.split[k].1.get_or_init(|| self.build_subcells(map, k));
+            return self.answer(map, s.codes[sub], (&s.scans, &s.candidates), (x, n_x));
+        }
+        self.answer(map, code, (&self.scans, &self.candidates), (x, n_x))
+    }
+
+    /// The answer at `(x, n_x)` of a cell (or subcell) of code `code` (never `SPLIT`), whose
+    /// candidate lists are `lists`.
+    #[inline(always)]
+    fn answer(&self, map: &ClusterMap, code: u32, (scans, candidates): Lists, (x, n_x): (Vec3, Vec3)) -> Option<usize> {
         let (c, d2) = match code {
             EMPTY => return None,
             TREE => return map.query(x, n_x).filter(|&c| self.in_subset[c]),
             s if s & SCAN != 0 => {
-                let (a, b) = self.scans[(s & !SCAN) as usize];
-                nearest(&self.candidates[a as usize..b as usize], x)?
+                let (a, b) = scans[(s & !SCAN) as usize];
+                nearest(&candidates[a as usize..b as usize], x)?
             }
             // every x of the cell is within reach of its nearest representative, of cluster c
             c => return (n_x.dot(map.normal(c as usize)) >= MIN_NORMAL_COS).then_some(c as usize),
@@ -241,6 +327,7 @@ impl SubsetGrid {
             match c {
                 EMPTY => k.empty += 1,
                 TREE => k.tree += 1,
+                c if c & (SCAN | SPLIT) == SPLIT => k.tree += 1,
                 c if c & SCAN != 0 => k.scan += 1,
                 _ => k.one += 1,
             }
@@ -255,6 +342,14 @@ impl SubsetGrid {
         }
         self.cells.iter().filter(|&&c| c != EMPTY).count() as f64 / self.cells.len() as f64
     }
+}
+
+/// Appends candidate list `list` to `(scans, candidates)`; its code.
+fn push_scan(scans: &mut Vec<(u32, u32)>, candidates: &mut Vec<([f32; 3], u32)>, list: Vec<([f32; 3], u32)>) -> u32 {
+    let s = candidates.len() as u32;
+    candidates.extend(list);
+    scans.push((s, candidates.len() as u32));
+    SCAN | (scans.len() as u32 - 1)
 }
 
 /// The smallest `(dist², cluster)` of `list` from `x` (the kd-tree's order), as (cluster, dist²).
@@ -309,25 +404,26 @@ fn dominates(d: &[f32; 3], r: &[f32; 3], corners: &[[f64; 3]; 8]) -> bool {
 impl Builder<'_> {
     /// The answer of the cell with centre `o` and half-diagonal `h` (the module header).
     fn cell(&self, o: Vec3, h: f32, out: &mut Vec<(f32, u32)>) -> Built {
-        let (Some((_, dn2)), Some((_, dg2))) = (self.map.nearest_representative(o), self.guided.nearest(o.to_array()))
+        let (Some((_, dn2)), Some((_, dg2))) =
+            (self.map.nearest_representative(o), self.r.guided.nearest(o.to_array()))
         else {
             return Built::Code(TREE);
         };
         let (dn, dg) = (dn2.sqrt(), dg2.sqrt());
-        if dg - h > padded((dn + h).min(self.reach), h) {
+        if dg - h > padded((dn + h).min(self.r.reach), h) {
             return Built::Code(EMPTY);
         }
-        let rc = padded((dn + h).min(self.reach) + h, h);
-        self.all.k_nearest_within(o.to_array(), FETCH, rc * rc, out);
+        let rc = padded((dn + h).min(self.r.reach) + h, h);
+        self.r.all.k_nearest_within(o.to_array(), FETCH, rc * rc, out);
         if out.len() == FETCH {
             return Built::Code(TREE);
         }
         // a representative that one of the few nearest to o beats all over the cell is never nearest
         let corners = corners(o, h / 3f32.sqrt());
-        let near: Vec<[f32; 3]> = out.iter().take(DOMINATORS).map(|&(_, i)| self.reps[i as usize].0).collect();
+        let near: Vec<[f32; 3]> = out.iter().take(DOMINATORS).map(|&(_, i)| self.r.reps[i as usize].0).collect();
         let list: Vec<([f32; 3], u32)> = out
             .iter()
-            .map(|&(_, i)| self.reps[i as usize])
+            .map(|&(_, i)| self.r.reps[i as usize])
             .filter(|r| !near.iter().any(|d| *d != r.0 && dominates(d, &r.0, &corners)))
             .collect();
         if list.len() > MAX_CANDIDATES {
@@ -338,7 +434,7 @@ impl Builder<'_> {
         }
         let c0 = list[0].1;
         let one = list.iter().all(|r| r.1 == c0);
-        if one && padded(dn + h, h) <= self.map.reach(c0 as usize) && c0 < SCAN - 2 {
+        if one && padded(dn + h, h) <= self.map.reach(c0 as usize) && c0 < SPLIT {
             return Built::Code(c0);
         }
         Built::Scan(list)
@@ -457,6 +553,38 @@ mod tests {
             }
         }
         assert!(total.one > 0 && total.scan > 0 && total.empty > 0, "{total:?}");
+    }
+
+    /// Cells with more than `MAX_CANDIDATES` candidates (many clusters, a long reach) answer by
+    /// their subcells, built on their first query: still `query` restricted to the subset,
+    /// exactly, and most subcells answer without the tree.
+    #[test]
+    fn split_cells_are_the_maps_query_too() {
+        let pts = points(12_000);
+        let cl = cluster_points(&pts, 64, 5);
+        let map = ClusterMap::build(&pts, &cl, 63, 32, 0.5);
+        let n = map.n_clusters();
+        let mut r = Rng::keyed(8, stream::MISC, 4, 0);
+        let reps: Vec<Vec3> = map.representatives().map(|(_, p)| Vec3::from_array(p)).collect();
+        for subset in [(0..n).step_by(2).collect::<Vec<_>>(), (0..n).collect()] {
+            let grid = SubsetGrid::build(&map, &subset);
+            assert!(!grid.split.is_empty(), "subset {subset:?}: no cell asks the map ({:?})", grid.kinds());
+            let mut accepted = 0;
+            for t in 0..200_000 {
+                let d = Vec3::new(r.next_f32() - 0.5, r.next_f32() - 0.5, r.next_f32() - 0.5) * 0.3;
+                let q = reps[t % reps.len()];
+                let x = if t % 2 == 0 { Vec3::new(q.x + d.x, q.y, q.z + d.z) } else { q + d * r.next_f32() };
+                let nx = [Vec3::Y, Vec3::X, Vec3::new(0.6, 0.8, 0.0)][t % 3];
+                let got = grid.cluster_at(&map, x, nx);
+                assert_eq!(got, map.query(x, nx).filter(|c| subset.contains(c)), "subset {subset:?}: x = {x}");
+                accepted += usize::from(got.is_some());
+            }
+            assert!(accepted > 1000, "subset {subset:?}: only {accepted} accepted");
+            let built: Vec<&Subcells> = grid.split.iter().filter_map(|s| s.1.get()).collect();
+            let codes = built.iter().flat_map(|s| s.codes.iter());
+            let answered = codes.clone().filter(|&&c| c != TREE).count();
+            assert!(!built.is_empty() && 2 * answered > codes.count(), "most subcells ask the map");
+        }
     }
 
     /// A build stopped at once (a time box's end) leaves one cell that asks the map: still

@@ -141,6 +141,8 @@ pub type CellKey = (u32, [i32; 3], [u32; 3]);
 /// map whose values are pure functions of their keys.
 pub struct TableCache {
     shards: Vec<RwLock<Shard>>,
+    /// This cache's identity for the workers' memos ([`TableMemo`]).
+    id: Arc<()>,
 }
 
 /// A key with its hash, computed once per lookup (shard choice and map probe share it).
@@ -188,11 +190,73 @@ type Shard = HashMap<Hashed, Arc<ForecastTables>, BuildHasherDefault<PassThrough
 
 impl Default for TableCache {
     fn default() -> Self {
-        TableCache { shards: (0..SHARDS).map(|_| RwLock::new(Shard::default())).collect() }
+        TableCache { shards: (0..SHARDS).map(|_| RwLock::new(Shard::default())).collect(), id: Arc::new(()) }
+    }
+}
+
+/// Entries of a worker's [`TableMemo`] (direct-mapped by the key's hash).
+const MEMO: usize = 1024;
+
+/// A worker's memo of the shared [`TableCache`]'s answers (kept in `Context::memo`): the
+/// tables of the keys it looked up last, one per slot of the key's hash. A table is a pure
+/// function of its key, so the memo returns what the cache would; it saves the shard's lock,
+/// the map's probe and a shared reference count's cache line on the hot path.
+#[derive(Default)]
+pub struct TableMemo {
+    slots: Vec<Option<(Hashed, Arc<ForecastTables>)>>,
+    /// The cache whose answers the slots hold (its identity: held, so never reused by another).
+    cache: Option<Arc<()>>,
+}
+
+impl TableMemo {
+    /// Empties the memo unless it holds `cache`'s answers (a worker may serve another cache).
+    fn serve(&mut self, cache: &TableCache) {
+        if !self.cache.as_ref().is_some_and(|c| Arc::ptr_eq(c, &cache.id)) {
+            self.slots.clear();
+            self.cache = Some(cache.id.clone());
+        }
+    }
+
+    fn slot(k: &Hashed) -> usize {
+        (k.hash >> 48) as usize % MEMO
+    }
+
+    fn get(&self, k: &Hashed) -> Option<&Arc<ForecastTables>> {
+        match self.slots.get(Self::slot(k)) {
+            Some(Some((key, t))) if key == k => Some(t),
+            _ => None,
+        }
+    }
+
+    fn put(&mut self, k: Hashed, t: &Arc<ForecastTables>) {
+        if self.slots.is_empty() {
+            self.slots.resize(MEMO, None);
+        }
+        self.slots[Self::slot(&k)] = Some((k, t.clone()));
     }
 }
 
 impl TableCache {
+    /// [`TableCache::get`] through the worker's `memo`: its entry when it holds `k`, else the
+    /// cache's (then kept in the memo).
+    pub fn get_memo(&self, k: &CellKey, memo: &mut TableMemo) -> Option<Arc<ForecastTables>> {
+        let h = Hashed::new(*k);
+        memo.serve(self);
+        if let Some(t) = memo.get(&h) {
+            return Some(t.clone());
+        }
+        let t = self.get(k)?;
+        memo.put(h, &t);
+        Some(t)
+    }
+
+    /// [`TableCache::insert`], also into the worker's `memo`.
+    pub fn insert_memo(&self, k: CellKey, t: Arc<ForecastTables>, memo: &mut TableMemo) {
+        memo.serve(self);
+        memo.put(Hashed::new(k), &t);
+        self.insert(k, t);
+    }
+
     fn shard(&self, k: &Hashed) -> &RwLock<Shard> {
         // middle bits: the map itself uses the low ones (bucket) and the top seven (tag)
         &self.shards[(k.hash >> 32) as usize % SHARDS]
@@ -242,6 +306,30 @@ mod tests {
         assert!(hi / lo > 20.0, "cell edges {lo} .. {hi}");
         assert!(hi <= r * 1.0001);
         assert_eq!(CellSizes::new(&cl, 6, (r, 128, 0.0)), CellSizes::default());
+    }
+
+    /// A worker's memo returns what its cache holds, and never another cache's tables (a worker
+    /// may serve two renders); a key sharing a slot evicts, never answers for, another.
+    #[test]
+    fn a_memo_answers_only_for_its_cache() {
+        use crate::cf::direction_table::{DirectionTable, N_BINS};
+        let some = Arc::new(ForecastTables { t1: DirectionTable::from_weights(&[1.0; N_BINS]), t2: None });
+        let none = Arc::new(ForecastTables { t1: None, t2: None });
+        let (a, b, mut memo) = (TableCache::default(), TableCache::default(), TableMemo::default());
+        let key = (3, [1, -2, 0], [NORMAL_BIN_TAG, 7, 0]);
+        a.insert_memo(key, some.clone(), &mut memo);
+        assert_eq!(a.get_memo(&key, &mut memo).as_deref(), Some(&*some));
+        assert_eq!(b.get_memo(&key, &mut memo), None, "another cache's memo answered");
+        b.insert(key, none.clone());
+        assert_eq!(b.get_memo(&key, &mut memo).as_deref(), Some(&*none));
+        assert_eq!(a.get_memo(&key, &mut memo).as_deref(), Some(&*some));
+        // keys of one slot: each gets its own tables
+        let slot = TableMemo::slot(&Hashed::new(key));
+        let other = (0..).map(|c| (c, [0; 3], [0; 3])).find(|&k| k != key && TableMemo::slot(&Hashed::new(k)) == slot);
+        let other = other.expect("a key in the same slot");
+        a.insert_memo(other, none.clone(), &mut memo);
+        assert_eq!(a.get_memo(&key, &mut memo).as_deref(), Some(&*some));
+        assert_eq!(a.get_memo(&other, &mut memo).as_deref(), Some(&*none));
     }
 
     #[test]

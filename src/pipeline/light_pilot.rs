@@ -198,14 +198,17 @@ pub fn broadcast_count(
 /// the rule's choice; `None` when the render has no light side (no light or Dirac object, or a
 /// `--path-filter`), whose count then does not matter, or when `stop` came first (its share of
 /// the time box, a signal): the render then takes the default count
-/// (`pt_cf::light::default_paths`). Runs on the current rayon pool.
+/// (`pt_cf::light::default_paths`). Runs on the current rayon pool. Also returns the pilot's
+/// integrator, built from `product` and `args` at another light-path count: at the render's count
+/// (`LightTracer::set_light_paths`) it is the render's integrator (its lookup grid and its table
+/// cache are pure functions of the product and their keys), which rank 0 then need not build.
 pub fn choose(
     world: &World,
     args: &MethodArgs,
     (seed, resolution): (u64, (u32, u32)),
     product: &[u8],
     stop: &Stop,
-) -> Result<Option<LightPathRule>, MethodError> {
+) -> Result<(Option<LightPathRule>, Box<dyn Integrator>), MethodError> {
     let (pw, ph) = pilot_resolution(resolution.0, resolution.1);
     let px = pw as f64 * ph as f64;
     let paths = |nu: f64| (nu * px).ceil() as u64;
@@ -224,7 +227,7 @@ pub fn choose(
             measure(world, integrator.as_mut(), &pixels, seed, nu, stop)
         })
         .collect();
-    let Some(measured) = measured else { return Ok(None) };
+    let Some(measured) = measured else { return Ok((None, integrator)) };
     let candidates: Vec<Candidate> = CANDIDATES
         .iter()
         .zip(&measured)
@@ -236,13 +239,14 @@ pub fn choose(
         })
         .collect();
     let nu = best(&candidates).map_or(1.0, |c| c.paths_per_pixel);
-    Ok(Some(LightPathRule {
+    let rule = LightPathRule {
         pilot_resolution: [pw, ph],
         pilot_passes: PILOT_PASSES,
         candidates,
         paths_per_pixel: nu,
         light_paths: (nu * resolution.0 as f64 * resolution.1 as f64).ceil().max(1.0) as u64,
-    }))
+    };
+    Ok((Some(rule), integrator))
 }
 
 /// The pilot's passes at `nu` paths per pixel (the integrator's current count): the summed

@@ -1,6 +1,7 @@
 //! Stage 2 of the pipeline (`pipeline` module docs): the caustic preprocess on rank 0, and
 //! unless `--light-paths` is given `pt-cf`'s light-path pilot (`light_pilot`), broadcast to
-//! every rank, which builds its integrator from the same bytes and count.
+//! every rank, which builds its integrator from the same bytes and count (rank 0 after a pilot
+//! takes the pilot's, set to that count: the same integrator, already built).
 //!
 //! Invariant: every rank leaves together when rank 0 fails (`distributed::agree` before each
 //! collective), so none waits in a broadcast.
@@ -46,13 +47,13 @@ pub(super) fn preprocess(
         let (stop, allowed) = budget.stop_for(PILOT_SHARE);
         let skip = allowed.is_some_and(|a| a < light_pilot::PILOT_MIN_S);
         let rule = match product {
-            Ok(product) if pilot && skip => Ok((product, None)),
+            Ok(product) if pilot && skip => Ok((product, (None, None))),
             Ok(product) if pilot => {
                 light_pilot::choose(world, &plan.args, (plan.seed, plan.resolution), &product, &stop)
-                    .map(|rule| (product, rule))
+                    .map(|(rule, integrator)| (product, (rule, Some(integrator))))
                     .map_err(RenderError::from)
             }
-            Ok(product) => Ok((product, None)),
+            Ok(product) => Ok((product, (None, None))),
             Err(e) => Err(e.into()),
         };
         if pilot {
@@ -60,11 +61,11 @@ pub(super) fn preprocess(
         }
         rule
     } else {
-        Ok((Vec::new(), None))
+        Ok((Vec::new(), (None, None)))
     };
     let preprocess_s = secs(t_pre);
     // every rank must leave together when rank 0 fails, or the others wait in the broadcast
-    let (mut product, light_path_rule) = distributed::agree(cluster, pre)?;
+    let (mut product, (light_path_rule, pilot_integrator)) = distributed::agree(cluster, pre)?;
     let t_bc = Instant::now();
     cluster.broadcast_bytes(&mut product);
     if pilot {
@@ -83,7 +84,16 @@ pub(super) fn preprocess(
     // everywhere: the same image), the rest is a minimal phase
     let (stop, allowed) = budget.stop_for(BUILD_SHARE);
     plan.args.cf.build_deadline = stop.deadline();
-    let integrator = plan.method.build(world, &plan.args, &product)?;
+    let integrator = match (pilot_integrator, plan.args.ptcf.light_paths) {
+        // rank 0 after a pilot: its integrator at the broadcast count (`light_pilot::choose`)
+        (Some(mut integrator), Some(n)) => {
+            if let Some(light) = integrator.light_tracer_mut() {
+                light.set_light_paths(n);
+            }
+            integrator
+        }
+        _ => plan.method.build(world, &plan.args, &product)?,
+    };
     budget.record("build", secs(t_build), allowed, stop.is_due());
     Ok(Prepared { integrator, stats, light_path_rule })
 }

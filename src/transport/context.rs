@@ -27,12 +27,25 @@ pub struct Context {
     /// Buffers an integrator keeps from one batch to the next (`pt`'s wavefront), typed by that
     /// integrator: capacity only, never read by the math.
     pub scratch: Option<Box<dyn Any + Send>>,
+    /// Values of pure functions an integrator keeps per worker (`pt-cf`'s memo of the table
+    /// cache, `cf::table_cache::TableMemo`), typed by that integrator: they change how fast a
+    /// value is found, never the value.
+    pub memo: Option<Box<dyn Any + Send>>,
 }
 
 impl Context {
     /// A context drawing from `rng`.
     pub fn new(rng: Rng) -> Context {
-        Context { rng, knn: Vec::new(), profile: Profile::default(), camera: None, scratch: None }
+        Context { rng, knn: Vec::new(), profile: Profile::default(), camera: None, scratch: None, memo: None }
+    }
+
+    /// The memo of type `T` (a fresh one when absent or of another type).
+    pub fn memo<T: Default + Send + 'static>(&mut self) -> &mut T {
+        let b = self.memo.get_or_insert_with(|| Box::new(T::default()));
+        if !b.is::<T>() {
+            *b = Box::new(T::default());
+        }
+        b.downcast_mut::<T>().unwrap_or_else(|| unreachable!("the memo was just made a T"))
     }
 
     /// The scratch of type `T` (a fresh one when absent or of another type), to be given back

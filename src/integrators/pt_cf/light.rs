@@ -301,6 +301,14 @@ impl<'a, P: CameraPdf> Tracer<'a, P> {
                 return; // emitters absorb
             }
             let w_in = -d;
+            if depth == 1 {
+                // a first vertex with no Dirac lobe ends the path (below) before it is shaded:
+                // `shade` keeps the material's kind (or gives black behind a one-sided surface)
+                let kind = s.material_of(hit.prim);
+                if !kind.is_dirac() && !kind.has_mixed_lobes() {
+                    return;
+                }
+            }
             let (m, sp) = self.world.shade(&hit, w_in);
             let m = &m;
             // C is defined by the lobe each vertex sampled (spec §1): its first vertex left by a
