@@ -13,3 +13,5 @@ PEERS="path ptracer" LUXCORE="" CYCLES="" scripts/equal-time-vs-mitsuba.sh scene
 FORECAST_DEFAULT=target/release/forecast BACKENDS=wide SCENES="scenes/external/sms-pool/scene.xml 384x216" OUT=out/q21/bench \
   scripts/bench-set-vs-mitsuba.sh 15 3 > out/q21/bench-pool.txt 2>&1
 echo done
+# after the suite: sms-sphere at 4 minutes (ptracer renders neither of its target crops: path only)
+# PEERS="path" LUXCORE="" CYCLES="" scripts/equal-time-vs-mitsuba.sh scenes/external/sms-sphere/scene.xml 480x270 240 3 out/q21/et-sms-sphere-240
