@@ -189,6 +189,34 @@ fn probe_marks_light_seen_through_glass_and_split_removes_its_variance() {
     }
 }
 
+/// The probe weighs a pixel's coin tosses against the brightest emitter: the reflections of the
+/// 8×8 light in the glass ball (`LIGHT_IN_GLASS`, Le = 1; a reflection is chosen with the Fresnel
+/// probability F ≈ 0.04, so a point's prefix emission has standard deviation √(F(1−F)) ≈ 0.2)
+/// are split while that light is the brightest; beside an emitter 100 times brighter the pixels
+/// inside the highlight, where every lattice point reflects it (0.2/100 = 2·10⁻³ of the brightest,
+/// above `SPLIT_SIGMA` = 10⁻³), stay split and only some at its rim, where fewer points see it,
+/// drop; beside one 10⁶ times brighter none is split (a coin toss on a light of 1 has standard
+/// deviation at most 0.5: 5·10⁻⁷ of it; the pool's sky in its water beside its sun: 1.4·10⁻⁶ at
+/// most). The bright emitter is a tiny quad below the ball, facing away from the camera: never
+/// seen.
+#[test]
+fn probe_weighs_coin_tosses_against_the_brightest_emitter() {
+    let split_with = |le: f32| {
+        let toml = format!(
+            "{LIGHT_IN_GLASS}\n[[shape]]\ntype = \"quad\"\ncorner = [0.0, -3.0, 0.0]\nu = [0.0, 0.0, 0.01]\n\
+             v = [0.01, 0.0, 0.0]\nemission = [{le}, {le}, {le}]\n"
+        );
+        let w = World::build(forecast::scene::load_str(&toml, "glass.toml", Path::new(".")).unwrap()).unwrap();
+        let cam = w.scene.camera.with_resolution(16, 16);
+        PixelSampler::new(&w, &cam, 16, 64).stats().split_pixels
+    };
+    let (dim, bright_100, bright_1e6) = (split_with(0.5), split_with(100.0), split_with(1e6));
+    eprintln!("split pixels beside an emitter of 0.5, 100, 1e6: {dim}, {bright_100}, {bright_1e6}");
+    assert!(dim >= 20, "the light's reflections must be split while it is the brightest ({dim} pixels)");
+    assert!(bright_100 <= dim && 2 * bright_100 >= dim, "the highlight's inside is still split ({bright_100} of {dim})");
+    assert_eq!(bright_1e6, 0, "2·10⁻⁷ of the brightest emitter is not");
+}
+
 /// The pixel sample from before emission splitting, written out: the pixel's camera stream,
 /// its jitter, one `radiance` call.
 fn pre_split_film(w: &World, integ: &mut dyn Integrator, res: u32, passes: u64, seed: u64) -> Film {

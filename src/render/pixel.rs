@@ -26,11 +26,11 @@ use super::Context;
 use crate::accel::{Ray, World};
 use crate::integrators::{CameraEstimate, Integrator};
 use crate::interrupt::Stop;
-use crate::math::Rgb;
+use crate::math::{luminance, Rgb};
 use crate::profile::Phase;
 use crate::sampling::qmc::SamplerKind;
 use crate::sampling::rng::{stream, Rng};
-use crate::scene::Camera;
+use crate::scene::{Camera, EnvMap};
 use crate::transport::dirac::prefix_emission;
 use crate::transport::particle::MAX_VERTICES;
 use rayon::prelude::*;
@@ -369,18 +369,50 @@ const PROBE_BAND: usize = 64;
 /// Chains traced at a lattice point whose prefix meets a mirror or glass.
 pub const PROBE_CHAINS: usize = 16;
 
-/// The prefix emission at the image-plane point `[u, v]`, or `None` where it is random: a
-/// prefix that meets a Dirac vertex draws numbers (its Fresnel choices), and is traced up to
-/// [`PROBE_CHAINS`] times from the same stream; any two that differ make the point random (the
-/// light seen through glass along some choices only). A prefix that draws nothing is certain.
-fn probe_point(world: &World, camera: &Camera, [u, v]: [f32; 2], cap: u32, rng: &mut Rng) -> Option<Rgb> {
+/// The luminance of the prefix emission at a lattice point: its mean and mean square over the
+/// point's chains. A prefix that meets a Dirac vertex draws numbers (its Fresnel choices) and is
+/// traced [`PROBE_CHAINS`] times from the same stream (the light seen through glass along some
+/// choices only); a prefix that draws nothing is certain, one chain.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Moments {
+    m1: f64,
+    m2: f64,
+}
+
+fn probe_point(world: &World, camera: &Camera, [u, v]: [f32; 2], cap: u32, rng: &mut Rng) -> Moments {
     let d = camera.direction(u, v);
     let before = rng.clone();
-    let first = prefix_emission(world, camera.position, d, cap, rng);
+    let mut y = luminance(prefix_emission(world, camera.position, d, cap, rng)) as f64;
     if *rng == before {
-        return Some(first);
+        return Moments { m1: y, m2: y * y };
     }
-    (1..PROBE_CHAINS).all(|_| prefix_emission(world, camera.position, d, cap, rng) == first).then_some(first)
+    let mut sum = Moments::default();
+    for chain in 0..PROBE_CHAINS {
+        if chain > 0 {
+            y = luminance(prefix_emission(world, camera.position, d, cap, rng)) as f64;
+        }
+        sum.m1 += y;
+        sum.m2 += y * y;
+    }
+    let n = PROBE_CHAINS as f64;
+    Moments { m1: sum.m1 / n, m2: sum.m2 / n }
+}
+
+/// A pixel is split where the standard deviation of its prefix emission's luminance (over the
+/// pixel's area and the chains' choices) is at least this fraction of the brightest emitter's
+/// luminance ([`brightest_emission`]).
+pub const SPLIT_SIGMA: f64 = 1e-3;
+
+/// The luminance of the brightest radiance a camera prefix can see: the area emitters' and the
+/// environment's largest texel (0 without either: nothing is split).
+fn brightest_emission(world: &World) -> f64 {
+    let s = &world.scene;
+    let area = s.emitters.iter().map(|e| luminance(e.radiance)).fold(0.0f32, f32::max);
+    let env = s.environment.as_ref().map_or(0.0, |e| match &e.map {
+        EnvMap::Constant(c) => luminance(*c),
+        EnvMap::LatLong(m) => m.texels.iter().map(|t| luminance(t.rgb)).fold(0.0, f32::max),
+    });
+    area.max(env) as f64
 }
 
 /// Lattice intervals across the image's wider side at least (the probe's angular resolution):
@@ -396,29 +428,31 @@ pub fn probe_subdivision(w: u32, h: u32) -> usize {
     PROBE_ACROSS.div_ceil(w.max(h).max(1) as usize).clamp(2, PROBE_MAX_SUBDIVISION)
 }
 
-/// The pixels whose prefix emission differs among their `(m+1)²` lattice points (`m` =
-/// [`probe_subdivision`]: at `m = 2` corners, edge midpoints and centre) or is random at one of
-/// them ([`probe_point`]), from a fixed stream keyed by the lattice index: a pure function of
-/// scene, camera, resolution and cap, unless `stop` comes first (checked at every lattice point):
-/// then the band in flight and those after it are not split, and the flag returned is `true`.
-/// Band by band, so the lattice never needs to be held whole.
+/// The pixels whose prefix emission's luminance varies over the pixel: its variance over the
+/// pixel's `(m+1)²` lattice points (`m` = [`probe_subdivision`]) and their chains
+/// ([`probe_point`]) at least ([`SPLIT_SIGMA`] × [`brightest_emission`])², from a fixed stream
+/// keyed by the lattice index: a pure function of scene, camera, resolution and cap, unless
+/// `stop` comes first (checked at every lattice point): then the band in flight and those after
+/// it are not split, and the flag returned is `true`. Band by band, so the lattice never needs to
+/// be held whole.
 fn probe_edges(world: &World, camera: &Camera, cap: u32, stop: &Stop) -> (Vec<bool>, bool) {
     use std::sync::atomic::{AtomicBool, Ordering};
     let (w, h) = (camera.width as usize, camera.height as usize);
     let m = probe_subdivision(camera.width, camera.height);
     let (lw, step) = (m * w + 1, 1.0 / m as f32);
+    let floor = (SPLIT_SIGMA * brightest_emission(world)).powi(2);
     let mut split = Vec::with_capacity(w * h);
     let cut = AtomicBool::new(false);
     for y0 in (0..h).step_by(PROBE_BAND) {
         let y1 = (y0 + PROBE_BAND).min(h);
         // lattice rows m·y0 ..= m·y1
         let base = m * y0 * lw;
-        let lattice: Vec<Option<Rgb>> = (base..(m * y1 + 1) * lw)
+        let lattice: Vec<Moments> = (base..(m * y1 + 1) * lw)
             .into_par_iter()
             .map(|i| {
                 if cut.load(Ordering::Relaxed) || stop.is_due() {
                     cut.store(true, Ordering::Relaxed);
-                    return None;
+                    return Moments::default();
                 }
                 let (u, v) = ((i % lw) as f32 * step, (i / lw) as f32 * step);
                 let mut rng = Rng::keyed(0, stream::PIXEL_SPLIT, u64::MAX, i as u64);
@@ -431,10 +465,13 @@ fn probe_edges(world: &World, camera: &Camera, cap: u32, stop: &Stop) -> (Vec<bo
         }
         let band = (y0 * w..y1 * w).into_par_iter().map(|p| {
             let (x, y) = (m * (p % w), m * (p / w - y0));
-            let first = lattice[y * lw + x];
-            // a random point (`None`) differs from every value, itself included
-            first.is_none()
-                || (0..(m + 1) * (m + 1)).any(|j| lattice[(y + j / (m + 1)) * lw + x + j % (m + 1)] != first)
+            let n = ((m + 1) * (m + 1)) as f64;
+            let sum = (0..(m + 1) * (m + 1)).fold(Moments::default(), |a, j| {
+                let q = lattice[(y + j / (m + 1)) * lw + x + j % (m + 1)];
+                Moments { m1: a.m1 + q.m1, m2: a.m2 + q.m2 }
+            });
+            let (m1, m2) = (sum.m1 / n, sum.m2 / n);
+            m2 - m1 * m1 >= floor && m2 > m1 * m1
         });
         split.par_extend(band);
     }
