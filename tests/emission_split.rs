@@ -213,7 +213,10 @@ fn probe_weighs_coin_tosses_against_the_brightest_emitter() {
     let (dim, bright_100, bright_1e6) = (split_with(0.5), split_with(100.0), split_with(1e6));
     eprintln!("split pixels beside an emitter of 0.5, 100, 1e6: {dim}, {bright_100}, {bright_1e6}");
     assert!(dim >= 20, "the light's reflections must be split while it is the brightest ({dim} pixels)");
-    assert!(bright_100 <= dim && 2 * bright_100 >= dim, "the highlight's inside is still split ({bright_100} of {dim})");
+    assert!(
+        bright_100 <= dim && 2 * bright_100 >= dim,
+        "the highlight's inside is still split ({bright_100} of {dim})"
+    );
     assert_eq!(bright_1e6, 0, "2·10⁻⁷ of the brightest emitter is not");
 }
 

@@ -11,9 +11,12 @@
 //!
 //! Which pixels. A probe traces the prefix emission on a lattice of `m` intervals per pixel side
 //! (`(mW+1)×(mH+1)` points, from a fixed stream, band by band; `m` from [`probe_subdivision`])
-//! and splits exactly the pixels whose `(m+1)²` values are not all equal, or random at one point:
-//! a point whose prefix meets a mirror or glass is traced [`PROBE_CHAINS`] times, and chains that
-//! differ (the light seen through glass along some Fresnel choices only) mark it.
+//! (a point whose prefix meets a mirror or glass [`PROBE_CHAINS`] times: the light seen through
+//! glass along some Fresnel choices only) and splits exactly the pixels where the prefix
+//! emission's luminance, over the pixel's `(m+1)²` points and their chains, has a standard
+//! deviation of at least [`SPLIT_SIGMA`] of the brightest emitter's: the coin toss that splitting
+//! averages. Where it is smaller (the sky's reflections in water beside a sun a million times
+//! brighter) the `K − 1` extra prefixes cost more than the variance they remove.
 //!
 //! Invariants: `L̂` is unbiased for any `K` (the contract on `E` is `transport::dirac`'s); the
 //! split set is a pure function of the scene, the camera, the resolution and the cap (and, when
