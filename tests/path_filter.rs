@@ -9,7 +9,7 @@
 //! - The classes mean what they say: without mirrors or glass (`cornell-nodirac`) every class
 //!   with an `S` is empty and `DDL` is not; `cornell-box` has `DS*` light.
 //! - A filter turns emission splitting off (its extra camera rays add `L`/`SL` light no filter
-//!   sees): the filtered renders here keep the default `--emission-split 16`, the unfiltered one
+//!   sees): the filtered renders here keep the default `--emission-split 64`, the unfiltered one
 //!   has 1, and `*` (every class kept) is the unfiltered image bit for bit.
 //! - `pt-cf`'s filtered parts sum to its image the same way (its splits and table lookups see the
 //!   same random numbers).
@@ -32,7 +32,7 @@ fn film_of(scene: &str, method: Method, filter: Option<&str>, name: &str) -> Fil
     j.args.pt.path_filter = filter.map(str::to_string);
     if filter.is_none() {
         // what a filter implies (the split's extra rays are unfiltered): the filtered renders
-        // keep the default split of 16, which `MethodArgs::emission_split` must turn off
+        // keep the default split of 64, which `MethodArgs::emission_split` must turn off
         j.args.settings.emission_split = 1;
         // and a filter turns `pt-cf`'s light paths off (they are not class-filtered)
         j.args.ptcf.light_paths = Some(0);

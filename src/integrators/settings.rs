@@ -26,7 +26,7 @@ pub struct RenderSettings {
     /// directly or through mirrors and glass (unbiased; 1 = off, at most 64).
     // The edge pixels are found by a probe before pass 0 (`render::pixel`); one of the rays
     // carries the rest of the estimate. The default is by measurement.
-    #[arg(long, value_name = "K", default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=MAX_EMISSION_SPLIT as i64))]
+    #[arg(long, value_name = "K", default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=MAX_EMISSION_SPLIT as i64))]
     pub emission_split: u32,
     /// Ray-tracing back end.
     // `AccelKind::Embree` is a hidden value in a build without the `embree` feature: it parses
