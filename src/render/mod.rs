@@ -18,6 +18,7 @@
 
 pub mod film;
 pub mod pixel;
+pub mod probe;
 
 use crate::accel::{take_ray_counts, World};
 use crate::integrators::{Integrator, LightSplats};

@@ -1,42 +1,37 @@
 //! How one pixel sample is drawn: one jittered camera ray, or emission splitting
-//! (`--emission-split K`) in the pixels where light sources have edges (beyond the paper; the
-//! derivation and the tests: `docs/emission-split.md`).
+//! (`--emission-split K`) in the pixels where light sources have edges or images (beyond the
+//! paper; the derivation and the tests: `docs/emission-split.md`).
 //!
-//! Estimator. In a split pixel a sample is `L̂ = (1/K)·Σ_k E(r_k) + (L − E)(r_J)`: `K` camera rays
-//! `r_k` at N-rooks positions in the pixel (ray `k` in column stratum `k` and row stratum
-//! `rows[k]`, a uniform random permutation), each contributing `E`, the emission seen along its
-//! Dirac prefix (`transport::dirac::prefix_emission`: the first hit, or a short mirror/glass
-//! chain), and one of them, `J` uniform, continued by the integrator for everything else
-//! (`Integrator::estimate` returns `E` and `L − E` apart).
+//! Estimator. In a split pixel a sample takes `K` camera rays and adds `E`, the emission each
+//! sees along its Dirac prefix (`transport::dirac::prefix_emission`: the first hit, or a short
+//! mirror/glass chain), to `L − E` of one of them, continued by the integrator
+//! (`Integrator::estimate` returns `E` and `L − E` apart). Where the probe mapped the pixel
+//! (`probe::CellMap`, density `q` per unit pixel area), the continued ray `r_0` is uniform over
+//! the pixel, the other `K − 1` are drawn from `q` (stratified over its cumulative table), and
+//! `L̂ = Σ_i E(r_i) / (1 + (K−1)·q(r_i)) + (L − E)(r_0)`: the balance heuristic of the two
+//! techniques. Without a map (`PixelSampler::everywhere`, or a pixel the probe's time ran out
+//! for) the `K` rays sit at N-rooks positions (ray `k` in column stratum `k` and row stratum
+//! `rows[k]`, a uniform random permutation), `J` uniform of them is continued, and
+//! `L̂ = (1/K)·Σ_k E(r_k) + (L − E)(r_J)`. Which pixels, and their maps: `probe`.
 //!
-//! Which pixels. A probe traces the prefix emission on a lattice of `m` intervals per pixel side
-//! (`(mW+1)×(mH+1)` points, from a fixed stream, band by band; `m` from [`probe_subdivision`])
-//! (a point whose prefix meets a mirror or glass [`PROBE_CHAINS`] times: the light seen through
-//! glass along some Fresnel choices only) and splits exactly the pixels where the prefix
-//! emission's luminance, over the pixel's `(m+1)²` points and their chains, has a standard
-//! deviation of at least [`SPLIT_SIGMA`] of the brightest emitter's: the coin toss that splitting
-//! averages. Where it is smaller (the sky's reflections in water beside a sun a million times
-//! brighter) the `K − 1` extra prefixes cost more than the variance they remove.
-//!
-//! Invariants: `L̂` is unbiased for any `K` (the contract on `E` is `transport::dirac`'s); the
-//! split set is a pure function of the scene, the camera, the resolution and the cap (and, when
-//! the probe runs against a time box's share, of how many bands it finished: the rest are not
-//! split), never of the samples, so it cannot bias (a pixel it misses, an edge thinner than `1/m` pixel, is merely
-//! not split); `K = 1` draws exactly the random numbers of the plain sampler and traces no probe.
+//! Invariants: `L̂` is unbiased for any `K` and any map (the contract on `E` is
+//! `transport::dirac`'s); the split set and the maps are pure functions of the scene, the camera,
+//! the resolution and the cap (`probe`), never of the samples, so they cannot bias; `K = 1` draws
+//! exactly the random numbers of the plain sampler and traces no probe.
 //! Measurements: `results/CONCLUSIONS.md`, "Emission splitting and its probe".
 
+use super::probe::{cell_maps, probe_edges, CellMap};
 use super::Context;
 use crate::accel::{Ray, World};
 use crate::integrators::{CameraEstimate, Integrator};
 use crate::interrupt::Stop;
-use crate::math::{luminance, Rgb};
+use crate::math::Rgb;
 use crate::profile::Phase;
 use crate::sampling::qmc::SamplerKind;
 use crate::sampling::rng::{stream, Rng};
-use crate::scene::{Camera, EnvMap};
+use crate::scene::Camera;
 use crate::transport::dirac::prefix_emission;
 use crate::transport::particle::MAX_VERTICES;
-use rayon::prelude::*;
 use std::time::Instant;
 
 /// The most camera rays per pixel sample (`--emission-split`), owned by the render settings.
@@ -67,6 +62,9 @@ pub struct PixelSampler<'a> {
     cap: u32,
     /// Row-major, one flag per pixel; empty when `k = 1`.
     split: Vec<bool>,
+    /// The split pixels' maps, by pixel index (ascending); a split pixel without one is split
+    /// uniformly (N-rooks).
+    maps: Vec<(u64, CellMap)>,
     stats: SplitStats,
     /// The workers' contexts and buffers, kept from one call of `render::camera_tiles` to the
     /// next (capacity only): made afresh per call, their growth cost 5% of `pt`'s CPU time on
@@ -212,6 +210,7 @@ impl<'a> PixelSampler<'a> {
             k: 1,
             cap: MAX_VERTICES,
             split: Vec::new(),
+            maps: Vec::new(),
             stats,
             workers: Pool::default(),
             outs: Pool::default(),
@@ -240,6 +239,9 @@ impl<'a> PixelSampler<'a> {
         }
         let t0 = Instant::now();
         let (split, probe_stopped) = probe_edges(world, camera, cap, stop);
+        let maps = cell_maps(world, camera, cap, &split, stop);
+        let maps: Vec<(u64, CellMap)> =
+            maps.into_iter().enumerate().filter_map(|(p, m)| m.map(|m| (p as u64, *m))).collect();
         let n = split.iter().filter(|&&s| s).count() as u64;
         let stats = SplitStats {
             emission_split: k,
@@ -248,7 +250,17 @@ impl<'a> PixelSampler<'a> {
             probe_s: t0.elapsed().as_secs_f64(),
             probe_stopped,
         };
-        PixelSampler { camera, k, cap, split, stats, workers: Pool::default(), outs: Pool::default(), sobol: false }
+        PixelSampler {
+            camera,
+            k,
+            cap,
+            split,
+            maps,
+            stats,
+            workers: Pool::default(),
+            outs: Pool::default(),
+            sobol: false,
+        }
     }
 
     /// `k` rays per sample in every pixel, no probe (tests and ablations: the estimator must be
@@ -262,6 +274,7 @@ impl<'a> PixelSampler<'a> {
             k,
             cap,
             split: vec![true; n as usize],
+            maps: Vec::new(),
             stats,
             workers: Pool::default(),
             outs: Pool::default(),
@@ -343,6 +356,22 @@ impl<'a> PixelSampler<'a> {
         let cam = self.camera;
         let k = self.k as usize;
         let mut rng = Rng::keyed(key.0, stream::PIXEL_SPLIT, key.1, pixel);
+        if let Ok(i) = self.maps.binary_search_by_key(&pixel, |m| m.0) {
+            let map = &self.maps[i].1;
+            let at = |[u, v]: [f32; 2]| cam.direction(x as f32 + u, y as f32 + v);
+            let n = (k - 1) as f32;
+            let weight = |uv: [f32; 2]| 1.0 / (1.0 + n * map.pdf(uv));
+            let est = integrator.estimate(world, cam.position, at([jx, jy]), ctx);
+            let t0 = ctx.profile.start(Phase::EmissionSplit);
+            let mut e = est.prefix_le * weight([jx, jy]);
+            for i in 0..k - 1 {
+                let u = (i as f32 + rng.next_f32()) / n;
+                let uv = map.sample(u, rng.next_2d());
+                e += prefix_emission(world, cam.position, at(uv), self.cap, &mut rng) * weight(uv);
+            }
+            ctx.profile.record(Phase::EmissionSplit, t0);
+            return e + est.rest;
+        }
         let mut rows = [0u8; MAX_EMISSION_SPLIT as usize];
         for i in 0..k {
             // inside-out Fisher–Yates: a uniform permutation of 0..k
@@ -366,137 +395,10 @@ impl<'a> PixelSampler<'a> {
     }
 }
 
-/// Pixel rows per probe band (bounds the probe's memory to about m²·W·BAND colours).
-const PROBE_BAND: usize = 64;
-
-/// Chains traced at a lattice point whose prefix meets a mirror or glass.
-pub const PROBE_CHAINS: usize = 16;
-
-/// The luminance of the prefix emission at a lattice point: its mean and mean square over the
-/// point's chains. A prefix that meets a Dirac vertex draws numbers (its Fresnel choices) and is
-/// traced [`PROBE_CHAINS`] times from the same stream (the light seen through glass along some
-/// choices only); a prefix that draws nothing is certain, one chain.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-struct Moments {
-    m1: f64,
-    m2: f64,
-}
-
-fn probe_point(world: &World, camera: &Camera, [u, v]: [f32; 2], cap: u32, rng: &mut Rng) -> Moments {
-    let d = camera.direction(u, v);
-    let before = rng.clone();
-    let mut y = luminance(prefix_emission(world, camera.position, d, cap, rng)) as f64;
-    if *rng == before {
-        return Moments { m1: y, m2: y * y };
-    }
-    let mut sum = Moments::default();
-    for chain in 0..PROBE_CHAINS {
-        if chain > 0 {
-            y = luminance(prefix_emission(world, camera.position, d, cap, rng)) as f64;
-        }
-        sum.m1 += y;
-        sum.m2 += y * y;
-    }
-    let n = PROBE_CHAINS as f64;
-    Moments { m1: sum.m1 / n, m2: sum.m2 / n }
-}
-
-/// A pixel is split where the standard deviation of its prefix emission's luminance (over the
-/// pixel's area and the chains' choices) is at least this fraction of the brightest emitter's
-/// luminance ([`brightest_emission`]).
-pub const SPLIT_SIGMA: f64 = 1e-3;
-
-/// The luminance of the brightest radiance a camera prefix can see: the area emitters' and the
-/// environment's largest texel (0 without either: nothing is split).
-fn brightest_emission(world: &World) -> f64 {
-    let s = &world.scene;
-    let area = s.emitters.iter().map(|e| luminance(e.radiance)).fold(0.0f32, f32::max);
-    let env = s.environment.as_ref().map_or(0.0, |e| match &e.map {
-        EnvMap::Constant(c) => luminance(*c),
-        EnvMap::LatLong(m) => m.texels.iter().map(|t| luminance(t.rgb)).fold(0.0, f32::max),
-    });
-    area.max(env) as f64
-}
-
-/// Lattice intervals across the image's wider side at least (the probe's angular resolution):
-/// a glint is found at any resolution where it was found at 640 pixels across.
-const PROBE_ACROSS: usize = 1280;
-
-/// The most lattice intervals per pixel side (bounds the probe's cost at tiny resolutions).
-const PROBE_MAX_SUBDIVISION: usize = 8;
-
-/// Lattice intervals per pixel side for a `w`×`h` image: 2 (corners, edge midpoints and centre)
-/// from 640 pixels across up, more below, so that the lattice keeps [`PROBE_ACROSS`] intervals.
-pub fn probe_subdivision(w: u32, h: u32) -> usize {
-    PROBE_ACROSS.div_ceil(w.max(h).max(1) as usize).clamp(2, PROBE_MAX_SUBDIVISION)
-}
-
-/// The pixels whose prefix emission's luminance varies over the pixel: its variance over the
-/// pixel's `(m+1)²` lattice points (`m` = [`probe_subdivision`]) and their chains
-/// ([`probe_point`]) at least ([`SPLIT_SIGMA`] × [`brightest_emission`])², from a fixed stream
-/// keyed by the lattice index: a pure function of scene, camera, resolution and cap, unless
-/// `stop` comes first (checked at every lattice point): then the band in flight and those after
-/// it are not split, and the flag returned is `true`. Band by band, so the lattice never needs to
-/// be held whole.
-fn probe_edges(world: &World, camera: &Camera, cap: u32, stop: &Stop) -> (Vec<bool>, bool) {
-    use std::sync::atomic::{AtomicBool, Ordering};
-    let (w, h) = (camera.width as usize, camera.height as usize);
-    let m = probe_subdivision(camera.width, camera.height);
-    let (lw, step) = (m * w + 1, 1.0 / m as f32);
-    let floor = (SPLIT_SIGMA * brightest_emission(world)).powi(2);
-    let mut split = Vec::with_capacity(w * h);
-    let cut = AtomicBool::new(false);
-    for y0 in (0..h).step_by(PROBE_BAND) {
-        let y1 = (y0 + PROBE_BAND).min(h);
-        // lattice rows m·y0 ..= m·y1
-        let base = m * y0 * lw;
-        let lattice: Vec<Moments> = (base..(m * y1 + 1) * lw)
-            .into_par_iter()
-            .map(|i| {
-                if cut.load(Ordering::Relaxed) || stop.is_due() {
-                    cut.store(true, Ordering::Relaxed);
-                    return Moments::default();
-                }
-                let (u, v) = ((i % lw) as f32 * step, (i / lw) as f32 * step);
-                let mut rng = Rng::keyed(0, stream::PIXEL_SPLIT, u64::MAX, i as u64);
-                probe_point(world, camera, [u, v], cap, &mut rng)
-            })
-            .collect();
-        if cut.load(Ordering::Relaxed) {
-            split.resize(w * h, false);
-            return (split, true);
-        }
-        let band = (y0 * w..y1 * w).into_par_iter().map(|p| {
-            let (x, y) = (m * (p % w), m * (p / w - y0));
-            let n = ((m + 1) * (m + 1)) as f64;
-            let sum = (0..(m + 1) * (m + 1)).fold(Moments::default(), |a, j| {
-                let q = lattice[(y + j / (m + 1)) * lw + x + j % (m + 1)];
-                Moments { m1: a.m1 + q.m1, m2: a.m2 + q.m2 }
-            });
-            let (m1, m2) = (sum.m1 / n, sum.m2 / n);
-            m2 - m1 * m1 >= floor && m2 > m1 * m1
-        });
-        split.par_extend(band);
-    }
-    (split, false)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::math::Vec3;
-
-    /// Half-pixel steps from 640 pixels across up (the probe of before, unchanged there); below,
-    /// at least `PROBE_ACROSS` intervals across the wider side, up to 8 per pixel.
-    #[test]
-    fn probe_subdivision_keeps_the_lattice_s_angular_resolution() {
-        let cases = [((640, 360), 2), ((640, 640), 2), ((1920, 1080), 2), ((360, 640), 2), ((639, 10), 3)];
-        let low = [((256, 256), 5), ((256, 144), 5), ((256, 192), 5), ((85, 48), 8), ((16, 16), 8), ((1, 1), 8)];
-        for ((w, h), m) in cases.into_iter().chain(low) {
-            assert_eq!(probe_subdivision(w, h), m, "{w}x{h}");
-            assert!(m == PROBE_MAX_SUBDIVISION || m * w.max(h) as usize >= PROBE_ACROSS, "{w}x{h}");
-        }
-    }
 
     /// `camera_lanes` gives, for 1 to 16 passes (both of its paths) and both samplers, the rays
     /// and streams of one pass at a time (`Rng::indexed`, the Sobol prefix if any, the jitter,
