@@ -617,6 +617,52 @@ emission = [1.0, 1.0, 1.0]
         assert_eq!(split, expected);
     }
 
+    /// The rays the probe traces on the benchmark scenes, plain (every chain traced whole, the
+    /// shared band rows twice) and memoized, with `pt`'s cap (the scene's `max_depth` + 1), all
+    /// on one thread (`results/2026-12-08-probe-chains.md`; slow with the plain count: ignored).
+    #[test]
+    #[ignore]
+    fn probe_ray_counts_on_the_benchmark_scenes() {
+        use crate::accel::take_ray_counts;
+        use crate::transport::dirac::Direct;
+        let scenes = [
+            ("scenes/ring.toml", 256, 256),
+            ("scenes/external/sms-pool/scene.xml", 384, 216),
+            ("scenes/figurines.toml", 640, 360),
+            ("scenes/cornell-box.toml", 640, 640),
+        ];
+        for (path, w, h) in scenes {
+            let world = World::build(crate::scene::load(std::path::Path::new(path)).unwrap()).unwrap();
+            let camera = world.scene.camera.with_resolution(w, h);
+            let cap = world.scene.render.max_depth.saturating_add(1);
+            let m = probe_subdivision(w, h);
+            let (lw, lh, step) = (m * w as usize + 1, m * h as usize + 1, 1.0 / m as f32);
+            let shared_rows = (h as usize).div_ceil(PROBE_BAND) - 1;
+            let (mut plain, mut memoized, mut chained) = (0u64, 0u64, 0u64);
+            let mut memo = RayMemo::default();
+            for i in 0..lw * lh {
+                let uv = [(i % lw) as f32 * step, (i / lw) as f32 * step];
+                let key = || Rng::keyed(0, stream::PIXEL_SPLIT, u64::MAX, i as u64);
+                let _ = take_ray_counts();
+                probe_point_with(&world, &camera, uv, cap, &mut key(), &mut Direct);
+                let n = take_ray_counts().0;
+                probe_point(&world, &camera, uv, cap, &mut key(), &mut memo);
+                let k = take_ray_counts().0;
+                let twice = (i / lw) % (m * PROBE_BAND) == 0 && i / lw > 0 && i / lw < lh - 1;
+                plain += n * (1 + twice as u64);
+                memoized += k;
+                chained += (n > 1) as u64;
+            }
+            eprintln!(
+                "{path} {w}x{h} m={m}: {} lattice points ({} rows twice before), {chained} chained; \
+                 rays: {plain} plain, {memoized} memoized ({:.2}x fewer)",
+                lw * lh,
+                shared_rows,
+                plain as f64 / memoized as f64
+            );
+        }
+    }
+
     /// `camera_lanes` gives, for 1 to 16 passes (both of its paths) and both samplers, the rays
     /// and streams of one pass at a time (`Rng::indexed`, the Sobol prefix if any, the jitter,
     /// `Camera::direction`), as bits, and streams that go on alike.
