@@ -17,6 +17,9 @@
 //! deviation of at least [`SPLIT_SIGMA`] of the brightest emitter's: the coin toss that splitting
 //! averages. Where it is smaller (the sky's reflections in water beside a sun a million times
 //! brighter) the `K − 1` extra prefixes cost more than the variance they remove.
+//! The probe traces each distinct ray of a lattice point once (its chains repeat the camera ray
+//! and mostly the same choices: `transport::dirac::RayMemo`, per thread), the same values bit
+//! for bit.
 //!
 //! Invariants: `L̂` is unbiased for any `K` (the contract on `E` is `transport::dirac`'s); the
 //! split set is a pure function of the scene, the camera, the resolution and the cap (and, when

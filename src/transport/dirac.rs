@@ -10,6 +10,10 @@
 //! sampling, roulette from vertex [`RR_FROM_VERTEX`](super::roulette::RR_FROM_VERTEX) on
 //! β·etaScale ([`Throughput`], as `pt`'s), one-sided emitters, and the integrator's own vertex cap
 //! (`Integrator::prefix_cap`).
+//!
+//! The chain follower intersects and shades through a [`Tracer`]: [`Direct`] (the world, every
+//! integrator's path) or [`RayMemo`] (the emission-split probe's repeats answered from memory);
+//! both give the same values and draw the same random numbers, bit for bit.
 
 use super::particle::MAX_VERTICES;
 use super::roulette::Throughput;
