@@ -7,7 +7,9 @@
 //! traced [`PROBE_CHAINS`] times (the light seen through glass along some Fresnel choices only).
 //! A pixel is split where the luminance of `E` over its `(m+1)²` points and their chains has a
 //! standard deviation of at least [`SPLIT_SIGMA`] of the brightest emitter's: the coin toss that
-//! splitting averages, weighed against the light that rules the scene.
+//! splitting averages, weighed against the light that rules the scene. The probe traces each
+//! distinct ray of a lattice point once (its chains repeat the camera ray and mostly the same
+//! choices: `transport::dirac::RayMemo`, per thread), the same values bit for bit.
 //!
 //! Where in the pixel. In each split pixel a finer lattice of [`SUB`] cells per side (its
 //! `(SUB+1)²` corners traced as above) gives each cell the root mean square of `E` at its
@@ -27,7 +29,7 @@ use crate::interrupt::Stop;
 use crate::math::luminance;
 use crate::sampling::rng::{stream, Rng};
 use crate::scene::{Camera, EnvMap};
-use crate::transport::dirac::prefix_emission;
+use crate::transport::dirac::{prefix_emission_with, RayMemo, Tracer};
 use rayon::prelude::*;
 
 /// Pixel rows per probe band (bounds the probe's memory to about m²·W·BAND colours).
@@ -38,7 +40,7 @@ pub const PROBE_CHAINS: usize = 16;
 
 /// The luminance of the prefix emission at a lattice point: its mean and mean square over the
 /// point's chains. A prefix that meets a Dirac vertex draws numbers (its Fresnel choices) and is
-/// traced `chains` times from the same stream (the light seen through glass along some
+/// traced [`PROBE_CHAINS`] times from the same stream (the light seen through glass along some
 /// choices only); a prefix that draws nothing is certain, one chain.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct Moments {
@@ -46,28 +48,45 @@ struct Moments {
     m2: f64,
 }
 
+/// A lattice point's [`Moments`]. Its chains repeat one camera ray and mostly the same choices:
+/// `memo` (cleared here) traces each distinct ray once and shades each hit once: the same values
+/// bit for bit.
 fn probe_point(
     world: &World,
     camera: &Camera,
     [u, v]: [f32; 2],
-    (cap, chains): (u32, usize),
+    cap: u32,
     rng: &mut Rng,
+    memo: &mut RayMemo,
+) -> Moments {
+    memo.clear();
+    probe_point_with(world, camera, [u, v], cap, rng, memo)
+}
+
+/// [`probe_point`] through any [`Tracer`] (`Direct`: the reference its memo is tested against).
+fn probe_point_with<T: Tracer>(
+    world: &World,
+    camera: &Camera,
+    [u, v]: [f32; 2],
+    cap: u32,
+    rng: &mut Rng,
+    tracer: &mut T,
 ) -> Moments {
     let d = camera.direction(u, v);
     let before = rng.clone();
-    let mut y = luminance(prefix_emission(world, camera.position, d, cap, rng)) as f64;
+    let mut y = luminance(prefix_emission_with(world, tracer, camera.position, d, cap, rng)) as f64;
     if *rng == before {
         return Moments { m1: y, m2: y * y };
     }
     let mut sum = Moments::default();
-    for chain in 0..chains {
+    for chain in 0..PROBE_CHAINS {
         if chain > 0 {
-            y = luminance(prefix_emission(world, camera.position, d, cap, rng)) as f64;
+            y = luminance(prefix_emission_with(world, tracer, camera.position, d, cap, rng)) as f64;
         }
         sum.m1 += y;
         sum.m2 += y * y;
     }
-    let n = chains as f64;
+    let n = PROBE_CHAINS as f64;
     Moments { m1: sum.m1 / n, m2: sum.m2 / n }
 }
 
@@ -116,22 +135,24 @@ pub fn probe_edges(world: &World, camera: &Camera, cap: u32, stop: &Stop) -> (Ve
     let floor = (SPLIT_SIGMA * brightest_emission(world)).powi(2);
     let mut split = Vec::with_capacity(w * h);
     let cut = AtomicBool::new(false);
+    let mut lattice: Vec<Moments> = Vec::new();
     for y0 in (0..h).step_by(PROBE_BAND) {
         let y1 = (y0 + PROBE_BAND).min(h);
-        // lattice rows m·y0 ..= m·y1
+        // lattice rows m·y0 ..= m·y1; row m·y0 is the band before's last (kept, not traced again)
         let base = m * y0 * lw;
-        let lattice: Vec<Moments> = (base..(m * y1 + 1) * lw)
-            .into_par_iter()
-            .map(|i| {
-                if cut.load(Ordering::Relaxed) || stop.is_due() {
-                    cut.store(true, Ordering::Relaxed);
-                    return Moments::default();
-                }
-                let (u, v) = ((i % lw) as f32 * step, (i / lw) as f32 * step);
-                let mut rng = Rng::keyed(0, stream::PIXEL_SPLIT, u64::MAX, i as u64);
-                probe_point(world, camera, [u, v], (cap, PROBE_CHAINS), &mut rng)
-            })
-            .collect();
+        let kept = if y0 == 0 { 0 } else { lw };
+        let mut rows: Vec<Moments> = Vec::with_capacity((m * (y1 - y0) + 1) * lw);
+        rows.extend_from_slice(&lattice[lattice.len() - kept..]);
+        rows.par_extend((base + kept..(m * y1 + 1) * lw).into_par_iter().map_init(RayMemo::default, |memo, i| {
+            if cut.load(Ordering::Relaxed) || stop.is_due() {
+                cut.store(true, Ordering::Relaxed);
+                return Moments::default();
+            }
+            let (u, v) = ((i % lw) as f32 * step, (i / lw) as f32 * step);
+            let mut rng = Rng::keyed(0, stream::PIXEL_SPLIT, u64::MAX, i as u64);
+            probe_point(world, camera, [u, v], cap, &mut rng, memo)
+        }));
+        lattice = rows;
         if cut.load(Ordering::Relaxed) {
             split.resize(w * h, false);
             return (split, true);
@@ -218,7 +239,7 @@ pub fn cell_maps(world: &World, camera: &Camera, cap: u32, split: &[bool], stop:
     split
         .par_iter()
         .enumerate()
-        .map(|(p, &s)| {
+        .map_init(RayMemo::default, |memo, (p, &s)| {
             if !s || stop.is_due() {
                 return None;
             }
@@ -227,7 +248,7 @@ pub fn cell_maps(world: &World, camera: &Camera, cap: u32, split: &[bool], stop:
                 .map(|j| {
                     let mut rng = Rng::keyed(0, stream::PIXEL_SPLIT, u64::MAX - 1, (p * n * n + j) as u64);
                     let (u, v) = (x + (j % n) as f32 / SUB as f32, y + (j / n) as f32 / SUB as f32);
-                    probe_point(world, camera, [u, v], (cap, PROBE_CHAINS), &mut rng).m2.sqrt() as f32
+                    probe_point(world, camera, [u, v], cap, &mut rng, memo).m2.sqrt() as f32
                 })
                 .collect();
             let mut wts = [0.0; SUB * SUB];
@@ -255,6 +276,146 @@ mod tests {
         for ((w, h), m) in cases.into_iter().chain(low) {
             assert_eq!(probe_subdivision(w, h), m, "{w}x{h}");
             assert!(m == PROBE_MAX_SUBDIVISION || m * w.max(h) as usize >= PROBE_ACROSS, "{w}x{h}");
+        }
+    }
+
+    /// A glass sphere with a light behind it (`tests/emission_split.rs`'s), and a mirror.
+    const LIGHT_IN_GLASS: &str = r#"
+[camera]
+position   = [0.0, 0.0, 3.0]
+look_at    = [0.0, 0.0, 0.0]
+fov        = 40.0
+resolution = [16, 16]
+
+[materials.glass]
+type = "glass"
+ior  = 1.5
+
+[materials.mirror]
+type = "mirror"
+reflectance = [0.9, 0.9, 0.9]
+
+[[shape]]
+type     = "sphere"
+center   = [0.0, 0.0, 0.0]
+radius   = 0.8
+material = "glass"
+
+[[shape]]
+type     = "sphere"
+center   = [0.9, 0.7, -0.5]
+radius   = 0.3
+material = "mirror"
+
+[[shape]]
+type     = "quad"
+corner   = [-4.0, 4.0, 5.0]
+u        = [8.0, 0.0, 0.0]
+v        = [0.0, -8.0, 0.0]
+emission = [1.0, 1.0, 1.0]
+"#;
+
+    /// The memoized probe gives every lattice point's value bit for bit as the plain chain
+    /// follower (`Direct`, the same random numbers), tracing fewer rays; and `probe_edges` (bands
+    /// of 64 rows, the shared row kept) splits exactly the pixels the plain lattice, held whole,
+    /// says. 8×130 pixels: three bands, `m` = 8.
+    #[test]
+    fn memoized_probe_is_the_plain_probe_bit_for_bit() {
+        use crate::accel::take_ray_counts;
+        use crate::transport::dirac::Direct;
+        let world =
+            World::build(crate::scene::load_str(LIGHT_IN_GLASS, "glass.toml", std::path::Path::new(".")).unwrap())
+                .unwrap();
+        let (w, h) = (8usize, 130usize);
+        let camera = world.scene.camera.with_resolution(w as u32, h as u32);
+        let cap = 64;
+        let m = probe_subdivision(w as u32, h as u32);
+        let (lw, step) = (m * w + 1, 1.0 / m as f32);
+        let bits = |q: Moments| [q.m1.to_bits(), q.m2.to_bits()];
+        let mut memo = RayMemo::default();
+        let (mut plain_rays, mut memo_rays, mut random, mut chained) = (0, 0, 0, 0);
+        let mut lattice = Vec::new();
+        for i in 0..lw * (m * h + 1) {
+            let uv = [(i % lw) as f32 * step, (i / lw) as f32 * step];
+            let key = |i: usize| Rng::keyed(0, stream::PIXEL_SPLIT, u64::MAX, i as u64);
+            let _ = take_ray_counts();
+            let (mut a, mut b) = (key(i), key(i));
+            let plain = probe_point_with(&world, &camera, uv, cap, &mut a, &mut Direct);
+            let n = take_ray_counts().0;
+            let memoized = probe_point(&world, &camera, uv, cap, &mut b, &mut memo);
+            let k = take_ray_counts().0;
+            assert_eq!(bits(plain), bits(memoized), "lattice point {i}");
+            assert!(a == b, "lattice point {i}: the streams went on alike");
+            (plain_rays, memo_rays) = (plain_rays + n, memo_rays + k);
+            random += (plain.m2 > plain.m1 * plain.m1) as usize;
+            chained += (n > 1) as usize;
+            lattice.push(plain);
+        }
+        eprintln!("{chained} chained points, {random} random: {plain_rays} rays plain, {memo_rays} memoized");
+        assert!(random > 0 && chained > random, "the scene must have random and chained points");
+        assert!(memo_rays * 4 < plain_rays, "{memo_rays} rays memoized vs {plain_rays}");
+        let floor = (SPLIT_SIGMA * brightest_emission(&world)).powi(2);
+        let expected: Vec<bool> = (0..w * h)
+            .map(|p| {
+                let (x, y) = (m * (p % w), m * (p / w));
+                let n = ((m + 1) * (m + 1)) as f64;
+                let sum = (0..(m + 1) * (m + 1)).fold(Moments::default(), |a, j| {
+                    let q: Moments = lattice[(y + j / (m + 1)) * lw + x + j % (m + 1)];
+                    Moments { m1: a.m1 + q.m1, m2: a.m2 + q.m2 }
+                });
+                let (m1, m2) = (sum.m1 / n, sum.m2 / n);
+                m2 - m1 * m1 >= floor && m2 > m1 * m1
+            })
+            .collect();
+        let (split, stopped) = probe_edges(&world, &camera, cap, &Stop::never());
+        assert!(!stopped);
+        assert!(expected.iter().any(|&s| s) && expected.iter().any(|&s| !s));
+        assert_eq!(split, expected);
+    }
+
+    /// The rays the probe traces on the benchmark scenes, plain (every chain traced whole, the
+    /// shared band rows twice) and memoized, with `pt`'s cap (the scene's `max_depth` + 1), all
+    /// on one thread (`results/2026-12-08-probe-chains.md`; slow with the plain count: ignored).
+    #[test]
+    #[ignore]
+    fn probe_ray_counts_on_the_benchmark_scenes() {
+        use crate::accel::take_ray_counts;
+        use crate::transport::dirac::Direct;
+        let scenes = [
+            ("scenes/ring.toml", 256, 256),
+            ("scenes/external/sms-pool/scene.xml", 384, 216),
+            ("scenes/figurines.toml", 640, 360),
+            ("scenes/cornell-box.toml", 640, 640),
+        ];
+        for (path, w, h) in scenes {
+            let world = World::build(crate::scene::load(std::path::Path::new(path)).unwrap()).unwrap();
+            let camera = world.scene.camera.with_resolution(w, h);
+            let cap = world.scene.render.max_depth.saturating_add(1);
+            let m = probe_subdivision(w, h);
+            let (lw, lh, step) = (m * w as usize + 1, m * h as usize + 1, 1.0 / m as f32);
+            let shared_rows = (h as usize).div_ceil(PROBE_BAND) - 1;
+            let (mut plain, mut memoized, mut chained) = (0u64, 0u64, 0u64);
+            let mut memo = RayMemo::default();
+            for i in 0..lw * lh {
+                let uv = [(i % lw) as f32 * step, (i / lw) as f32 * step];
+                let key = || Rng::keyed(0, stream::PIXEL_SPLIT, u64::MAX, i as u64);
+                let _ = take_ray_counts();
+                probe_point_with(&world, &camera, uv, cap, &mut key(), &mut Direct);
+                let n = take_ray_counts().0;
+                probe_point(&world, &camera, uv, cap, &mut key(), &mut memo);
+                let k = take_ray_counts().0;
+                let twice = (i / lw) % (m * PROBE_BAND) == 0 && i / lw > 0 && i / lw < lh - 1;
+                plain += n * (1 + twice as u64);
+                memoized += k;
+                chained += (n > 1) as u64;
+            }
+            eprintln!(
+                "{path} {w}x{h} m={m}: {} lattice points ({} rows twice before), {chained} chained; \
+                 rays: {plain} plain, {memoized} memoized ({:.2}x fewer)",
+                lw * lh,
+                shared_rows,
+                plain as f64 / memoized as f64
+            );
         }
     }
 
