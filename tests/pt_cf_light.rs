@@ -168,7 +168,9 @@ fn bin() -> &'static str {
 /// `--emission-split 1` the image was the same bit for bit); and the probe's finer lattice below
 /// 640 pixels across, which splits 12 of its pixels instead of 9
 /// (`results/2026-12-06-probe-resolution.md`; again the same bit for bit with `--emission-split
-/// 1`). It renders with `--sampler
+/// 1`); and emission splitting's `K` = 64 by default with the probe's cell maps
+/// (`results/2026-12-08-split-k.md`, `results/2026-12-08-cell-maps.md`, z-tested by
+/// `tests/emission_split.rs`; with `--emission-split 1` the same bit for bit). It renders with `--sampler
 /// independent`, the camera streams as they were before the Sobol prefix (docs/sampling.md),
 /// which are the same bit for bit, and with `--accel obvhs`, the tree it was written with (the
 /// default tree, `wide`, differs at exact ties in t: results/2026-12-07-own-tree.md). Regenerate it
