@@ -240,8 +240,6 @@ impl<'a> PixelSampler<'a> {
         let t0 = Instant::now();
         let (split, probe_stopped) = probe_edges(world, camera, cap, stop);
         let maps = cell_maps(world, camera, cap, &split, stop);
-        let maps: Vec<(u64, CellMap)> =
-            maps.into_iter().enumerate().filter_map(|(p, m)| m.map(|m| (p as u64, *m))).collect();
         let n = split.iter().filter(|&&s| s).count() as u64;
         let stats = SplitStats {
             emission_split: k,

@@ -188,11 +188,6 @@ pub struct CellMap {
 }
 
 impl CellMap {
-    /// The uniform map.
-    pub fn uniform() -> CellMap {
-        CellMap::from_weights(&[0.0; SUB * SUB])
-    }
-
     /// The map of cell weights `w` (≥ 0), mixed with the uniform one by [`DEFENSIVE`].
     fn from_weights(w: &[f32; SUB * SUB]) -> CellMap {
         let total: f32 = w.iter().sum();
@@ -230,17 +225,17 @@ impl CellMap {
     }
 }
 
-/// The [`CellMap`] of each split pixel (`split[p]`), from a finer lattice of its `(SUB+1)²`
-/// corners traced as the probe's points ([`probe_point`], streams keyed by pixel and corner);
-/// `None` for the pixels not split, and for those left when `stop` came due (split uniformly).
-pub fn cell_maps(world: &World, camera: &Camera, cap: u32, split: &[bool], stop: &Stop) -> Vec<Option<Box<CellMap>>> {
+/// `(pixel, map)` for each split pixel (`split[p]`), ascending: its [`CellMap`] from a finer
+/// lattice of its `(SUB+1)²` corners traced as the probe's points ([`probe_point`], streams keyed
+/// by pixel and corner). The pixels left when `stop` came due get none (split uniformly).
+pub fn cell_maps(world: &World, camera: &Camera, cap: u32, split: &[bool], stop: &Stop) -> Vec<(u64, CellMap)> {
     let w = camera.width as usize;
     let n = SUB + 1;
-    split
-        .par_iter()
-        .enumerate()
-        .map_init(RayMemo::default, |memo, (p, &s)| {
-            if !s || stop.is_due() {
+    let pixels: Vec<usize> = split.iter().enumerate().filter_map(|(p, &s)| s.then_some(p)).collect();
+    pixels
+        .into_par_iter()
+        .map_init(RayMemo::default, |memo, p| {
+            if stop.is_due() {
                 return None;
             }
             let (x, y) = ((p % w) as f32, (p / w) as f32);
@@ -258,8 +253,9 @@ pub fn cell_maps(world: &World, camera: &Camera, cap: u32, split: &[bool], stop:
                     .into_iter()
                     .fold(0.0, f32::max);
             }
-            Some(Box::new(CellMap::from_weights(&wts)))
+            Some((p as u64, CellMap::from_weights(&wts)))
         })
+        .flatten()
         .collect()
 }
 
@@ -426,7 +422,7 @@ emission = [1.0, 1.0, 1.0]
     fn cell_map_sample_has_density_pdf() {
         let mut w = [0.0f32; SUB * SUB];
         (w[9], w[10], w[63]) = (4.0, 1.0, 0.5);
-        for map in [CellMap::uniform(), CellMap::from_weights(&w)] {
+        for map in [CellMap::from_weights(&[0.0; SUB * SUB]), CellMap::from_weights(&w)] {
             assert!((1..SUB * SUB).all(|c| map.cdf[c] >= map.cdf[c - 1]));
             let total: f32 = (0..SUB * SUB).map(|c| map.pmf(c)).sum();
             assert!((total - 1.0).abs() < 1e-5);
